@@ -1,0 +1,1 @@
+//! TODO-module (filled by the mesh I/O work).

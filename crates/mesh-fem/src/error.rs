@@ -1,0 +1,114 @@
+use std::path::PathBuf;
+
+/// Everything that can go wrong between a file on disk and the FEM operators.
+///
+/// Each variant names the culprit (file, line, face or vertex) so that a user can find it.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshError {
+    /// The mesh has no vertices or no faces.
+    #[error("the mesh is empty ({n_vertices} vertices, {n_faces} faces)")]
+    Empty {
+        /// Number of vertices found.
+        n_vertices: usize,
+        /// Number of faces found.
+        n_faces: usize,
+    },
+    /// A coordinate is NaN or infinite.
+    #[error("vertex {vertex} has a non-finite coordinate {position:?}")]
+    NonFiniteCoordinate {
+        /// Vertex index (0-based).
+        vertex: usize,
+        /// Its position as read.
+        position: [f64; 3],
+    },
+    /// A face refers to a vertex that does not exist.
+    #[error("face {face} uses vertex {index}, but the mesh has {n_vertices} vertices")]
+    IndexOutOfRange {
+        /// Face index (0-based).
+        face: usize,
+        /// The offending vertex index (0-based).
+        index: u32,
+        /// Number of vertices of the mesh.
+        n_vertices: usize,
+    },
+    /// The whole mesh has zero (or non-finite) area.
+    #[error("the mesh has total area {area}, so it has no geometry to work on")]
+    DegenerateMesh {
+        /// Total area found.
+        area: f64,
+    },
+    /// A face repeats a vertex index.
+    #[error("face {face} repeats a vertex (vertices {vertices:?})")]
+    RepeatedIndex {
+        /// Face index.
+        face: usize,
+        /// Its vertex indices.
+        vertices: Vec<u32>,
+    },
+    /// A face has zero area.
+    #[error("face {face} has zero area (vertices {vertices:?})")]
+    DegenerateFace {
+        /// Face index.
+        face: usize,
+        /// Its vertex indices.
+        vertices: [u32; 3],
+    },
+    /// A polygon with more than three corners was found and fan triangulation was not enabled.
+    #[error("{path}: face {face} has {corners} corners; enable triangulation (LoadOptions::triangulate) to fan-triangulate polygons")]
+    Polygon {
+        /// File read.
+        path: PathBuf,
+        /// Face index in the file (0-based).
+        face: usize,
+        /// Number of corners.
+        corners: usize,
+    },
+    /// A vertex belongs to no face.
+    #[error("vertex {vertex} belongs to no face (drop unreferenced vertices with the repair option)")]
+    UnreferencedVertex {
+        /// Vertex index.
+        vertex: usize,
+    },
+    /// The file extension names no supported format.
+    #[error("{path}: unknown mesh format {extension:?} (supported: .obj, .ply, .off, .stl)")]
+    UnknownFormat {
+        /// File read.
+        path: PathBuf,
+        /// The extension found (empty if none).
+        extension: String,
+    },
+    /// The file could not be parsed.
+    #[error("{path}:{line}: {message}")]
+    Parse {
+        /// File read.
+        path: PathBuf,
+        /// 1-based line (0 for binary formats or when unknown).
+        line: usize,
+        /// What was wrong.
+        message: String,
+    },
+    /// An operating-system I/O error.
+    #[error("{path}: {source}")]
+    Io {
+        /// File involved.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The validation found a problem that makes the mesh unusable for the requested work.
+    #[error("mesh is unusable: {reason}")]
+    Invalid {
+        /// Human-readable summary naming the culprit.
+        reason: String,
+    },
+    /// A Matrix Market file could not be read or written, or holds the wrong matrix.
+    #[error("{path}: matrix market: {message}")]
+    MatrixMarket {
+        /// File involved.
+        path: PathBuf,
+        /// What was wrong.
+        message: String,
+    },
+}

@@ -1,0 +1,228 @@
+//! Mesh generators for tests, benchmarks and the demo.
+//!
+//! | generator | vertices | what it is good for |
+//! |---|---|---|
+//! | [`icosphere`] | 10·4^L + 2 | near-uniform sphere; spectrum l(l+1) with multiplicity 2l+1 |
+//! | [`uv_sphere`] | 2 + rings·segments | latitude/longitude sphere, poles with high valence |
+//! | [`grid`] | nx·ny | flat unit square with open boundary; spectrum π²(k² + m²) |
+//! | [`torus`] | nu·nv | genus-1 closed surface |
+//! | [`irregular_sphere`] | 10·4^L + 2 | unit sphere with triangle areas varying by ≈10³ |
+//! | [`bumpy`] | 10·4^L + 2 | irregularly sampled bumpy shape (the demo's default mesh) |
+//!
+//! All generated faces are oriented counter-clockwise seen from outside (closed meshes) or
+//! from +z (the grid).
+
+use crate::TriMesh;
+use std::collections::HashMap;
+
+fn normalize(p: [f64; 3]) -> [f64; 3] {
+    let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+    [p[0] / r, p[1] / r, p[2] / r]
+}
+
+fn build(positions: Vec<[f64; 3]>, faces: Vec<[u32; 3]>) -> TriMesh {
+    // Generators only produce finite coordinates and in-range indices.
+    TriMesh::new(positions, faces).expect("generated meshes are valid by construction")
+}
+
+/// Icosphere: the regular icosahedron subdivided `level` times (each triangle into four),
+/// with vertices projected on the unit sphere. It has 10·4^level + 2 vertices
+/// (level 5: 10,242; 6: 40,962; 7: 163,842; 8: 655,362).
+pub fn icosphere(level: u32) -> TriMesh {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut positions: Vec<[f64; 3]> = [
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ]
+    .iter()
+    .map(|&p| normalize(p))
+    .collect();
+    let mut faces: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..level {
+        let mut midpoint: HashMap<(u32, u32), u32> = HashMap::with_capacity(faces.len() * 3 / 2);
+        let mut mid = |a: u32, b: u32, positions: &mut Vec<[f64; 3]>| -> u32 {
+            let key = if a < b { (a, b) } else { (b, a) };
+            *midpoint.entry(key).or_insert_with(|| {
+                let (pa, pb) = (positions[a as usize], positions[b as usize]);
+                positions.push(normalize([pa[0] + pb[0], pa[1] + pb[1], pa[2] + pb[2]]));
+                (positions.len() - 1) as u32
+            })
+        };
+        let mut next = Vec::with_capacity(faces.len() * 4);
+        for &[a, b, c] in &faces {
+            let ab = mid(a, b, &mut positions);
+            let bc = mid(b, c, &mut positions);
+            let ca = mid(c, a, &mut positions);
+            next.extend_from_slice(&[[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        faces = next;
+    }
+    build(positions, faces)
+}
+
+/// Number of vertices of [`icosphere`]`(level)`.
+pub fn icosphere_vertex_count(level: u32) -> usize {
+    10 * 4usize.pow(level) + 2
+}
+
+/// UV (latitude/longitude) unit sphere with `rings` ≥ 2 latitude bands and `segments` ≥ 3
+/// longitudes: two poles plus (rings − 1)·segments vertices.
+///
+/// # Panics
+/// If `rings < 2` or `segments < 3` (a programming error, not user input).
+pub fn uv_sphere(rings: usize, segments: usize) -> TriMesh {
+    assert!(rings >= 2 && segments >= 3, "uv_sphere needs rings ≥ 2 and segments ≥ 3");
+    let mut positions = vec![[0.0, 0.0, 1.0]];
+    for r in 1..rings {
+        let theta = std::f64::consts::PI * r as f64 / rings as f64;
+        for s in 0..segments {
+            let phi = 2.0 * std::f64::consts::PI * s as f64 / segments as f64;
+            positions.push([theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()]);
+        }
+    }
+    positions.push([0.0, 0.0, -1.0]);
+    let south = (positions.len() - 1) as u32;
+    let idx = |r: usize, s: usize| (1 + (r - 1) * segments + s % segments) as u32;
+    let mut faces = Vec::new();
+    for s in 0..segments {
+        faces.push([0, idx(1, s), idx(1, s + 1)]);
+    }
+    for r in 1..rings - 1 {
+        for s in 0..segments {
+            let (a, b, c, d) = (idx(r, s), idx(r + 1, s), idx(r + 1, s + 1), idx(r, s + 1));
+            faces.push([a, b, c]);
+            faces.push([a, c, d]);
+        }
+    }
+    for s in 0..segments {
+        faces.push([south, idx(rings - 1, s + 1), idx(rings - 1, s)]);
+    }
+    build(positions, faces)
+}
+
+/// Flat grid on the unit square [0,1]² in the plane z = 0, with `nx` × `ny` vertices and an
+/// open boundary. Cells are split along alternating diagonals so the mesh has no preferred
+/// direction.
+///
+/// # Panics
+/// If `nx < 2` or `ny < 2`.
+pub fn grid(nx: usize, ny: usize) -> TriMesh {
+    assert!(nx >= 2 && ny >= 2, "grid needs at least 2×2 vertices");
+    let mut positions = Vec::with_capacity(nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            positions.push([i as f64 / (nx - 1) as f64, j as f64 / (ny - 1) as f64, 0.0]);
+        }
+    }
+    let id = |i: usize, j: usize| (j * nx + i) as u32;
+    let mut faces = Vec::with_capacity(2 * (nx - 1) * (ny - 1));
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            if (i + j) % 2 == 0 {
+                faces.push([a, b, c]);
+                faces.push([a, c, d]);
+            } else {
+                faces.push([a, b, d]);
+                faces.push([b, c, d]);
+            }
+        }
+    }
+    build(positions, faces)
+}
+
+/// Torus with major radius `major` and minor radius `minor`, `nu` samples around the
+/// central circle and `nv` around the tube (nu·nv vertices, genus 1).
+///
+/// # Panics
+/// If `nu < 3`, `nv < 3` or the radii are not `0 < minor < major`.
+pub fn torus(major: f64, minor: f64, nu: usize, nv: usize) -> TriMesh {
+    assert!(nu >= 3 && nv >= 3 && minor > 0.0 && minor < major, "invalid torus parameters");
+    let mut positions = Vec::with_capacity(nu * nv);
+    for i in 0..nu {
+        let u = 2.0 * std::f64::consts::PI * i as f64 / nu as f64;
+        for j in 0..nv {
+            let v = 2.0 * std::f64::consts::PI * j as f64 / nv as f64;
+            let r = major + minor * v.cos();
+            positions.push([r * u.cos(), r * u.sin(), minor * v.sin()]);
+        }
+    }
+    let id = |i: usize, j: usize| ((i % nu) * nv + j % nv) as u32;
+    let mut faces = Vec::with_capacity(2 * nu * nv);
+    for i in 0..nu {
+        for j in 0..nv {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            faces.push([a, b, c]);
+            faces.push([a, c, d]);
+        }
+    }
+    build(positions, faces)
+}
+
+/// Moves a point of the unit sphere by the conformal map "stereographic projection from the
+/// north pole, dilation by `s`, projection back". Sampling density near the south pole
+/// grows by s² and near the north pole shrinks by s², so triangle areas vary by ≈ s⁴.
+fn dilate_on_sphere(p: [f64; 3], s: f64) -> [f64; 3] {
+    let denom = 1.0 - p[2];
+    if denom < 1e-15 {
+        return p; // the north pole is a fixed point
+    }
+    let (x, y) = (s * p[0] / denom, s * p[1] / denom);
+    let r2 = x * x + y * y;
+    [2.0 * x / (r2 + 1.0), 2.0 * y / (r2 + 1.0), (r2 - 1.0) / (r2 + 1.0)]
+}
+
+/// Unit sphere with strongly varying triangle sizes: an icosphere of `level` moved by a
+/// conformal dilation of the sphere with factor `s`, so face areas vary by about s⁴
+/// (s = 5.6 gives ≈10³). The surface is still the exact sphere (up to the piecewise-linear
+/// approximation), so its spectrum still approaches l(l+1).
+pub fn irregular_sphere(level: u32, s: f64) -> TriMesh {
+    let (positions, faces) = icosphere(level).into_parts();
+    build(positions.into_iter().map(|p| dilate_on_sphere(p, s)).collect(), faces)
+}
+
+/// The demo's default mesh: an irregularly sampled ([`irregular_sphere`] with s = 4) sphere
+/// with smooth radial bumps r = 1 + 0.25·sin(3x)·cos(2y)·cos(z) + 0.15·sin(5z), so it has
+/// protrusions, non-uniform curvature and triangle areas varying by ≈10².
+pub fn bumpy(level: u32) -> TriMesh {
+    let (positions, faces) = irregular_sphere(level, 4.0).into_parts();
+    let positions = positions
+        .into_iter()
+        .map(|p| {
+            let r = 1.0 + 0.25 * (3.0 * p[0]).sin() * (2.0 * p[1]).cos() * p[2].cos() + 0.15 * (5.0 * p[2]).sin();
+            [r * p[0], r * p[1], r * p[2]]
+        })
+        .collect();
+    build(positions, faces)
+}

@@ -1,0 +1,33 @@
+//! # mesh-fem
+//!
+//! Triangle meshes in, linear finite-element operators out.
+//!
+//! * [`TriMesh`]: vertex positions and triangles, the one mesh type of wfem.
+//! * [`io`]: reading OBJ, PLY, OFF and STL files and writing fields (PLY/NPY/CSV), atomically.
+//! * [`validate`]: a [`validate::ValidationReport`] naming every problem, and explicit repairs.
+//! * [`stats`]: counts, topology (Euler characteristic, genus, boundary loops) and geometry.
+//! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
+//! * [`operators`]: the cotangent stiffness L, the consistent mass B and the lumped mass D of
+//!   the paper's Eq. (3) and Eq. (7), assembled in parallel into faer sparse matrices.
+//!
+//! **Sign convention.** Throughout wfem the stiffness matrix L is symmetric positive
+//! semidefinite: positive diagonal, non-positive off-diagonal entries on well-shaped meshes,
+//! `L·1 = 0`. The paper prints Eq. (3) with the opposite sign (libigl's `cotmatrix` also uses
+//! the opposite sign).
+
+#![warn(missing_docs)]
+
+mod error;
+mod mesh;
+
+pub mod corpus;
+pub mod generate;
+pub mod io;
+pub mod mtx;
+pub mod operators;
+pub mod stats;
+pub mod validate;
+
+pub use error::MeshError;
+pub use mesh::TriMesh;
+pub use operators::{assemble, AssemblyParams, FemOperators, LumpedMassKind};

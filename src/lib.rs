@@ -1,0 +1,11 @@
+//! # wfem
+//!
+//! The wFEM heat kernel on triangle meshes. This facade re-exports the workspace crates:
+//! [`mesh_fem`] (meshes and FEM operators), [`shifted_solve`] (rational approximation and
+//! shifted sparse solvers), [`wfem_heat`] (K_t f, distances) and [`shape_retrieval`]
+//! (descriptors and retrieval).
+
+pub use mesh_fem;
+pub use shape_retrieval;
+pub use shifted_solve;
+pub use wfem_heat;
