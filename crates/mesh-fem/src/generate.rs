@@ -102,7 +102,10 @@ pub fn icosphere_vertex_count(level: u32) -> usize {
 /// # Panics
 /// If `rings < 2` or `segments < 3` (a programming error, not user input).
 pub fn uv_sphere(rings: usize, segments: usize) -> TriMesh {
-    assert!(rings >= 2 && segments >= 3, "uv_sphere needs rings ≥ 2 and segments ≥ 3");
+    assert!(
+        rings >= 2 && segments >= 3,
+        "uv_sphere needs rings ≥ 2 and segments ≥ 3"
+    );
     let mut positions = vec![[0.0, 0.0, 1.0]];
     for r in 1..rings {
         let theta = std::f64::consts::PI * r as f64 / rings as f64;
@@ -168,7 +171,10 @@ pub fn grid(nx: usize, ny: usize) -> TriMesh {
 /// # Panics
 /// If `nu < 3`, `nv < 3` or the radii are not `0 < minor < major`.
 pub fn torus(major: f64, minor: f64, nu: usize, nv: usize) -> TriMesh {
-    assert!(nu >= 3 && nv >= 3 && minor > 0.0 && minor < major, "invalid torus parameters");
+    assert!(
+        nu >= 3 && nv >= 3 && minor > 0.0 && minor < major,
+        "invalid torus parameters"
+    );
     let mut positions = Vec::with_capacity(nu * nv);
     for i in 0..nu {
         let u = 2.0 * std::f64::consts::PI * i as f64 / nu as f64;

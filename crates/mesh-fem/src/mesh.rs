@@ -21,15 +21,26 @@ impl TriMesh {
     /// [`MeshError::IndexOutOfRange`] for a face that names a vertex that does not exist.
     pub fn new(positions: Vec<[f64; 3]>, faces: Vec<[u32; 3]>) -> Result<Self, MeshError> {
         if positions.is_empty() || faces.is_empty() {
-            return Err(MeshError::Empty { n_vertices: positions.len(), n_faces: faces.len() });
+            return Err(MeshError::Empty {
+                n_vertices: positions.len(),
+                n_faces: faces.len(),
+            });
         }
-        if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| p.iter().any(|c| !c.is_finite())) {
+        if let Some((vertex, p)) = positions
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.iter().any(|c| !c.is_finite()))
+        {
             return Err(MeshError::NonFiniteCoordinate { vertex, position: *p });
         }
         let n = positions.len();
         for (face, f) in faces.iter().enumerate() {
             if let Some(&index) = f.iter().find(|&&i| i as usize >= n) {
-                return Err(MeshError::IndexOutOfRange { face, index, n_vertices: n });
+                return Err(MeshError::IndexOutOfRange {
+                    face,
+                    index,
+                    n_vertices: n,
+                });
             }
         }
         Ok(Self { positions, faces })
@@ -64,7 +75,11 @@ impl TriMesh {
     #[inline]
     pub fn corners(&self, f: usize) -> [[f64; 3]; 3] {
         let [a, b, c] = self.faces[f];
-        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
     }
 
     /// Area of face `f`, |T| = ½‖(b − a) × (c − a)‖.
@@ -84,7 +99,11 @@ impl TriMesh {
     /// # Errors
     /// [`MeshError::NonFiniteCoordinate`] if the scaled coordinates overflow.
     pub fn scaled(&self, alpha: f64) -> Result<Self, MeshError> {
-        let positions = self.positions.iter().map(|p| [p[0] * alpha, p[1] * alpha, p[2] * alpha]).collect();
+        let positions = self
+            .positions
+            .iter()
+            .map(|p| [p[0] * alpha, p[1] * alpha, p[2] * alpha])
+            .collect();
         Self::new(positions, self.faces.clone())
     }
 
@@ -111,7 +130,11 @@ pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 #[inline]
 pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 #[inline]
 pub(crate) fn norm(a: [f64; 3]) -> f64 {

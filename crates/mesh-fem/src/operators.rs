@@ -77,7 +77,10 @@ impl FemOperators {
                 }
             }
         }
-        SparseColMat::new(self.stiffness.symbolic().to_owned().expect("clone of a valid pattern"), val)
+        SparseColMat::new(
+            self.stiffness.symbolic().to_owned().expect("clone of a valid pattern"),
+            val,
+        )
     }
 }
 
@@ -111,9 +114,18 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
     let faces = mesh.faces();
 
     // Per-face area and cotangents, in parallel.
-    let geometry: Vec<(f64, [f64; 3])> = (0..faces.len()).into_par_iter().map(|f| face_cotangents(mesh.corners(f))).collect();
-    if let Some(f) = geometry.iter().position(|(a, c)| !(*a > 0.0) || c.iter().any(|x| !x.is_finite())) {
-        return Err(MeshError::DegenerateFace { face: f, vertices: faces[f] });
+    let geometry: Vec<(f64, [f64; 3])> = (0..faces.len())
+        .into_par_iter()
+        .map(|f| face_cotangents(mesh.corners(f)))
+        .collect();
+    if let Some(f) = geometry
+        .iter()
+        .position(|(a, c)| !(*a > 0.0) || c.iter().any(|x| !x.is_finite()))
+    {
+        return Err(MeshError::DegenerateFace {
+            face: f,
+            vertices: faces[f],
+        });
     }
 
     // Counting sort of the six directed half-entries (row, col) of each face by column.
@@ -203,8 +215,12 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
             outs.push((r0, l0, b0, d0));
             (r, l, b, d) = (r1, l1, b1, d1);
         }
-        outs.par_iter_mut().zip(segments.par_iter()).zip(unique.par_iter()).zip(lumped_diagonal.par_iter_mut()).enumerate().for_each(
-            |(j, ((((r, l, b, d), seg), &u), dj))| {
+        outs.par_iter_mut()
+            .zip(segments.par_iter())
+            .zip(unique.par_iter())
+            .zip(lumped_diagonal.par_iter_mut())
+            .enumerate()
+            .for_each(|(j, ((((r, l, b, d), seg), &u), dj))| {
                 let seg = &seg[..u];
                 let l_diag: f64 = -seg.iter().map(|e| e.1).sum::<f64>();
                 // Each incident face contributes |T|/12 on two edges at vertex j, so the
@@ -234,8 +250,7 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
                     b[w] = b_diag;
                     d[w] = 2.0 * b_diag;
                 }
-            },
-        );
+            });
     }
 
     if params.lumped == LumpedMassKind::Voronoi {
