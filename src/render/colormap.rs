@@ -47,8 +47,8 @@ impl Colormap {
 }
 
 /// Viridis as the degree-6 polynomial least-squares fit of matplotlib's 256-entry table
-/// (fit published by Matt Zucker, CC0); per-channel error below ≈ 0.01, i.e. within 2–3 of
-/// 255 sRGB steps, which is invisible, and it keeps the monotone lightness of the original.
+/// (fit published by Matt Zucker, CC0); per-channel error within ≈ 5/255 sRGB steps (largest
+/// at the yellow end), which is invisible, and it keeps the monotone lightness of the original.
 fn viridis(t: f64) -> [f64; 3] {
     const C: [[f64; 3]; 7] = [
         [

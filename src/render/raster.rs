@@ -53,8 +53,8 @@ impl Camera {
 /// Entries of the colour lookup table (more than 8-bit precision in t, so no banding).
 const LUT_SIZE: usize = 1024;
 /// Iso-line colour and opacity.
-const ISO_COLOR: [f32; 3] = [20.0, 20.0, 20.0];
-const ISO_OPACITY: f32 = 0.85;
+const ISO_COLOR: [f32; 3] = [0.0, 0.0, 0.0];
+const ISO_OPACITY: f32 = 0.8;
 /// Iso-line width in output pixels.
 const ISO_WIDTH: f32 = 1.3;
 /// Fraction of the view left empty on each side.
@@ -260,7 +260,7 @@ impl<'a> Scene<'a> {
                 }
                 let diffuse = (n[0] * light[0] + n[1] * light[1] + n[2] * light[2]).max(0.0);
                 let spec = (n[0] * half[0] + n[1] * half[1] + n[2] * half[2]).max(0.0).powi(48);
-                let shade = 0.35 + 0.65 * diffuse;
+                let shade = 0.42 + 0.58 * diffuse;
                 let mut c = base.map(|v| v as f32 * shade + 255.0 * 0.12 * spec);
 
                 if self.level_step > 0.0 {
@@ -279,7 +279,8 @@ impl<'a> Scene<'a> {
                     };
                     let alpha = (half_width + 0.5 - dpx).clamp(0.0, 1.0) * ISO_OPACITY;
                     if alpha > 0.0 {
-                        c = [0, 1, 2].map(|k| c[k] * (1.0 - alpha) + ISO_COLOR[k] * alpha);
+                        // Blend towards the line colour, never lightening a pixel darker than it.
+                        c = [0, 1, 2].map(|k| c[k] * (1.0 - alpha) + c[k].min(ISO_COLOR[k]) * alpha);
                     }
                 }
                 *px = c.map(|v| v.round().clamp(0.0, 255.0) as u8);
