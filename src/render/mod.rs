@@ -236,6 +236,8 @@ impl RgbImage {
         let mut encoder = png::Encoder::new(&mut out, self.width, self.height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
+        // fdeflate: an order of magnitude faster than the default level, files ≈ 20% larger.
+        encoder.set_compression(png::Compression::Fast);
         let mut writer = encoder.write_header().map_err(|e| RenderError::Encode(e.to_string()))?;
         writer
             .write_image_data(&self.data)

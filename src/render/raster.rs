@@ -188,26 +188,29 @@ impl<'a> Scene<'a> {
                 continue;
             }
             let (x1, y1) = (x1 as usize, y1 as usize);
+            // The barycentric weights are affine in the pixel position: step them along rows.
+            let (dw0, dw1) = ((b[1] - c[1]) * inv, (c[1] - a[1]) * inv);
             for y in y0..=y1 {
-                let py = y as f64 + 0.5;
+                let p = [x0 as f64 + 0.5, y as f64 + 0.5, 0.0];
+                let mut w0 = edge(b, c, p) * inv;
+                let mut w1 = edge(c, a, p) * inv;
+                let row = y * w;
                 for x in x0..=x1 {
-                    let p = [x as f64 + 0.5, py, 0.0];
-                    let w0 = edge(b, c, p) * inv;
-                    let w1 = edge(c, a, p) * inv;
                     let w2 = 1.0 - w0 - w1;
                     // Inclusive test: pixels on a shared edge are claimed by both faces and the
                     // depth test picks one, so there are no cracks.
                     const EPS: f64 = -1e-9;
-                    if w0 < EPS || w1 < EPS || w2 < EPS {
-                        continue;
+                    if w0 >= EPS && w1 >= EPS && w2 >= EPS {
+                        let z = (w0 * a[2] + w1 * b[2] + w2 * c[2]) as f32;
+                        let i = row + x;
+                        if z > buf.depth[i] {
+                            buf.depth[i] = z;
+                            buf.face[i] = fi as u32;
+                            buf.bary[i] = [w0 as f32, w1 as f32];
+                        }
                     }
-                    let z = (w0 * a[2] + w1 * b[2] + w2 * c[2]) as f32;
-                    let i = y * w + x;
-                    if z > buf.depth[i] {
-                        buf.depth[i] = z;
-                        buf.face[i] = fi as u32;
-                        buf.bary[i] = [w0 as f32, w1 as f32];
-                    }
+                    w0 += dw0;
+                    w1 += dw1;
                 }
             }
         }
@@ -283,7 +286,7 @@ impl<'a> Scene<'a> {
                         c = [0, 1, 2].map(|k| c[k] * (1.0 - alpha) + c[k].min(ISO_COLOR[k]) * alpha);
                     }
                 }
-                *px = c.map(|v| v.round().clamp(0.0, 255.0) as u8);
+                *px = c.map(|v| (v + 0.5).clamp(0.0, 255.0) as u8);
             }
         });
         out
