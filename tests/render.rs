@@ -4,7 +4,9 @@
 
 use wfem::mesh_fem::generate::{bumpy, grid, icosphere, torus};
 use wfem::mesh_fem::TriMesh;
-use wfem::render::{layout, render_png, render_rgb, Colormap, RenderError, RenderParams, RgbImage, UpAxis, View};
+use wfem::render::{
+    layout, render_png, render_rgb, symmetric_range, Colormap, RenderError, RenderParams, RgbImage, UpAxis, View,
+};
 
 /// Front view only (camera at −y, z up), no legend, small.
 fn front_params(n_isolines: usize) -> RenderParams {
@@ -330,16 +332,31 @@ fn degenerate_geometry_does_not_panic() {
         ..RenderParams::default()
     };
     render_png(&mesh, &field, &params).unwrap();
+    // Tiny images with every decoration still render.
+    for (width, height) in [(1, 1), (2, 7), (9, 2)] {
+        let tiny = RenderParams {
+            width,
+            height,
+            supersample: 4,
+            title: Some("tiny".into()),
+            ..params.clone()
+        };
+        let img = render_rgb(&mesh, &field, &tiny).unwrap();
+        assert!(img.width >= width && img.height >= height);
+    }
     // A mesh collapsed to one point, and a flat grid seen edge-on.
     let point = TriMesh::new(vec![[1.0, 2.0, 3.0]; 3], vec![[0, 1, 2]]).unwrap();
     render_png(&point, &[1.0, 2.0, 3.0], &params).unwrap();
     let flat = grid(4, 4);
     let edge_on = RenderParams {
         views: vec![View::new([1.0, 0.0, 0.0], [0.0, 0.0, 1.0])],
+        legend: false,
+        highlight: vec![],
         ..params
     };
     let img = render_rgb(&flat, &vec![0.0; flat.n_vertices()], &edge_on).unwrap();
-    assert!(img.data.len() > 0);
+    // Every face projects to a segment: nothing but background.
+    assert!(img.data.iter().all(|&c| c == 255));
 }
 
 #[test]
@@ -407,7 +424,14 @@ fn errors_name_the_culprit() {
         Err(RenderError::DegenerateView { .. })
     ));
 
-    for (width, height, supersample) in [(0, 32, 2), (32, 0, 2), (32, 32, 0), (32, 32, 9), (100_000, 32, 1)] {
+    for (width, height, supersample) in [
+        (0, 32, 2),
+        (32, 0, 2),
+        (32, 32, 0),
+        (32, 32, 9),
+        (100_000, 32, 1),
+        (8192, 8192, 1),
+    ] {
         let q = RenderParams {
             width,
             height,
@@ -515,4 +539,23 @@ fn bumpy_render_with_everything() {
     };
     let img = render_rgb(&mesh, &field, &params).unwrap();
     assert!(count_red(&img) > 5, "anchor visible in at least one view");
+}
+
+#[test]
+fn symmetric_range_centres_zero() {
+    assert_eq!(symmetric_range(&[-0.5, 2.0, 1.0]), Some((-2.0, 2.0)));
+    assert_eq!(symmetric_range(&[0.0, 0.0]), None);
+    assert_eq!(symmetric_range(&[]), None);
+    assert_eq!(symmetric_range(&[1.0, f64::NAN]), None);
+    // With Coolwarm, a zero value is drawn in the map's grey centre.
+    let mesh = icosphere(3);
+    let field = z_field(&mesh);
+    let params = RenderParams {
+        colormap: Colormap::Coolwarm,
+        range: symmetric_range(&field),
+        ..front_params(0)
+    };
+    let img = render_rgb(&mesh, &field, &params).unwrap();
+    let t = best_t(Colormap::Coolwarm, img.pixel(params.width / 2, params.height / 2));
+    assert!((t - 0.5).abs() < 0.04, "{t}");
 }

@@ -10,7 +10,7 @@ const FRAME: [u8; 3] = [60, 60, 60];
 pub(crate) fn bar_rect(x0: u32, top: u32, height: u32, fs: u32, range: (f64, f64)) -> (Rect, u32) {
     let pad = 6 * fs;
     let bar_w = 8 * fs;
-    let bar_h = ((height as f64 * 0.72) as u32).max(2);
+    let bar_h = ((height as f64 * 0.72) as u32).clamp(1, height.max(1));
     let label_w = labels(range, bar_h, fs)
         .iter()
         .map(|(_, s)| text_width(s, fs))
@@ -18,7 +18,7 @@ pub(crate) fn bar_rect(x0: u32, top: u32, height: u32, fs: u32, range: (f64, f64
         .unwrap_or(0);
     let bar = Rect {
         x: x0 + pad + 2 * fs,
-        y: top + (height - bar_h) / 2,
+        y: top + height.saturating_sub(bar_h) / 2,
         width: bar_w,
         height: bar_h,
     };
@@ -28,7 +28,7 @@ pub(crate) fn bar_rect(x0: u32, top: u32, height: u32, fs: u32, range: (f64, f64
 /// Draws the bar, its frame, the iso-level marks on its left and the labelled ticks on its right.
 pub(crate) fn draw(img: &mut RgbImage, bar: Rect, range: (f64, f64), params: &RenderParams, fs: u32) {
     let (lo, hi) = range;
-    let constant = !(hi > lo);
+    let constant = hi <= lo;
     let (x0, y0) = (bar.x as i64, bar.y as i64);
     let (bw, bh) = (bar.width as i64, bar.height as i64);
     for row in 0..bh {
@@ -66,7 +66,7 @@ pub(crate) fn draw(img: &mut RgbImage, bar: Rect, range: (f64, f64), params: &Re
     for (v, label) in labels(range, bar.height, fs) {
         let y = y_of(v);
         img.fill_rect(x0 + bw + f, y, x0 + bw + 3 * f, y + f.max(1), FRAME);
-        let ty = (y - th / 2).clamp(0, img.height as i64 - th);
+        let ty = (y - th / 2).min(img.height as i64 - th).max(0);
         draw_text(img, x0 + bw + 5 * f, ty, &label, fs, TEXT);
     }
 }
@@ -75,7 +75,7 @@ pub(crate) fn draw(img: &mut RgbImage, bar: Rect, range: (f64, f64), params: &Re
 /// in between that do not collide with the end labels.
 pub(crate) fn labels(range: (f64, f64), bar_h: u32, fs: u32) -> Vec<(f64, String)> {
     let (lo, hi) = range;
-    if !(hi > lo) {
+    if hi <= lo {
         return vec![(lo, format_value(lo, lo.abs().max(1e-300) * 1e-3, lo.abs()))];
     }
     let magnitude = lo.abs().max(hi.abs());

@@ -60,8 +60,8 @@ pub enum RenderError {
         /// The view's up vector.
         up: [f64; 3],
     },
-    /// Width or height is zero, too large, or the supersampling factor is outside 1..=4.
-    #[error("invalid image size {width}×{height} per view (supersample {supersample}); need 1..=8192 and 1..=4")]
+    /// Width or height is zero or too large, or the supersampling factor is outside 1..=4.
+    #[error("invalid image size {width}×{height} per view (supersample {supersample}); need sides in 1..=8192, supersample in 1..=4 and width·height·supersample² ≤ 2^25")]
     InvalidSize {
         /// Requested width per view.
         width: u32,
@@ -327,9 +327,15 @@ pub fn layout(params: &RenderParams, range: (f64, f64)) -> Result<Layout, Render
     })
 }
 
+/// Upper bound on width · height · supersample² of one view.
+const MAX_SUPERSAMPLED_PIXELS: u64 = 1 << 25;
+
 fn check_size(params: &RenderParams) -> Result<(), RenderError> {
     let ok_dim = |d: u32| (1..=8192).contains(&d);
-    if !ok_dim(params.width) || !ok_dim(params.height) || !(1..=4).contains(&params.supersample) {
+    let ss = params.supersample as u64;
+    // Each view needs ≈ 19 bytes per supersampled pixel; cap that at 2²⁵ pixels (≈ 640 MB).
+    let too_many = params.width as u64 * params.height as u64 * ss * ss > MAX_SUPERSAMPLED_PIXELS;
+    if !ok_dim(params.width) || !ok_dim(params.height) || !(1..=4).contains(&params.supersample) || too_many {
         return Err(RenderError::InvalidSize {
             width: params.width,
             height: params.height,
@@ -337,6 +343,20 @@ fn check_size(params: &RenderParams) -> Result<(), RenderError> {
         });
     }
     Ok(())
+}
+
+/// The range (−m, m) with m = max |fᵢ|, for signed fields drawn with [`Colormap::Coolwarm`] so
+/// that zero is the white centre of the map; `None` if the field is empty, identically zero or
+/// has a non-finite value.
+pub fn symmetric_range(field: &[f64]) -> Option<(f64, f64)> {
+    let mut m = 0.0f64;
+    for &v in field {
+        if !v.is_finite() {
+            return None;
+        }
+        m = m.max(v.abs());
+    }
+    (m > 0.0).then_some((-m, m))
 }
 
 /// Validates the inputs and returns the colour range (lo, hi); lo == hi for a constant field

@@ -85,7 +85,7 @@ impl<'a> Scene<'a> {
         let positions = mesh.positions();
         let faces = mesh.faces();
         let (lo, hi) = range;
-        let constant = !(hi > lo);
+        let constant = hi <= lo;
         let inv_range = if constant { 0.0 } else { 1.0 / (hi - lo) };
         let level_step = if constant || params.n_isolines == 0 {
             0.0
