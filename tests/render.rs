@@ -559,3 +559,37 @@ fn symmetric_range_centres_zero() {
     let t = best_t(Colormap::Coolwarm, img.pixel(params.width / 2, params.height / 2));
     assert!((t - 0.5).abs() < 0.04, "{t}");
 }
+
+#[test]
+fn layout_snapshot() {
+    // Integer geometry only (stable across platforms): view rectangles, legend bar, title band.
+    let cases = [
+        ("default", RenderParams::default(), (-1.53, 1.72)),
+        (
+            "titled_small",
+            RenderParams {
+                width: 200,
+                height: 150,
+                title: Some("K_t e_i, t = 0.1".into()),
+                ..RenderParams::default()
+            },
+            (0.0, 1.0e-5),
+        ),
+        (
+            "no_legend_two_views",
+            RenderParams {
+                width: 320,
+                height: 240,
+                views: View::standard(UpAxis::Z)[..2].to_vec(),
+                legend: false,
+                ..RenderParams::default()
+            },
+            (0.0, 1.0),
+        ),
+    ];
+    let summary: Vec<String> = cases
+        .iter()
+        .map(|(name, params, range)| format!("{name}: {:?}", layout(params, *range).unwrap()))
+        .collect();
+    insta::assert_snapshot!(summary.join("\n"));
+}

@@ -22,7 +22,7 @@ pub(crate) fn bar_rect(x0: u32, top: u32, height: u32, fs: u32, range: (f64, f64
         width: bar_w,
         height: bar_h,
     };
-    (bar, pad + 2 * fs + bar_w + 4 * fs + label_w + pad)
+    (bar, pad + 2 * fs + bar_w + 6 * fs + label_w + pad)
 }
 
 /// Draws the bar, its frame, the iso-level marks on its left and the labelled ticks on its right.
@@ -67,7 +67,8 @@ pub(crate) fn draw(img: &mut RgbImage, bar: Rect, range: (f64, f64), params: &Re
         let y = y_of(v);
         img.fill_rect(x0 + bw + f, y, x0 + bw + 3 * f, y + f.max(1), FRAME);
         let ty = (y - th / 2).min(img.height as i64 - th).max(0);
-        draw_text(img, x0 + bw + 5 * f, ty, &label, fs, TEXT);
+        // A gap of 3 font pixels keeps the tick from reading as a minus sign.
+        draw_text(img, x0 + bw + 6 * f, ty, &label, fs, TEXT);
     }
 }
 
