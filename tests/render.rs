@@ -332,6 +332,13 @@ fn degenerate_geometry_does_not_panic() {
         ..RenderParams::default()
     };
     render_png(&mesh, &field, &params).unwrap();
+    // Coordinates so large that the projection overflows.
+    let huge = TriMesh::new(
+        vec![[1e308, 0.0, 0.0], [-1e308, 1e308, 0.0], [0.0, -1e308, 1e308]],
+        vec![[0, 1, 2]],
+    )
+    .unwrap();
+    render_png(&huge, &[0.0, 1.0, 2.0], &params).unwrap();
     // Tiny images with every decoration still render.
     for (width, height) in [(1, 1), (2, 7), (9, 2)] {
         let tiny = RenderParams {

@@ -170,7 +170,8 @@ impl<'a> Scene<'a> {
             let area = edge(a, b, c);
             // Edge-on and zero-area triangles cover no pixel centre; skipping them also keeps
             // the barycentric division below finite.
-            if area.abs() < 1e-12 {
+            // (NaN only arises from coordinates near f64::MAX overflowing in the projection.)
+            if area.is_nan() || area.abs() < 1e-12 {
                 continue;
             }
             let inv = 1.0 / area;
