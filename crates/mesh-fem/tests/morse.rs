@@ -309,6 +309,57 @@ fn tilted_plane_on_grid_has_only_corner_extrema() {
 }
 
 #[test]
+fn monkey_saddle_has_multiplicity_two() {
+    // f = r³ cos(3θ + 0.3) around the centre node of the grid, whose valence is 8: the link
+    // signs are + − + + − + − − (six sign changes), i.e. index 1 − 6/2 = −2.
+    let n = 21;
+    let mesh = grid(n, n);
+    let f = field(&mesh, |p| {
+        let (x, y) = (p[0] - 0.5, p[1] - 0.5);
+        (x * x + y * y).powf(1.5) * (3.0 * y.atan2(x) + 0.3).cos()
+    });
+    let centre = (n / 2 * n + n / 2) as u32;
+    assert_eq!(neighbour_sets(&mesh)[centre as usize].len(), 8);
+    let cps = critical_points(&mesh, &f).unwrap();
+    let at_centre: Vec<CriticalKind> = cps.iter().filter(|c| c.vertex == centre).map(|c| c.kind).collect();
+    assert_eq!(at_centre, vec![CriticalKind::Saddle { multiplicity: 2 }]);
+    let interior_saddles = cps
+        .iter()
+        .filter(|c| !boundary_vertices(&mesh).contains(&c.vertex))
+        .filter(|c| matches!(c.kind, CriticalKind::Saddle { .. }))
+        .count();
+    assert_eq!(interior_saddles, 1);
+}
+
+#[test]
+fn boundary_vertices_follow_the_doubled_surface_convention() {
+    // f = y − 4(x − ½)² on the unit square: no interior critical point; on the boundary the
+    // top midpoint is a maximum, the bottom corners are minima (the tie f = −1 is broken by
+    // index, both are still minima), and the bottom midpoint, whose link path runs
+    // lower → higher → lower (two sign changes), is a saddle of the doubled square.
+    let n = 21;
+    let mesh = grid(n, n);
+    let f = field(&mesh, |p| p[1] - 4.0 * (p[0] - 0.5).powi(2));
+    let cps = critical_points(&mesh, &f).unwrap();
+    let got: Vec<(u32, CriticalKind)> = cps.iter().map(|c| (c.vertex, c.kind)).collect();
+    let mid = (n / 2) as u32;
+    assert_eq!(
+        got,
+        vec![
+            (0, CriticalKind::Minimum),
+            (mid, CriticalKind::Saddle { multiplicity: 1 }),
+            ((n - 1) as u32, CriticalKind::Minimum),
+            ((n * (n - 1)) as u32 + mid, CriticalKind::Maximum),
+        ]
+    );
+    // The saddle is where the two corner basins merge in the sublevel filtration.
+    let d = persistence(&mesh, &f).unwrap();
+    assert_eq!(d.minima.len(), 2);
+    assert_eq!((d.minima[1].birth, d.minima[1].death), ((n - 1) as u32, Some(mid)));
+    assert_eq!(d.minima[1].persistence, 1.0);
+}
+
+#[test]
 fn local_extrema_are_the_critical_extrema() {
     for (_, mesh) in closed_surfaces().into_iter().chain([("grid", grid(20, 20))]) {
         let adj = neighbour_sets(&mesh);
