@@ -166,7 +166,8 @@ pub fn critical_points(mesh: &TriMesh, f: &[f64]) -> Result<Vec<CriticalPoint>, 
 /// of its lower-star filtration, so the mesh graph suffices and the result equals the
 /// persistence of the PL function; every death vertex is a saddle of [`critical_points`].
 /// Components that never die are essential; their persistence is the range of f on the
-/// component. O(n log n + F log F) for the sort and the adjacency, α(n) per union–find step.
+/// component. Cost: O(n log n) for the sort, O(F + Σ_v deg(v) log deg(v)) for the adjacency
+/// and α(n) per union–find step; the sublevel and superlevel sweeps run in parallel.
 ///
 /// The counts match the critical points: there is one minima pair per minimum and one
 /// maxima pair per maximum, and on a closed surface of genus g the finite pairs account for
@@ -183,15 +184,19 @@ pub fn persistence(mesh: &TriMesh, f: &[f64]) -> Result<PersistenceDiagram, Mesh
     for (r, &v) in order.iter().enumerate() {
         rank[v as usize] = r as u32;
     }
-    let minima = sweep(order.iter().copied(), &rank, &adjacency, f, Direction::Sublevel);
     let top = (n - 1) as u32;
     let reversed_rank: Vec<u32> = rank.iter().map(|&r| top - r).collect();
-    let maxima = sweep(
-        order.iter().rev().copied(),
-        &reversed_rank,
-        &adjacency,
-        f,
-        Direction::Superlevel,
+    let (minima, maxima) = rayon::join(
+        || sweep(order.iter().copied(), &rank, &adjacency, f, Direction::Sublevel),
+        || {
+            sweep(
+                order.iter().rev().copied(),
+                &reversed_rank,
+                &adjacency,
+                f,
+                Direction::Superlevel,
+            )
+        },
     );
     let value_range = f[order[n - 1] as usize] - f[order[0] as usize];
     Ok(PersistenceDiagram {
@@ -253,13 +258,27 @@ pub fn local_minima(mesh: &TriMesh, f: &[f64]) -> Result<Vec<u32>, MeshError> {
     local_extrema(mesh, f, Ordering::Greater)
 }
 
-/// Vertices v whose every neighbour w satisfies key(w) `cmp` key(v).
+/// Vertices v whose every neighbour w satisfies key(w) `neighbour` key(v), by one scan over
+/// the triangle edges in O(F): each edge disqualifies the end that has a neighbour on the
+/// wrong side.
 fn local_extrema(mesh: &TriMesh, f: &[f64], neighbour: Ordering) -> Result<Vec<u32>, MeshError> {
     check_field(mesh, f)?;
-    let adjacency = Adjacency::new(mesh);
+    let mut candidate = vec![true; mesh.n_vertices()];
+    for &[a, b, c] in mesh.faces() {
+        for (x, y) in [(a, b), (b, c), (c, a)] {
+            if x == y {
+                continue;
+            }
+            // y is on the `neighbour` side of x, so x may still qualify and y does not.
+            if compare(f, y, x) == neighbour {
+                candidate[y as usize] = false;
+            } else {
+                candidate[x as usize] = false;
+            }
+        }
+    }
     Ok((0..mesh.n_vertices() as u32)
-        .into_par_iter()
-        .filter(|&v| adjacency.neighbours(v).iter().all(|&w| compare(f, w, v) == neighbour))
+        .filter(|&v| candidate[v as usize])
         .collect())
 }
 
@@ -343,7 +362,8 @@ impl VertexFaces {
     }
 }
 
-/// The edge graph of the mesh (CSR, sorted neighbour lists, no self loops), O(F log F).
+/// The edge graph of the mesh (CSR, sorted neighbour lists, no self loops), gathered from the
+/// triangles around each vertex in parallel: O(F + Σ_v deg(v) log deg(v)).
 struct Adjacency {
     offsets: Vec<usize>,
     neighbours: Vec<u32>,
@@ -351,27 +371,30 @@ struct Adjacency {
 
 impl Adjacency {
     fn new(mesh: &TriMesh) -> Self {
-        let n = mesh.n_vertices();
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(6 * mesh.n_faces());
-        for &[a, b, c] in mesh.faces() {
-            for (x, y) in [(a, b), (b, c), (c, a)] {
-                if x != y {
-                    pairs.push((x, y));
-                    pairs.push((y, x));
+        let incidence = VertexFaces::new(mesh);
+        let faces = mesh.faces();
+        let lists: Vec<Vec<u32>> = (0..mesh.n_vertices() as u32)
+            .into_par_iter()
+            .map(|v| {
+                let incident = incidence.of(v);
+                let mut list = Vec::with_capacity(2 * incident.len());
+                for &fi in incident {
+                    list.extend(faces[fi as usize].iter().copied().filter(|&w| w != v));
                 }
-            }
+                list.sort_unstable();
+                list.dedup();
+                list
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(lists.len() + 1);
+        offsets.push(0);
+        for list in &lists {
+            offsets.push(offsets[offsets.len() - 1] + list.len());
         }
-        pairs.par_sort_unstable();
-        pairs.dedup();
-        let mut offsets = vec![0usize; n + 1];
-        for &(x, _) in &pairs {
-            offsets[x as usize + 1] += 1;
+        Self {
+            offsets,
+            neighbours: lists.concat(),
         }
-        for i in 0..n {
-            offsets[i + 1] += offsets[i];
-        }
-        let neighbours = pairs.into_iter().map(|(_, y)| y).collect();
-        Self { offsets, neighbours }
     }
 
     fn neighbours(&self, v: u32) -> &[u32] {
