@@ -2,7 +2,7 @@
 //! topological persistence.
 //!
 //! The paper's feature-driven approximation (Sect. 4.2, Fig. 13) selects as anchor set 𝒜 the
-//! critical points of a noisy map f with the highest persistence [Ban67; EMP06; PF09] and
+//! critical points of a noisy map f with the highest persistence \[Ban67; EMP06; PF09\] and
 //! builds the *global component* f_glob := Σ_{i∈𝒜} f(pᵢ) K_t eᵢ from them; the sparse heat
 //! kernel signature SHK2 (Sect. 5) detects features as persistent maxima. This module
 //! provides the three ingredients:
@@ -15,11 +15,36 @@
 //!   simplification to a persistence threshold, and [`local_maxima`] / [`local_minima`] for
 //!   plain feature detection.
 //!
+//! ```
+//! use mesh_fem::{generate, morse};
+//! // A noisy height function on a sphere: many spurious extrema, two persistent ones.
+//! let mesh = generate::icosphere(3);
+//! let f: Vec<f64> = mesh
+//!     .positions()
+//!     .iter()
+//!     .map(|p| p[2] + 0.02 * (40.0 * p[0]).sin() * (40.0 * p[1]).cos())
+//!     .collect();
+//! let diagram = morse::persistence(&mesh, &f)?;
+//! // Anchor set 𝒜 of Sect. 4.2: extrema (and their saddles) with persistence ≥ 10 % of the range.
+//! let anchors = morse::persistent_extrema_relative(&diagram, 0.1);
+//! assert_eq!(anchors.len(), 2); // the north and south poles
+//! assert!(morse::local_maxima(&mesh, &f)?.len() > 1);
+//! # Ok::<(), mesh_fem::MeshError>(())
+//! ```
+//!
 //! **Simulation of simplicity.** Ties are broken by comparing (f(v), v) lexicographically, so
 //! any two distinct vertices are ordered and every neighbour of a vertex is either *lower* or
 //! *higher*. The same total order is used everywhere in this module, so the critical points,
 //! the local extrema and the persistence pairs are mutually consistent even on functions
 //! with plateaus (which then behave like an infinitesimally tilted version of f).
+//!
+//! **References** (keys as in the paper). \[Ban67\] T. Banchoff, *Critical points and curvature
+//! for embedded polyhedra*, J. Differential Geom. 1 (1967) — the link rule. \[EMP06\]
+//! H. Edelsbrunner, D. Morozov, V. Pascucci, *Persistence-sensitive simplification of
+//! functions on 2-manifolds*, SoCG 2006 — persistence pairing and simplification. \[ZC05\]
+//! A. Zomorodian, G. Carlsson, *Computing persistent homology* (2005) — cited for SHK2.
+//! \[PF09\] Patanè and Falcidieno (2009), cited by the paper for persistent critical points.
+//! Simulation of simplicity: H. Edelsbrunner, E. Mücke, ACM TOG 9 (1990).
 
 use crate::{MeshError, TriMesh};
 use rayon::prelude::*;
@@ -154,7 +179,7 @@ pub fn critical_points(mesh: &TriMesh, f: &[f64]) -> Result<Vec<CriticalPoint>, 
 }
 
 /// 0-dimensional persistence of the sublevel-set filtration (minima paired with saddles) and
-/// of the superlevel-set filtration (maxima paired with saddles) of `f` [EMP06], as used to
+/// of the superlevel-set filtration (maxima paired with saddles) of `f` \[EMP06\], as used to
 /// rank critical points in the paper's Sect. 4.2.
 ///
 /// **Algorithm.** Vertices are swept in increasing order of (f(v), v) (decreasing for
@@ -211,7 +236,7 @@ pub fn persistence(mesh: &TriMesh, f: &[f64]) -> Result<PersistenceDiagram, Mesh
 /// saddles they are paired with, and all essential extrema (which always survive).
 /// Sorted by vertex index, without repetition.
 ///
-/// By the persistence simplification theorem [EMP06] (for 2-manifolds), f can be perturbed by
+/// By the persistence simplification theorem \[EMP06\] (for 2-manifolds), f can be perturbed by
 /// at most `threshold` in L∞ so that exactly these extrema and paired saddles remain; they are
 /// the paper's anchor set 𝒜 for the global component f_glob = Σ_{i∈𝒜} f(pᵢ) K_t eᵢ
 /// (Sect. 4.2, Fig. 13). Saddles that create 1-cycles (2g of them on a closed genus-g
