@@ -3,7 +3,7 @@
 //! critical points of height functions, and a brute-force persistence pairing computed by
 //! minimax ("bottleneck") flooding from every extremum instead of a union–find sweep.
 
-use mesh_fem::generate::{bumpy, grid, icosphere, torus};
+use mesh_fem::generate::{bumpy, grid, icosphere, torus, uv_sphere};
 use mesh_fem::morse::{
     critical_points, local_maxima, local_minima, persistence, persistent_extrema, persistent_extrema_relative,
     CriticalKind, CriticalPoint, PersistencePair,
@@ -181,6 +181,7 @@ fn closed_surfaces() -> Vec<(&'static str, TriMesh)> {
         ("bumpy(3)", bumpy(3)),
         ("torus", torus(2.0, 0.7, 40, 20)),
         ("thin torus", torus(1.0, 0.2, 24, 9)),
+        ("uv sphere (valence-40 poles)", uv_sphere(12, 40)),
     ]
 }
 
@@ -357,6 +358,27 @@ fn boundary_vertices_follow_the_doubled_surface_convention() {
     assert_eq!(d.minima.len(), 2);
     assert_eq!((d.minima[1].birth, d.minima[1].death), ((n - 1) as u32, Some(mid)));
     assert_eq!(d.minima[1].persistence, 1.0);
+}
+
+#[test]
+fn classification_ignores_face_orientation() {
+    // The link rule only needs the link as an undirected cycle or path, so flipping some
+    // triangles (an inconsistently oriented input) changes nothing.
+    let mesh = bumpy(2);
+    let faces: Vec<[u32; 3]> = mesh
+        .faces()
+        .iter()
+        .enumerate()
+        .map(|(i, &[a, b, c])| if i % 3 == 0 { [a, c, b] } else { [a, b, c] })
+        .collect();
+    let flipped = TriMesh::new(mesh.positions().to_vec(), faces).unwrap();
+    for f in generic_functions(&mesh) {
+        assert_eq!(
+            critical_points(&mesh, &f).unwrap(),
+            critical_points(&flipped, &f).unwrap()
+        );
+        assert_eq!(persistence(&mesh, &f).unwrap(), persistence(&flipped, &f).unwrap());
+    }
 }
 
 #[test]
