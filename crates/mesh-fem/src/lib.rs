@@ -23,6 +23,7 @@ mod mesh;
 pub mod corpus;
 pub mod generate;
 pub mod io;
+pub mod morse;
 pub mod mtx;
 pub mod operators;
 pub mod stats;
