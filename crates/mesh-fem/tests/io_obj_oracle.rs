@@ -27,7 +27,6 @@ fn our_obj_triangles_equal_tobj_triangles_on_the_corpus() {
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     files.par_iter().for_each(|path| {
         let (mesh, _) = load(path, &LoadOptions::with_triangulation(true)).unwrap();

@@ -104,11 +104,11 @@ fn read_ascii(bytes: &[u8], path: &Path) -> Result<Vec<[[f64; 3]; 3]>, MeshError
                         format!("facet starting at line {facet_line} has more than 3 vertices"),
                     ));
                 }
-                for c in 0..3 {
+                for (c, slot) in current[k].iter_mut().enumerate() {
                     let t = it
                         .next()
                         .ok_or_else(|| parse_error(path, line_no, format!("vertex has {c} coordinates, expected 3")))?;
-                    current[k][c] = parse_f64(t).ok_or_else(|| {
+                    *slot = parse_f64(t).ok_or_else(|| {
                         parse_error(
                             path,
                             line_no,
