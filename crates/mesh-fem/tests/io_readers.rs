@@ -535,6 +535,17 @@ fn stl_ascii_and_binary_weld_to_the_same_tetrahedron() {
 }
 
 #[test]
+fn stl_binary_with_solid_header_and_trailing_bytes_is_read_as_binary() {
+    let mut bytes = binary_stl(&TETRA, b"solid exported");
+    bytes.extend_from_slice(b"\0\0trailing");
+    let (m, r) = read_stl(&bytes, name(), &strict()).unwrap();
+    check_tetra(&m, &r);
+    assert!(r.notes.iter().any(|n| n.contains("binary")), "{:?}", r.notes);
+    // Garbage that starts with "solid" is neither: the ASCII error is reported.
+    expect_parse_line(read_stl(b"solid x\nfacet normal 0 0 0\nbogus\n", name(), &strict()), 3);
+}
+
+#[test]
 fn stl_welds_signed_zeros_but_not_distinct_points() {
     let mut t = TETRA;
     t[1][0] = [-0.0, 0.0, -0.0];

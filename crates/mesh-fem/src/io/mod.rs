@@ -78,7 +78,6 @@ impl MeshFormat {
 
 /// Options for [`load`] and [`load_bytes`].
 #[derive(Clone, Debug, Default)]
-#[non_exhaustive]
 pub struct LoadOptions {
     /// Fan-triangulate faces with more than three corners instead of failing with
     /// [`MeshError::Polygon`]. Off by default, because a silent triangulation changes the
@@ -154,7 +153,8 @@ pub fn load_bytes(
 }
 
 /// Reads an OBJ mesh from memory (`v` and `f` records; `f` corners may be `v`, `v/vt`,
-/// `v/vt/vn` or `v//vn`; negative indices count back from the last vertex read). `o`/`g`
+/// `v/vt/vn` or `v//vn`; negative indices count back from the last vertex read; values after
+/// x y z on a `v` line (w or colours) and `l`/`p` records are ignored). `o`/`g`
 /// groups share the one vertex list of the file, so the mesh stays connected across groups.
 ///
 /// # Errors

@@ -3,8 +3,8 @@
 //! Binary layout: 80-byte header, u32 little-endian triangle count, then per triangle 50
 //! bytes: normal (3 × f32), three corners (9 × f32), u16 attribute. Binary files may start
 //! with the word "solid" in their header, so the decision is: if the size matches the binary
-//! layout exactly the file is binary; otherwise a file beginning with "solid" is ASCII and
-//! anything else is (possibly truncated) binary.
+//! layout exactly the file is binary; otherwise a file beginning with "solid" that contains
+//! only text bytes is ASCII, and anything else is (possibly truncated or padded) binary.
 
 use super::text::{parse_f64, show, tokens, Lines};
 use super::{finish, parse_error, FaceSink, LoadOptions, LoadReport, MeshFormat};
@@ -28,12 +28,19 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<(Tri
         bytes[start..].starts_with(b"solid")
     };
     let mut report = LoadReport::new(MeshFormat::Stl);
-    let corners = if exact_binary || !starts_with_solid {
-        report.notes.push("binary STL".to_string());
-        read_binary(bytes, path, &mut report)?
-    } else {
+    // Binary records hold NUL and other control bytes (zero normals, the u16 attribute), which
+    // ASCII STL never contains; so "solid" + text ⇒ ASCII, everything else ⇒ binary.
+    let textual = || {
+        bytes
+            .iter()
+            .all(|&b| b >= 0x20 || matches!(b, b'\t' | b'\n' | b'\r' | 0x0c))
+    };
+    let corners = if !exact_binary && starts_with_solid && textual() {
         report.notes.push("ASCII STL".to_string());
         read_ascii(bytes, path)?
+    } else {
+        report.notes.push("binary STL".to_string());
+        read_binary(bytes, path, &mut report)?
     };
     weld(corners, path, report)
 }
