@@ -213,6 +213,23 @@ fn off_huge_declared_counts_do_not_allocate_up_front() {
 
 // ---------------------------------------------------------------- PLY
 
+#[test]
+fn ply_huge_declared_counts_fail_cleanly() {
+    for format in ["ascii", "binary_little_endian"] {
+        let src = format!(
+            "ply\nformat {format} 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\n\
+             element face 4000000000\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n"
+        );
+        assert!(
+            matches!(
+                read_ply(src.as_bytes(), name(), &strict()),
+                Err(MeshError::Parse { .. })
+            ),
+            "{format}"
+        );
+    }
+}
+
 fn ascii_ply(face_prop: &str, crlf: bool) -> Vec<u8> {
     let mut s = String::from("ply\nformat ascii 1.0\ncomment made by hand\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\n");
     s.push_str(&format!("element face 2\nproperty {face_prop}\nend_header\n"));
