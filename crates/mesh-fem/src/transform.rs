@@ -49,7 +49,11 @@ impl DerivedMesh {
 
 #[inline]
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 #[inline]
@@ -280,10 +284,7 @@ fn compact(positions: &[[f64; 3]], faces: Vec<[u32; 3]>) -> Result<DerivedMesh, 
         }
     }
     let new_positions = source_vertex.iter().map(|&v| positions[v as usize]).collect();
-    let new_faces = faces
-        .iter()
-        .map(|f| f.map(|v| new_index[v as usize]))
-        .collect();
+    let new_faces = faces.iter().map(|f| f.map(|v| new_index[v as usize])).collect();
     Ok(DerivedMesh {
         mesh: TriMesh::new(new_positions, new_faces)?,
         source_vertex,
@@ -692,7 +693,8 @@ impl QemDecimator {
             }
         }
         if let Some((c, v)) = best {
-            self.heap.push(Reverse((c.max(0.0).to_bits(), u, v, self.version[u as usize])));
+            self.heap
+                .push(Reverse((c.max(0.0).to_bits(), u, v, self.version[u as usize])));
         }
     }
 
