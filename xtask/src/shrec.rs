@@ -14,7 +14,7 @@
 //! | class | recipe | strength knob |
 //! |---|---|---|
 //! | `isometry` | skinning bend: weight w = smoothstep of the signed distance to a random joint plane through a random vertex (half-width 5 % D), rotate by w·θ about a random axis in the plane | θ = 15°·s |
-//! | `topology` | among pairs with ‖x_i − x_j‖ < 8 % D and edge-graph distance > 10 % D, weld the k closest (union-find, smallest id survives with its position) | k = 5·2^{s−1} pairs |
+//! | `topology` | among pairs with ‖x_i − x_j‖ < 8 % D and edge-graph distance > 10 % D, weld the k closest, skipping a pair whose weld would make a face degenerate (union-find, smallest id survives with its position) | k = 5·2^{s−1} pairs |
 //! | `microholes` | delete k random seed vertices and their 1-rings; seeds ≥ 4 hops apart; keep the largest piece | k = 10·2^{s−1} |
 //! | `holes` | delete edge-graph geodesic balls around 4 random seeds (≥ 30 % D apart); keep the largest piece | radius = 2.5 %·s·D |
 //! | `scale` | x ← βx | β = 1.25, 0.6, 2, 0.4, 4 |
@@ -273,7 +273,7 @@ pub fn parameter_table() -> serde_json::Value {
     json!({
         "units": "D = bounding-box diagonal of the base mesh, mean_edge = mean edge length of the base mesh",
         "isometry": {"recipe": "skinning bend about a random joint plane through a random vertex; smoothstep weight over the band |signed distance| < half_width; rotation by w*theta about a random axis in the plane", "half_width_D": BEND_HALF_WIDTH, "theta_deg": per(&|s| json!(bend_angle_deg(s)))},
-        "topology": {"recipe": "among vertex pairs closer than max_distance whose edge-graph distance exceeds min_graph_distance, weld the `pairs` closest ones (union-find, smallest id survives with its position)", "min_graph_distance_D": WELD_MIN_GRAPH_DISTANCE, "max_distance_D": WELD_MAX_DISTANCE, "pairs": per(&|s| json!(weld_pair_count(s)))},
+        "topology": {"recipe": "among vertex pairs closer than max_distance whose edge-graph distance exceeds min_graph_distance, weld the `pairs` closest ones, skipping pairs whose weld would leave a face of area < 1e-6 mean face area (union-find, smallest id survives with its position)", "min_graph_distance_D": WELD_MIN_GRAPH_DISTANCE, "max_distance_D": WELD_MAX_DISTANCE, "pairs": per(&|s| json!(weld_pair_count(s)))},
         "microholes": {"recipe": "delete random seed vertices with their 1-ring vertices (seeds at least `separation_hops` apart), keep the largest connected piece", "separation_hops": MICRO_HOLE_SEPARATION, "holes": per(&|s| json!(micro_hole_count(s)))},
         "holes": {"recipe": "delete edge-graph geodesic balls around random seeds at least separation apart, keep the largest connected piece", "seeds": BIG_HOLE_COUNT, "separation_D": BIG_HOLE_SEPARATION, "radius_D": per(&|s| json!(big_hole_radius(s)))},
         "scale": {"recipe": "x <- beta x", "beta": SCALE_FACTORS},
@@ -455,9 +455,24 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
                 .map(|[i, j]| (norm(sub(p[i as usize], p[j as usize])), [i, j]))
                 .collect();
             candidates.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            candidates.truncate(wanted);
-            let welds: Vec<[u32; 2]> = candidates.iter().map(|c| c.1).collect();
-            let eps = candidates.last().map_or(0.0, |c| c.0);
+            // Greedy in order of distance: a pair is taken only if the welded mesh keeps every
+            // face clearly non-degenerate (a weld can make three corners collinear).
+            let min_area = 1e-6 * base.mesh.area() / base.mesh.n_faces() as f64;
+            let mut welds: Vec<[u32; 2]> = Vec::new();
+            let mut last_distance = 0.0;
+            for (tries, &(dist_ij, pair)) in candidates.iter().enumerate() {
+                if welds.len() == wanted || tries >= 4 * wanted + 100 {
+                    break;
+                }
+                welds.push(pair);
+                let trial = weld_vertices(&base.mesh, &welds)?;
+                if (0..trial.mesh.n_faces()).all(|f| trial.mesh.face_area(f) > min_area) {
+                    last_distance = dist_ij;
+                } else {
+                    welds.pop();
+                }
+            }
+            let eps = last_distance;
             let derived = weld_vertices(&base.mesh, &welds)?;
             let merged = n - derived.mesh.n_vertices();
             Ok(from_derived(
@@ -604,7 +619,7 @@ pub fn validate_output(t: &Transformed, n_base: usize, diameter: f64) -> Result<
             return Err(format!("face {f} repeats a vertex: {face:?}"));
         }
         let a = m.face_area(f);
-        if !(a > min_area) {
+        if a.is_nan() || a <= min_area {
             return Err(format!("face {f} {face:?} is degenerate (area {a:e})"));
         }
     }

@@ -382,7 +382,7 @@ pub fn weld_vertices(mesh: &TriMesh, pairs: &[[u32; 2]]) -> Result<DerivedMesh, 
 /// All vertex pairs (i, j), i < j, with ‖x_i − x_j‖ < `eps`, sorted, found with a uniform
 /// hash grid of cell size `eps` (expected O(n + #pairs)). Returns nothing for `eps ≤ 0`.
 pub fn close_pairs(positions: &[[f64; 3]], eps: f64) -> Vec<[u32; 2]> {
-    if !(eps > 0.0) || !eps.is_finite() {
+    if eps.is_nan() || eps <= 0.0 || eps.is_infinite() {
         return Vec::new();
     }
     let cell = |p: [f64; 3]| p.map(|c| (c / eps).floor() as i64);
@@ -521,10 +521,13 @@ impl QemDecimator {
     /// # Errors
     /// [`MeshError::Invalid`] if a parameter is not finite or out of range.
     pub fn new(mesh: &TriMesh, params: QemParams) -> Result<Self, MeshError> {
-        if !(params.length_weight >= 0.0 && params.length_weight.is_finite())
-            || !(params.min_normal_cos > -1.0 && params.min_normal_cos < 1.0)
-            || !(params.min_quality >= 0.0 && params.min_quality < 1.0)
-        {
+        let ok = params.length_weight >= 0.0
+            && params.length_weight.is_finite()
+            && params.min_normal_cos > -1.0
+            && params.min_normal_cos < 1.0
+            && params.min_quality >= 0.0
+            && params.min_quality < 1.0;
+        if !ok {
             return Err(MeshError::Invalid {
                 reason: format!("QEM parameters out of range: {params:?}"),
             });
@@ -667,7 +670,7 @@ impl QemDecimator {
             let n_old = cross(sub(old[1], old[0]), sub(old[2], old[0]));
             let n_new = cross(sub(new[1], new[0]), sub(new[2], new[0]));
             let (l_old, l_new) = (norm(n_old), norm(n_new));
-            if !(l_new > 0.0) || dot(n_old, n_new) < self.params.min_normal_cos * l_old * l_new {
+            if l_new.is_nan() || l_new <= 0.0 || dot(n_old, n_new) < self.params.min_normal_cos * l_old * l_new {
                 return false;
             }
             let q_new = quality(new[0], new[1], new[2]);
@@ -717,8 +720,8 @@ impl QemDecimator {
         self.vertex_alive[u as usize] = false;
         self.n_alive -= 1;
         let qu = self.quadrics[u as usize];
-        for k in 0..10 {
-            self.quadrics[v as usize][k] += qu[k];
+        for (qv, x) in self.quadrics[v as usize].iter_mut().zip(qu) {
+            *qv += x;
         }
         let mut affected = self.neighbors(v);
         affected.push(v);
