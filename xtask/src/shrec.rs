@@ -21,6 +21,7 @@
 //! | `localscale` | x ← c + (1 + (β−1)w)(x − c), w = exp(−d_g(x,c)²/(2ρ²)), c a random vertex | β = 1 + 0.2s, ρ = 10 % D |
 //! | `noise` | x ← x + σz, z ~ N(0, I₃) per vertex | σ = 0.1·s·ℓ̄ |
 //! | `shotnoise` | a random fraction p of the vertices moves by ±a·n̂ (random sign) | p = 0.5 %·s, a = 5ℓ̄ |
+//! | `pose` | another TOSCA pose of the family (real near-isometry); ground truth from `corres/*.vts`, −1 where unknown | rank round((s−1)(m−1)/4) of the m poses sorted by Kabsch RMS deformation |
 //! | `sampling` | QEM half-edge collapse ([`mesh_fem::transform::QemDecimator`]); survivors keep positions | keep 80, 60, 40, 20, 10 % |
 //!
 //! Every output is validated before it is written ([`validate_output`]).
@@ -172,11 +173,28 @@ pub enum Class {
     ShotNoise,
     /// Down-sampling by QEM half-edge collapse.
     Sampling,
+    /// Real near-isometries: the other TOSCA poses of the base shape's family, ordered by
+    /// how far they are from a rigid motion, with ground truth from `corres/*.vts`.
+    Pose,
 }
 
 impl Class {
-    /// All classes, in SHREC'10 order.
-    pub const ALL: [Class; 9] = [
+    /// All classes: the nine synthetic ones, then [`Class::Pose`] (needs TOSCA pose files).
+    pub const ALL: [Class; 10] = [
+        Class::Isometry,
+        Class::Topology,
+        Class::MicroHoles,
+        Class::Holes,
+        Class::Scale,
+        Class::LocalScale,
+        Class::Noise,
+        Class::ShotNoise,
+        Class::Sampling,
+        Class::Pose,
+    ];
+
+    /// The nine synthetic classes, in SHREC'10 order; they work on any mesh.
+    pub const SYNTHETIC: [Class; 9] = [
         Class::Isometry,
         Class::Topology,
         Class::MicroHoles,
@@ -200,6 +218,7 @@ impl Class {
             Class::Noise => "noise",
             Class::ShotNoise => "shotnoise",
             Class::Sampling => "sampling",
+            Class::Pose => "pose",
         }
     }
 
@@ -267,6 +286,13 @@ pub const SHOT_AMPLITUDE: f64 = 5.0;
 /// Fraction of the vertices kept by the sampling class for s = 1…5.
 pub const SAMPLING_KEEP: [f64; 5] = [0.8, 0.6, 0.4, 0.2, 0.1];
 
+/// Which of the `m` poses (sorted by increasing deformation) strength s uses: the
+/// (s−1)/4 quantile, k = round((s−1)(m−1)/4). With fewer than 5 poses some strengths share
+/// a pose.
+pub fn pose_index(s: u8, m: usize) -> usize {
+    ((s as f64 - 1.0) * (m as f64 - 1.0) / 4.0).round() as usize
+}
+
 /// The parameter table (class → strength → parameters) recorded in the manifest.
 pub fn parameter_table() -> serde_json::Value {
     let per = |f: &dyn Fn(u8) -> serde_json::Value| (1..=5u8).map(f).collect::<Vec<_>>();
@@ -280,6 +306,7 @@ pub fn parameter_table() -> serde_json::Value {
         "localscale": {"recipe": "x <- c + (1 + (beta-1) w)(x - c), w = exp(-d_g(x,c)^2 / (2 rho^2)), c a random vertex, d_g edge-graph distance", "rho_D": LOCAL_SCALE_WIDTH, "beta": per(&|s| json!(local_scale_factor(s)))},
         "noise": {"recipe": "x <- x + sigma z, z ~ N(0, I3)", "sigma_mean_edge": per(&|s| json!(noise_sigma(s)))},
         "shotnoise": {"recipe": "a random fraction of the vertices moves by +-amplitude along the unit vertex normal", "amplitude_mean_edge": SHOT_AMPLITUDE, "fraction": per(&|s| json!(shot_fraction(s)))},
+        "pose": {"recipe": "another TOSCA pose of the same family; poses sorted by deformation = Kabsch-aligned RMS distance of corresponding points / D; strength s takes rank round((s-1)(m-1)/4) of m poses; ground truth from corres/*.vts (row i of two files = same point), -1 where no row names the vertex"},
         "sampling": {"recipe": "QEM half-edge collapse (mesh_fem::transform::QemDecimator, default QemParams); surviving vertices keep position and identity", "keep_fraction": SAMPLING_KEEP},
     })
 }
@@ -318,9 +345,154 @@ pub struct BaseShape {
     pub diameter: f64,
     /// ℓ̄: the mean edge length.
     pub mean_edge: f64,
+    /// Other poses of the same family, sorted by increasing [`Pose::deformation`] (empty
+    /// unless loaded with [`BaseShape::load_poses`]).
+    pub poses: Vec<Pose>,
+}
+
+/// Another pose of a base shape's family with its ground truth.
+#[derive(Clone, Debug)]
+pub struct Pose {
+    /// Pose name (file stem), e.g. `cat3`.
+    pub name: String,
+    /// The pose mesh.
+    pub mesh: TriMesh,
+    /// For each pose vertex, the base vertex at the same body point (−1: none).
+    pub ground_truth: Vec<i64>,
+    /// Non-rigidity: RMS distance, after the best rigid alignment (Kabsch), between the
+    /// corresponding points of the pose and the base, divided by D.
+    pub deformation: f64,
+}
+
+/// Reads a `.vts` file: one 1-based vertex index per line.
+fn read_vts(path: &Path, n_vertices: usize) -> Result<Vec<u32>, ShrecError> {
+    let text = std::fs::read_to_string(path).map_err(|source| {
+        ShrecError::Mesh(MeshError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    })?;
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| {
+            let v: usize = l.trim().parse().map_err(|_| {
+                ShrecError::Argument(format!("{}:{}: not a vertex index: {l:?}", path.display(), i + 1))
+            })?;
+            if v == 0 || v > n_vertices {
+                return Err(ShrecError::Argument(format!(
+                    "{}:{}: 1-based index {v} outside 1..={n_vertices}",
+                    path.display(),
+                    i + 1
+                )));
+            }
+            Ok((v - 1) as u32)
+        })
+        .collect()
+}
+
+/// Best rigid alignment residual: min over rotations R and translations t of
+/// sqrt(mean ‖R a_i + t − b_i‖²), via the Kabsch algorithm (3×3 SVD with faer).
+fn kabsch_rms(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let m = a.len() as f64;
+    let ca = [0, 1, 2].map(|k| a.iter().map(|p| p[k]).sum::<f64>() / m);
+    let cb = [0, 1, 2].map(|k| b.iter().map(|p| p[k]).sum::<f64>() / m);
+    let mut h = faer::Mat::<f64>::zeros(3, 3);
+    let (mut sa, mut sb) = (0.0, 0.0);
+    for (p, q) in a.iter().zip(b) {
+        let x = sub(*p, ca);
+        let y = sub(*q, cb);
+        sa += dot(x, x);
+        sb += dot(y, y);
+        for i in 0..3 {
+            for j in 0..3 {
+                h[(i, j)] += x[i] * y[j];
+            }
+        }
+    }
+    // Σ‖R x − y‖² = Σ‖x‖² + Σ‖y‖² − 2 tr(R H) and max_R tr(RH) = σ₁ + σ₂ ± σ₃ (sign of det H).
+    let Ok(svd) = h.svd() else {
+        return f64::NAN;
+    };
+    let sigma = svd.S().column_vector();
+    let det = h.determinant();
+    let trace = sigma[0] + sigma[1] + if det < 0.0 { -sigma[2] } else { sigma[2] };
+    ((sa + sb - 2.0 * trace).max(0.0) / m).sqrt()
 }
 
 impl BaseShape {
+    /// Loads the other poses of the family from the base file's folder: files
+    /// `<family><k>.off` with `corres/<family><k>.vts`, where the base file is
+    /// `<family><k0>.off` with `corres/<family><k0>.vts`. Row i of two `.vts` files names
+    /// the same body point (TOSCA / BCICP convention); a pose vertex named by no row gets −1.
+    /// Poses are sorted by increasing deformation.
+    ///
+    /// # Errors
+    /// Unreadable pose or `.vts` files. A base without a `.vts` file simply has no poses.
+    pub fn load_poses(&mut self, base_file: &Path) -> Result<(), ShrecError> {
+        let dir = base_file.parent().unwrap_or(Path::new("."));
+        let family = self.name.trim_end_matches(|c: char| c.is_ascii_digit()).to_string();
+        let base_vts_path = dir.join("corres").join(format!("{}.vts", self.name));
+        if !base_vts_path.is_file() {
+            return Ok(());
+        }
+        let base_vts = read_vts(&base_vts_path, self.mesh.n_vertices())?;
+        let entries = std::fs::read_dir(dir).map_err(|source| {
+            ShrecError::Mesh(MeshError::Io {
+                path: dir.to_path_buf(),
+                source,
+            })
+        })?;
+        let mut names: Vec<String> = entries
+            .filter_map(|e| e.ok())
+            .filter_map(|e| e.file_name().to_str().map(str::to_string))
+            .filter_map(|f| f.strip_suffix(".off").map(str::to_string))
+            .filter(|stem| {
+                stem.strip_prefix(&family)
+                    .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+                    && *stem != self.name
+            })
+            .collect();
+        names.sort();
+        let mut poses = Vec::new();
+        for name in names {
+            let vts_path = dir.join("corres").join(format!("{name}.vts"));
+            if !vts_path.is_file() {
+                continue;
+            }
+            let (mesh, _) =
+                mesh_fem::io::load(&dir.join(format!("{name}.off")), &mesh_fem::io::LoadOptions::default())?;
+            let vts = read_vts(&vts_path, mesh.n_vertices())?;
+            if vts.len() != base_vts.len() {
+                return Err(ShrecError::Argument(format!(
+                    "{} has {} rows but {} has {}",
+                    vts_path.display(),
+                    vts.len(),
+                    base_vts_path.display(),
+                    base_vts.len()
+                )));
+            }
+            let mut ground_truth = vec![-1i64; mesh.n_vertices()];
+            for (&pv, &bv) in vts.iter().zip(&base_vts) {
+                if ground_truth[pv as usize] < 0 {
+                    ground_truth[pv as usize] = bv as i64;
+                }
+            }
+            let a: Vec<[f64; 3]> = base_vts.iter().map(|&v| self.mesh.positions()[v as usize]).collect();
+            let b: Vec<[f64; 3]> = vts.iter().map(|&v| mesh.positions()[v as usize]).collect();
+            let deformation = kabsch_rms(&a, &b) / self.diameter;
+            poses.push(Pose {
+                name,
+                mesh,
+                ground_truth,
+                deformation,
+            });
+        }
+        poses.sort_by(|x, y| x.deformation.total_cmp(&y.deformation).then(x.name.cmp(&y.name)));
+        self.poses = poses;
+        Ok(())
+    }
+
     /// Prepares a base shape.
     ///
     /// # Errors
@@ -338,6 +510,7 @@ impl BaseShape {
             graph,
             diameter,
             mean_edge,
+            poses: Vec::new(),
         })
     }
 }
@@ -402,6 +575,22 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
     let n = p.len();
     let d = base.diameter;
     match class {
+        Class::Pose => {
+            let m = base.poses.len();
+            if m == 0 {
+                return Err(ShrecError::Argument(format!(
+                    "{}: no other poses with ground truth were loaded (see BaseShape::load_poses)",
+                    base.name
+                )));
+            }
+            let k = pose_index(s, m);
+            let pose = &base.poses[k];
+            Ok(Transformed {
+                mesh: pose.mesh.clone(),
+                ground_truth: pose.ground_truth.clone(),
+                params: json!({"pose": pose.name, "deformation_D": pose.deformation, "rank": k, "poses_available": m}),
+            })
+        }
         Class::Isometry => {
             let c = p[rng.below(n)];
             let m = rng.unit_vector();
@@ -790,7 +979,10 @@ pub fn generate(opts: &GenerateOptions) -> Result<Manifest, ShrecError> {
     for name in &opts.shapes {
         let (stem, file) = base_file(&opts.meshes_dir, name)?;
         let (mesh, _) = mesh_fem::io::load(&file, &mesh_fem::io::LoadOptions::default())?;
-        let shape = BaseShape::new(&stem, mesh)?;
+        let mut shape = BaseShape::new(&stem, mesh)?;
+        if opts.classes.contains(&Class::Pose) {
+            shape.load_poses(&file)?;
+        }
         make_dir(&opts.out_dir.join(&stem))?;
         let null = Transformed {
             ground_truth: identity_gt(shape.mesh.n_vertices()),

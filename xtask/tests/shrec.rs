@@ -86,7 +86,7 @@ fn splitmix64_reference_values_and_normals() {
 #[test]
 fn every_class_and_strength_gives_a_valid_mesh() {
     let b = base();
-    for class in Class::ALL {
+    for class in Class::SYNTHETIC {
         for s in 1..=5 {
             let t = run(&b, class, s, 7);
             assert!(t
@@ -95,6 +95,7 @@ fn every_class_and_strength_gives_a_valid_mesh() {
                 .all(|&g| g >= 0 && (g as usize) < b.mesh.n_vertices()));
         }
     }
+    assert!(transform(&b, Class::Pose, 1, 7).is_err(), "no poses loaded");
     assert!(transform(&b, Class::Noise, 0, 7).is_err());
     assert!(transform(&b, Class::Noise, 6, 7).is_err());
 }
@@ -429,4 +430,101 @@ fn generator_on_a_real_shape_writes_files_and_manifest() {
     // Same seed again: identical manifest.
     let again = generate(&opts).unwrap();
     assert_eq!(again, manifest);
+}
+
+/// A synthetic family in a temporary folder: fam0 = base, fam1 = rigidly moved copy,
+/// fam2 = rigidly moved copy with known noise; identity `.vts` files.
+#[test]
+fn poses_are_ranked_by_kabsch_deformation_with_vts_ground_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("corres")).unwrap();
+    let m = bumpy(2);
+    let n = m.n_vertices();
+    let (c, s) = (0.6f64.cos(), 0.6f64.sin());
+    let rigid = |p: [f64; 3]| [c * p[0] - s * p[1] + 3.0, s * p[0] + c * p[1] - 1.0, p[2] + 0.5];
+    let moved: Vec<[f64; 3]> = m.positions().iter().map(|&p| rigid(p)).collect();
+    let mut rng = SplitMix64::new(9);
+    let sigma = 0.01;
+    let noisy: Vec<[f64; 3]> = moved
+        .iter()
+        .map(|p| {
+            [
+                p[0] + sigma * rng.normal(),
+                p[1] + sigma * rng.normal(),
+                p[2] + sigma * rng.normal(),
+            ]
+        })
+        .collect();
+    let noise_rms = (moved.iter().zip(&noisy).map(|(a, b)| dist(*a, *b).powi(2)).sum::<f64>() / n as f64).sqrt();
+    // The pose files list vertices in reverse order to exercise the .vts mapping.
+    let rev = |p: &[[f64; 3]]| p.iter().rev().copied().collect::<Vec<_>>();
+    let rev_faces: Vec<[u32; 3]> = m.faces().iter().map(|f| f.map(|v| (n - 1) as u32 - v)).collect();
+    let ids: String = (1..=n).map(|i| format!("{i}\n")).collect();
+    let rev_ids: String = (1..=n).map(|i| format!("{}\n", n + 1 - i)).collect();
+    mesh_fem::io::write_mesh(&dir.path().join("fam0.off"), &m).unwrap();
+    mesh_fem::io::write_mesh(
+        &dir.path().join("fam1.off"),
+        &TriMesh::new(rev(&noisy), rev_faces.clone()).unwrap(),
+    )
+    .unwrap();
+    mesh_fem::io::write_mesh(
+        &dir.path().join("fam2.off"),
+        &TriMesh::new(rev(&moved), rev_faces).unwrap(),
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("corres/fam0.vts"), &ids).unwrap();
+    std::fs::write(dir.path().join("corres/fam1.vts"), &rev_ids).unwrap();
+    std::fs::write(dir.path().join("corres/fam2.vts"), &rev_ids).unwrap();
+    let mut b = BaseShape::new("fam0", m.clone()).unwrap();
+    b.load_poses(&dir.path().join("fam0.off")).unwrap();
+    assert_eq!(b.poses.len(), 2);
+    assert_eq!(b.poses[0].name, "fam2", "the rigid copy has the smallest deformation");
+    assert!(b.poses[0].deformation < 1e-12, "{}", b.poses[0].deformation);
+    // Kabsch residual of noise is at most its RMS (the identity alignment), and close to it.
+    let d1 = b.poses[1].deformation * b.diameter;
+    assert!(
+        d1 <= noise_rms * (1.0 + 1e-12) && d1 > 0.95 * noise_rms,
+        "{d1} vs {noise_rms}"
+    );
+    for s in 1..=5u8 {
+        let t = run(&b, Class::Pose, s, 0);
+        // Ground truth through the reversed .vts: pose vertex i is base vertex n−1−i, and the
+        // positions agree up to the rigid motion (and the noise for fam1).
+        for (i, &g) in t.ground_truth.iter().enumerate() {
+            assert_eq!(g as usize, n - 1 - i);
+            let want = rigid(m.positions()[g as usize]);
+            assert!(dist(t.mesh.positions()[i], want) < 6.0 * sigma);
+        }
+    }
+    assert_eq!(pose_index(1, 2), 0);
+    assert_eq!(pose_index(5, 2), 1);
+    assert_eq!(pose_index(3, 9), 4);
+}
+
+#[test]
+fn tosca_cat_poses_have_ground_truth() {
+    let file = mesh_fem::corpus::mesh_path("tosca-bcicp-5k/TOSCA_Isometric/cat0.off").unwrap();
+    let (mesh, _) = mesh_fem::io::load(&file, &mesh_fem::io::LoadOptions::default()).unwrap();
+    let mut b = BaseShape::new("cat0", mesh).unwrap();
+    b.load_poses(&file).unwrap();
+    assert_eq!(b.poses.len(), 10);
+    assert!(b.poses.windows(2).all(|w| w[0].deformation <= w[1].deformation));
+    for s in [1u8, 5] {
+        let t = run(&b, Class::Pose, s, 0);
+        let mapped = t.ground_truth.iter().filter(|&&g| g >= 0).count();
+        assert!(mapped as f64 > 0.5 * t.mesh.n_vertices() as f64, "only {mapped} mapped");
+        // Neighbours map to nearby base points: mean base distance of the images of the
+        // ends of a pose edge is a few base edge lengths.
+        let (mut sum, mut count) = (0.0, 0.0);
+        for f in t.mesh.faces() {
+            for k in 0..3 {
+                let (gi, gj) = (t.ground_truth[f[k] as usize], t.ground_truth[f[(k + 1) % 3] as usize]);
+                if gi >= 0 && gj >= 0 {
+                    sum += dist(b.mesh.positions()[gi as usize], b.mesh.positions()[gj as usize]);
+                    count += 1.0;
+                }
+            }
+        }
+        assert!(sum / count < 3.0 * b.mean_edge, "s={s}: {}", sum / count / b.mean_edge);
+    }
 }
