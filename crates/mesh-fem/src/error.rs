@@ -111,4 +111,24 @@ pub enum MeshError {
         /// What was wrong.
         message: String,
     },
+    // ---- variants added by the validate/stats/mtx work (branch `validate`) ----
+    /// A repair option has an invalid value.
+    #[error("invalid repair option {option}: {message}")]
+    InvalidRepairOption {
+        /// The option's name.
+        option: &'static str,
+        /// What was wrong.
+        message: String,
+    },
+    /// A line of a Matrix Market file could not be parsed.
+    #[error("{path}:{line}: matrix market: {message}")]
+    MatrixMarketLine {
+        /// File read.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What was wrong.
+        message: String,
+    },
+    // ---- end of variants added by the validate/stats/mtx work ----
 }

@@ -19,6 +19,7 @@
 
 mod error;
 mod mesh;
+mod topology;
 
 pub mod corpus;
 pub mod generate;
@@ -31,3 +32,6 @@ pub mod validate;
 pub use error::MeshError;
 pub use mesh::TriMesh;
 pub use operators::{assemble, AssemblyParams, FemOperators, LumpedMassKind};
+pub use mtx::{read_matrix_market, write_matrix_market, write_operators};
+pub use stats::{stats, MeshStats};
+pub use validate::{repair, validate, Problem, RepairOptions, RepairReport, Severity, ValidationReport};
