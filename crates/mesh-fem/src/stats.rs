@@ -6,7 +6,10 @@
 //! * χ = V_used − E + F, with V_used the vertices that belong to a face and E the number of
 //!   distinct undirected edges;
 //! * a **boundary edge** has exactly one face; **boundary loops** are the cycles of boundary
-//!   edges, joined where they meet inside one fan of faces around a vertex;
+//!   edges, joined where they meet inside one fan of faces around a vertex. On a manifold
+//!   mesh this is the usual count; where loops touch at a pinched (non-manifold) vertex they
+//!   stay separate loops, so on such meshes the count can exceed the number of connected
+//!   components of the boundary-edge graph that `SOURCES.md` lists (teapot.obj: 25 vs 10);
 //! * **manifold**: every edge has at most two faces and the faces around every vertex form
 //!   a single fan; **closed**: no boundary edge and no non-manifold edge;
 //! * genus g = (2 − χ − b)/2 for a connected, manifold, orientable mesh with b boundary loops.
