@@ -31,7 +31,7 @@ pub mod validate;
 
 pub use error::MeshError;
 pub use mesh::TriMesh;
-pub use operators::{assemble, AssemblyParams, FemOperators, LumpedMassKind};
 pub use mtx::{read_matrix_market, write_matrix_market, write_operators};
+pub use operators::{assemble, AssemblyParams, FemOperators, LumpedMassKind};
 pub use stats::{stats, MeshStats};
 pub use validate::{repair, validate, Problem, RepairOptions, RepairReport, Severity, ValidationReport};

@@ -86,10 +86,7 @@ pub fn write_matrix_market(
     if symmetric {
         check_symmetric(path, matrix.nrows(), matrix.ncols(), &entries)?;
     }
-    let kept: Vec<&(usize, usize, f64)> = entries
-        .iter()
-        .filter(|&&(i, j, _)| !symmetric || i >= j)
-        .collect();
+    let kept: Vec<&(usize, usize, f64)> = entries.iter().filter(|&&(i, j, _)| !symmetric || i >= j).collect();
     write_atomically(path, |w| {
         writeln!(
             w,
@@ -133,12 +130,7 @@ fn sorted_entries(matrix: &SparseColMat<usize, f64>) -> Vec<(usize, usize, f64)>
     out
 }
 
-fn check_symmetric(
-    path: &Path,
-    nrows: usize,
-    ncols: usize,
-    entries: &[(usize, usize, f64)],
-) -> Result<(), MeshError> {
+fn check_symmetric(path: &Path, nrows: usize, ncols: usize, entries: &[(usize, usize, f64)]) -> Result<(), MeshError> {
     if nrows != ncols {
         return Err(mm_err(
             path,
@@ -171,13 +163,12 @@ fn check_symmetric(
         if order != Less {
             q += 1;
         }
-        if !((va - vb).abs() <= tol) {
+        let close = (va - vb).abs() <= tol;
+        if !close {
             let (j, i) = key;
             return Err(mm_err(
                 path,
-                format!(
-                    "matrix is not symmetric: entry ({i}, {j}) = {va} but ({j}, {i}) = {vb} (0-based)"
-                ),
+                format!("matrix is not symmetric: entry ({i}, {j}) = {va} but ({j}, {i}) = {vb} (0-based)"),
             ));
         }
     }
@@ -215,12 +206,20 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseColMat<usize, 
         ));
     }
     if words[2] != "coordinate" {
-        return Err(mm_err(path, format!("only the coordinate format is supported, not {:?}", words[2])));
+        return Err(mm_err(
+            path,
+            format!("only the coordinate format is supported, not {:?}", words[2]),
+        ));
     }
     let pattern = match words[3].as_str() {
         "real" | "double" | "integer" => false,
         "pattern" => true,
-        other => return Err(mm_err(path, format!("unsupported field {other:?} (real, integer or pattern)"))),
+        other => {
+            return Err(mm_err(
+                path,
+                format!("unsupported field {other:?} (real, integer or pattern)"),
+            ))
+        }
     };
     #[derive(PartialEq)]
     enum Sym {
@@ -253,10 +252,16 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseColMat<usize, 
         .collect::<Result<_, _>>()
         .map_err(|e| line_err(size_line, format!("bad size line {size:?}: {e}")))?;
     let [nrows, ncols, nnz] = dims[..] else {
-        return Err(line_err(size_line, format!("the size line needs `rows cols entries`, got {size:?}")));
+        return Err(line_err(
+            size_line,
+            format!("the size line needs `rows cols entries`, got {size:?}"),
+        ));
     };
     if sym != Sym::General && nrows != ncols {
-        return Err(line_err(size_line, format!("a symmetric matrix must be square, got {nrows} × {ncols}")));
+        return Err(line_err(
+            size_line,
+            format!("a symmetric matrix must be square, got {nrows} × {ncols}"),
+        ));
     }
 
     let mut triplets: Vec<Triplet<usize, usize, f64>> =
@@ -272,9 +277,7 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseColMat<usize, 
             let w = it
                 .next()
                 .ok_or_else(|| line_err(ln, format!("missing {what} index in {l:?}")))?;
-            let i: usize = w
-                .parse()
-                .map_err(|_| line_err(ln, format!("bad {what} index {w:?}")))?;
+            let i: usize = w.parse().map_err(|_| line_err(ln, format!("bad {what} index {w:?}")))?;
             if i == 0 || i > bound {
                 return Err(line_err(ln, format!("{what} index {i} is outside 1..={bound}")));
             }
@@ -316,7 +319,10 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseColMat<usize, 
         }
     }
     if count != nnz {
-        return Err(mm_err(path, format!("the size line announces {nnz} entries but the file has {count}")));
+        return Err(mm_err(
+            path,
+            format!("the size line announces {nnz} entries but the file has {count}"),
+        ));
     }
     SparseColMat::try_new_from_triplets(nrows, ncols, &triplets)
         .map_err(|e| mm_err(path, format!("cannot build the matrix: {e:?}")))
@@ -359,14 +365,8 @@ pub fn to_nalgebra_csc(matrix: &SparseColMat<usize, f64>) -> nalgebra_sparse::Cs
     }
     let row_indices = entries.iter().map(|e| e.0).collect();
     let values = entries.iter().map(|e| e.2).collect();
-    nalgebra_sparse::CscMatrix::try_from_csc_data(
-        matrix.nrows(),
-        matrix.ncols(),
-        col_offsets,
-        row_indices,
-        values,
-    )
-    .expect("sorted, deduplicated, in-range CSC data is valid")
+    nalgebra_sparse::CscMatrix::try_from_csc_data(matrix.nrows(), matrix.ncols(), col_offsets, row_indices, values)
+        .expect("sorted, deduplicated, in-range CSC data is valid")
 }
 
 /// Converts a faer sparse matrix to `nalgebra_sparse::CsrMatrix`.

@@ -14,10 +14,10 @@
 //!   a single fan; **closed**: no boundary edge and no non-manifold edge;
 //! * genus g = (2 − χ − b)/2 for a connected, manifold, orientable mesh with b boundary loops.
 
+use crate::mesh::{cross, dot, norm, sub};
 use crate::topology::Topology;
 use crate::validate::bbox_diagonal;
 use crate::TriMesh;
-use crate::mesh::{cross, dot, norm, sub};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -76,8 +76,8 @@ pub fn stats(mesh: &TriMesh) -> MeshStats {
     let is_manifold = topo.non_manifold_edges.is_empty() && topo.non_manifold_vertices.is_empty();
     let is_orientable = topo.non_orientable_edges.is_empty();
     let b = topo.n_boundary_loops as i64;
-    let genus = (topo.n_components == 1 && is_manifold && is_orientable && (2 - chi - b) % 2 == 0)
-        .then_some((2 - chi - b) / 2);
+    let genus =
+        (topo.n_components == 1 && is_manifold && is_orientable && (2 - chi - b) % 2 == 0).then_some((2 - chi - b) / 2);
 
     let total_length: f64 = topo
         .edges

@@ -239,9 +239,7 @@ impl Topology {
             }
         }
         drop(first_fan);
-        let non_manifold_vertices: Vec<u32> = (0..n_vertices as u32)
-            .filter(|&v| pinched[v as usize])
-            .collect();
+        let non_manifold_vertices: Vec<u32> = (0..n_vertices as u32).filter(|&v| pinched[v as usize]).collect();
 
         // Boundary loops: boundary edges meeting in the same fan belong to the same loop.
         let boundary: Vec<u32> = (0..n_edges as u32)
@@ -261,9 +259,7 @@ impl Topology {
             }
         }
         drop(fan_edge);
-        let n_boundary_loops = (0..boundary.len() as u32)
-            .filter(|&i| loops.find(i) == i)
-            .count();
+        let n_boundary_loops = (0..boundary.len() as u32).filter(|&i| loops.find(i) == i).count();
 
         // Connected components of the referenced vertices.
         let mut comps = UnionFind::new(n_vertices);

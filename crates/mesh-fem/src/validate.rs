@@ -133,9 +133,9 @@ impl Problem {
     /// Severity of this kind of problem.
     pub fn severity(&self) -> Severity {
         match self {
-            Problem::RepeatedIndex { .. }
-            | Problem::ZeroAreaFace { .. }
-            | Problem::UnreferencedVertex { .. } => Severity::Error,
+            Problem::RepeatedIndex { .. } | Problem::ZeroAreaFace { .. } | Problem::UnreferencedVertex { .. } => {
+                Severity::Error
+            }
             _ => Severity::Warning,
         }
     }
@@ -147,9 +147,7 @@ impl Problem {
                 face,
                 vertices: vertices.to_vec(),
             }),
-            Problem::ZeroAreaFace { face, vertices } => {
-                Some(MeshError::DegenerateFace { face, vertices })
-            }
+            Problem::ZeroAreaFace { face, vertices } => Some(MeshError::DegenerateFace { face, vertices }),
             Problem::UnreferencedVertex { vertex } => Some(MeshError::UnreferencedVertex { vertex }),
             _ => None,
         }
@@ -282,11 +280,7 @@ impl ValidationReport {
                 continue;
             }
             seen.push(d);
-            let count = self
-                .problems
-                .iter()
-                .filter(|q| std::mem::discriminant(*q) == d)
-                .count();
+            let count = self.problems.iter().filter(|q| std::mem::discriminant(*q) == d).count();
             let tag = match p.severity() {
                 Severity::Error => "error",
                 Severity::Warning => "warning",
@@ -300,9 +294,7 @@ impl ValidationReport {
                 Problem::RepeatedIndex { .. } | Problem::ZeroAreaFace { .. } => {
                     "; fix: RepairOptions::drop_degenerate_faces"
                 }
-                Problem::UnreferencedVertex { .. } => {
-                    "; fix: RepairOptions::drop_unreferenced_vertices"
-                }
+                Problem::UnreferencedVertex { .. } => "; fix: RepairOptions::drop_unreferenced_vertices",
                 Problem::NonManifoldEdge { .. } | Problem::NonManifoldVertex { .. } => {
                     "; FEM assembly is per face, so the operators still assemble"
                 }
@@ -534,10 +526,7 @@ impl RepairReport {
             ));
         }
         if self.dropped_vertices > 0 {
-            lines.push(format!(
-                "  dropped {} unreferenced vertices",
-                self.dropped_vertices
-            ));
+            lines.push(format!("  dropped {} unreferenced vertices", self.dropped_vertices));
         }
         lines.join("\n")
     }
@@ -586,11 +575,7 @@ pub fn repair(mesh: &TriMesh, opts: &RepairOptions) -> Result<(TriMesh, RepairRe
                 a == b
                     || b == c
                     || a == c
-                    || is_degenerate_triangle([
-                        positions[a as usize],
-                        positions[b as usize],
-                        positions[c as usize],
-                    ])
+                    || is_degenerate_triangle([positions[a as usize], positions[b as usize], positions[c as usize]])
             })
             .collect();
         for (f, &d) in degenerate.iter().enumerate() {
@@ -605,8 +590,10 @@ pub fn repair(mesh: &TriMesh, opts: &RepairOptions) -> Result<(TriMesh, RepairRe
     if opts.drop_duplicate_faces {
         let live: Vec<usize> = (0..faces.len()).filter(|&f| alive[f]).collect();
         let live_faces: Vec<[u32; 3]> = live.iter().map(|&f| faces[f]).collect();
-        let mut dups: Vec<usize> =
-            duplicate_faces(&live_faces).into_iter().map(|(copy, _)| live[copy]).collect();
+        let mut dups: Vec<usize> = duplicate_faces(&live_faces)
+            .into_iter()
+            .map(|(copy, _)| live[copy])
+            .collect();
         dups.sort_unstable();
         for &f in &dups {
             alive[f] = false;
@@ -626,8 +613,7 @@ pub fn repair(mesh: &TriMesh, opts: &RepairOptions) -> Result<(TriMesh, RepairRe
                 report.flipped_faces.push(f);
             }
         }
-        report.non_orientable_components =
-            topo.component_non_orientable.iter().filter(|&&x| x).count();
+        report.non_orientable_components = topo.component_non_orientable.iter().filter(|&&x| x).count();
     }
 
     // 5. Compact: keep merged representatives, drop unreferenced vertices if asked.
@@ -694,7 +680,7 @@ pub(crate) fn bbox_diagonal(positions: &[[f64; 3]]) -> f64 {
 fn merge_representatives(positions: &[[f64; 3]], tol: f64) -> Vec<u32> {
     let n = positions.len();
     let mut rep: Vec<u32> = (0..n as u32).collect();
-    if !(tol > 0.0) {
+    if tol <= 0.0 || tol.is_nan() {
         // Exact coordinates (−0.0 and +0.0 are the same point).
         let key = |p: &[f64; 3]| p.map(|c| if c == 0.0 { 0u64 } else { c.to_bits() });
         let mut first: HashMap<[u64; 3], u32> = HashMap::with_capacity(n);

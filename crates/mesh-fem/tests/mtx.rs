@@ -6,7 +6,9 @@ mod minimal_reader;
 use faer::sparse::{SparseColMat, Triplet};
 use mesh_fem::generate::{bumpy, icosphere};
 use mesh_fem::mtx::{from_nalgebra_csc, to_nalgebra_csc, to_nalgebra_csr};
-use mesh_fem::{assemble, read_matrix_market, stats, write_matrix_market, write_operators, AssemblyParams, MeshError, TriMesh};
+use mesh_fem::{
+    assemble, read_matrix_market, stats, write_matrix_market, write_operators, AssemblyParams, MeshError, TriMesh,
+};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -41,7 +43,11 @@ fn libigl_reference_files_read_and_match_assembly() {
         let s = stats(&mesh);
         let n = mesh.n_vertices();
         let ops = assemble(&mesh, &AssemblyParams::default()).unwrap();
-        for (kind, ours) in [("stiffness", &ops.stiffness), ("mass", &ops.mass), ("lumped_mass", &ops.lumped_mass)] {
+        for (kind, ours) in [
+            ("stiffness", &ops.stiffness),
+            ("mass", &ops.mass),
+            ("lumped_mass", &ops.lumped_mass),
+        ] {
             let m = read_matrix_market(Path::new(REFERENCE).join(format!("{name}_{kind}.mtx"))).unwrap();
             assert_eq!((m.nrows(), m.ncols()), (n, n), "{name} {kind}");
             let e = entries(&m);
@@ -60,7 +66,10 @@ fn libigl_reference_files_read_and_match_assembly() {
             }
             for (&(i, j), &w) in &ours {
                 if !e.contains_key(&(i, j)) {
-                    assert!(w.abs() <= 1e-12 * scale, "{name} {kind}: ({i}, {j}) = {w} missing in file");
+                    assert!(
+                        w.abs() <= 1e-12 * scale,
+                        "{name} {kind}: ({i}, {j}) = {w} missing in file"
+                    );
                 }
             }
         }
@@ -74,7 +83,10 @@ fn libigl_reference_files_read_and_match_assembly() {
         assert!(diag_positive, "{name}: L has positive diagonal");
         assert!(row_sum.iter().all(|r| r.abs() < 1e-10), "{name}: L·1 = 0");
         let b = read_matrix_market(Path::new(REFERENCE).join(format!("{name}_mass.mtx"))).unwrap();
-        assert!((entries(&b).values().sum::<f64>() - s.area).abs() < 1e-12 * s.area, "{name}: 1ᵀB1 = area");
+        assert!(
+            (entries(&b).values().sum::<f64>() - s.area).abs() < 1e-12 * s.area,
+            "{name}: 1ᵀB1 = area"
+        );
     }
 }
 
@@ -83,8 +95,10 @@ fn operators_round_trip_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
     let ops = assemble(&bumpy(2), &AssemblyParams::default()).unwrap();
     write_operators(dir.path(), &ops).unwrap();
-    let mut names: Vec<String> =
-        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
     names.sort();
     // Atomic writes leave no temporary files behind.
     assert_eq!(names, ["lumped_mass.mtx", "mass.mtx", "stiffness.mtx"]);
@@ -138,11 +152,19 @@ fn symmetric_write_checks_symmetry() {
         other => panic!("{other:?}"),
     }
     let m = from_triplets(2, 3, &[(0, 0, 1.0)]);
-    assert!(matches!(write_matrix_market(dir.path().join("b.mtx"), &m, true), Err(MeshError::MatrixMarket { .. })));
+    assert!(matches!(
+        write_matrix_market(dir.path().join("b.mtx"), &m, true),
+        Err(MeshError::MatrixMarket { .. })
+    ));
     // Nothing was left behind by the failed writes.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     // Writing into a folder that does not exist is an I/O error naming the path.
-    let e = write_matrix_market(dir.path().join("no/such/dir/c.mtx"), &from_triplets(1, 1, &[(0, 0, 1.0)]), false).unwrap_err();
+    let e = write_matrix_market(
+        dir.path().join("no/such/dir/c.mtx"),
+        &from_triplets(1, 1, &[(0, 0, 1.0)]),
+        false,
+    )
+    .unwrap_err();
     assert!(matches!(e, MeshError::Io { .. }), "{e}");
 }
 
@@ -158,7 +180,10 @@ fn other_fields_and_symmetries_are_read() {
     let m = read_str("%%MatrixMarket matrix coordinate pattern general\n% comment\n\n2 2 2\n1 2\n2 1\n").unwrap();
     assert_eq!(entries(&m), BTreeMap::from([((0, 1), 1.0), ((1, 0), 1.0)]));
     let m = read_str("%%MatrixMarket matrix coordinate integer symmetric\n3 3 3\n1 1 4\n3 1 -2\n3 3 7\n").unwrap();
-    assert_eq!(entries(&m), BTreeMap::from([((0, 0), 4.0), ((2, 0), -2.0), ((0, 2), -2.0), ((2, 2), 7.0)]));
+    assert_eq!(
+        entries(&m),
+        BTreeMap::from([((0, 0), 4.0), ((2, 0), -2.0), ((0, 2), -2.0), ((2, 2), 7.0)])
+    );
     let m = read_str("%%MatrixMarket matrix coordinate real skew-symmetric\n2 2 1\n2 1 1.5\n").unwrap();
     assert_eq!(entries(&m), BTreeMap::from([((1, 0), 1.5), ((0, 1), -1.5)]));
     // Duplicates are summed; the header is case-insensitive.
@@ -179,8 +204,16 @@ fn malformed_files_name_the_line() {
         (format!("{h}2 2 1\n1 1\n"), 3, "missing value"),
         (format!("{h}2 2 1\n1 1 1 1\n"), 3, "too many fields"),
         (format!("{h}2 2 1\n1 1 1\n2 2 1\n"), 4, "more entries"),
-        ("%%MatrixMarket matrix coordinate real symmetric\n2 2 1\n1 2 1.0\n".to_string(), 3, "above the diagonal"),
-        ("%%MatrixMarket matrix coordinate real symmetric\n2 3 1\n1 1 1.0\n".to_string(), 2, "square"),
+        (
+            "%%MatrixMarket matrix coordinate real symmetric\n2 2 1\n1 2 1.0\n".to_string(),
+            3,
+            "above the diagonal",
+        ),
+        (
+            "%%MatrixMarket matrix coordinate real symmetric\n2 3 1\n1 1 1.0\n".to_string(),
+            2,
+            "square",
+        ),
         ("%%NotMatrixMarket\n1 1 1\n1 1 1\n".to_string(), 1, "header"),
     ];
     for (text, line, needle) in cases {
@@ -194,8 +227,14 @@ fn malformed_files_name_the_line() {
     }
     for (text, needle) in [
         (format!("{h}2 2 3\n1 1 1\n"), "announces 3 entries"),
-        ("%%MatrixMarket matrix array real general\n1 1\n1\n".to_string(), "coordinate"),
-        ("%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n".to_string(), "complex"),
+        (
+            "%%MatrixMarket matrix array real general\n1 1\n1\n".to_string(),
+            "coordinate",
+        ),
+        (
+            "%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n".to_string(),
+            "complex",
+        ),
         (String::new(), "empty"),
     ] {
         match read_str(&text) {
@@ -213,7 +252,10 @@ fn nalgebra_conversions_round_trip_and_agree_on_products() {
     let ops = assemble(&icosphere(2), &AssemblyParams::default()).unwrap();
     let l = &ops.stiffness;
     let csc = to_nalgebra_csc(l);
-    assert_eq!((csc.nrows(), csc.ncols(), csc.nnz()), (l.nrows(), l.ncols(), entries(l).len()));
+    assert_eq!(
+        (csc.nrows(), csc.ncols(), csc.nnz()),
+        (l.nrows(), l.ncols(), entries(l).len())
+    );
     let back = from_nalgebra_csc(&csc);
     assert_eq!(entries(&back), entries(l));
     // y = L x through CSR versus a product over the faer entries.
@@ -225,7 +267,12 @@ fn nalgebra_conversions_round_trip_and_agree_on_products() {
         y_faer[i] += v * x[j];
     }
     for (i, row) in csr.row_iter().enumerate() {
-        let y: f64 = row.col_indices().iter().zip(row.values()).map(|(&j, &v)| v * x[j]).sum();
+        let y: f64 = row
+            .col_indices()
+            .iter()
+            .zip(row.values())
+            .map(|(&j, &v)| v * x[j])
+            .sum();
         assert!((y - y_faer[i]).abs() < 1e-12, "row {i}");
     }
     // A rectangular, unsorted-input matrix converts too.

@@ -52,7 +52,13 @@ pub fn strip(n: usize, twist: bool) -> TriMesh {
 /// Three triangles sharing the edge 0–1 (like geometry-central's fan3).
 pub fn fan3() -> TriMesh {
     TriMesh::new(
-        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1.0, 0.0], [0.5, -1.0, 0.0], [0.5, 0.0, 1.0]],
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 1.0, 0.0],
+            [0.5, -1.0, 0.0],
+            [0.5, 0.0, 1.0],
+        ],
         vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]],
     )
     .unwrap()
@@ -61,7 +67,13 @@ pub fn fan3() -> TriMesh {
 /// Two triangles touching at vertex 0 only.
 pub fn bowtie() -> TriMesh {
     TriMesh::new(
-        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [-1.0, -1.0, 0.0]],
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [-1.0, -1.0, 0.0],
+        ],
         vec![[0, 1, 2], [0, 3, 4]],
     )
     .unwrap()
@@ -85,7 +97,10 @@ pub fn hourglass() -> TriMesh {
 }
 
 fn assert_closed_genus(s: &MeshStats, genus: i64) {
-    assert!(s.is_closed && s.is_manifold && s.is_orientable && s.is_consistently_oriented, "{s:?}");
+    assert!(
+        s.is_closed && s.is_manifold && s.is_orientable && s.is_consistently_oriented,
+        "{s:?}"
+    );
     assert_eq!(s.n_boundary_edges, 0);
     assert_eq!(s.n_boundary_loops, 0);
     assert_eq!(s.n_components, 1);
@@ -103,7 +118,11 @@ fn icosphere_counts_follow_subdivision() {
         assert_eq!(s.n_edges, 30 * k);
         assert_closed_genus(&s, 0);
         // Inscribed in the unit sphere: the area grows towards 4π from below.
-        assert!(s.area < 4.0 * PI && s.area > 4.0 * PI * (1.0 - 1.5 / k as f64), "{}", s.area);
+        assert!(
+            s.area < 4.0 * PI && s.area > 4.0 * PI * (1.0 - 1.5 / k as f64),
+            "{}",
+            s.area
+        );
         assert!((s.bbox_diagonal - 2.0 * 3f64.sqrt() * icosphere_extent(level)).abs() < 1e-12);
     }
     // The icosahedron is equilateral: every angle is 60° and every edge has the length
@@ -213,7 +232,10 @@ fn statistics_are_scale_covariant() {
     let s = stats(&m);
     for alpha in [1e-6, 1e6] {
         let t = stats(&m.scaled(alpha).unwrap());
-        assert_eq!((t.n_edges, t.euler_characteristic, t.genus), (s.n_edges, s.euler_characteristic, s.genus));
+        assert_eq!(
+            (t.n_edges, t.euler_characteristic, t.genus),
+            (s.n_edges, s.euler_characteristic, s.genus)
+        );
         assert!((t.area / (alpha * alpha) / s.area - 1.0).abs() < 1e-12);
         assert!((t.mean_edge_length / alpha / s.mean_edge_length - 1.0).abs() < 1e-12);
         assert!((t.min_angle_deg - s.min_angle_deg).abs() < 1e-9);
@@ -223,7 +245,10 @@ fn statistics_are_scale_covariant() {
 #[test]
 fn stats_serialize_to_json() {
     let json = serde_json::to_string(&stats(&icosphere(1))).unwrap();
-    assert!(json.contains("\"n_edges\":120") && json.contains("\"genus\":0"), "{json}");
+    assert!(
+        json.contains("\"n_edges\":120") && json.contains("\"genus\":0"),
+        "{json}"
+    );
 }
 
 /// Expected values from the per-file table of SOURCES.md.
@@ -240,27 +265,155 @@ struct Expected {
 #[test]
 fn corpus_meshes_match_sources_table() {
     let table = [
-        Expected { file: "common-3d-test-models/spot.obj", closed: true, manifold: true, loops: 0, components: 1, genus: Some(0), chi: 2 },
-        Expected { file: "common-3d-test-models/stanford-bunny.obj", closed: false, manifold: true, loops: 5, components: 1, genus: Some(0), chi: -3 },
-        Expected { file: "common-3d-test-models/cow.obj", closed: true, manifold: false, loops: 0, components: 1, genus: None, chi: 1 },
-        Expected { file: "common-3d-test-models/rocker-arm.obj", closed: true, manifold: true, loops: 0, components: 1, genus: Some(1), chi: 0 },
-        Expected { file: "common-3d-test-models/teapot.obj", closed: false, manifold: false, loops: 10, components: 4, genus: None, chi: -34 },
-        Expected { file: "common-3d-test-models/beetle.obj", closed: false, manifold: false, loops: 23, components: 2, genus: None, chi: -3 },
-        Expected { file: "libigl-tutorial-data/truck.obj", closed: false, manifold: false, loops: 144, components: 50, genus: None, chi: -96 },
-        Expected { file: "geometry-central-test-assets/hourglass_ico.obj", closed: true, manifold: false, loops: 0, components: 1, genus: None, chi: 3 },
-        Expected { file: "geometry-central-test-assets/triple_vierbein.obj", closed: false, manifold: false, loops: 1, components: 1, genus: None, chi: 1 },
-        Expected { file: "geometry-central-test-assets/fan3.obj", closed: false, manifold: false, loops: 1, components: 1, genus: None, chi: 1 },
-        Expected { file: "geometry-central-test-assets/moebius.obj", closed: false, manifold: true, loops: 1, components: 1, genus: None, chi: 0 },
-        Expected { file: "pmp-data/elephant.off", closed: true, manifold: true, loops: 0, components: 1, genus: Some(3), chi: -4 },
-        Expected { file: "pmp-data/hemisphere.off", closed: false, manifold: true, loops: 1, components: 1, genus: Some(0), chi: 1 },
-        Expected { file: "deftransfer-pyfm/camel_gallop/camel-gallop-01.off", closed: false, manifold: false, loops: 0, components: 1, genus: None, chi: 4 },
-        Expected { file: "deftransfer-pyfm/camel_gallop/camel-gallop-07.off", closed: true, manifold: false, loops: 0, components: 1, genus: None, chi: 1 },
+        Expected {
+            file: "common-3d-test-models/spot.obj",
+            closed: true,
+            manifold: true,
+            loops: 0,
+            components: 1,
+            genus: Some(0),
+            chi: 2,
+        },
+        Expected {
+            file: "common-3d-test-models/stanford-bunny.obj",
+            closed: false,
+            manifold: true,
+            loops: 5,
+            components: 1,
+            genus: Some(0),
+            chi: -3,
+        },
+        Expected {
+            file: "common-3d-test-models/cow.obj",
+            closed: true,
+            manifold: false,
+            loops: 0,
+            components: 1,
+            genus: None,
+            chi: 1,
+        },
+        Expected {
+            file: "common-3d-test-models/rocker-arm.obj",
+            closed: true,
+            manifold: true,
+            loops: 0,
+            components: 1,
+            genus: Some(1),
+            chi: 0,
+        },
+        Expected {
+            file: "common-3d-test-models/teapot.obj",
+            closed: false,
+            manifold: false,
+            loops: 10,
+            components: 4,
+            genus: None,
+            chi: -34,
+        },
+        Expected {
+            file: "common-3d-test-models/beetle.obj",
+            closed: false,
+            manifold: false,
+            loops: 23,
+            components: 2,
+            genus: None,
+            chi: -3,
+        },
+        Expected {
+            file: "libigl-tutorial-data/truck.obj",
+            closed: false,
+            manifold: false,
+            loops: 144,
+            components: 50,
+            genus: None,
+            chi: -96,
+        },
+        Expected {
+            file: "geometry-central-test-assets/hourglass_ico.obj",
+            closed: true,
+            manifold: false,
+            loops: 0,
+            components: 1,
+            genus: None,
+            chi: 3,
+        },
+        Expected {
+            file: "geometry-central-test-assets/triple_vierbein.obj",
+            closed: false,
+            manifold: false,
+            loops: 1,
+            components: 1,
+            genus: None,
+            chi: 1,
+        },
+        Expected {
+            file: "geometry-central-test-assets/fan3.obj",
+            closed: false,
+            manifold: false,
+            loops: 1,
+            components: 1,
+            genus: None,
+            chi: 1,
+        },
+        Expected {
+            file: "geometry-central-test-assets/moebius.obj",
+            closed: false,
+            manifold: true,
+            loops: 1,
+            components: 1,
+            genus: None,
+            chi: 0,
+        },
+        Expected {
+            file: "pmp-data/elephant.off",
+            closed: true,
+            manifold: true,
+            loops: 0,
+            components: 1,
+            genus: Some(3),
+            chi: -4,
+        },
+        Expected {
+            file: "pmp-data/hemisphere.off",
+            closed: false,
+            manifold: true,
+            loops: 1,
+            components: 1,
+            genus: Some(0),
+            chi: 1,
+        },
+        Expected {
+            file: "deftransfer-pyfm/camel_gallop/camel-gallop-01.off",
+            closed: false,
+            manifold: false,
+            loops: 0,
+            components: 1,
+            genus: None,
+            chi: 4,
+        },
+        Expected {
+            file: "deftransfer-pyfm/camel_gallop/camel-gallop-07.off",
+            closed: true,
+            manifold: false,
+            loops: 0,
+            components: 1,
+            genus: None,
+            chi: 1,
+        },
     ];
     let mut failures = Vec::new();
     for e in &table {
-        let Some(mesh) = minimal_reader::read_corpus(e.file) else { return };
+        let Some(mesh) = minimal_reader::read_corpus(e.file) else {
+            return;
+        };
         let s = stats(&mesh);
-        let got = (s.is_closed, s.is_manifold, s.n_components, s.genus, s.euler_characteristic);
+        let got = (
+            s.is_closed,
+            s.is_manifold,
+            s.n_components,
+            s.genus,
+            s.euler_characteristic,
+        );
         let want = (e.closed, e.manifold, e.components, e.genus, e.chi);
         if got != want {
             failures.push(format!("{}: got {got:?}, SOURCES.md says {want:?}", e.file));
@@ -269,10 +422,7 @@ fn corpus_meshes_match_sources_table() {
         // meshes that is the number of loops; where loops touch at pinched vertices mesh-fem
         // counts them separately, so it can only find more.
         let graph_loops = boundary_graph_components(&mesh);
-        if graph_loops != e.loops
-            || (e.manifold && s.n_boundary_loops != e.loops)
-            || s.n_boundary_loops < e.loops
-        {
+        if graph_loops != e.loops || (e.manifold && s.n_boundary_loops != e.loops) || s.n_boundary_loops < e.loops {
             failures.push(format!(
                 "{}: {} loops ({graph_loops} boundary-graph components), SOURCES.md says {}",
                 e.file, s.n_boundary_loops, e.loops
@@ -327,5 +477,7 @@ fn boundary_graph_components(mesh: &TriMesh) -> usize {
             on_boundary[b as usize] = true;
         }
     }
-    (0..mesh.n_vertices()).filter(|&v| on_boundary[v] && root(&mut parent, v) == v).count()
+    (0..mesh.n_vertices())
+        .filter(|&v| on_boundary[v] && root(&mut parent, v) == v)
+        .count()
 }

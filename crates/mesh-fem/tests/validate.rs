@@ -6,7 +6,9 @@ mod minimal_reader;
 
 use mesh_fem::generate::{grid, icosphere, torus};
 use mesh_fem::validate::{is_degenerate_triangle, DEGENERATE_AREA_RATIO};
-use mesh_fem::{assemble, repair, stats, validate, AssemblyParams, MeshError, Problem, RepairOptions, Severity, TriMesh};
+use mesh_fem::{
+    assemble, repair, stats, validate, AssemblyParams, MeshError, Problem, RepairOptions, Severity, TriMesh,
+};
 
 fn mesh(p: Vec<[f64; 3]>, f: Vec<[u32; 3]>) -> TriMesh {
     TriMesh::new(p, f).unwrap()
@@ -51,7 +53,13 @@ fn repeated_index_is_fatal_and_names_the_face() {
     let m = mesh(p, f.clone());
     let r = validate(&m);
     assert_eq!(r.counts.repeated_index, 1);
-    assert_eq!(r.problems[0], Problem::RepeatedIndex { face: 7, vertices: f[7] });
+    assert_eq!(
+        r.problems[0],
+        Problem::RepeatedIndex {
+            face: 7,
+            vertices: f[7]
+        }
+    );
     assert_eq!(r.problems[0].severity(), Severity::Error);
     assert!(!r.is_usable());
     match r.clone().into_result() {
@@ -75,8 +83,18 @@ fn zero_area_face_is_fatal_and_agrees_with_assemble() {
     ];
     let m = mesh(p, f.clone());
     let r = validate(&m);
-    assert!(r.problems.contains(&Problem::ZeroAreaFace { face: 3, vertices: f[3] }), "{}", r.summary());
-    assert!(matches!(r.clone().into_result(), Err(MeshError::DegenerateFace { face: 3, .. })));
+    assert!(
+        r.problems.contains(&Problem::ZeroAreaFace {
+            face: 3,
+            vertices: f[3]
+        }),
+        "{}",
+        r.summary()
+    );
+    assert!(matches!(
+        r.clone().into_result(),
+        Err(MeshError::DegenerateFace { face: 3, .. })
+    ));
     assert_agrees_with_assemble(&m);
 }
 
@@ -88,7 +106,11 @@ fn needle_threshold_is_relative_and_shared_with_assemble() {
             let l = scale;
             let h = l * 10f64.powi(k);
             let corners = [[0.0, 0.0, 0.0], [l, 0.0, 0.0], [l / 2.0, h, 0.0]];
-            assert_eq!(is_degenerate_triangle(corners), expect_degenerate, "scale {scale}, h/L = 1e{k}");
+            assert_eq!(
+                is_degenerate_triangle(corners),
+                expect_degenerate,
+                "scale {scale}, h/L = 1e{k}"
+            );
             // The same face inside a mesh: validate and assemble agree on it.
             let m = mesh(corners.to_vec(), vec![[0, 1, 2]]);
             assert_eq!(validate(&m).is_usable(), !expect_degenerate);
@@ -97,10 +119,22 @@ fn needle_threshold_is_relative_and_shared_with_assemble() {
     }
     // Exactly at the threshold.
     let ratio = DEGENERATE_AREA_RATIO;
-    assert!(is_degenerate_triangle([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]));
-    assert!(!is_degenerate_triangle([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 4.0 * ratio, 0.0]]));
+    assert!(is_degenerate_triangle([
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0]
+    ]));
+    assert!(!is_degenerate_triangle([
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.5, 4.0 * ratio, 0.0]
+    ]));
     // Overflowing coordinates give an infinite area: degenerate, never NaN cotangents.
-    assert!(is_degenerate_triangle([[0.0, 0.0, 0.0], [1e300, 0.0, 0.0], [0.0, 1e300, 0.0]]));
+    assert!(is_degenerate_triangle([
+        [0.0, 0.0, 0.0],
+        [1e300, 0.0, 0.0],
+        [0.0, 1e300, 0.0]
+    ]));
 }
 
 #[test]
@@ -113,10 +147,16 @@ fn unreferenced_vertex_is_fatal_and_repair_drops_it() {
     let m = mesh(p, f_shifted);
     let r = validate(&m);
     assert_eq!(r.counts.unreferenced_vertices, 2);
-    assert!(matches!(r.clone().into_result(), Err(MeshError::UnreferencedVertex { vertex: 5 })));
+    assert!(matches!(
+        r.clone().into_result(),
+        Err(MeshError::UnreferencedVertex { vertex: 5 })
+    ));
     assert_agrees_with_assemble(&m);
 
-    let opts = RepairOptions { drop_unreferenced_vertices: true, ..Default::default() };
+    let opts = RepairOptions {
+        drop_unreferenced_vertices: true,
+        ..Default::default()
+    };
     let (fixed, rep) = repair(&m, &opts).unwrap();
     assert_eq!(fixed, icosphere(1));
     assert_eq!(rep.dropped_vertices, 2);
@@ -126,20 +166,33 @@ fn unreferenced_vertex_is_fatal_and_repair_drops_it() {
     assert_eq!(rep.vertex_map[4], Some(4));
     assert_eq!(rep.vertex_map[6], Some(5));
     assert!(rep.dropped_faces.is_empty());
-    assert!(rep.summary().contains("dropped 2 unreferenced vertices"), "{}", rep.summary());
+    assert!(
+        rep.summary().contains("dropped 2 unreferenced vertices"),
+        "{}",
+        rep.summary()
+    );
     assert!(validate(&fixed).is_usable());
 }
 
 #[test]
 fn non_manifold_edge_is_a_warning_and_still_assembles() {
     let m = mesh(
-        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1.0, 0.0], [0.5, -1.0, 0.0], [0.5, 0.0, 1.0]],
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 1.0, 0.0],
+            [0.5, -1.0, 0.0],
+            [0.5, 0.0, 1.0],
+        ],
         vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]],
     );
     let r = validate(&m);
     assert!(r.is_usable());
     assert_eq!(r.counts.non_manifold_edges, 1);
-    assert!(r.problems.contains(&Problem::NonManifoldEdge { edge: [0, 1], n_faces: 3 }));
+    assert!(r.problems.contains(&Problem::NonManifoldEdge {
+        edge: [0, 1],
+        n_faces: 3
+    }));
     assert!(r.warnings().all(|p| p.severity() == Severity::Warning));
     assert!(r.summary().contains("still assemble"), "{}", r.summary());
     assert_agrees_with_assemble(&m);
@@ -148,7 +201,13 @@ fn non_manifold_edge_is_a_warning_and_still_assembles() {
 #[test]
 fn pinched_vertex_is_reported() {
     let m = mesh(
-        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [-1.0, -1.0, 0.0]],
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [-1.0, -1.0, 0.0],
+        ],
         vec![[0, 1, 2], [0, 3, 4]],
     );
     let r = validate(&m);
@@ -182,7 +241,14 @@ fn flipped_faces_are_found_and_reoriented() {
     assert_eq!(r.counts.non_orientable_components, 0);
     assert!(!stats(&bad).is_consistently_oriented && stats(&bad).is_orientable);
 
-    let (fixed, rep) = repair(&bad, &RepairOptions { orient_faces: true, ..Default::default() }).unwrap();
+    let (fixed, rep) = repair(
+        &bad,
+        &RepairOptions {
+            orient_faces: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(rep.flipped_faces, vec![3, 100, 101]);
     assert!(validate(&fixed).problems.is_empty());
     // Flipping again swaps corners 1 and 2: same cyclic orientation as the original face.
@@ -206,7 +272,11 @@ fn moebius_strip_is_non_orientable_and_left_alone() {
     let mut f = Vec::new();
     for i in 0..n as u32 {
         let (t, b) = (2 * i, 2 * i + 1);
-        let (tn, bn) = if i + 1 < n as u32 { (2 * i + 2, 2 * i + 3) } else { (1, 0) };
+        let (tn, bn) = if i + 1 < n as u32 {
+            (2 * i + 2, 2 * i + 3)
+        } else {
+            (1, 0)
+        };
         f.push([t, b, bn]);
         f.push([t, bn, tn]);
     }
@@ -216,7 +286,14 @@ fn moebius_strip_is_non_orientable_and_left_alone() {
     assert!(r.problems.iter().any(|p| matches!(p, Problem::NonOrientable { .. })));
     assert!(r.is_usable());
     assert_agrees_with_assemble(&m);
-    let (fixed, rep) = repair(&m, &RepairOptions { orient_faces: true, ..Default::default() }).unwrap();
+    let (fixed, rep) = repair(
+        &m,
+        &RepairOptions {
+            orient_faces: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(rep.non_orientable_components, 1);
     assert!(rep.flipped_faces.is_empty());
     assert_eq!(fixed, m);
@@ -234,7 +311,14 @@ fn duplicate_faces_are_reported_and_dropped() {
     assert!(r.problems.contains(&Problem::DuplicateFace { face: 80, first: 4 }));
     assert!(r.problems.contains(&Problem::DuplicateFace { face: 81, first: 9 }));
     assert!(r.is_usable());
-    let (fixed, rep) = repair(&m, &RepairOptions { drop_duplicate_faces: true, ..Default::default() }).unwrap();
+    let (fixed, rep) = repair(
+        &m,
+        &RepairOptions {
+            drop_duplicate_faces: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(fixed, icosphere(1));
     assert_eq!(rep.dropped_duplicate_faces, vec![80, 81]);
     assert_eq!(rep.dropped_faces, vec![80, 81]);
@@ -276,7 +360,14 @@ fn merging_a_triangle_soup_restores_the_mesh() {
     let s = soup(&m, 0.0);
     let sv = validate(&s);
     assert_eq!(sv.counts.components, m.n_faces());
-    let (fixed, rep) = repair(&s, &RepairOptions { merge_duplicate_vertices: Some(0.0), ..Default::default() }).unwrap();
+    let (fixed, rep) = repair(
+        &s,
+        &RepairOptions {
+            merge_duplicate_vertices: Some(0.0),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(fixed.n_vertices(), m.n_vertices());
     assert_eq!(rep.merged_vertices, 3 * m.n_faces() - m.n_vertices());
     let st = stats(&fixed);
@@ -290,7 +381,14 @@ fn merging_a_triangle_soup_restores_the_mesh() {
     // With jitter 1e-9 (relative to a bbox diagonal of ≈ 3.5): tolerance 1e-8 merges, 1e-12 does not.
     let s = soup(&m, 1e-9);
     let tol = 1e-8;
-    let (fixed, rep) = repair(&s, &RepairOptions { merge_duplicate_vertices: Some(tol), ..Default::default() }).unwrap();
+    let (fixed, rep) = repair(
+        &s,
+        &RepairOptions {
+            merge_duplicate_vertices: Some(tol),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(fixed.n_vertices(), m.n_vertices());
     let d = stats(&s).bbox_diagonal;
     for (v, new) in rep.vertex_map.iter().enumerate() {
@@ -298,7 +396,14 @@ fn merging_a_triangle_soup_restores_the_mesh() {
         let dist = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
         assert!(dist <= tol * d);
     }
-    let (fixed, _) = repair(&s, &RepairOptions { merge_duplicate_vertices: Some(1e-12), ..Default::default() }).unwrap();
+    let (fixed, _) = repair(
+        &s,
+        &RepairOptions {
+            merge_duplicate_vertices: Some(1e-12),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert!(fixed.n_vertices() > m.n_vertices());
 }
 
@@ -309,7 +414,10 @@ fn merging_can_create_degenerate_faces_which_repair_drops() {
     let (mut p, f) = grid(4, 4).into_parts();
     p[1] = [1e-12, 0.0, 0.0];
     let m = mesh(p, f);
-    let opts = RepairOptions { merge_duplicate_vertices: Some(1e-9), ..Default::default() };
+    let opts = RepairOptions {
+        merge_duplicate_vertices: Some(1e-9),
+        ..Default::default()
+    };
     let (merged, _) = repair(&m, &opts).unwrap();
     assert!(!validate(&merged).is_usable());
     let opts = RepairOptions {
@@ -322,7 +430,13 @@ fn merging_can_create_degenerate_faces_which_repair_drops() {
     assert_eq!(rep.merged_vertices, 1);
     assert_eq!(rep.vertex_map[1], Some(0));
     // Exactly the faces containing both vertex 0 and vertex 1.
-    let expected: Vec<usize> = m.faces().iter().enumerate().filter(|(_, t)| t.contains(&0) && t.contains(&1)).map(|(i, _)| i).collect();
+    let expected: Vec<usize> = m
+        .faces()
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t.contains(&0) && t.contains(&1))
+        .map(|(i, _)| i)
+        .collect();
     assert_eq!(rep.dropped_degenerate_faces, expected);
     assert!(validate(&fixed).is_usable(), "{}", validate(&fixed).summary());
     assert!(assemble(&fixed, &AssemblyParams::default()).is_ok());
@@ -332,11 +446,25 @@ fn merging_can_create_degenerate_faces_which_repair_drops() {
 fn repair_rejects_bad_tolerance_and_reports_empty_results() {
     let m = icosphere(0);
     for tol in [-1.0, f64::NAN, f64::INFINITY] {
-        let e = repair(&m, &RepairOptions { merge_duplicate_vertices: Some(tol), ..Default::default() }).unwrap_err();
+        let e = repair(
+            &m,
+            &RepairOptions {
+                merge_duplicate_vertices: Some(tol),
+                ..Default::default()
+            },
+        )
+        .unwrap_err();
         assert!(matches!(e, MeshError::InvalidRepairOption { .. }), "{e}");
     }
     let flat = mesh(vec![[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]], vec![[0, 1, 2]]);
-    let e = repair(&flat, &RepairOptions { drop_degenerate_faces: true, ..Default::default() }).unwrap_err();
+    let e = repair(
+        &flat,
+        &RepairOptions {
+            drop_degenerate_faces: true,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
     assert!(matches!(e, MeshError::Empty { n_faces: 0, .. }), "{e}");
     // Nothing turned on: nothing changes.
     let (same, rep) = repair(&m, &RepairOptions::default()).unwrap();
@@ -347,13 +475,22 @@ fn repair_rejects_bad_tolerance_and_reports_empty_results() {
 
 #[test]
 fn corpus_bunny_with_unreferenced_vertices() {
-    let Some(m) = minimal_reader::read_corpus("common-3d-test-models/stanford-bunny.obj") else { return };
+    let Some(m) = minimal_reader::read_corpus("common-3d-test-models/stanford-bunny.obj") else {
+        return;
+    };
     let r = validate(&m);
     assert_eq!(r.counts.unreferenced_vertices, 1113);
     assert_eq!(r.counts.boundary_loops, 5);
     assert!(!r.is_usable());
     assert_agrees_with_assemble(&m);
-    let (fixed, rep) = repair(&m, &RepairOptions { drop_unreferenced_vertices: true, ..Default::default() }).unwrap();
+    let (fixed, rep) = repair(
+        &m,
+        &RepairOptions {
+            drop_unreferenced_vertices: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(rep.dropped_vertices, 1113);
     assert_eq!(fixed.n_vertices(), 35947 - 1113);
     assert_agrees_with_assemble(&fixed);
@@ -363,10 +500,18 @@ fn corpus_bunny_with_unreferenced_vertices() {
 
 #[test]
 fn corpus_non_manifold_meshes_still_assemble() {
-    for file in ["common-3d-test-models/cow.obj", "deftransfer-pyfm/camel_gallop/camel-gallop-01.off"] {
-        let Some(m) = minimal_reader::read_corpus(file) else { return };
+    for file in [
+        "common-3d-test-models/cow.obj",
+        "deftransfer-pyfm/camel_gallop/camel-gallop-01.off",
+    ] {
+        let Some(m) = minimal_reader::read_corpus(file) else {
+            return;
+        };
         let r = validate(&m);
-        assert!(r.counts.non_manifold_edges + r.counts.non_manifold_vertices > 0, "{file}");
+        assert!(
+            r.counts.non_manifold_edges + r.counts.non_manifold_vertices > 0,
+            "{file}"
+        );
         assert_agrees_with_assemble(&m);
     }
 }
