@@ -515,3 +515,272 @@ fn corpus_non_manifold_meshes_still_assemble() {
         assert_agrees_with_assemble(&m);
     }
 }
+
+/// Small deterministic generator (64-bit LCG) for the randomized cross-check.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> u64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        self.0 >> 33
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// Topology recomputed by brute force (hash maps, per-vertex BFS, BFS 2-colouring), with
+/// none of mesh-fem's union-find code: (edges, boundary edges, non-manifold edges,
+/// inconsistent edges, non-manifold vertices, components, non-orientable components,
+/// boundary loops).
+fn brute_force(n: usize, faces: &[[u32; 3]]) -> [usize; 8] {
+    use std::collections::{HashMap, HashSet, VecDeque};
+    let mut edges: HashMap<(u32, u32), Vec<(usize, bool)>> = HashMap::new();
+    for (f, t) in faces.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if a != b {
+                edges.entry((a.min(b), a.max(b))).or_default().push((f, a < b));
+            }
+        }
+    }
+    let boundary = edges.values().filter(|v| v.len() == 1).count();
+    let non_manifold = edges.values().filter(|v| v.len() > 2).count();
+    let inconsistent = edges.values().filter(|v| v.len() == 2 && v[0].1 == v[1].1).count();
+
+    // Fans at each vertex: incident faces joined when they share an edge through v.
+    let mut incident: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (f, t) in faces.iter().enumerate() {
+        for &v in t.iter().collect::<HashSet<_>>() {
+            incident[v as usize].push(f);
+        }
+    }
+    let mut fan_of: HashMap<(usize, usize), usize> = HashMap::new(); // (vertex, face) → fan id
+    let mut pinched = 0;
+    let mut next_fan = 0;
+    for v in 0..n {
+        let mut fans_here = 0;
+        for &start in &incident[v] {
+            if fan_of.contains_key(&(v, start)) {
+                continue;
+            }
+            fans_here += 1;
+            let id = next_fan;
+            next_fan += 1;
+            let mut queue = VecDeque::from([start]);
+            fan_of.insert((v, start), id);
+            while let Some(f) = queue.pop_front() {
+                for &w in &faces[f] {
+                    if w as usize == v {
+                        continue;
+                    }
+                    let key = ((v as u32).min(w), (v as u32).max(w));
+                    for &(g, _) in &edges[&key] {
+                        if let std::collections::hash_map::Entry::Vacant(e) = fan_of.entry((v, g)) {
+                            e.insert(id);
+                            queue.push_back(g);
+                        }
+                    }
+                }
+            }
+        }
+        if fans_here > 1 {
+            pinched += 1;
+        }
+    }
+
+    // Vertex components by BFS.
+    let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for t in faces {
+        for k in 0..3 {
+            adj[t[k] as usize].push(t[(k + 1) % 3]);
+            adj[t[(k + 1) % 3] as usize].push(t[k]);
+        }
+    }
+    let mut comp = vec![usize::MAX; n];
+    let mut n_comp = 0;
+    for s in 0..n {
+        if incident[s].is_empty() || comp[s] != usize::MAX {
+            continue;
+        }
+        comp[s] = n_comp;
+        let mut queue = VecDeque::from([s]);
+        while let Some(v) = queue.pop_front() {
+            for &w in &adj[v] {
+                if comp[w as usize] == usize::MAX {
+                    comp[w as usize] = n_comp;
+                    queue.push_back(w as usize);
+                }
+            }
+        }
+        n_comp += 1;
+    }
+
+    // Orientability: BFS 2-colouring of faces across two-face edges.
+    let mut face_adj: Vec<Vec<(usize, bool)>> = vec![Vec::new(); faces.len()];
+    for v in edges.values() {
+        if v.len() == 2 {
+            let flip = v[0].1 == v[1].1;
+            face_adj[v[0].0].push((v[1].0, flip));
+            face_adj[v[1].0].push((v[0].0, flip));
+        }
+    }
+    let mut colour: Vec<Option<bool>> = vec![None; faces.len()];
+    let mut bad_components = HashSet::new();
+    for s in 0..faces.len() {
+        if colour[s].is_some() {
+            continue;
+        }
+        colour[s] = Some(false);
+        let mut queue = VecDeque::from([s]);
+        while let Some(f) = queue.pop_front() {
+            let c = colour[f].unwrap();
+            for &(g, flip) in &face_adj[f] {
+                match colour[g] {
+                    None => {
+                        colour[g] = Some(c ^ flip);
+                        queue.push_back(g);
+                    }
+                    Some(cg) if cg != c ^ flip => {
+                        bad_components.insert(comp[faces[f][0] as usize]);
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+
+    // Boundary loops: boundary edges joined where they meet in the same fan.
+    let bedges: Vec<((u32, u32), usize)> = edges
+        .iter()
+        .filter(|(_, v)| v.len() == 1)
+        .map(|(&k, v)| (k, v[0].0))
+        .collect();
+    let mut loop_id: Vec<usize> = (0..bedges.len()).collect();
+    let mut by_fan: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (i, &((a, b), f)) in bedges.iter().enumerate() {
+        for v in [a, b] {
+            by_fan.entry(fan_of[&(v as usize, f)]).or_default().push(i);
+        }
+    }
+    // Relabel until stable (fine for small meshes).
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for members in by_fan.values() {
+            let m = members.iter().map(|&i| loop_id[i]).min().unwrap();
+            for &i in members {
+                if loop_id[i] != m {
+                    loop_id[i] = m;
+                    changed = true;
+                }
+            }
+        }
+    }
+    let loops = loop_id.iter().collect::<HashSet<_>>().len();
+
+    [
+        edges.len(),
+        boundary,
+        non_manifold,
+        inconsistent,
+        pinched,
+        n_comp,
+        bad_components.len(),
+        loops,
+    ]
+}
+
+#[test]
+fn topology_matches_brute_force_on_random_meshes() {
+    let mut rng = Lcg(0x5eed_1234);
+    let base = icosphere(1);
+    // How many trials had more than one of each counted thing: the check must not be vacuous.
+    let mut seen = [0usize; 8];
+    let mut non_orientable_trials = 0;
+    for trial in 0..300 {
+        let faces: Vec<[u32; 3]> = if trial % 2 == 0 {
+            // Random soups on few vertices: many non-manifold edges and pinched vertices.
+            let n = 6 + rng.below(10);
+            (0..5 + rng.below(25))
+                .map(|_| {
+                    let mut t = [rng.below(n) as u32, rng.below(n) as u32, rng.below(n) as u32];
+                    if rng.below(10) > 0 {
+                        while t[1] == t[0] {
+                            t[1] = rng.below(n) as u32;
+                        }
+                        while t[2] == t[0] || t[2] == t[1] {
+                            t[2] = rng.below(n) as u32;
+                        }
+                    }
+                    t
+                })
+                .collect()
+        } else {
+            // An icosphere with faces deleted, flipped and duplicated.
+            let mut f = Vec::new();
+            for t in base.faces() {
+                match rng.below(12) {
+                    0 => {}
+                    1 => f.push([t[0], t[2], t[1]]),
+                    2 => {
+                        f.push(*t);
+                        f.push(*t);
+                    }
+                    _ => f.push(*t),
+                }
+            }
+            f
+        };
+        let n = faces.iter().flatten().map(|&v| v as usize + 1).max().unwrap();
+        let positions: Vec<[f64; 3]> = (0..n)
+            .map(|i| [(i as f64).sin(), (i as f64 * 1.7).cos(), (i as f64 * 0.3).sin()])
+            .collect();
+        let m = mesh(positions, faces.clone());
+        let s = stats(&m);
+        let r = validate(&m);
+        let got = [
+            s.n_edges,
+            s.n_boundary_edges,
+            s.n_non_manifold_edges,
+            r.counts.inconsistently_oriented_edges,
+            s.n_non_manifold_vertices,
+            s.n_components,
+            r.counts.non_orientable_components,
+            s.n_boundary_loops,
+        ];
+        let want = brute_force(n, &faces);
+        assert_eq!(got, want, "trial {trial}: faces {faces:?}");
+        for k in 0..8 {
+            seen[k] += usize::from(want[k] > 1);
+        }
+        non_orientable_trials += usize::from(want[6] > 0);
+        assert_eq!(r.counts.non_manifold_edges, s.n_non_manifold_edges);
+        assert_eq!(r.counts.unreferenced_vertices, s.n_unreferenced_vertices);
+        // χ from the same counts.
+        let used = n - s.n_unreferenced_vertices;
+        assert_eq!(
+            s.euler_characteristic,
+            used as i64 - s.n_edges as i64 + faces.len() as i64
+        );
+
+        // Orientation repair on every orientable component leaves no inconsistent edge there.
+        let (fixed, rep) = repair(
+            &m,
+            &RepairOptions {
+                orient_faces: true,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        if rep.non_orientable_components == 0 {
+            assert_eq!(
+                validate(&fixed).counts.inconsistently_oriented_edges,
+                0,
+                "trial {trial}"
+            );
+        }
+    }
+}
