@@ -560,9 +560,9 @@ fn brute_force(n: usize, faces: &[[u32; 3]]) -> [usize; 8] {
     let mut fan_of: HashMap<(usize, usize), usize> = HashMap::new(); // (vertex, face) → fan id
     let mut pinched = 0;
     let mut next_fan = 0;
-    for v in 0..n {
+    for (v, around) in incident.iter().enumerate() {
         let mut fans_here = 0;
-        for &start in &incident[v] {
+        for &start in around {
             if fan_of.contains_key(&(v, start)) {
                 continue;
             }
@@ -701,7 +701,7 @@ fn topology_matches_brute_force_on_random_meshes() {
     let mut seen = [0usize; 8];
     let mut non_orientable_trials = 0;
     for trial in 0..300 {
-        let faces: Vec<[u32; 3]> = if trial % 2 == 0 {
+        let mut faces: Vec<[u32; 3]> = if trial % 2 == 0 {
             // Random soups on few vertices: many non-manifold edges and pinched vertices.
             let n = 6 + rng.below(10);
             (0..5 + rng.below(25))
@@ -734,6 +734,12 @@ fn topology_matches_brute_force_on_random_meshes() {
             }
             f
         };
+        if trial % 4 == 0 {
+            // A disjoint second copy: at least two components.
+            let k = faces.iter().flatten().max().unwrap() + 1;
+            let copy: Vec<[u32; 3]> = faces.iter().map(|t| t.map(|v| v + k)).collect();
+            faces.extend(copy);
+        }
         let n = faces.iter().flatten().map(|&v| v as usize + 1).max().unwrap();
         let positions: Vec<[f64; 3]> = (0..n)
             .map(|i| [(i as f64).sin(), (i as f64 * 1.7).cos(), (i as f64 * 0.3).sin()])
@@ -783,4 +789,8 @@ fn topology_matches_brute_force_on_random_meshes() {
             );
         }
     }
+    // The check must not be vacuous: every counted thing occurs more than once in some
+    // trial (non-orientable components at least once).
+    assert!(seen.iter().enumerate().all(|(k, &c)| c > 0 || k == 6), "{seen:?}");
+    assert!(non_orientable_trials > 0);
 }
