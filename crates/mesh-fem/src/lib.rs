@@ -6,6 +6,8 @@
 //! * [`io`]: reading OBJ, PLY, OFF and STL files and writing fields (PLY/NPY/CSV), atomically.
 //! * [`validate`]: a [`validate::ValidationReport`] naming every problem, and explicit repairs.
 //! * [`stats`]: counts, topology (Euler characteristic, genus, boundary loops) and geometry.
+//! * [`mtx`]: Matrix Market reading and writing (atomic, 17 digits) and `nalgebra-sparse`
+//!   conversions.
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
 //! * [`operators`]: the cotangent stiffness L, the consistent mass B and the lumped mass D of
 //!   the paper's Eq. (3) and Eq. (7), assembled in parallel into faer sparse matrices.

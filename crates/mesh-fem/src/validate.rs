@@ -29,6 +29,11 @@ use serde::Serialize;
 use std::collections::HashMap;
 use std::fmt;
 
+/// "1 face", "2 faces".
+fn counted(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
 /// Relative area threshold below which a triangle counts as degenerate:
 /// a face is degenerate when `|T| ≤ DEGENERATE_AREA_RATIO · ℓ_max²`, with ℓ_max its longest
 /// edge (or when its area is not finite).
@@ -89,7 +94,7 @@ pub enum Problem {
     NonManifoldEdge {
         /// The edge's vertices, ascending.
         edge: [u32; 2],
-        /// How many faces share it.
+        /// How many face sides lie on it (a face that repeats an index can count twice).
         n_faces: usize,
     },
     /// A vertex whose incident faces form more than one fan (e.g. two cones touching at a tip).
@@ -183,7 +188,12 @@ impl fmt::Display for Problem {
             }
             Problem::SeveralComponents { count } => write!(f, "{count} connected components"),
             Problem::Boundary { loops, edges } => {
-                write!(f, "open mesh: {loops} boundary loops, {edges} boundary edges")
+                write!(
+                    f,
+                    "open mesh: {}, {}",
+                    counted(*loops, "boundary loop", "boundary loops"),
+                    counted(*edges, "boundary edge", "boundary edges")
+                )
             }
         }
     }
@@ -269,7 +279,7 @@ impl ValidationReport {
             if n_errors == 0 {
                 "usable".to_string()
             } else {
-                format!("NOT usable ({n_errors} fatal problems)")
+                format!("NOT usable ({})", counted(n_errors, "fatal problem", "fatal problems"))
             }
         );
         // One line per kind: count and first culprit.
@@ -496,37 +506,51 @@ impl RepairReport {
         };
         let mut lines = vec!["repair:".to_string()];
         if self.merged_vertices > 0 {
-            lines.push(format!("  merged {} duplicate vertices", self.merged_vertices));
+            lines.push(format!(
+                "  merged {}",
+                counted(self.merged_vertices, "duplicate vertex", "duplicate vertices")
+            ));
         }
         if !self.dropped_degenerate_faces.is_empty() {
             lines.push(format!(
-                "  dropped {} degenerate faces ({})",
-                self.dropped_degenerate_faces.len(),
+                "  dropped {} ({})",
+                counted(
+                    self.dropped_degenerate_faces.len(),
+                    "degenerate face",
+                    "degenerate faces"
+                ),
                 first(&self.dropped_degenerate_faces)
             ));
         }
         if !self.dropped_duplicate_faces.is_empty() {
             lines.push(format!(
-                "  dropped {} duplicate faces ({})",
-                self.dropped_duplicate_faces.len(),
+                "  dropped {} ({})",
+                counted(self.dropped_duplicate_faces.len(), "duplicate face", "duplicate faces"),
                 first(&self.dropped_duplicate_faces)
             ));
         }
         if !self.flipped_faces.is_empty() {
             lines.push(format!(
-                "  flipped {} faces ({})",
-                self.flipped_faces.len(),
+                "  flipped {} ({})",
+                counted(self.flipped_faces.len(), "face", "faces"),
                 first(&self.flipped_faces)
             ));
         }
         if self.non_orientable_components > 0 {
             lines.push(format!(
-                "  left {} non-orientable components as they are",
-                self.non_orientable_components
+                "  left {} as they are",
+                counted(
+                    self.non_orientable_components,
+                    "non-orientable component",
+                    "non-orientable components"
+                )
             ));
         }
         if self.dropped_vertices > 0 {
-            lines.push(format!("  dropped {} unreferenced vertices", self.dropped_vertices));
+            lines.push(format!(
+                "  dropped {}",
+                counted(self.dropped_vertices, "unreferenced vertex", "unreferenced vertices")
+            ));
         }
         lines.join("\n")
     }

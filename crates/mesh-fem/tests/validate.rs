@@ -794,3 +794,27 @@ fn topology_matches_brute_force_on_random_meshes() {
     assert!(seen.iter().enumerate().all(|(k, &c)| c > 0 || k == 6), "{seen:?}");
     assert!(non_orientable_trials > 0);
 }
+
+#[test]
+fn summaries_read_well() {
+    // icosphere(1) with one face repeating an index, one unreferenced vertex, one duplicate
+    // face and one flipped face.
+    let (mut p, mut f) = icosphere(1).into_parts();
+    p.push([3.0, 0.0, 0.0]);
+    f[2] = [f[2][0], f[2][1], f[2][1]];
+    f[5].swap(0, 1);
+    f.push(f[10]);
+    let m = mesh(p, f);
+    let r = validate(&m);
+    insta::assert_snapshot!("validation_summary", r.summary());
+    let opts = RepairOptions {
+        drop_degenerate_faces: true,
+        drop_duplicate_faces: true,
+        orient_faces: true,
+        drop_unreferenced_vertices: true,
+        ..Default::default()
+    };
+    let (fixed, rep) = repair(&m, &opts).unwrap();
+    insta::assert_snapshot!("repair_summary", rep.summary());
+    insta::assert_snapshot!("repaired_validation_summary", validate(&fixed).summary());
+}
