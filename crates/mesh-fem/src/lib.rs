@@ -4,8 +4,8 @@
 //!
 //! * [`TriMesh`]: vertex positions and triangles, the one mesh type of wfem.
 //! * [`io`]: reading OBJ, PLY, OFF and STL files and writing fields (PLY/NPY/CSV), atomically.
-//! * [`validate`]: a [`validate::ValidationReport`] naming every problem, and explicit repairs.
-//! * [`stats`]: counts, topology (Euler characteristic, genus, boundary loops) and geometry.
+//! * [`validate`](mod@validate): a [`validate::ValidationReport`] naming every problem, and explicit repairs.
+//! * [`stats`](mod@stats): counts, topology (Euler characteristic, genus, boundary loops) and geometry.
 //! * [`mtx`]: Matrix Market reading and writing (atomic, 17 digits) and `nalgebra-sparse`
 //!   conversions.
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
