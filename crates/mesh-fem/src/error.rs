@@ -111,6 +111,34 @@ pub enum MeshError {
         /// What was wrong.
         message: String,
     },
+    // ===== morse.rs: critical points and persistence (appended by branch `morse`) =====
+    /// A per-vertex scalar field does not have one value per vertex.
+    #[error("the scalar field has {len} values, but the mesh has {n_vertices} vertices")]
+    ScalarFieldLength {
+        /// Number of values given.
+        len: usize,
+        /// Number of vertices of the mesh.
+        n_vertices: usize,
+    },
+    /// A per-vertex scalar field holds a NaN or infinite value.
+    #[error("the scalar field value at vertex {vertex} is {value}, not a finite number")]
+    NonFiniteScalarField {
+        /// Vertex index (0-based).
+        vertex: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// The link of a vertex is neither one cycle (interior vertex) nor one path (boundary
+    /// vertex), so the vertex is not a manifold point of the surface.
+    #[error("vertex {vertex} is non-manifold: {reason}")]
+    NonManifoldVertex {
+        /// Vertex index (0-based).
+        vertex: usize,
+        /// What is wrong with its link.
+        reason: String,
+    },
+    // ===== end of morse.rs block =====
+
     // ---- variants added by the validate/stats/mtx work (branch `validate`) ----
     /// A repair option has an invalid value.
     #[error("invalid repair option {option}: {message}")]

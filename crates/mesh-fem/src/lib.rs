@@ -26,6 +26,7 @@ mod topology;
 pub mod corpus;
 pub mod generate;
 pub mod io;
+pub mod morse;
 pub mod mtx;
 pub mod operators;
 pub mod stats;
