@@ -10,6 +10,17 @@
 //! * [`write_operators`]: `stiffness.mtx` (L), `mass.mtx` (B), `lumped_mass.mtx` (D).
 //!
 //! The files are what scipy (`scipy.io.mmread`), MATLAB (`mmread.m`) and libigl read.
+//!
+//! ```
+//! use mesh_fem::{assemble, generate, read_matrix_market, write_operators, AssemblyParams};
+//! let ops = assemble(&generate::icosphere(1), &AssemblyParams::default())?;
+//! let dir = std::env::temp_dir().join(format!("mesh-fem-mtx-doc-{}", std::process::id()));
+//! write_operators(&dir, &ops)?;
+//! let l = read_matrix_market(dir.join("stiffness.mtx"))?;
+//! assert_eq!((l.nrows(), l.ncols()), (42, 42));
+//! # std::fs::remove_dir_all(&dir).unwrap();
+//! # Ok::<(), mesh_fem::MeshError>(())
+//! ```
 
 use crate::{FemOperators, MeshError};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};

@@ -67,6 +67,12 @@ pub struct MeshStats {
 }
 
 /// Computes the [`MeshStats`] of `mesh` in O(F log F).
+///
+/// ```
+/// use mesh_fem::{generate, stats};
+/// let s = stats(&generate::torus(2.0, 0.5, 24, 12));
+/// assert_eq!((s.euler_characteristic, s.genus, s.is_closed), (0, Some(1), true));
+/// ```
 pub fn stats(mesh: &TriMesh) -> MeshStats {
     let topo = Topology::new(mesh.n_vertices(), mesh.faces());
     let positions = mesh.positions();

@@ -327,6 +327,18 @@ impl ValidationReport {
 /// Validates `mesh` for FEM assembly and reports every problem with its culprit.
 ///
 /// Runs in O(F log F). See the [module documentation](self) for what each problem means.
+///
+/// ```
+/// use mesh_fem::{validate, MeshError, Problem, TriMesh};
+/// // Two triangles; vertex 4 belongs to no face.
+/// let p = vec![[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [1., 1., 0.], [5., 5., 5.]];
+/// let mesh = TriMesh::new(p, vec![[0, 1, 2], [2, 1, 3]])?;
+/// let report = validate(&mesh);
+/// assert!(!report.is_usable());
+/// assert!(report.problems.contains(&Problem::Boundary { loops: 1, edges: 4 }));
+/// assert!(matches!(report.into_result(), Err(MeshError::UnreferencedVertex { vertex: 4 })));
+/// # Ok::<(), MeshError>(())
+/// ```
 pub fn validate(mesh: &TriMesh) -> ValidationReport {
     let faces = mesh.faces();
     let topo = Topology::new(mesh.n_vertices(), faces);
@@ -557,6 +569,18 @@ impl RepairReport {
 }
 
 /// Applies the repairs turned on in `opts` and reports what changed.
+///
+/// ```
+/// use mesh_fem::{repair, validate, MeshError, RepairOptions, TriMesh};
+/// let p = vec![[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [1., 1., 0.], [5., 5., 5.]];
+/// let mesh = TriMesh::new(p, vec![[0, 1, 2], [2, 1, 3]])?;
+/// let opts = RepairOptions { drop_unreferenced_vertices: true, ..Default::default() };
+/// let (fixed, report) = repair(&mesh, &opts)?;
+/// assert_eq!(report.vertex_map, vec![Some(0), Some(1), Some(2), Some(3), None]);
+/// assert!(validate(&fixed).is_usable());
+/// println!("{}", report.summary()); // "repair:\n  dropped 1 unreferenced vertex"
+/// # Ok::<(), MeshError>(())
+/// ```
 ///
 /// Faces keep their relative order, vertices too (merged vertices take the index of the
 /// vertex they merged into). Runs in O((V + F) log(V + F)).
