@@ -85,8 +85,9 @@ pub(crate) fn write_atomically(
 /// written too (the file keeps the sparsity pattern). Values carry 17 significant digits.
 ///
 /// # Errors
-/// [`MeshError::MatrixMarket`] if `symmetric` is asked for a non-square or non-symmetric
-/// matrix (naming the first asymmetric entry), [`MeshError::Io`] if the file cannot be written.
+/// [`MeshError::MatrixMarket`] for a NaN or infinite entry (naming it), or if `symmetric` is
+/// asked for a non-square or non-symmetric matrix (naming the first asymmetric entry);
+/// [`MeshError::Io`] if the file cannot be written.
 pub fn write_matrix_market(
     path: impl AsRef<Path>,
     matrix: &SparseColMat<usize, f64>,
@@ -94,6 +95,12 @@ pub fn write_matrix_market(
 ) -> Result<(), MeshError> {
     let path = path.as_ref();
     let entries = sorted_entries(matrix);
+    if let Some(&(i, j, v)) = entries.iter().find(|e| !e.2.is_finite()) {
+        return Err(mm_err(
+            path,
+            format!("entry ({i}, {j}) is {v} (0-based); refusing to write a non-finite value"),
+        ));
+    }
     if symmetric {
         check_symmetric(path, matrix.nrows(), matrix.ncols(), &entries)?;
     }
@@ -186,6 +193,10 @@ fn check_symmetric(path: &Path, nrows: usize, ncols: usize, entries: &[(usize, u
     Ok(())
 }
 
+/// Largest column count [`read_matrix_market`] accepts regardless of the number of entries
+/// (beyond it a file needs at least one entry per 64 columns).
+const MAX_EMPTY_COLUMNS: usize = 1 << 24;
+
 /// Reads a Matrix Market `coordinate` file into a faer sparse matrix.
 ///
 /// Accepts field `real`, `integer` or `pattern` and symmetry `general`, `symmetric`
@@ -197,7 +208,7 @@ fn check_symmetric(path: &Path, nrows: usize, ncols: usize, entries: &[(usize, u
 /// unsupported header (e.g. `array` or `complex`) or a wrong entry count;
 /// [`MeshError::MatrixMarketLine`] naming the line of a malformed size line or entry
 /// (unparsable numbers, indices out of range, an upper-triangle entry in a symmetric file,
-/// a non-finite value).
+/// a non-finite value, more than 2^24 columns with fewer than one entry per 64 columns).
 pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseColMat<usize, f64>, MeshError> {
     let path = path.as_ref();
     let text = std::fs::read_to_string(path).map_err(|e| io_err(path, e))?;
@@ -275,8 +286,11 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseColMat<usize, 
         ));
     }
 
+    // The announced count is untrusted: reserve no more than the file can hold (an entry
+    // line takes at least 4 bytes).
+    let cap = nnz.min(text.len() / 4 + 1);
     let mut triplets: Vec<Triplet<usize, usize, f64>> =
-        Vec::with_capacity(if sym == Sym::General { nnz } else { 2 * nnz });
+        Vec::with_capacity(if sym == Sym::General { cap } else { 2 * cap });
     let mut count = 0usize;
     for (ln, l) in content {
         count += 1;
@@ -333,6 +347,14 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseColMat<usize, 
         return Err(mm_err(
             path,
             format!("the size line announces {nnz} entries but the file has {count}"),
+        ));
+    }
+    // A column pointer array is allocated for every column; refuse absurd dimensions that a
+    // corrupt size line could ask for instead of exhausting memory.
+    if ncols > MAX_EMPTY_COLUMNS.max(64 * nnz) {
+        return Err(line_err(
+            size_line,
+            format!("{ncols} columns for {nnz} entries: refusing to allocate a matrix that sparse"),
         ));
     }
     SparseColMat::try_new_from_triplets(nrows, ncols, &triplets)

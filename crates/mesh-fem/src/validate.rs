@@ -603,7 +603,14 @@ pub fn repair(mesh: &TriMesh, opts: &RepairOptions) -> Result<(TriMesh, RepairRe
                     message: format!("tolerance must be finite and ≥ 0, got {tol}"),
                 });
             }
-            merge_representatives(positions, tol * bbox_diagonal(positions))
+            let absolute = tol * bbox_diagonal(positions);
+            if !absolute.is_finite() {
+                return Err(MeshError::InvalidRepairOption {
+                    option: "merge_duplicate_vertices",
+                    message: format!("tolerance {tol} times the bounding-box diagonal is not a finite number"),
+                });
+            }
+            merge_representatives(positions, absolute)
         }
     };
     report.merged_vertices = rep.iter().enumerate().filter(|&(v, &r)| r as usize != v).count();
@@ -745,7 +752,11 @@ fn merge_representatives(positions: &[[f64; 3]], tol: f64) -> Vec<u32> {
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    if let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
+                    if let Some(list) = grid.get(&[
+                        c[0].saturating_add(dx),
+                        c[1].saturating_add(dy),
+                        c[2].saturating_add(dz),
+                    ]) {
                         for &r in list {
                             let d = norm(sub(positions[r as usize], *p));
                             if d <= tol && best.is_none_or(|(bd, br)| d < bd || (d == bd && r < br)) {

@@ -156,6 +156,11 @@ fn symmetric_write_checks_symmetry() {
         write_matrix_market(dir.path().join("b.mtx"), &m, true),
         Err(MeshError::MatrixMarket { .. })
     ));
+    let m = from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, f64::NAN)]);
+    match write_matrix_market(dir.path().join("nan.mtx"), &m, false) {
+        Err(MeshError::MatrixMarket { message, .. }) => assert!(message.contains("(1, 1) is NaN"), "{message}"),
+        other => panic!("{other:?}"),
+    }
     // Nothing was left behind by the failed writes.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     // Writing into a folder that does not exist is an I/O error naming the path.
@@ -215,6 +220,8 @@ fn malformed_files_name_the_line() {
             "square",
         ),
         ("%%NotMatrixMarket\n1 1 1\n1 1 1\n".to_string(), 1, "header"),
+        // A corrupt size line must not make the reader allocate absurd amounts of memory.
+        (format!("{h}10 1000000000000 1\n1 1 1\n"), 2, "refusing to allocate"),
     ];
     for (text, line, needle) in cases {
         match read_str(&text) {
@@ -227,6 +234,10 @@ fn malformed_files_name_the_line() {
     }
     for (text, needle) in [
         (format!("{h}2 2 3\n1 1 1\n"), "announces 3 entries"),
+        (
+            format!("{h}2 2 1000000000000000000\n1 1 1\n"),
+            "announces 1000000000000000000 entries",
+        ),
         (
             "%%MatrixMarket matrix array real general\n1 1\n1\n".to_string(),
             "coordinate",

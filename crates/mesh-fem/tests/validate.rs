@@ -445,7 +445,7 @@ fn merging_can_create_degenerate_faces_which_repair_drops() {
 #[test]
 fn repair_rejects_bad_tolerance_and_reports_empty_results() {
     let m = icosphere(0);
-    for tol in [-1.0, f64::NAN, f64::INFINITY] {
+    for tol in [-1.0, f64::NAN, f64::INFINITY, 1e308] {
         let e = repair(
             &m,
             &RepairOptions {
