@@ -314,9 +314,9 @@ impl ValidationReport {
                 Problem::InconsistentOrientation { .. } => {
                     "; L and B do not depend on it; fix: RepairOptions::orient_faces"
                 }
+                Problem::NonOrientable { .. } => "; L and B do not depend on it, but no consistent normals exist",
                 Problem::SeveralComponents { .. } => "; L has one zero eigenvalue per component",
                 Problem::Boundary { .. } => "; natural (Neumann) boundary conditions apply",
-                _ => "",
             };
             s.push_str(&format!("\n  {tag}: {p}{more}{hint}"));
         }
