@@ -481,3 +481,78 @@ fn boundary_graph_components(mesh: &TriMesh) -> usize {
         .filter(|&v| on_boundary[v] && root(&mut parent, v) == v)
         .count()
 }
+
+/// Every OBJ and OFF file of the corpus against its row of the per-file table in
+/// SOURCES.md: closed, manifold, components, genus, χ, boundary loops and the orientation
+/// note (197 files, ≈ 80 MB of text).
+#[test]
+fn whole_corpus_matches_sources_table() {
+    let Some(dir) = minimal_reader::corpus_dir() else {
+        return;
+    };
+    let table = std::fs::read_to_string(dir.join("SOURCES.md")).unwrap();
+    let mut checked = 0;
+    let mut failures = Vec::new();
+    for line in table.lines().filter(|l| l.starts_with("| `")) {
+        let cols: Vec<&str> = line.split('|').map(str::trim).collect();
+        // | file | fmt | V | F | closed | manifold | bdry | cc | g | χ | … | notes |
+        if cols.len() < 15 || !(cols[2] == "OBJ" || cols[2] == "OFF") {
+            continue;
+        }
+        let file = cols[1].trim_matches('`');
+        let yes = |s: &str| s == "yes";
+        let want_closed = yes(cols[5]);
+        let want_manifold = yes(cols[6]);
+        let want_loops: usize = cols[7].parse().unwrap();
+        let want_cc: usize = cols[8].parse().unwrap();
+        let want_genus: Option<i64> = cols[9].parse().ok();
+        let want_chi: i64 = cols[10].parse().unwrap();
+        let flagged_orientation = line.contains("non-orientable or inconsistently oriented");
+
+        let (p, f) = minimal_reader::read_parts(&dir.join(file));
+        let mesh = TriMesh::new(p, f).unwrap();
+        let s = stats(&mesh);
+        let mut bad = Vec::new();
+        if s.is_closed != want_closed {
+            bad.push(format!("closed {} vs {want_closed}", s.is_closed));
+        }
+        if s.is_manifold != want_manifold {
+            bad.push(format!("manifold {} vs {want_manifold}", s.is_manifold));
+        }
+        if s.n_components != want_cc {
+            bad.push(format!("components {} vs {want_cc}", s.n_components));
+        }
+        if s.euler_characteristic != want_chi {
+            bad.push(format!("χ {} vs {want_chi}", s.euler_characteristic));
+        }
+        // SOURCES.md gives a genus for every single-component manifold mesh, orientable or
+        // not; mesh-fem only for orientable ones.
+        if s.genus != want_genus && !(s.genus.is_none() && !s.is_orientable) {
+            bad.push(format!("genus {:?} vs {want_genus:?}", s.genus));
+        }
+        let graph_loops = boundary_graph_components(&mesh);
+        if graph_loops != want_loops || (want_manifold && s.n_boundary_loops != want_loops) {
+            bad.push(format!(
+                "loops {} ({graph_loops} graph) vs {want_loops}",
+                s.n_boundary_loops
+            ));
+        }
+        let inconsistent = s.is_manifold && !s.is_consistently_oriented;
+        if inconsistent != flagged_orientation {
+            bad.push(format!(
+                "inconsistent orientation {inconsistent} vs {flagged_orientation}"
+            ));
+        }
+        if !bad.is_empty() {
+            failures.push(format!("{file}: {}", bad.join(", ")));
+        }
+        checked += 1;
+    }
+    assert!(checked > 150, "only {checked} files checked");
+    assert!(
+        failures.is_empty(),
+        "{} mismatches:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
