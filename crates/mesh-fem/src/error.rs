@@ -55,7 +55,7 @@ pub enum MeshError {
         vertices: [u32; 3],
     },
     /// A polygon with more than three corners was found and fan triangulation was not enabled.
-    #[error("{path}: face {face} has {corners} corners; enable triangulation (LoadOptions::triangulate) to fan-triangulate polygons")]
+    #[error("{path}: face {face} has {corners} corners; enable LoadOptions::triangulate_polygons to fan-triangulate polygons")]
     Polygon {
         /// File read.
         path: PathBuf,
@@ -138,6 +138,45 @@ pub enum MeshError {
         reason: String,
     },
     // ===== end of morse.rs block =====
+    // ---- Variants added by the mesh I/O work (branch `io`); keep this block together. ----
+    /// A face in a mesh file names a negative vertex index (or an OBJ relative index that
+    /// points before the first vertex).
+    #[error("{path}:{line}: face {face} uses the negative vertex index {index}")]
+    NegativeIndex {
+        /// File read.
+        path: PathBuf,
+        /// 1-based line (0 for binary formats).
+        line: usize,
+        /// Face index in the file (0-based).
+        face: usize,
+        /// The index as written in the file.
+        index: i64,
+    },
+    /// A per-vertex field has the wrong number of values.
+    #[error("{path}: field {name:?} has {found} values, but the mesh has {expected} vertices")]
+    FieldLength {
+        /// File read or written.
+        path: PathBuf,
+        /// Field name (the file name for a field file being read).
+        name: String,
+        /// Number of values required (the number of vertices).
+        expected: usize,
+        /// Number of values found.
+        found: usize,
+    },
+    /// A per-vertex field holds a NaN or infinite value.
+    #[error("{path}: field {name:?} has the non-finite value {value} at vertex {vertex}")]
+    NonFiniteValue {
+        /// File read or written.
+        path: PathBuf,
+        /// Field name (the file name for a field file being read).
+        name: String,
+        /// Vertex index (0-based).
+        vertex: usize,
+        /// The value found.
+        value: f64,
+    },
+    // ---- end of the I/O block ----
 
     // ---- variants added by the validate/stats/mtx work (branch `validate`) ----
     /// A repair option has an invalid value.
