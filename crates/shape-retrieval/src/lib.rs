@@ -2,8 +2,29 @@
 //!
 //! Heat kernel shape descriptors (HKS, scale-invariant HKS), feature points, bags of
 //! features and retrieval metrics on top of [`wfem_heat`].
+//!
+//! Descriptors are computed from a truncated spectrum of the generalized eigenproblem
+//! `L φ_k = λ_k B φ_k`, `ΦᵀBΦ = I` (paper, Eq. (4)), with L the cotangent stiffness
+//! (symmetric positive semidefinite, positive diagonal) and B the mass matrix, given as plain
+//! inputs ([`Spectrum`]), so any eigensolver can feed them:
+//!
+//! * [`hks`]: heat kernel signature in the kernel-value and matrix-diagonal conventions,
+//!   scaled and scale-normalized variants;
+//! * [`sihks`]: the scale-invariant HKS of Bronstein & Kokkinos;
+//! * [`kmeans`], [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;
+//! * [`retrieval`]: ranking, average precision, mAP, precision/recall;
+//! * [`features`]: repeatability of feature points and robustness of dense descriptors.
 
 #![warn(missing_docs)]
 
+mod check;
 mod error;
+pub mod hks;
+pub mod sihks;
+
 pub use error::RetrievalError;
+pub use hks::{
+    heat_kernel_signature, heat_trace, HeatKernelSignature, HksConvention, HksParams, Spectrum, SpectrumNormalization,
+    TimeSampling,
+};
+pub use sihks::{scale_invariant_hks, SihksParams};
