@@ -17,14 +17,22 @@
 
 #![warn(missing_docs)]
 
+pub mod bof;
 mod check;
 mod error;
+pub mod features;
 pub mod hks;
+pub mod kmeans;
+pub mod retrieval;
 pub mod sihks;
 
+pub use bof::{l1_distance, pairwise_l1, vertex_areas, Vocabulary, VocabularyParams};
 pub use error::RetrievalError;
+pub use features::{descriptor_distance, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
 pub use hks::{
     heat_kernel_signature, heat_trace, HeatKernelSignature, HksConvention, HksParams, Spectrum, SpectrumNormalization,
     TimeSampling,
 };
+pub use kmeans::{kmeans, KmeansParams, KmeansReport};
+pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
 pub use sihks::{scale_invariant_hks, SihksParams};
