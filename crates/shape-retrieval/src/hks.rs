@@ -286,7 +286,7 @@ pub fn auto_times(eigenvalues: &[f64], num_times: usize) -> Result<Vec<f64>, Ret
         .copied()
         .filter(|&v| v > ZERO_EIGENVALUE_RTOL * lambda_max)
         .fold(f64::INFINITY, f64::min);
-    if !(lambda_max > 0.0) || !lambda_2.is_finite() {
+    if !lambda_max.is_finite() || lambda_max <= 0.0 || !lambda_2.is_finite() {
         return Err(RetrievalError::NoNonzeroEigenvalue);
     }
     let c = 4.0 * std::f64::consts::LN_10;
@@ -319,7 +319,7 @@ pub(crate) fn normalized_spectrum(
         SpectrumNormalization::None => return Ok((spectrum.eigenvalues.to_vec(), 1.0)),
         SpectrumNormalization::MaxEigenvalue => {
             let lambda_max = spectrum.max_eigenvalue();
-            if !(lambda_max > 0.0) {
+            if lambda_max <= 0.0 {
                 return Err(RetrievalError::NoNonzeroEigenvalue);
             }
             lambda_max

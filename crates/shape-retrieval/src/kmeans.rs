@@ -121,8 +121,8 @@ pub fn kmeans(points: MatRef<'_, f64>, params: &KmeansParams) -> Result<KmeansRe
         // Update step (sequential sums keep the result independent of the thread count).
         let mut sums = vec![0.0; k * d];
         let mut counts = vec![0usize; k];
-        for i in 0..n {
-            let c = assignment[i] as usize;
+        for (i, &a) in assignment.iter().enumerate() {
+            let c = a as usize;
             counts[c] += 1;
             sums[c * d..(c + 1) * d]
                 .iter_mut()

@@ -134,7 +134,7 @@ pub fn scale_invariant_hks(spectrum: &Spectrum<'_>, params: &SihksParams) -> Res
             let mut log_h = Vec::with_capacity(m);
             for (j, &t) in times.iter().enumerate() {
                 let value = hks[(i, j)];
-                if !(value > 0.0) {
+                if value.is_nan() || value <= 0.0 {
                     return Err(RetrievalError::NonPositiveSignature {
                         vertex: i,
                         time: t,

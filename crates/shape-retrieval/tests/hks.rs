@@ -179,9 +179,9 @@ fn scaled_hks_divides_by_heat_trace() {
     )
     .unwrap();
     let z = heat_trace(&s.eigenvalues, &plain.times);
-    for j in 0..plain.times.len() {
+    for (j, zj) in z.iter().enumerate() {
         for i in 0..plain.values.nrows() {
-            let want = plain.values[(i, j)] / z[j];
+            let want = plain.values[(i, j)] / zj;
             assert!((scaled.values[(i, j)] - want).abs() <= 1e-14 * want.abs());
         }
     }
