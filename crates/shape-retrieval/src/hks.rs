@@ -346,14 +346,34 @@ pub(crate) fn signature_at(
     convention: HksConvention,
     times: &[f64],
 ) -> Result<Mat<f64>, RetrievalError> {
-    let phi = spectrum.eigenvectors;
+    signature_rows(
+        spectrum,
+        eigenvalues,
+        factor,
+        convention,
+        times,
+        0..spectrum.n_vertices(),
+    )
+}
+
+/// [`signature_at`] restricted to the vertices `rows` (a block of rows of the result).
+pub(crate) fn signature_rows(
+    spectrum: &Spectrum<'_>,
+    eigenvalues: &[f64],
+    factor: f64,
+    convention: HksConvention,
+    times: &[f64],
+    rows: std::ops::Range<usize>,
+) -> Result<Mat<f64>, RetrievalError> {
+    let phi = spectrum.eigenvectors.subrows(rows.start, rows.len());
     let psi = match convention {
         HksConvention::KernelValue => phi,
         HksConvention::MatrixDiagonal => spectrum
             .mass_eigenvectors
             .as_ref()
             .ok_or(RetrievalError::MassRequired)?
-            .as_ref(),
+            .as_ref()
+            .subrows(rows.start, rows.len()),
     };
     let (n, k) = (phi.nrows(), phi.ncols());
     let products = Mat::from_fn(n, k, |i, c| factor * phi[(i, c)] * psi[(i, c)]);

@@ -26,10 +26,13 @@
 //! units (shapes of area ~10³–10⁶); for a unit-area shape choose t₀ ≈ 1e−5 or shift τ.
 
 use crate::check;
-use crate::hks::{signature_at, HksConvention, Spectrum};
+use crate::hks::{signature_rows, HksConvention, Spectrum};
 use crate::RetrievalError;
 use faer::Mat;
 use rayon::prelude::*;
+
+/// Vertices per block of the HKS table (4096 × 385 doubles ≈ 12 MB).
+const VERTEX_BLOCK: usize = 4096;
 
 /// Options of [`scale_invariant_hks`].
 #[derive(Clone, Debug, PartialEq)]
@@ -116,8 +119,7 @@ pub fn scale_invariant_hks(spectrum: &Spectrum<'_>, params: &SihksParams) -> Res
             reason: "must be in 1 ..= (number of τ samples − 1)/2 + 1, with at least 3 τ samples",
         });
     }
-    let hks = signature_at(spectrum, spectrum.eigenvalues(), 1.0, params.convention, &times)?;
-    let n = hks.nrows();
+    let n = spectrum.n_vertices();
     let k_freq = params.num_frequencies;
     // Twiddle factors e^{−2πi jω/(m−1)} for ω < K, shared by every vertex.
     let twiddles: Vec<(f64, f64)> = (0..k_freq)
@@ -128,38 +130,50 @@ pub fn scale_invariant_hks(spectrum: &Spectrum<'_>, params: &SihksParams) -> Res
             })
         })
         .collect();
-    let rows: Vec<Result<Vec<f64>, RetrievalError>> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            let mut log_h = Vec::with_capacity(m);
-            for (j, &t) in times.iter().enumerate() {
-                let value = hks[(i, j)];
-                if value.is_nan() || value <= 0.0 {
-                    return Err(RetrievalError::NonPositiveSignature {
-                        vertex: i,
-                        time: t,
-                        value,
-                    });
-                }
-                log_h.push(value.ln());
-            }
-            let diff: Vec<f64> = log_h.windows(2).map(|w| (w[1] - w[0]) / params.tau_step).collect();
-            Ok((0..k_freq)
-                .map(|w| {
-                    let tw = &twiddles[w * n_diff..(w + 1) * n_diff];
-                    let (re, im) = diff
-                        .iter()
-                        .zip(tw)
-                        .fold((0.0, 0.0), |(re, im), (d, (c, s))| (re + d * c, im + d * s));
-                    re.hypot(im)
-                })
-                .collect())
-        })
-        .collect();
     let mut out = Mat::<f64>::zeros(n, k_freq);
-    for (i, row) in rows.into_iter().enumerate() {
-        for (w, v) in row?.into_iter().enumerate() {
-            out[(i, w)] = v;
+    // Blocks of vertices keep the n × m HKS table (m ≈ 400) small on large meshes.
+    for start in (0..n).step_by(VERTEX_BLOCK) {
+        let rows = start..(start + VERTEX_BLOCK).min(n);
+        let hks = signature_rows(
+            spectrum,
+            spectrum.eigenvalues(),
+            1.0,
+            params.convention,
+            &times,
+            rows.clone(),
+        )?;
+        let block: Vec<Result<Vec<f64>, RetrievalError>> = (0..rows.len())
+            .into_par_iter()
+            .map(|r| {
+                let mut log_h = Vec::with_capacity(m);
+                for (j, &t) in times.iter().enumerate() {
+                    let value = hks[(r, j)];
+                    if value.is_nan() || value <= 0.0 {
+                        return Err(RetrievalError::NonPositiveSignature {
+                            vertex: start + r,
+                            time: t,
+                            value,
+                        });
+                    }
+                    log_h.push(value.ln());
+                }
+                let diff: Vec<f64> = log_h.windows(2).map(|w| (w[1] - w[0]) / params.tau_step).collect();
+                Ok((0..k_freq)
+                    .map(|w| {
+                        let tw = &twiddles[w * n_diff..(w + 1) * n_diff];
+                        let (re, im) = diff
+                            .iter()
+                            .zip(tw)
+                            .fold((0.0, 0.0), |(re, im), (d, (c, s))| (re + d * c, im + d * s));
+                        re.hypot(im)
+                    })
+                    .collect())
+            })
+            .collect();
+        for (r, row) in block.into_iter().enumerate() {
+            for (w, v) in row?.into_iter().enumerate() {
+                out[(start + r, w)] = v;
+            }
         }
     }
     Ok(out)
