@@ -221,6 +221,21 @@ pub struct HeatKernelSignature {
 /// product. Truncation error relative to the full spectrum is about e^{−t λ_k} (NUMERICS §4):
 /// ≈1e−4 at the automatic smallest time.
 ///
+/// ```
+/// use faer::Mat;
+/// use shape_retrieval::{heat_kernel_signature, HksParams, Spectrum, TimeSampling};
+///
+/// // Two vertices, B = I: φ₀ = (1, 1)/√2 with λ₀ = 0 and φ₁ = (1, −1)/√2 with λ₁ = 2,
+/// // so h(i, t) = (1 + e^{−2t})/2 at both vertices.
+/// let r = 0.5f64.sqrt();
+/// let phi = Mat::from_fn(2, 2, |i, k| if k == 1 && i == 1 { -r } else { r });
+/// let spectrum = Spectrum::new(&[0.0, 2.0], phi.as_ref())?;
+/// let params = HksParams { times: TimeSampling::Explicit(vec![0.5]), ..Default::default() };
+/// let hks = heat_kernel_signature(&spectrum, &params)?;
+/// assert!((hks.values[(0, 0)] - (1.0 + (-1.0f64).exp()) / 2.0).abs() < 1e-15);
+/// # Ok::<(), shape_retrieval::RetrievalError>(())
+/// ```
+///
 /// # Errors
 /// [`RetrievalError::MassRequired`] for the matrix-diagonal convention without mass,
 /// [`RetrievalError::InvalidParameter`] for non-positive times, `num_times = 0` or a bad area,

@@ -11,7 +11,7 @@
 //! * [`hks`]: heat kernel signature in the kernel-value and matrix-diagonal conventions,
 //!   scaled and scale-normalized variants;
 //! * [`sihks`]: the scale-invariant HKS of Bronstein & Kokkinos;
-//! * [`kmeans`], [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;
+//! * [`kmeans`](mod@kmeans), [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;
 //! * [`retrieval`]: ranking, average precision, mAP, precision/recall;
 //! * [`features`]: repeatability of feature points and robustness of dense descriptors.
 
