@@ -132,6 +132,51 @@ impl<'a> Spectrum<'a> {
         self.eigenvectors
     }
 
+    /// Applies the truncated wFEM heat kernel to a block of functions (paper, Eq. (8)):
+    /// `K_t F = Φ D_t Φᵀ B F = Σ_k e^{−λ_k t} ⟨F, φ_k⟩_B φ_k`, for F n × m. Cost O(n·k·m).
+    /// Suits [`crate::Vocabulary::spatially_sensitive_bag`] as its kernel.
+    ///
+    /// # Errors
+    /// [`RetrievalError::MassRequired`] without B, [`RetrievalError::DimensionMismatch`] if F
+    /// does not have n rows, [`RetrievalError::InvalidParameter`] for t < 0 or non-finite,
+    /// [`RetrievalError::NonFinite`] for NaN in F.
+    pub fn apply_heat_kernel(&self, t: f64, functions: MatRef<'_, f64>) -> Result<Mat<f64>, RetrievalError> {
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(RetrievalError::InvalidParameter {
+                name: "t",
+                value: t,
+                reason: "must be finite and ≥ 0",
+            });
+        }
+        let bx = self.mass_eigenvectors.as_ref().ok_or(RetrievalError::MassRequired)?;
+        check::same("function rows vs vertices", self.n_vertices(), functions.nrows())?;
+        check::finite_mat("functions", functions)?;
+        // Coefficients c = D_t (BΦ)ᵀ F (k × m), then Φ c.
+        let mut coefficients = Mat::<f64>::zeros(self.n_eigenpairs(), functions.ncols());
+        matmul(
+            coefficients.as_mut(),
+            Accum::Replace,
+            bx.transpose(),
+            functions,
+            1.0,
+            Par::rayon(0),
+        );
+        for (k, &lambda) in self.eigenvalues.iter().enumerate() {
+            let decay = (-lambda * t).exp();
+            coefficients.row_mut(k).iter_mut().for_each(|c| *c *= decay);
+        }
+        let mut out = Mat::<f64>::zeros(self.n_vertices(), functions.ncols());
+        matmul(
+            out.as_mut(),
+            Accum::Replace,
+            self.eigenvectors,
+            coefficients.as_ref(),
+            1.0,
+            Par::rayon(0),
+        );
+        Ok(out)
+    }
+
     /// The largest eigenvalue λ_max of the given (truncated) spectrum.
     pub fn max_eigenvalue(&self) -> f64 {
         self.eigenvalues.iter().fold(0.0f64, |m, &v| m.max(v))

@@ -152,6 +152,17 @@ fn spatially_sensitive_bag_is_symmetric_and_conserves_area() {
         let f = voc
             .spatially_sensitive_bag(p.as_ref(), s.ops.mass.as_ref(), |block| Ok(&kernel * block))
             .unwrap();
+        // The spectral kernel of `Spectrum` plugs in the same way and agrees.
+        let spectrum = Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref())
+            .unwrap()
+            .with_mass(s.ops.mass.as_ref())
+            .unwrap();
+        let g = voc
+            .spatially_sensitive_bag(p.as_ref(), s.ops.mass.as_ref(), |block| {
+                spectrum.apply_heat_kernel(t, block)
+            })
+            .unwrap();
+        assert!((&f - &g).norm_max() < 1e-10 * f.norm_max());
         assert_eq!((f.nrows(), f.ncols()), (10, 10));
         let total: f64 = f.col_iter().flat_map(|c| c.iter().copied().collect::<Vec<_>>()).sum();
         assert!(

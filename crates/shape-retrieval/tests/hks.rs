@@ -399,3 +399,37 @@ fn snapshot_hks_conventions_on_bumpy() {
         table(&heat_kernel_signature(&spectrum, &unit).unwrap())
     );
 }
+
+#[test]
+fn apply_heat_kernel_matches_dense_and_conserves_mass() {
+    let s = dense_spectrum(&bumpy(2));
+    let k = 50;
+    let spectrum = Spectrum::new(&s.eigenvalues[..k], s.eigenvectors.subcols(0, k))
+        .unwrap()
+        .with_mass(s.ops.mass.as_ref())
+        .unwrap();
+    let f = Mat::from_fn(s.eigenvalues.len(), 3, |i, j| ((i * (j + 1)) as f64 * 0.1).cos());
+    let t = 0.05;
+    let got = spectrum.apply_heat_kernel(t, f.as_ref()).unwrap();
+    let want = dense_kernel_matrix(&s, k, t) * &s.mass * &f;
+    assert!((&got - &want).norm_max() < 1e-12 * want.norm_max());
+    // 1ᵀB K_t f = 1ᵀB f: the constant mode is kept.
+    let ones = Mat::from_fn(1, f.nrows(), |_, _| 1.0);
+    let (before, after) = (&ones * &s.mass * &f, &ones * &s.mass * &got);
+    for j in 0..3 {
+        assert!((before[(0, j)] - after[(0, j)]).abs() < 1e-10 * before[(0, j)].abs().max(1.0));
+    }
+    let no_mass = Spectrum::new(&s.eigenvalues[..k], s.eigenvectors.subcols(0, k)).unwrap();
+    assert!(matches!(
+        no_mass.apply_heat_kernel(t, f.as_ref()),
+        Err(RetrievalError::MassRequired)
+    ));
+    assert!(matches!(
+        spectrum.apply_heat_kernel(-1.0, f.as_ref()),
+        Err(RetrievalError::InvalidParameter { .. })
+    ));
+    assert!(matches!(
+        spectrum.apply_heat_kernel(t, f.subrows(0, 5)),
+        Err(RetrievalError::DimensionMismatch { .. })
+    ));
+}
