@@ -14,7 +14,7 @@
 //! 5. Shapes are compared with the **L1 distance** between bags.
 
 use crate::check;
-use crate::kmeans::{kmeans, nearest_center, squared_distance, KmeansParams};
+use crate::kmeans::{kmeans, nearest_center, squared_distance, KmeansParams, SplitMix64};
 use crate::RetrievalError;
 use faer::linalg::matmul::matmul;
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
@@ -34,6 +34,10 @@ pub struct VocabularyParams {
     /// Soft-assignment width σ; `None` (default) = median distance of the training descriptors
     /// to their nearest word.
     pub sigma: Option<f64>,
+    /// Train on at most this many descriptors, drawn without replacement (seeded by `seed`);
+    /// `None` (default) uses all. Pooled dense descriptors of a whole collection run into
+    /// millions of rows, and k-means cost is linear in them.
+    pub max_training_points: Option<usize>,
 }
 
 impl Default for VocabularyParams {
@@ -43,6 +47,7 @@ impl Default for VocabularyParams {
             max_iter: 300,
             seed: 0,
             sigma: None,
+            max_training_points: None,
         }
     }
 }
@@ -55,13 +60,24 @@ pub struct Vocabulary {
 }
 
 impl Vocabulary {
-    /// Learns the words by k-means on the rows of `descriptors` (N × d, pooled over shapes).
+    /// Learns the words by k-means on the rows of `descriptors` (N × d, pooled over shapes), or
+    /// on a seeded random subset of `params.max_training_points` rows; σ (if not given) is the
+    /// median nearest-word distance over the same rows.
     ///
     /// # Errors
     /// Those of [`kmeans`] ([`RetrievalError::TooFewDescriptors`] if N < V, NaN, empty input),
     /// and [`RetrievalError::InvalidParameter`] if σ is not positive (given, or the median
     /// distance is 0 because most descriptors coincide with words).
     pub fn train(descriptors: MatRef<'_, f64>, params: &VocabularyParams) -> Result<Self, RetrievalError> {
+        let sample;
+        let descriptors = match params.max_training_points {
+            Some(m) if m < descriptors.nrows() => {
+                let rows = sample_rows(descriptors.nrows(), m, params.seed);
+                sample = Mat::from_fn(m, descriptors.ncols(), |i, j| descriptors[(rows[i], j)]);
+                sample.as_ref()
+            }
+            _ => descriptors,
+        };
         let report = kmeans(
             descriptors,
             &KmeansParams {
@@ -251,6 +267,20 @@ pub fn pairwise_l1(bags: &[Vec<f64>]) -> Result<Mat<f64>, RetrievalError> {
         })
         .collect();
     Ok(Mat::from_fn(m, m, |i, j| rows[i][j]))
+}
+
+/// `m` distinct indices of `0..n` (partial Fisher–Yates with SplitMix64), in increasing order.
+fn sample_rows(n: usize, m: usize, seed: u64) -> Vec<usize> {
+    // A different stream from the k-means++ seeding that uses the same seed.
+    let mut rng = SplitMix64::new(seed ^ 0x5DEE_CE66_D1CE_5EED);
+    let mut idx: Vec<usize> = (0..n).collect();
+    for i in 0..m {
+        let j = i + ((rng.next_f64() * (n - i) as f64) as usize).min(n - i - 1);
+        idx.swap(i, j);
+    }
+    idx.truncate(m);
+    idx.sort_unstable();
+    idx
 }
 
 fn row_major(m: MatRef<'_, f64>) -> Vec<f64> {

@@ -93,7 +93,8 @@ pub struct ClassPrecision {
 /// Result of [`evaluate`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct RetrievalReport {
-    /// AP of every item used as a query (`None` if its class has no other member).
+    /// AP of every item used as a query (`None` if its class has no other member). Averages over
+    /// any subset of queries (e.g. SHREC'10's per transformation and strength) come from here.
     pub average_precision: Vec<Option<f64>>,
     /// Mean of the defined APs.
     pub mean_average_precision: f64,

@@ -102,6 +102,41 @@ fn trained_vocabulary_sigma_is_median_nearest_word_distance() {
     .unwrap();
     assert_eq!(given.sigma(), 0.3);
     assert_eq!(given.words(), voc.words());
+    // Subsampled training: deterministic, and σ is the median over the sample, close to the full one.
+    let sub = VocabularyParams {
+        size: 12,
+        max_training_points: Some(100),
+        ..Default::default()
+    };
+    let a = Vocabulary::train(p.as_ref(), &sub).unwrap();
+    let b = Vocabulary::train(p.as_ref(), &sub).unwrap();
+    assert_eq!(a.words(), b.words());
+    assert!(
+        (a.sigma() / voc.sigma() - 1.0).abs() < 0.5,
+        "{} vs {}",
+        a.sigma(),
+        voc.sigma()
+    );
+    // Every word of a subsampled vocabulary is a mean of training rows, so it lies in their hull;
+    // at least check it is within the range of the descriptors per coordinate.
+    for c in 0..12 {
+        for j in 0..p.ncols() {
+            let col: Vec<f64> = (0..p.nrows()).map(|i| p[(i, j)]).collect();
+            let (lo, hi) = col
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+            assert!(a.words()[(c, j)] >= lo - 1e-12 && a.words()[(c, j)] <= hi + 1e-12);
+        }
+    }
+    let too_small = VocabularyParams {
+        size: 12,
+        max_training_points: Some(5),
+        ..Default::default()
+    };
+    assert!(matches!(
+        Vocabulary::train(p.as_ref(), &too_small),
+        Err(RetrievalError::TooFewDescriptors { n_points: 5, k: 12 })
+    ));
 }
 
 #[test]
