@@ -77,7 +77,9 @@ impl<'a> Spectrum<'a> {
         })
     }
 
-    /// Attaches the mass matrix B (n × n, consistent or lumped), computing `BΦ` once.
+    /// Attaches the mass matrix the eigenvectors are orthonormal against (n × n): the consistent
+    /// B for the wFEM kernel (Eq. (6)), or the lumped D if the spectrum is that of (L, D) (the
+    /// Voronoi-cot kernel, Eq. (7)). Computes `BΦ` once. Orthonormality is not checked.
     ///
     /// # Errors
     /// [`RetrievalError::DimensionMismatch`] if B is not n × n.
