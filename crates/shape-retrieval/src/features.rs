@@ -1,4 +1,4 @@
-//! Feature-point repeatability and dense-descriptor robustness (SHREC'10 feature track; paper, Sect. 5).
+//! Feature points (local maxima), their repeatability, and dense-descriptor robustness (SHREC'10 feature track; paper, Sect. 5).
 //!
 //! **Repeatability.** Let 𝒜(X), 𝒜(Y) be the feature points detected on a null shape X and a
 //! transformed shape Y, and let the ground truth map each vertex of Y to a vertex of X (and
@@ -237,4 +237,76 @@ pub fn descriptor_distance(
         sum += (diff2 / norm2).sqrt();
     }
     Ok(sum / pairs.len() as f64)
+}
+
+/// Feature detection by local maxima of a vertex function (e.g. the HKS at a large t, as in
+/// Sun et al. 2009 and the paper's SHK1): vertex v is a feature if `f(v)` beats every vertex
+/// within `rings` edges of it. Ties are broken by the lower vertex index, so a plateau yields
+/// exactly one feature. Returns the features in increasing order.
+///
+/// `faces` define the edge graph on `values.len()` vertices. Cost O(n · |k-ring|).
+///
+/// # Errors
+/// [`RetrievalError::Empty`] for no values, [`RetrievalError::InvalidParameter`] for `rings = 0`,
+/// [`RetrievalError::VertexOutOfRange`] for a face index ≥ n, [`RetrievalError::NonFinite`].
+pub fn local_maxima(faces: &[[u32; 3]], values: &[f64], rings: usize) -> Result<Vec<u32>, RetrievalError> {
+    let n = values.len();
+    check::non_empty("values", n)?;
+    check::finite_slice("values", values)?;
+    if rings == 0 {
+        return Err(RetrievalError::InvalidParameter {
+            name: "rings",
+            value: 0.0,
+            reason: "must be at least 1",
+        });
+    }
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for f in faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            for v in [a, b] {
+                if v as usize >= n {
+                    return Err(RetrievalError::VertexOutOfRange {
+                        what: "faces",
+                        index: v as usize,
+                        n_vertices: n,
+                    });
+                }
+            }
+            neighbours[a as usize].push(b);
+            neighbours[b as usize].push(a);
+        }
+    }
+    neighbours.iter_mut().for_each(|nb| {
+        nb.sort_unstable();
+        nb.dedup();
+    });
+    // (f(v), −v) ordering: larger value wins, equal values go to the lower index.
+    let beats = |v: usize, u: usize| values[v] > values[u] || (values[v] == values[u] && v < u);
+    use rayon::prelude::*;
+    let is_max: Vec<bool> = (0..n)
+        .into_par_iter()
+        .map(|v| {
+            // Breadth-first search over the k-ring, stopping at the first vertex that wins.
+            let mut seen = vec![v as u32];
+            let mut frontier = vec![v as u32];
+            for _ in 0..rings {
+                let mut next = Vec::new();
+                for &u in &frontier {
+                    for &w in &neighbours[u as usize] {
+                        if !seen.contains(&w) {
+                            if !beats(v, w as usize) {
+                                return false;
+                            }
+                            seen.push(w);
+                            next.push(w);
+                        }
+                    }
+                }
+                frontier = next;
+            }
+            true
+        })
+        .collect();
+    Ok((0..n as u32).filter(|&v| is_max[v as usize]).collect())
 }

@@ -28,7 +28,7 @@ pub mod sihks;
 
 pub use bof::{l1_distance, pairwise_l1, vertex_areas, Vocabulary, VocabularyParams};
 pub use error::RetrievalError;
-pub use features::{descriptor_distance, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
+pub use features::{descriptor_distance, local_maxima, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
 pub use hks::{
     heat_kernel_signature, heat_trace, HeatKernelSignature, HksConvention, HksParams, Spectrum, SpectrumNormalization,
     TimeSampling,

@@ -280,3 +280,78 @@ fn hks_robustness_scale_and_noise() {
     out += &format!("scale 2.5 without normalization: {}\n", sig(d_plain, 4));
     insta::assert_snapshot!("hks_robustness_bumpy2", out);
 }
+
+#[test]
+fn local_maxima_of_height_and_brute_force() {
+    let mesh = icosphere(2);
+    let n = mesh.n_vertices();
+    // The height z has one maximum on the sphere: the topmost vertex.
+    let z: Vec<f64> = mesh.positions().iter().map(|p| p[2]).collect();
+    let top = (0..n).max_by(|&a, &b| z[a].total_cmp(&z[b])).unwrap() as u32;
+    assert_eq!(shape_retrieval::local_maxima(mesh.faces(), &z, 1).unwrap(), vec![top]);
+    // Pseudo-random values: compare with a brute-force k-ring from all-pairs hop distances.
+    let mut state = 5u64;
+    let values: Vec<f64> = (0..n)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f64
+        })
+        .collect();
+    let unit = TriMesh::new(mesh.positions().to_vec(), mesh.faces().to_vec()).unwrap();
+    let hops = all_pairs_hops(&unit);
+    for rings in [1, 2, 3] {
+        let got = shape_retrieval::local_maxima(mesh.faces(), &values, rings).unwrap();
+        let want: Vec<u32> = (0..n)
+            .filter(|&v| {
+                (0..n)
+                    .all(|u| u == v || hops[v][u] > rings || values[v] > values[u] || (values[v] == values[u] && v < u))
+            })
+            .map(|v| v as u32)
+            .collect();
+        assert_eq!(got, want, "rings = {rings}");
+        assert!(!got.is_empty());
+    }
+    // A constant function has exactly one (tie-broken) maximum per connected k-ring cover: vertex 0 wins.
+    let flat = vec![1.0; n];
+    assert!(shape_retrieval::local_maxima(mesh.faces(), &flat, 1)
+        .unwrap()
+        .contains(&0));
+    assert!(matches!(
+        shape_retrieval::local_maxima(mesh.faces(), &flat, 0),
+        Err(RetrievalError::InvalidParameter { .. })
+    ));
+    assert!(matches!(
+        shape_retrieval::local_maxima(&[[0, 1, 99]], &[1.0, 2.0], 1),
+        Err(RetrievalError::VertexOutOfRange { index: 99, .. })
+    ));
+}
+
+/// Hop (edge-count) distances between all vertex pairs, by BFS.
+fn all_pairs_hops(mesh: &TriMesh) -> Vec<Vec<usize>> {
+    let n = mesh.n_vertices();
+    let mut adj = vec![Vec::new(); n];
+    for f in mesh.faces() {
+        for k in 0..3 {
+            adj[f[k] as usize].push(f[(k + 1) % 3] as usize);
+            adj[f[(k + 1) % 3] as usize].push(f[k] as usize);
+        }
+    }
+    (0..n)
+        .map(|s| {
+            let mut d = vec![usize::MAX; n];
+            d[s] = 0;
+            let mut queue = std::collections::VecDeque::from([s]);
+            while let Some(u) = queue.pop_front() {
+                for &w in &adj[u] {
+                    if d[w] == usize::MAX {
+                        d[w] = d[u] + 1;
+                        queue.push_back(w);
+                    }
+                }
+            }
+            d
+        })
+        .collect()
+}
