@@ -299,8 +299,7 @@ fn local_maxima_of_height_and_brute_force() {
             (state >> 40) as f64
         })
         .collect();
-    let unit = TriMesh::new(mesh.positions().to_vec(), mesh.faces().to_vec()).unwrap();
-    let hops = all_pairs_hops(&unit);
+    let hops = all_pairs_hops(&mesh);
     for rings in [1, 2, 3] {
         let got = shape_retrieval::local_maxima(mesh.faces(), &values, rings).unwrap();
         let want: Vec<u32> = (0..n)
@@ -313,11 +312,12 @@ fn local_maxima_of_height_and_brute_force() {
         assert_eq!(got, want, "rings = {rings}");
         assert!(!got.is_empty());
     }
-    // A constant function has exactly one (tie-broken) maximum per connected k-ring cover: vertex 0 wins.
+    // A constant function: ties go to the lower index, so vertex 0 is a maximum and none of its
+    // neighbours is.
     let flat = vec![1.0; n];
-    assert!(shape_retrieval::local_maxima(mesh.faces(), &flat, 1)
-        .unwrap()
-        .contains(&0));
+    let flat_max = shape_retrieval::local_maxima(mesh.faces(), &flat, 1).unwrap();
+    assert!(flat_max.contains(&0));
+    assert!(flat_max.iter().all(|&v| v == 0 || hops[0][v as usize] > 1));
     assert!(matches!(
         shape_retrieval::local_maxima(mesh.faces(), &flat, 0),
         Err(RetrievalError::InvalidParameter { .. })
