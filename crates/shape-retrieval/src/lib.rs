@@ -13,7 +13,8 @@
 //! * [`sihks`]: the scale-invariant HKS of Bronstein & Kokkinos;
 //! * [`kmeans`](mod@kmeans), [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;
 //! * [`retrieval`]: ranking, average precision, mAP, precision/recall;
-//! * [`features`]: repeatability of feature points and robustness of dense descriptors.
+//! * [`features`]: feature points (local maxima), their repeatability, and robustness of
+//!   dense descriptors.
 
 #![warn(missing_docs)]
 
