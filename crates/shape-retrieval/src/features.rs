@@ -241,8 +241,10 @@ pub fn descriptor_distance(
 
 /// Feature detection by local maxima of a vertex function (e.g. the HKS at a large t, as in
 /// Sun et al. 2009 and the paper's SHK1): vertex v is a feature if `f(v)` beats every vertex
-/// within `rings` edges of it. Ties are broken by the lower vertex index, so a plateau yields
-/// exactly one feature. Returns the features in increasing order.
+/// within `rings` edges of it. Vertices are compared by `(f(v), v)` lexicographically (ties go
+/// to the higher index), the simulation-of-simplicity order of `mesh_fem::morse`, so `rings = 1`
+/// gives the same set as `mesh_fem::morse::local_maxima`; larger rings suppress maxima that are
+/// close to a higher one. Returns the features in increasing order.
 ///
 /// `faces` define the edge graph on `values.len()` vertices. Cost O(n · |k-ring|).
 ///
@@ -281,8 +283,8 @@ pub fn local_maxima(faces: &[[u32; 3]], values: &[f64], rings: usize) -> Result<
         nb.sort_unstable();
         nb.dedup();
     });
-    // (f(v), −v) ordering: larger value wins, equal values go to the lower index.
-    let beats = |v: usize, u: usize| values[v] > values[u] || (values[v] == values[u] && v < u);
+    // (f(v), v) lexicographic order: larger value wins, equal values go to the higher index.
+    let beats = |v: usize, u: usize| values[v] > values[u] || (values[v] == values[u] && v > u);
     use rayon::prelude::*;
     let is_max: Vec<bool> = (0..n)
         .into_par_iter()

@@ -305,19 +305,22 @@ fn local_maxima_of_height_and_brute_force() {
         let want: Vec<u32> = (0..n)
             .filter(|&v| {
                 (0..n)
-                    .all(|u| u == v || hops[v][u] > rings || values[v] > values[u] || (values[v] == values[u] && v < u))
+                    .all(|u| u == v || hops[v][u] > rings || values[v] > values[u] || (values[v] == values[u] && v > u))
             })
             .map(|v| v as u32)
             .collect();
         assert_eq!(got, want, "rings = {rings}");
         assert!(!got.is_empty());
     }
-    // A constant function: ties go to the lower index, so vertex 0 is a maximum and none of its
-    // neighbours is.
+    // A constant function: ties go to the higher index, so the last vertex is a maximum and none
+    // of its neighbours is.
     let flat = vec![1.0; n];
     let flat_max = shape_retrieval::local_maxima(mesh.faces(), &flat, 1).unwrap();
-    assert!(flat_max.contains(&0));
-    assert!(flat_max.iter().all(|&v| v == 0 || hops[0][v as usize] > 1));
+    let last = n - 1;
+    assert!(flat_max.contains(&(last as u32)));
+    assert!(flat_max
+        .iter()
+        .all(|&v| v as usize == last || hops[last][v as usize] > 1));
     assert!(matches!(
         shape_retrieval::local_maxima(mesh.faces(), &flat, 0),
         Err(RetrievalError::InvalidParameter { .. })
