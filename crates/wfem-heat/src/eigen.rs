@@ -29,7 +29,7 @@ pub struct Eigenbasis {
 #[derive(Clone, Debug, PartialEq)]
 pub struct EigenParams {
     /// Shift σ < 0 of the factored matrix `L − σM` (SPD because L is PSD). `None` picks
-    /// σ = −10⁻³·tr(L)/tr(M), small compared with the spectrum yet safely negative.
+    /// σ = −0.01·4π/A with A = 1ᵀM1, i.e. 1% of the Weyl scale of the first eigenvalues.
     pub shift: Option<f64>,
     /// Block size b of the Lanczos iteration; must exceed the largest eigenvalue
     /// multiplicity among the wanted pairs (sphere: 2l+1; icosphere: at most 5).
@@ -37,7 +37,8 @@ pub struct EigenParams {
     /// Relative residual tolerance ‖Sx − θx‖_M / θ on the shift-inverted operator
     /// S = (L − σM)⁻¹M. The eigenvalue error is about the square of it.
     pub tol: f64,
-    /// Maximum Krylov dimension; `None` = min(n, max(3k, k + 60) rounded up to blocks).
+    /// Maximum Krylov dimension (the basis is not restarted, so memory is 2·n·max_dim
+    /// doubles); `None` = min(n, max(6k, k + 200)).
     pub max_dim: Option<usize>,
     /// Seed of the random start block.
     pub seed: u64,
@@ -169,13 +170,6 @@ impl Eigenbasis {
                 reason: format!("{} is not in (0, 1)", params.tol),
             });
         }
-        let trace = |a: &SparseColMat<usize, f64>| -> f64 {
-            let s = a.symbolic();
-            (0..n)
-                .flat_map(|j| s.col_range(j).filter(move |&p| s.row_idx()[p] == j))
-                .map(|p| a.val()[p])
-                .sum()
-        };
         let sigma = match params.shift {
             Some(s) if s < 0.0 && s.is_finite() => s,
             Some(s) => {
@@ -184,7 +178,12 @@ impl Eigenbasis {
                     reason: format!("σ = {s} must be finite and negative (L − σM must be SPD)"),
                 })
             }
-            None => -1e-3 * trace(stiffness) / trace(mass),
+            None => {
+                // Weyl's law λ_k ≈ 4πk/A (A = 1ᵀM1): a shift 1% of the first nonzero
+                // eigenvalue's scale below zero keeps the wanted θ = 1/(λ − σ) well separated.
+                let area: f64 = spmv_sym(mass, &vec![1.0; n]).iter().sum();
+                -1e-2 * 4.0 * std::f64::consts::PI / area
+            }
         };
         if !crate::sparse::same_pattern(stiffness, mass) {
             return Err(HeatError::InconsistentOperators {
@@ -196,7 +195,10 @@ impl Eigenbasis {
         let factor = pattern.factor(&shifted, || format!("L − σM with σ = {sigma:e}"))?;
 
         let b = params.block_size.min(n);
-        let max_dim = params.max_dim.unwrap_or_else(|| (3 * k).max(k + 60)).clamp(k.max(b), n);
+        let max_dim = params
+            .max_dim
+            .unwrap_or_else(|| (6 * k).max(k + 200))
+            .clamp(k.max(b), n);
         let max_blocks = max_dim.div_ceil(b);
         let cap = max_blocks * b;
 

@@ -58,3 +58,29 @@ pub fn matvec(a: &faer::sparse::SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64>
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
+
+/// A real mesh: Spot (low resolution, 829 vertices) from the odedstein-meshes collection,
+/// read with tobj from `$WFEM_MESHES` (default `/work/shared/data/meshes`). Returns `None`
+/// (and says so) when the corpus is not installed.
+pub fn spot() -> Option<(TriMesh, FemOperators)> {
+    let root = std::env::var("WFEM_MESHES").unwrap_or_else(|_| "/work/shared/data/meshes".into());
+    let path = std::path::Path::new(&root).join("odedstein-meshes/spot/spot_low_resolution.obj");
+    if !path.exists() {
+        eprintln!("mesh corpus not found at {}: real-mesh check skipped", path.display());
+        return None;
+    }
+    let (models, _) = tobj::load_obj(
+        &path,
+        &tobj::LoadOptions {
+            triangulate: true,
+            single_index: false,
+            ..Default::default()
+        },
+    )
+    .expect("readable OBJ");
+    let m = &models[0].mesh;
+    let positions: Vec<[f64; 3]> = m.positions.chunks(3).map(|p| [p[0], p[1], p[2]]).collect();
+    let faces: Vec<[u32; 3]> = m.indices.chunks(3).map(|f| [f[0], f[1], f[2]]).collect();
+    let mesh = TriMesh::new(positions, faces).expect("valid mesh");
+    Some(ops_of(&mesh))
+}

@@ -1,0 +1,47 @@
+//! Fast exact path vs one backward-Euler step (one real sparse Cholesky of M + tL and one
+//! solve) on icospheres of area 4π at t = 0.01.
+//!
+//! Run: `cargo bench -p wfem-heat --bench heat`.
+use criterion::{criterion_group, criterion_main, Criterion};
+use mesh_fem::{assemble, generate, AssemblyParams};
+use std::f64::consts::PI;
+use std::hint::black_box;
+use std::time::Duration;
+use wfem_heat::{HeatKernel, HeatParams, Method};
+
+fn bench(c: &mut Criterion) {
+    let t = 0.01;
+    for level in [5u32, 6] {
+        let mesh = generate::icosphere(level).with_area(4.0 * PI).expect("area");
+        let ops = assemble(&mesh, &AssemblyParams::default()).expect("assembly");
+        let n = ops.n();
+        let f: Vec<f64> = mesh.positions().iter().map(|p| p[0]).collect();
+        let mut e = vec![0.0; n];
+        e[n / 3] = 1.0;
+        let be = HeatKernel::new(
+            &ops,
+            HeatParams {
+                method: Method::BackwardEuler,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let fast = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+        for (what, v) in [("x", &f), ("e_i", &e)] {
+            let (_, iters, est) = fast.apply_fast_report(v, t).unwrap();
+            eprintln!("n = {n}, f = {what}: fast path {iters} iterations (estimate {est:.1e})");
+        }
+        let mut group = c.benchmark_group(format!("heat_n{n}_t0.01"));
+        group
+            .sample_size(10)
+            .warm_up_time(Duration::from_secs(1))
+            .measurement_time(Duration::from_secs(4));
+        group.bench_function("backward_euler", |b| b.iter(|| be.apply(black_box(&f), t).unwrap()));
+        group.bench_function("fast_x", |b| b.iter(|| fast.apply(black_box(&f), t).unwrap()));
+        group.bench_function("fast_e_i", |b| b.iter(|| fast.apply(black_box(&e), t).unwrap()));
+        group.finish();
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
