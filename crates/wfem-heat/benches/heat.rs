@@ -7,7 +7,7 @@ use mesh_fem::{assemble, generate, AssemblyParams};
 use std::f64::consts::PI;
 use std::hint::black_box;
 use std::time::Duration;
-use wfem_heat::{HeatKernel, HeatParams, Method};
+use wfem_heat::{FastParams, HeatKernel, HeatParams, Method};
 
 fn bench(c: &mut Criterion) {
     let t = 0.01;
@@ -27,9 +27,19 @@ fn bench(c: &mut Criterion) {
         )
         .unwrap();
         let fast = HeatKernel::new(&ops, HeatParams::default()).unwrap();
-        for (what, v) in [("x", &f), ("e_i", &e)] {
-            let (_, iters, est) = fast.apply_fast_report(v, t).unwrap();
-            eprintln!("n = {n}, f = {what}: fast path {iters} iterations (estimate {est:.1e})");
+        for gamma in [0.05, 0.1, 0.2, 0.4] {
+            let params = HeatParams {
+                method: Method::Fast(FastParams {
+                    gamma,
+                    ..Default::default()
+                }),
+                ..Default::default()
+            };
+            let k = HeatKernel::new(&ops, params).unwrap();
+            for (what, v) in [("x", &f), ("e_i", &e)] {
+                let (_, iters, est) = k.apply_fast_report(v, t).unwrap();
+                eprintln!("n = {n}, γ = {gamma}, f = {what}: fast path {iters} iterations (estimate {est:.1e})");
+            }
         }
         let mut group = c.benchmark_group(format!("heat_n{n}_t0.01"));
         group

@@ -39,11 +39,16 @@ pub enum Method {
         /// Eigensolver options.
         eigen: EigenParams,
     },
-    /// First-order explicit Taylor step `M g = (M − tL) f` (Eq. (9)): one solve with M.
-    /// Local error O(t²), i.e. `‖g − K_t f‖ = O(t²‖M⁻¹L‖²)` — for comparison only.
+    /// First-order explicit Taylor step `M g = (M − tL) f`, i.e. `K_t ≈ I − tM⁻¹L`
+    /// (Eq. (9)): one solve with M (factored once). It is a first-order method: the error of
+    /// one step is `Σᵢ |e^{−tλᵢ} − 1 + tλᵢ| |cᵢ| ≈ t²λᵢ²/2` per eigencomponent cᵢ of f, so
+    /// O(t²) for fixed smooth f, O(t) when a time T is covered in T/t steps, and unbounded
+    /// (growing like tλ_max) for rough f: valid only for t → 0⁺. For comparison only.
     Taylor,
-    /// One backward-Euler step `(M + tL) g = M f`: one real sparse Cholesky per t.
-    /// Error O(t²) per step (first order in t): for comparison only.
+    /// One backward-Euler step `(M + tL) g = M f`, i.e. `K_t ≈ (I + tM⁻¹L)⁻¹`: one real
+    /// sparse Cholesky per t. First order like [`Method::Taylor`] (one-step error
+    /// `|1/(1 + tλ) − e^{−tλ}| ≈ t²λ²/2`, O(t) over a fixed horizon) but stable (it damps
+    /// every mode). For comparison only.
     BackwardEuler,
     /// The fast exact path (beyond the paper): shift-and-invert rational Krylov on
     /// (M + γtL)⁻¹M, one real sparse Cholesky per t, reused for every iteration and every

@@ -2,11 +2,15 @@
 //! sparse Cholesky factorization whose symbolic analysis is reused across shifts.
 
 use crate::HeatError;
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+};
 use faer::sparse::SparseColMat;
-use faer::{Mat, MatMut, MatRef, Side};
+use faer::{get_global_parallelism, Conj, Mat, MatMut, MatRef, Par, Side};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// `A x` for a symmetric CSC matrix, computed row-wise (column j of A is row j) in parallel.
 pub(crate) fn spmv_sym(a: &SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
@@ -60,43 +64,70 @@ pub(crate) fn same_pattern(a: &SparseColMat<usize, f64>, b: &SparseColMat<usize,
         && a.symbolic().row_idx() == b.symbolic().row_idx()
 }
 
-/// The symbolic Cholesky analysis (AMD ordering, elimination tree) of the shared pattern.
+/// The symbolic Cholesky analysis (AMD ordering, elimination tree, supernodes) of the
+/// shared pattern, computed once and reused for every shift.
 #[derive(Clone, Debug)]
 pub(crate) struct CholeskyPattern {
-    symbolic: SymbolicLlt<usize>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
 }
 
 impl CholeskyPattern {
     pub(crate) fn new(pattern: &SparseColMat<usize, f64>) -> Result<Self, HeatError> {
-        let symbolic =
-            SymbolicLlt::try_new(pattern.symbolic(), Side::Lower).map_err(|e| HeatError::InconsistentOperators {
-                reason: format!("symbolic Cholesky analysis failed: {e:?}"),
-            })?;
-        Ok(Self { symbolic })
+        let symbolic = factorize_symbolic_cholesky(
+            pattern.symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| HeatError::InconsistentOperators {
+            reason: format!("symbolic Cholesky analysis failed: {e:?}"),
+        })?;
+        Ok(Self {
+            symbolic: Arc::new(symbolic),
+        })
     }
 
-    /// Numeric factorization of an SPD matrix on the analysed pattern.
+    /// Numeric factorization of an SPD matrix on the analysed pattern (parallel).
     pub(crate) fn factor(
         &self,
         a: &SparseColMat<usize, f64>,
         what: impl FnOnce() -> String,
     ) -> Result<SpdFactor, HeatError> {
-        let llt = Llt::try_new_with_symbolic(self.symbolic.clone(), a.as_ref(), Side::Lower)
-            .map_err(|_| HeatError::NotPositiveDefinite { matrix: what() })?;
-        Ok(SpdFactor { llt })
+        let sym = &self.symbolic;
+        let mut values = vec![0.0f64; sym.len_val()];
+        let par = get_global_parallelism();
+        let mut buf = MemBuffer::new(sym.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
+        sym.factorize_numeric_llt::<f64>(
+            &mut values,
+            a.as_ref(),
+            Side::Lower,
+            LltRegularization::default(),
+            par,
+            MemStack::new(&mut buf),
+            Default::default(),
+        )
+        .map_err(|_| HeatError::NotPositiveDefinite { matrix: what() })?;
+        Ok(SpdFactor {
+            symbolic: self.symbolic.clone(),
+            values,
+        })
     }
 }
 
 /// A numeric sparse Cholesky factor `A = PᵀRRᵀP`.
 #[derive(Debug)]
 pub(crate) struct SpdFactor {
-    llt: Llt<usize, f64>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    values: Vec<f64>,
 }
 
 impl SpdFactor {
-    /// Overwrites `rhs` with `A⁻¹ rhs`.
+    /// Overwrites `rhs` with `A⁻¹ rhs`. Triangular solves are memory bound, so they run
+    /// sequentially: callers parallelise over right-hand sides instead.
     pub(crate) fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
-        self.llt.solve_in_place(rhs);
+        let par = Par::Seq;
+        let mut buf = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), par));
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut buf));
     }
 
     /// `A⁻¹ b` for a vector.
