@@ -14,7 +14,7 @@
 
 use crate::sparse::{spmv_sym, SpdFactor};
 use crate::HeatError;
-use faer::{Mat, Side};
+use faer::{Col, Mat, Side};
 
 /// Options of the fast path ([`crate::Method::Fast`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,7 +33,7 @@ impl Default for FastParams {
     fn default() -> Self {
         Self {
             gamma: 0.1,
-            tol: 1e-12,
+            tol: 1e-11,
             max_iter: 200,
         }
     }
@@ -85,6 +85,47 @@ pub(crate) struct KrylovOutcome {
     pub estimate: f64,
 }
 
+/// Basis storage that grows by doubling its column capacity.
+struct Basis {
+    v: Mat<f64>,
+    mv: Mat<f64>,
+    len: usize,
+}
+
+impl Basis {
+    fn new(n: usize, cap: usize) -> Self {
+        Self {
+            v: Mat::zeros(n, cap),
+            mv: Mat::zeros(n, cap),
+            len: 0,
+        }
+    }
+    fn push(&mut self, x: &[f64], mx: &[f64], scale: f64) {
+        if self.len == self.v.ncols() {
+            let (n, cap) = (self.v.nrows(), 2 * self.v.ncols().max(1));
+            let mut v = Mat::zeros(n, cap);
+            let mut mv = Mat::zeros(n, cap);
+            v.as_mut()
+                .get_mut(.., 0..self.len)
+                .copy_from(self.v.as_ref().get(.., 0..self.len));
+            mv.as_mut()
+                .get_mut(.., 0..self.len)
+                .copy_from(self.mv.as_ref().get(.., 0..self.len));
+            self.v = v;
+            self.mv = mv;
+        }
+        let j = self.len;
+        for (i, (a, b)) in x.iter().zip(mx).enumerate() {
+            self.v[(i, j)] = a * scale;
+            self.mv[(i, j)] = b * scale;
+        }
+        self.len += 1;
+    }
+    fn mv_col(&self, j: usize) -> Vec<f64> {
+        self.mv.col(j).iter().copied().collect()
+    }
+}
+
 /// `K_t f ≈ ‖f‖_M V_m g(T_m) e₁` with `factor` the Cholesky factor of M + γtL.
 pub(crate) fn rational_krylov_exp(
     factor: &SpdFactor,
@@ -105,29 +146,36 @@ pub(crate) fn rational_krylov_exp(
             },
         ));
     }
-    // Basis V and M V, stored column by column.
-    let mut v: Vec<Vec<f64>> = vec![f.iter().map(|x| x / beta0).collect()];
-    let mut mv: Vec<Vec<f64>> = vec![mf.iter().map(|x| x / beta0).collect()];
+    let mut basis = Basis::new(n, params.max_iter.min(n).min(48) + 1);
+    basis.push(f, &mf, 1.0 / beta0);
     let mut alpha: Vec<f64> = Vec::new();
     let mut beta: Vec<f64> = Vec::new();
     let mut y_prev: Vec<f64> = Vec::new();
     let mut hits = 0usize;
     let mut estimate = f64::INFINITY;
     for j in 0..params.max_iter.min(n) {
-        let mut w = factor.solve_vec(&mv[j]);
-        // Full reorthogonalisation, two passes of classical Gram–Schmidt in ⟨·,·⟩_M;
-        // the stored M v_i make each coefficient a plain dot product.
+        let mut w = Col::<f64>::zeros(n);
+        {
+            let x = factor.solve_vec(&basis.mv_col(j));
+            w.iter_mut().zip(&x).for_each(|(a, b)| *a = *b);
+        }
+        // Full reorthogonalisation by classical Gram–Schmidt in ⟨·,·⟩_M (the stored M v_i make
+        // each coefficient a plain dot product), repeated once when the first pass cancelled
+        // more than 1/√2 of the norm (Daniel–Gragg–Kaufman–Stewart criterion).
         let mut a_j = 0.0;
-        for _ in 0..2 {
-            let coef: Vec<f64> = mv.iter().map(|mvi| dot(mvi, &w)).collect();
+        for pass in 0..2 {
+            let before = w.norm_l2();
+            let coef = basis.mv.as_ref().get(.., 0..j + 1).transpose() * &w;
             a_j += coef[j];
-            for (vi, c) in v.iter().zip(&coef) {
-                axpy(-c, vi, &mut w);
+            w -= basis.v.as_ref().get(.., 0..j + 1) * &coef;
+            if pass == 0 && w.norm_l2() > std::f64::consts::FRAC_1_SQRT_2 * before {
+                break;
             }
         }
         alpha.push(a_j);
-        let mw = spmv_sym(mass, &w);
-        let b_j = dot(&w, &mw).max(0.0).sqrt();
+        let wv: Vec<f64> = w.iter().copied().collect();
+        let mw = spmv_sym(mass, &wv);
+        let b_j = dot(&wv, &mw).max(0.0).sqrt();
         let y = g_tridiag_e1(&alpha, &beta, params.gamma)?;
         // Successive-iterate error estimate (V M-orthonormal: ‖V δ‖_M = ‖δ‖₂).
         let ynorm = norm(&y);
@@ -144,12 +192,10 @@ pub(crate) fn rational_krylov_exp(
         // Require two consecutive small differences: one alone can be a plateau.
         hits = if estimate <= params.tol { hits + 1 } else { 0 };
         if hits >= 2 || invariant {
-            let mut out = vec![0.0; n];
-            for (vi, yi) in v.iter().zip(&y) {
-                axpy(beta0 * yi, vi, &mut out);
-            }
+            let yc = Col::<f64>::from_fn(y.len(), |i| beta0 * y[i]);
+            let out = basis.v.as_ref().get(.., 0..y.len()) * &yc;
             return Ok((
-                out,
+                out.iter().copied().collect(),
                 KrylovOutcome {
                     iterations: j + 1,
                     estimate,
@@ -158,8 +204,7 @@ pub(crate) fn rational_krylov_exp(
         }
         y_prev = y;
         beta.push(b_j);
-        v.push(w.iter().map(|x| x / b_j).collect());
-        mv.push(mw.iter().map(|x| x / b_j).collect());
+        basis.push(&wv, &mw, 1.0 / b_j);
     }
     Err(HeatError::KrylovNoConvergence {
         column,
@@ -173,7 +218,4 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
-}
-fn axpy(alpha: f64, x: &[f64], y: &mut [f64]) {
-    y.iter_mut().zip(x).for_each(|(yi, xi)| *yi += alpha * xi);
 }
