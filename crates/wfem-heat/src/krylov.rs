@@ -12,9 +12,10 @@
 //! poles are all at s = 0, the convergence does not depend on ‖tL‖ (mesh size or t), only
 //! on the accuracy wanted: a few tens of solves reach 1e−12.
 
-use crate::sparse::{spmv_sym, SpdFactor};
+use crate::sparse::{spmv_seq, SpdFactor};
 use crate::HeatError;
-use faer::{Col, Mat, Side};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Col, Mat, Par, Side};
 
 /// Options of the fast path ([`crate::Method::Fast`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -135,7 +136,7 @@ pub(crate) fn rational_krylov_exp(
     column: usize,
 ) -> Result<(Vec<f64>, KrylovOutcome), HeatError> {
     let n = f.len();
-    let mf = spmv_sym(mass, f);
+    let mf = spmv_seq(mass, f);
     let beta0 = dot(f, &mf).max(0.0).sqrt();
     if beta0 == 0.0 {
         return Ok((
@@ -162,19 +163,36 @@ pub(crate) fn rational_krylov_exp(
         // Full reorthogonalisation by classical Gram–Schmidt in ⟨·,·⟩_M (the stored M v_i make
         // each coefficient a plain dot product), repeated once when the first pass cancelled
         // more than 1/√2 of the norm (Daniel–Gragg–Kaufman–Stewart criterion).
+        // Sequential BLAS-2: the loop is memory bound and runs inside a rayon task per
+        // right-hand side, so nested parallelism would only add overhead.
         let mut a_j = 0.0;
+        let mut coef = Mat::<f64>::zeros(j + 1, 1);
         for pass in 0..2 {
             let before = w.norm_l2();
-            let coef = basis.mv.as_ref().get(.., 0..j + 1).transpose() * &w;
-            a_j += coef[j];
-            w -= basis.v.as_ref().get(.., 0..j + 1) * &coef;
+            matmul(
+                coef.as_mut(),
+                Accum::Replace,
+                basis.mv.as_ref().get(.., 0..j + 1).transpose(),
+                w.as_mat(),
+                1.0,
+                Par::Seq,
+            );
+            a_j += coef[(j, 0)];
+            matmul(
+                w.as_mat_mut(),
+                Accum::Add,
+                basis.v.as_ref().get(.., 0..j + 1),
+                coef.as_ref(),
+                -1.0,
+                Par::Seq,
+            );
             if pass == 0 && w.norm_l2() > std::f64::consts::FRAC_1_SQRT_2 * before {
                 break;
             }
         }
         alpha.push(a_j);
         let wv: Vec<f64> = w.iter().copied().collect();
-        let mw = spmv_sym(mass, &wv);
+        let mw = spmv_seq(mass, &wv);
         let b_j = dot(&wv, &mw).max(0.0).sqrt();
         let y = g_tridiag_e1(&alpha, &beta, params.gamma)?;
         // Successive-iterate error estimate (V M-orthonormal: ‖V δ‖_M = ‖δ‖₂).
@@ -192,10 +210,18 @@ pub(crate) fn rational_krylov_exp(
         // Require two consecutive small differences: one alone can be a plateau.
         hits = if estimate <= params.tol { hits + 1 } else { 0 };
         if hits >= 2 || invariant {
-            let yc = Col::<f64>::from_fn(y.len(), |i| beta0 * y[i]);
-            let out = basis.v.as_ref().get(.., 0..y.len()) * &yc;
+            let yc = Mat::<f64>::from_fn(y.len(), 1, |i, _| y[i]);
+            let mut out = Mat::<f64>::zeros(n, 1);
+            matmul(
+                out.as_mut(),
+                Accum::Replace,
+                basis.v.as_ref().get(.., 0..y.len()),
+                yc.as_ref(),
+                beta0,
+                Par::Seq,
+            );
             return Ok((
-                out.iter().copied().collect(),
+                out.col(0).iter().copied().collect(),
                 KrylovOutcome {
                     iterations: j + 1,
                     estimate,

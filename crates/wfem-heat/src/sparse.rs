@@ -24,6 +24,16 @@ pub(crate) fn spmv_sym(a: &SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// `A x` for a symmetric CSC matrix, sequentially (for use inside parallel loops).
+pub(crate) fn spmv_seq(a: &SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
+    let sym = a.symbolic();
+    let rows = sym.row_idx();
+    let val = a.val();
+    (0..sym.ncols())
+        .map(|j| sym.col_range(j).map(|p| val[p] * x[rows[p]]).sum())
+        .collect()
+}
+
 /// `A X` column by column for a symmetric CSC matrix.
 pub(crate) fn spmm_sym(a: &SparseColMat<usize, f64>, x: MatRef<'_, f64>) -> Mat<f64> {
     let n = x.nrows();

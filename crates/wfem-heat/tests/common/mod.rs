@@ -47,9 +47,9 @@ pub fn rel_err(a: &[f64], b: &[f64]) -> f64 {
 pub fn matvec(a: &faer::sparse::SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; a.nrows()];
     let s = a.symbolic();
-    for j in 0..a.ncols() {
+    for (j, xj) in x.iter().enumerate() {
         for p in s.col_range(j) {
-            y[s.row_idx()[p]] += a.val()[p] * x[j];
+            y[s.row_idx()[p]] += a.val()[p] * xj;
         }
     }
     y
