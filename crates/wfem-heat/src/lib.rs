@@ -12,6 +12,20 @@
 //!   rational Krylov, one real sparse Cholesky per t).
 //! * [`Eigenbasis`]: generalized eigenpairs `L x = λ M x`, dense or the k smallest.
 //!
+//! ```
+//! use mesh_fem::{assemble, generate, AssemblyParams};
+//! use wfem_heat::{HeatKernel, HeatParams};
+//!
+//! let mesh = generate::icosphere(3).with_area(4.0 * std::f64::consts::PI)?;
+//! let ops = assemble(&mesh, &AssemblyParams::default())?;
+//! let kernel = HeatKernel::new(&ops, HeatParams::default())?; // wFEM kernel, fast path
+//! let f: Vec<f64> = mesh.positions().iter().map(|p| p[0]).collect();
+//! let g = kernel.apply(&f, 0.01)?; // g = K_t f
+//! // The x coordinate is nearly an eigenfunction (λ ≈ 2 on the sphere of area 4π): g ≈ e^{−2t} f.
+//! assert!((g[0] / f[0] - (-0.02f64).exp()).abs() < 3e-3);
+//! # Ok::<(), wfem_heat::HeatError>(())
+//! ```
+//!
 //! **Sign convention.** L is symmetric positive semidefinite (positive diagonal, `L·1 = 0`);
 //! the paper prints it with the opposite sign.
 

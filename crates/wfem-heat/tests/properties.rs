@@ -151,3 +151,43 @@ fn apply_many_and_one_shot_agree_with_apply() {
     let one_shot = wfem_heat::heat(&ops, &f, 0.05).unwrap();
     assert!(rel_err(&one_shot, &kernel.apply(&f, 0.05).unwrap()) < 1e-14);
 }
+
+/// For every method, apply_many on two columns equals apply on each column.
+#[test]
+fn apply_many_matches_apply_for_every_method() {
+    let (_, mesh, ops) = meshes().remove(2);
+    let n = ops.n();
+    let f = x_coordinate(&mesh);
+    let e = unit(n, 11);
+    let mut cols = faer::Mat::<f64>::zeros(n, 2);
+    for i in 0..n {
+        cols[(i, 0)] = f[i];
+        cols[(i, 1)] = e[i];
+    }
+    let methods = [
+        Method::Dense,
+        Method::Spectral {
+            k: 20,
+            eigen: Default::default(),
+        },
+        Method::Taylor,
+        Method::BackwardEuler,
+        Method::default(),
+    ];
+    for method in methods {
+        let k = HeatKernel::new(
+            &ops,
+            HeatParams {
+                kernel: KernelKind::Wfem,
+                method: method.clone(),
+            },
+        )
+        .unwrap();
+        let many = k.apply_many(cols.as_ref(), 0.02).unwrap();
+        for (c, v) in [(0, &f), (1, &e)] {
+            let single = k.apply(v, 0.02).unwrap();
+            let col: Vec<f64> = many.col(c).iter().copied().collect();
+            assert!(rel_err(&col, &single) < 1e-13, "{method:?} column {c}");
+        }
+    }
+}
