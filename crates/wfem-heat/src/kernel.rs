@@ -8,6 +8,7 @@ use faer::sparse::SparseColMat;
 use faer::{Mat, MatRef};
 use mesh_fem::FemOperators;
 use rayon::prelude::*;
+use std::sync::{Arc, Mutex};
 
 /// Which discrete heat kernel (paper, Table 1). All share the stiffness L (symmetric positive
 /// semidefinite, positive diagonal) and differ in the mass matrix M of `K_t = exp(−t M⁻¹L)`.
@@ -92,6 +93,8 @@ pub struct HeatKernel {
     pattern: CholeskyPattern,
     params: HeatParams,
     prepared: Prepared,
+    /// The last t-dependent factor `M + sL` and its s.
+    cache: Mutex<Option<(f64, Arc<SpdFactor>)>>,
 }
 
 pub(crate) fn check_time(t: f64) -> Result<(), HeatError> {
@@ -171,6 +174,7 @@ impl HeatKernel {
             pattern,
             params,
             prepared,
+            cache: Mutex::new(None),
         })
     }
 
@@ -245,15 +249,13 @@ impl HeatKernel {
                 Ok(Mat::from_fn(n, f.ncols(), |i, j| f[(i, j)] - t * step[(i, j)]))
             }
             (Method::BackwardEuler, _) => {
-                let a = combine(1.0, &self.mass, t, &self.stiffness);
-                let factor = self.pattern.factor(&a, || format!("M + tL at t = {t:e}"))?;
+                let factor = self.shifted_factor(t, "M + tL")?;
                 let mut g = spmm_sym(&self.mass, f);
                 factor.solve_in_place(g.as_mut());
                 Ok(g)
             }
             (Method::Fast(fp), _) => {
-                let a = combine(1.0, &self.mass, fp.gamma * t, &self.stiffness);
-                let factor = self.pattern.factor(&a, || format!("M + γtL at t = {t:e}"))?;
+                let factor = self.shifted_factor(fp.gamma * t, "M + γtL")?;
                 let cols: Vec<Vec<f64>> = (0..f.ncols())
                     .into_par_iter()
                     .map(|c| {
@@ -267,6 +269,21 @@ impl HeatKernel {
         }
     }
 
+    /// The Cholesky factor of `M + s·L`, reused when the previous call had the same s
+    /// (repeated `apply` at one t then costs only the solves).
+    fn shifted_factor(&self, s: f64, what: &str) -> Result<Arc<SpdFactor>, HeatError> {
+        let mut cache = self.cache.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some((cached_s, factor)) = cache.as_ref() {
+            if *cached_s == s {
+                return Ok(factor.clone());
+            }
+        }
+        let a = combine(1.0, &self.mass, s, &self.stiffness);
+        let factor = Arc::new(self.pattern.factor(&a, || format!("{what} with shift {s:e}"))?);
+        *cache = Some((s, factor.clone()));
+        Ok(factor)
+    }
+
     /// Fast path with its per-column iteration counts (for benchmarks and diagnostics).
     #[doc(hidden)]
     pub fn apply_fast_report(&self, f: &[f64], t: f64) -> Result<(Vec<f64>, usize, f64), HeatError> {
@@ -276,8 +293,7 @@ impl HeatKernel {
             Method::Fast(fp) => *fp,
             _ => FastParams::default(),
         };
-        let a = combine(1.0, &self.mass, fp.gamma * t, &self.stiffness);
-        let factor = self.pattern.factor(&a, || format!("M + γtL at t = {t:e}"))?;
+        let factor = self.shifted_factor(fp.gamma * t, "M + γtL")?;
         let (g, out) = rational_krylov_exp(&factor, &self.mass, f, &fp, 0)?;
         Ok((g, out.iterations, out.estimate))
     }

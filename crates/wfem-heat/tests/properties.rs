@@ -191,3 +191,22 @@ fn apply_many_matches_apply_for_every_method() {
         }
     }
 }
+
+/// The per-t factor cache never serves a stale factor: alternating times give the same
+/// results as fresh kernels.
+#[test]
+fn factor_cache_follows_t() {
+    let (_, mesh, ops) = meshes().remove(0);
+    let f = x_coordinate(&mesh);
+    for method in [Method::BackwardEuler, Method::default()] {
+        let params = HeatParams {
+            kernel: KernelKind::Wfem,
+            method,
+        };
+        let k = HeatKernel::new(&ops, params.clone()).unwrap();
+        for t in [0.1, 0.01, 0.1, 0.1, 1.0, 0.01] {
+            let fresh = HeatKernel::new(&ops, params.clone()).unwrap().apply(&f, t).unwrap();
+            assert_eq!(k.apply(&f, t).unwrap(), fresh, "t = {t}");
+        }
+    }
+}
