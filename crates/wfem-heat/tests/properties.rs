@@ -206,7 +206,8 @@ fn factor_cache_follows_t() {
         let k = HeatKernel::new(&ops, params.clone()).unwrap();
         for t in [0.1, 0.01, 0.1, 0.1, 1.0, 0.01] {
             let fresh = HeatKernel::new(&ops, params.clone()).unwrap().apply(&f, t).unwrap();
-            assert_eq!(k.apply(&f, t).unwrap(), fresh, "t = {t}");
+            // A stale factor would be off by O(1); parallel factorization may reorder sums.
+            assert!(rel_err(&k.apply(&f, t).unwrap(), &fresh) < 1e-13, "t = {t}");
         }
     }
 }
