@@ -33,6 +33,9 @@ fn levels() -> Vec<u32> {
 }
 
 fn bench(c: &mut Criterion) {
+    // The solver runs faer sequentially inside each pole and parallelises across poles; measure
+    // the faer primitives the same way.
+    faer::set_global_parallelism(faer::Par::Seq);
     let approx = RationalApprox::cram(16).unwrap();
     let z = approx.poles[7];
     for level in levels() {

@@ -10,12 +10,11 @@
 //! through a complex sparse LU of tL − zB), at most 60 steps each: the estimates are lower
 //! bounds of max and upper bounds of min that are exact once the Krylov space is invariant.
 
+use crate::factor::SeqLu;
 use crate::iterative::{PrecondFactor, Preconditioner, PreconditionerShift};
 use crate::solver::{check_time, ShiftedSolver};
 use crate::SolveError;
 use faer::c64;
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::Lu;
 use faer::{Mat, Side};
 
 /// Condition numbers of one shifted system (paper Fig. 2c,d).
@@ -135,7 +134,7 @@ impl ShiftedSolver {
             }
             y
         };
-        let lu = Lu::try_new_with_symbolic(self.lu_symbolic()?, ops.shifted(t, pole).as_ref())
+        let lu = SeqLu::new(&self.lu_symbolic()?, ops.shifted(t, pole).as_ref())
             .map_err(|_| SolveError::SingularShiftedMatrix { t, pole })?;
         let a2_inv = |y: &[f64]| -> Result<Vec<f64>, SolveError> {
             // A₂[u; v] = [y₁; y₂]  ⇔  (tL − zB)(u + iv) = y₁ − i y₂.

@@ -13,11 +13,10 @@
 //! preconditioned spectrum is ±|tλ − z|/(tλ + s), so with s = |z| it lies in ±[~0.5, 1] and the
 //! iteration count does not depend on the mesh size.
 
+use crate::factor::{CholeskySymbolic, SeqLlt};
 use crate::ops::PairOperators;
 use crate::SolveError;
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::{MatMut, Side};
+use faer::MatMut;
 
 /// Preconditioner of the MINRES / CG backend.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -94,7 +93,7 @@ impl MinresParams {
 /// A factored SPD preconditioner acting on n-vectors (applied blockwise to 2n-vectors).
 #[derive(Debug)]
 pub(crate) enum PrecondFactor {
-    Cholesky(Llt<usize, f64>),
+    Cholesky(SeqLlt),
     Jacobi(Vec<f64>),
     Identity,
 }
@@ -103,7 +102,7 @@ impl PrecondFactor {
     /// Builds the preconditioner for shift s (P = tL + sB).
     pub fn build(
         ops: &PairOperators,
-        llt_symbolic: &SymbolicLlt<usize>,
+        llt_symbolic: &CholeskySymbolic,
         kind: Preconditioner,
         t: f64,
         s: f64,
@@ -111,11 +110,9 @@ impl PrecondFactor {
         Ok(match kind {
             Preconditioner::ShiftedCholesky(_) => {
                 let p = ops.real_combination(t, s);
-                let llt = Llt::try_new_with_symbolic(llt_symbolic.clone(), p.as_ref(), Side::Lower).map_err(|e| {
-                    SolveError::Factorization {
-                        what: "Cholesky of the preconditioner tL + sB",
-                        detail: format!("{e:?}"),
-                    }
+                let llt = SeqLlt::new(llt_symbolic, p.as_ref()).map_err(|detail| SolveError::Factorization {
+                    what: "Cholesky of the preconditioner tL + sB",
+                    detail,
                 })?;
                 PrecondFactor::Cholesky(llt)
             }

@@ -26,6 +26,7 @@
 
 mod condition;
 mod error;
+mod factor;
 mod iterative;
 mod ops;
 pub mod poles;

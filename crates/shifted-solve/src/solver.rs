@@ -3,14 +3,13 @@
 
 use std::sync::Arc;
 
+use crate::factor::{cholesky_symbolic, lu_symbolic, CholeskySymbolic, LuSymbolic, SeqLlt, SeqLu};
 use crate::iterative::{minres, pcg, MinresParams, PrecondFactor, Preconditioner, PreconditionerShift};
 use crate::ops::PairOperators;
 use crate::{RationalApprox, SolveError};
 use faer::c64;
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
 use faer::sparse::SparseColMatRef;
-use faer::{Mat, MatRef, Side};
+use faer::{Mat, MatRef};
 use rayon::prelude::*;
 
 /// How each shifted system (tL − z_j B) x = b is solved.
@@ -85,8 +84,8 @@ impl BatchReport {
 pub struct ShiftedSolver {
     ops: Arc<PairOperators>,
     backend: Backend,
-    llt_symbolic: SymbolicLlt<usize>,
-    lu_symbolic: Option<SymbolicLu<usize>>,
+    llt_symbolic: CholeskySymbolic,
+    lu_symbolic: Option<LuSymbolic>,
 }
 
 pub(crate) fn check_time(t: f64) -> Result<(), SolveError> {
@@ -141,29 +140,23 @@ impl ShiftedSolver {
             p.validate()?;
         }
         let ops = PairOperators::new(stiffness, mass)?;
-        let llt_symbolic =
-            SymbolicLlt::try_new(ops.symbolic.as_ref(), Side::Lower).map_err(|e| SolveError::Factorization {
-                what: "symbolic Cholesky",
-                detail: format!("{e:?}"),
-            })?;
-        let b = ops.real_combination(0.0, 1.0);
-        Llt::try_new_with_symbolic(llt_symbolic.clone(), b.as_ref(), Side::Lower).map_err(|e| {
-            SolveError::MassNotPositiveDefinite {
-                detail: format!("{e:?}"),
-            }
+        let llt_symbolic = cholesky_symbolic(ops.symbolic.as_ref()).map_err(|detail| SolveError::Factorization {
+            what: "symbolic Cholesky",
+            detail,
         })?;
+        let b = ops.real_combination(0.0, 1.0);
+        SeqLlt::new(&llt_symbolic, b.as_ref()).map_err(|detail| SolveError::MassNotPositiveDefinite { detail })?;
         let tr_l: f64 = ops.diagonal(1.0, 0.0).iter().sum();
         let tr_b: f64 = ops.diagonal(0.0, 1.0).iter().sum();
         let delta = 1e-10 * (tr_l / tr_b).max(f64::MIN_POSITIVE);
         let reg = ops.real_combination(1.0, delta);
-        Llt::try_new_with_symbolic(llt_symbolic.clone(), reg.as_ref(), Side::Lower)
-            .map_err(|_| SolveError::StiffnessIndefinite { delta })?;
+        SeqLlt::new(&llt_symbolic, reg.as_ref()).map_err(|_| SolveError::StiffnessIndefinite { delta })?;
         let lu_symbolic = match backend {
             Backend::DirectLu => {
                 Some(
-                    SymbolicLu::try_new(ops.symbolic.as_ref()).map_err(|e| SolveError::Factorization {
+                    lu_symbolic(ops.symbolic.as_ref()).map_err(|detail| SolveError::Factorization {
                         what: "symbolic LU",
-                        detail: format!("{e:?}"),
+                        detail,
                     })?,
                 )
             }
@@ -196,16 +189,16 @@ impl ShiftedSolver {
         &self.ops
     }
 
-    pub(crate) fn llt_symbolic(&self) -> &SymbolicLlt<usize> {
+    pub(crate) fn llt_symbolic(&self) -> &CholeskySymbolic {
         &self.llt_symbolic
     }
 
-    pub(crate) fn lu_symbolic(&self) -> Result<SymbolicLu<usize>, SolveError> {
+    pub(crate) fn lu_symbolic(&self) -> Result<LuSymbolic, SolveError> {
         match &self.lu_symbolic {
             Some(s) => Ok(s.clone()),
-            None => SymbolicLu::try_new(self.ops.symbolic.as_ref()).map_err(|e| SolveError::Factorization {
+            None => lu_symbolic(self.ops.symbolic.as_ref()).map_err(|detail| SolveError::Factorization {
                 what: "symbolic LU",
-                detail: format!("{e:?}"),
+                detail,
             }),
         }
     }
@@ -266,12 +259,12 @@ impl ShiftedSolver {
                     .map(|&(z, c, real)| {
                         let solver = if real {
                             let a = ops.real_combination(t, -z.re);
-                            let llt = Llt::try_new_with_symbolic(self.llt_symbolic.clone(), a.as_ref(), Side::Lower)
+                            let llt = SeqLlt::new(&self.llt_symbolic, a.as_ref())
                                 .map_err(|_| SolveError::SingularShiftedMatrix { t, pole: z })?;
                             PoleSolver::Cholesky(llt)
                         } else {
                             let a = ops.shifted(t, z);
-                            let lu = Lu::try_new_with_symbolic(sym.clone(), a.as_ref())
+                            let lu = SeqLu::new(&sym, a.as_ref())
                                 .map_err(|_| SolveError::SingularShiftedMatrix { t, pole: z })?;
                             PoleSolver::Lu(lu)
                         };
@@ -323,8 +316,8 @@ impl ShiftedSolver {
 
 #[derive(Debug)]
 enum PoleSolver {
-    Lu(Lu<usize, c64>),
-    Cholesky(Llt<usize, f64>),
+    Lu(SeqLu),
+    Cholesky(SeqLlt),
     Krylov {
         precond: Arc<PrecondFactor>,
         params: MinresParams,
