@@ -266,7 +266,7 @@ impl ShiftedSolver {
                             let a = ops.shifted(t, z);
                             let lu = SeqLu::new(&sym, a.as_ref())
                                 .map_err(|_| SolveError::SingularShiftedMatrix { t, pole: z })?;
-                            PoleSolver::Lu(lu)
+                            PoleSolver::Lu(Box::new(lu))
                         };
                         Ok(PoleTerm {
                             pole: z,
@@ -316,7 +316,7 @@ impl ShiftedSolver {
 
 #[derive(Debug)]
 enum PoleSolver {
-    Lu(SeqLu),
+    Lu(Box<SeqLu>),
     Cholesky(SeqLlt),
     Krylov {
         precond: Arc<PrecondFactor>,

@@ -1,4 +1,5 @@
 //! The shipped rational approximations against e^{-x} itself (paper Eq. (10), NUMERICS §2.2).
+#![allow(clippy::excessive_precision)] // published constants are quoted verbatim
 use shifted_solve::*;
 
 fn grid() -> Vec<f64> {
