@@ -111,7 +111,6 @@ pub enum MeshError {
         /// What was wrong.
         message: String,
     },
-
     // ===== morse.rs: critical points and persistence (appended by branch `morse`) =====
     /// A per-vertex scalar field does not have one value per vertex.
     #[error("the scalar field has {len} values, but the mesh has {n_vertices} vertices")]
@@ -139,7 +138,6 @@ pub enum MeshError {
         reason: String,
     },
     // ===== end of morse.rs block =====
-
     // ---- Variants added by the mesh I/O work (branch `io`); keep this block together. ----
     /// A face in a mesh file names a negative vertex index (or an OBJ relative index that
     /// points before the first vertex).
@@ -179,6 +177,27 @@ pub enum MeshError {
         value: f64,
     },
     // ---- end of the I/O block ----
+
+    // ---- variants added by the validate/stats/mtx work (branch `validate`) ----
+    /// A repair option has an invalid value.
+    #[error("invalid repair option {option}: {message}")]
+    InvalidRepairOption {
+        /// The option's name.
+        option: &'static str,
+        /// What was wrong.
+        message: String,
+    },
+    /// A line of a Matrix Market file could not be parsed.
+    #[error("{path}:{line}: matrix market: {message}")]
+    MatrixMarketLine {
+        /// File read.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What was wrong.
+        message: String,
+    },
+    // ---- end of variants added by the validate/stats/mtx work ----
 
     // ===== transform.rs: mesh surgery (appended by branch `shrec`) =====
     /// A per-vertex mask does not have one entry per vertex.

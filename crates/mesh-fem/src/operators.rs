@@ -118,10 +118,11 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
         .into_par_iter()
         .map(|f| face_cotangents(mesh.corners(f)))
         .collect();
-    if let Some(f) = geometry
-        .iter()
-        .position(|(a, c)| !(*a > 0.0) || c.iter().any(|x| !x.is_finite()))
-    {
+    // The degeneracy test is shared with `validate` (relative threshold, see
+    // `validate::is_degenerate_triangle`), so a mesh validates as usable iff it assembles.
+    if let Some(f) = (0..faces.len()).into_par_iter().find_first(|&f| {
+        crate::validate::is_degenerate_triangle(mesh.corners(f)) || geometry[f].1.iter().any(|x| !x.is_finite())
+    }) {
         return Err(MeshError::DegenerateFace {
             face: f,
             vertices: faces[f],

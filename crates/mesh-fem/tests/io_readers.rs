@@ -180,7 +180,8 @@ fn off_polygons_and_errors() {
         6,
     );
     expect_parse_line(read_off(b"PLY\n3 1 0\n", name(), &strict()), 1);
-    expect_parse_line(read_off(b"4OFF\n3 1 0\n", name(), &strict()), 1);
+    let m = expect_parse_line(read_off(b"4OFF\n3 1 0\n", name(), &strict()), 1);
+    assert!(m.contains("not a 3-D OFF variant"), "{m}");
     expect_parse_line(read_off(b"OFF BINARY\n", name(), &strict()), 1);
     expect_parse_line(read_off(b"OFF\n-3 1 0\n", name(), &strict()), 2);
     match read_off(b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n", name(), &strict()) {

@@ -34,7 +34,7 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<(Tri
     let mut header_tokens = tokens(first).peekable();
     let mut counts: Vec<(usize, &[u8])> = Vec::with_capacity(3);
     if let Some(keyword) = header_tokens.peek().copied() {
-        if keyword.first().is_some_and(|b| b.is_ascii_alphabetic()) {
+        if keyword.first().is_some_and(|b| b.is_ascii_alphabetic()) || keyword.ends_with(b"OFF") {
             header_tokens.next();
             let prefix = keyword.strip_suffix(b"OFF").ok_or_else(|| {
                 parse_error(
