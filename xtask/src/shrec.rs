@@ -1,7 +1,8 @@
 //! Synthetic SHREC'10-style robustness benchmark (paper Sect. 5; NUMERICS §7).
 //!
 //! The SHREC'10 feature-detection/description data are not available, so we rebuild the
-//! protocol on TOSCA null shapes: every base mesh gets 9 transformation classes × 5 strengths,
+//! protocol on TOSCA null shapes: every base mesh gets 9 synthetic transformation classes plus
+//! the real-pose class `pose`, × 5 strengths,
 //! each with a ground-truth map from every new vertex to a base vertex.
 //!
 //! All randomness comes from [`SplitMix64`], seeded from (seed, shape, class) — **not** from
