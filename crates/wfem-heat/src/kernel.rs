@@ -55,11 +55,45 @@ pub enum Method {
     /// (M + γtL)⁻¹M, one real sparse Cholesky per t, reused for every iteration and every
     /// right-hand side; accurate to ≈1e−12 relative. See [`FastParams`].
     Fast(FastParams),
+    /// The paper's generalized Chebyshev method (Eq. (11)–(13)): the best uniform rational
+    /// approximation `e^{−x} ≈ c0 + 2 Re Σ_j c_j/(x − z_j)` of degree `degree` on [0, ∞)
+    /// turns K_t f into `degree/2` complex shifted solves `(tL − z_j M) g_j = M f`,
+    /// `K_t f ≈ c0 f + 2 Re Σ_j c_j g_j` (upper-half-plane poles; the paper's Eq. (13) is the
+    /// same sum in the nuclear convention θ = −conj z, α = −conj c). The error is at most
+    /// E_degree‖f‖_M (Eq. (14); E_16 = 2.1e−16, floored by rounding at ≈2e−14).
+    /// The backend is MINRES (the paper's choice) or a direct complex LU (default);
+    /// see [`shifted_solve::Backend`].
+    Rational {
+        /// Degree n of r_n (see [`shifted_solve::SHIPPED_DEGREES`]); E_n ≈ 9.289⁻ⁿ.
+        degree: usize,
+        /// How each shifted system is solved.
+        backend: shifted_solve::Backend,
+    },
 }
 
+impl Method {
+    /// The rational Chebyshev method of `degree` with the direct complex LU backend.
+    pub fn rational(degree: usize) -> Self {
+        Method::Rational {
+            degree,
+            backend: shifted_solve::Backend::DirectLu,
+        }
+    }
+
+    /// The spectral method with the `k` smallest eigenpairs and default eigensolver options.
+    pub fn spectral(k: usize) -> Self {
+        Method::Spectral {
+            k,
+            eigen: EigenParams::default(),
+        }
+    }
+}
+
+/// The default is the paper's rational Chebyshev method with
+/// [`shifted_solve::DEFAULT_DEGREE`] (error ≈ 1e−14) and the direct complex LU backend.
 impl Default for Method {
     fn default() -> Self {
-        Method::Fast(FastParams::default())
+        Method::rational(shifted_solve::DEFAULT_DEGREE)
     }
 }
 
@@ -79,6 +113,8 @@ enum Prepared {
     MassFactor(SpdFactor),
     /// Only the symbolic analysis; the numeric factor depends on t.
     Shifted,
+    /// The shifted solver (symbolic analyses) and the rational approximation.
+    Rational(shifted_solve::ShiftedSolver, &'static shifted_solve::RationalApprox),
 }
 
 /// The heat kernel of a mesh, `K_t = exp(−t M⁻¹L)` (paper, Eq. (6)), built once from the FEM
@@ -95,6 +131,8 @@ pub struct HeatKernel {
     prepared: Prepared,
     /// The last t-dependent factor `M + sL` and its s.
     cache: Mutex<Option<(f64, Arc<SpdFactor>)>>,
+    /// The rational factors of the last t (`Rational` method).
+    rational_cache: Mutex<Option<(f64, Arc<shifted_solve::RationalFactors>)>>,
 }
 
 pub(crate) fn check_time(t: f64) -> Result<(), HeatError> {
@@ -167,6 +205,11 @@ impl HeatKernel {
                 }
                 Prepared::Shifted
             }
+            Method::Rational { degree, backend } => {
+                let approx = shifted_solve::RationalApprox::cram(*degree)?;
+                let solver = shifted_solve::ShiftedSolver::new(stiffness.as_ref(), mass.as_ref(), *backend)?;
+                Prepared::Rational(solver, approx)
+            }
         };
         Ok(Self {
             stiffness,
@@ -175,6 +218,7 @@ impl HeatKernel {
             params,
             prepared,
             cache: Mutex::new(None),
+            rational_cache: Mutex::new(None),
         })
     }
 
@@ -265,6 +309,10 @@ impl HeatKernel {
                     .collect::<Result<_, _>>()?;
                 Ok(Mat::from_fn(n, cols.len(), |i, j| cols[j][i]))
             }
+            (_, Prepared::Rational(solver, approx)) => {
+                let factors = self.rational_factors(solver, approx, t)?;
+                Ok(factors.apply(f)?.0)
+            }
             _ => unreachable!("every method has its prepared data"),
         }
     }
@@ -282,6 +330,27 @@ impl HeatKernel {
         let factor = Arc::new(self.pattern.factor(&a, || format!("{what} with shift {s:e}"))?);
         *cache = Some((s, factor.clone()));
         Ok(factor)
+    }
+
+    /// The factors of every pole at time t, reused when the previous call had the same t.
+    fn rational_factors(
+        &self,
+        solver: &shifted_solve::ShiftedSolver,
+        approx: &shifted_solve::RationalApprox,
+        t: f64,
+    ) -> Result<Arc<shifted_solve::RationalFactors>, HeatError> {
+        let mut cache = self
+            .rational_cache
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some((cached_t, factors)) = cache.as_ref() {
+            if *cached_t == t {
+                return Ok(factors.clone());
+            }
+        }
+        let factors = Arc::new(solver.factor(approx, t)?);
+        *cache = Some((t, factors.clone()));
+        Ok(factors)
     }
 
     /// Fast path with its per-column iteration counts (for benchmarks and diagnostics).
