@@ -10,4 +10,5 @@ pub use shape_retrieval;
 pub use shifted_solve;
 pub use wfem_heat;
 
+pub mod cli;
 pub mod render;
