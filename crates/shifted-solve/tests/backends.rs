@@ -206,3 +206,13 @@ fn jacobi_and_unpreconditioned_minres_agree_with_lu() {
         assert!(rel_err(&x, &reference) < 1e-11, "{pc:?}: {report:?}");
     }
 }
+
+/// Solvers and factors are shared across threads by the callers (wfem-heat, shape-retrieval).
+#[test]
+fn solver_types_are_send_and_sync() {
+    fn assert_send_sync<T: Send + Sync>() {}
+    assert_send_sync::<ShiftedSolver>();
+    assert_send_sync::<RationalFactors>();
+    assert_send_sync::<RationalApprox>();
+    assert_send_sync::<BatchReport>();
+}
