@@ -99,201 +99,263 @@ fn face_cotangents(p: [[f64; 3]; 3]) -> (f64, [f64; 3]) {
     (0.5 * double_area, cots)
 }
 
+/// Columns per parallel work item of [`assemble`]: large enough to amortise the task and
+/// slice bookkeeping, small enough to balance the load on a few cores.
+const COLUMNS_PER_CHUNK: usize = 2048;
+
 /// Assembles the stiffness L, the consistent mass B and the lumped mass D of `mesh`
 /// (paper, Eq. (3) and Eq. (7)).
 ///
-/// Runs in O(#faces) time, in parallel over columns.
+/// Runs in O(#faces) time and memory, in parallel (rayon):
+/// 1. per face, the area |T| and the three corner cotangents;
+/// 2. a counting sort of the 3·#faces corners by vertex (which faces touch column j);
+/// 3. per column j, gather the two half-edges (j, i) of every incident face, sort them by
+///    (row, face) and merge duplicates; a first pass only counts the distinct rows to lay
+///    out the column pointers, the second writes the entries of L, B and D directly into
+///    their final arrays (all three matrices get their own copy of the shared pattern).
+///
+/// Contributions to an entry are summed in face order from both sides of the diagonal, so
+/// L and B are exactly symmetric, even on non-manifold meshes.
 ///
 /// # Errors
 /// * [`MeshError::DegenerateFace`] for a face of zero area (its cotangents are undefined);
 ///   drop such faces first with [`crate::validate::repair`].
 /// * [`MeshError::UnreferencedVertex`] for a vertex that belongs to no face (B would be
 ///   singular); drop such vertices first with [`crate::validate::repair`].
+/// * [`MeshError::Invalid`] for a mesh with 2³² faces or more (face indices are stored as
+///   `u32` during assembly).
 pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
     let n = mesh.n_vertices();
     let faces = mesh.faces();
+    if u32::try_from(faces.len()).is_err() {
+        return Err(MeshError::Invalid {
+            reason: format!("{} faces; assembly supports fewer than 2^32", faces.len()),
+        });
+    }
 
-    // Per-face area and cotangents, in parallel.
+    // 1. Per-face area and cotangents, in parallel; the first degenerate face is reported.
     let geometry: Vec<(f64, [f64; 3])> = (0..faces.len())
         .into_par_iter()
         .map(|f| face_cotangents(mesh.corners(f)))
         .collect();
     if let Some(f) = geometry
-        .iter()
-        .position(|(a, c)| !(*a > 0.0) || c.iter().any(|x| !x.is_finite()))
+        .par_iter()
+        .position_first(|(a, c)| a.is_nan() || *a <= 0.0 || c.iter().any(|x| !x.is_finite()))
     {
         return Err(MeshError::DegenerateFace {
             face: f,
             vertices: faces[f],
         });
     }
+    // Lumped mass per corner: |T|/3 (barycentric) or the mixed Voronoi share.
+    let corner_mass: Vec<[f64; 3]> = match params.lumped {
+        LumpedMassKind::Barycentric => geometry.par_iter().map(|&(area, _)| [area / 3.0; 3]).collect(),
+        LumpedMassKind::Voronoi => (0..faces.len())
+            .into_par_iter()
+            .map(|f| voronoi_corner_areas(mesh.corners(f), geometry[f]))
+            .collect(),
+    };
 
-    // Counting sort of the six directed half-entries (row, col) of each face by column.
-    let mut col_count = vec![0usize; n + 1];
-    for f in faces {
-        for &v in f {
-            col_count[v as usize + 1] += 2;
+    // 2. Counting sort of the corners by vertex: incident[first[j]..first[j + 1]] are the
+    //    faces around vertex j, in increasing face order.
+    let mut first = vec![0usize; n + 1];
+    for face in faces {
+        for &v in face {
+            first[v as usize + 1] += 1;
         }
     }
     for j in 0..n {
-        col_count[j + 1] += col_count[j];
+        first[j + 1] += first[j];
     }
-    if let Some(v) = (0..n).find(|&j| col_count[j + 1] == col_count[j]) {
+    if let Some(v) = (0..n).find(|&j| first[j + 1] == first[j]) {
         return Err(MeshError::UnreferencedVertex { vertex: v });
     }
-    let total = col_count[n];
-    let mut cursor = col_count.clone();
-    // (row, L value, B value) in column order.
-    let mut entries: Vec<(u32, f64, f64)> = vec![(0, 0.0, 0.0); total];
-    for (f, face) in faces.iter().enumerate() {
-        let (area, cots) = geometry[f];
-        let b = area / 12.0;
-        for k in 0..3 {
-            // The edge opposite corner k joins the other two corners.
-            let i = face[(k + 1) % 3];
-            let j = face[(k + 2) % 3];
-            let l = -0.5 * cots[k];
-            let pj = &mut cursor[j as usize];
-            entries[*pj] = (i, l, b);
-            *pj += 1;
-            let pi = &mut cursor[i as usize];
-            entries[*pi] = (j, l, b);
-            *pi += 1;
-        }
-    }
-    drop(cursor);
-
-    // Sort each column by row and merge the entries of an edge shared by several faces.
-    let mut segments: Vec<&mut [(u32, f64, f64)]> = Vec::with_capacity(n);
+    let mut incident = vec![0u32; first[n]];
     {
-        let mut rest: &mut [(u32, f64, f64)] = &mut entries;
-        for j in 0..n {
-            let (head, tail) = rest.split_at_mut(col_count[j + 1] - col_count[j]);
-            segments.push(head);
-            rest = tail;
+        let mut cursor = first[..n].to_vec();
+        for (f, face) in faces.iter().enumerate() {
+            for &v in face {
+                incident[cursor[v as usize]] = f as u32; // f < 2^32 checked above
+                cursor[v as usize] += 1;
+            }
         }
     }
-    let unique: Vec<usize> = segments
-        .par_iter_mut()
-        .map(|seg| {
-            seg.sort_unstable_by_key(|e| e.0);
-            let mut w = 0;
-            for r in 0..seg.len() {
-                if w > 0 && seg[w - 1].0 == seg[r].0 {
-                    seg[w - 1].1 += seg[r].1;
-                    seg[w - 1].2 += seg[r].2;
-                } else {
-                    seg[w] = seg[r];
-                    w += 1;
-                }
-            }
-            w
-        })
-        .collect();
 
-    // Final CSC arrays: the merged off-diagonal entries plus the diagonal, rows sorted.
+    // The off-diagonal half-edges (j, i) of column j, one per (incident face, other corner):
+    // sort key (row i, face f) so that merged sums are taken in face order, L value
+    // −½ cot(angle opposite ij), B value |T|/12.
+    let gather = |j: usize, buf: &mut Vec<(u64, f64, f64)>| {
+        buf.clear();
+        for &f in &incident[first[j]..first[j + 1]] {
+            let face = faces[f as usize];
+            let (area, cots) = geometry[f as usize];
+            // Corner k of the face is vertex j (a face never repeats a vertex: it would have
+            // zero area and was rejected above).
+            let k = if face[0] as usize == j {
+                0
+            } else if face[1] as usize == j {
+                1
+            } else {
+                2
+            };
+            let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+            let b = area / 12.0;
+            // Edge j–face[k1] is opposite corner k2, edge j–face[k2] is opposite corner k1.
+            buf.push((key(face[k1], f), -0.5 * cots[k2], b));
+            buf.push((key(face[k2], f), -0.5 * cots[k1], b));
+        }
+        buf.sort_unstable_by_key(|e| e.0);
+    };
+
+    // 3a. Count the distinct rows of each column, then lay out the column pointers.
+    let chunks: Vec<(usize, usize)> = (0..n)
+        .step_by(COLUMNS_PER_CHUNK)
+        .map(|c| (c, (c + COLUMNS_PER_CHUNK).min(n)))
+        .collect();
+    let mut distinct = vec![0usize; n];
+    distinct
+        .par_chunks_mut(COLUMNS_PER_CHUNK)
+        .enumerate()
+        .for_each(|(c, out)| {
+            let mut buf = Vec::new();
+            for (jj, count) in out.iter_mut().enumerate() {
+                gather(c * COLUMNS_PER_CHUNK + jj, &mut buf);
+                *count = 1 + buf.len() - buf.windows(2).filter(|w| row(w[0].0) == row(w[1].0)).count();
+            }
+        });
     let mut col_ptr = vec![0usize; n + 1];
     for j in 0..n {
-        col_ptr[j + 1] = col_ptr[j] + unique[j] + 1;
+        col_ptr[j + 1] = col_ptr[j] + distinct[j];
     }
+    drop(distinct);
     let nnz = col_ptr[n];
-    let mut row_idx = vec![0usize; nnz];
+
+    // 3b. Write the merged entries of L, B, D and the three copies of the row indices into
+    //     disjoint per-chunk slices of the final arrays, in parallel.
+    let mut rows = [vec![0usize; nnz], vec![0usize; nnz], vec![0usize; nnz]];
     let mut l_val = vec![0.0f64; nnz];
     let mut b_val = vec![0.0f64; nnz];
     let mut d_val = vec![0.0f64; nnz];
     let mut lumped_diagonal = vec![0.0f64; n];
     {
-        let mut outs = Vec::with_capacity(n);
-        let (mut r, mut l, mut b, mut d): (&mut [usize], &mut [f64], &mut [f64], &mut [f64]) =
-            (&mut row_idx, &mut l_val, &mut b_val, &mut d_val);
-        for j in 0..n {
-            let len = col_ptr[j + 1] - col_ptr[j];
-            let (r0, r1) = r.split_at_mut(len);
-            let (l0, l1) = l.split_at_mut(len);
-            let (b0, b1) = b.split_at_mut(len);
-            let (d0, d1) = d.split_at_mut(len);
-            outs.push((r0, l0, b0, d0));
-            (r, l, b, d) = (r1, l1, b1, d1);
-        }
-        outs.par_iter_mut()
-            .zip(segments.par_iter())
-            .zip(unique.par_iter())
-            .zip(lumped_diagonal.par_iter_mut())
-            .enumerate()
-            .for_each(|(j, ((((r, l, b, d), seg), &u), dj))| {
-                let seg = &seg[..u];
-                let l_diag: f64 = -seg.iter().map(|e| e.1).sum::<f64>();
-                // Each incident face contributes |T|/12 on two edges at vertex j, so the
-                // off-diagonal column sum of B is Σ|T|/6 = B_jj and the row sum is Σ|T|/3 = D_jj.
-                let b_diag: f64 = seg.iter().map(|e| e.2).sum::<f64>();
-                *dj = 2.0 * b_diag;
-                let mut w = 0;
-                let mut diag_done = false;
-                for e in seg {
-                    if !diag_done && (e.0 as usize) > j {
-                        r[w] = j;
-                        l[w] = l_diag;
-                        b[w] = b_diag;
-                        d[w] = 2.0 * b_diag;
-                        w += 1;
-                        diag_done = true;
+        let bounds: Vec<usize> = chunks.iter().map(|&(_, end)| col_ptr[end]).collect();
+        let [r0, r1, r2] = &mut rows;
+        let work: Vec<_> = split_at_bounds(r0, &bounds)
+            .into_iter()
+            .zip(split_at_bounds(r1, &bounds))
+            .zip(split_at_bounds(r2, &bounds))
+            .zip(split_at_bounds(&mut l_val, &bounds))
+            .zip(split_at_bounds(&mut b_val, &bounds))
+            .zip(split_at_bounds(&mut d_val, &bounds))
+            .zip(lumped_diagonal.chunks_mut(COLUMNS_PER_CHUNK))
+            .zip(&chunks)
+            .collect();
+        work.into_par_iter()
+            .for_each(|(((((((r0, r1), r2), l), b), d), diag), &(col_start, col_end))| {
+                let mut buf = Vec::new();
+                let base = col_ptr[col_start];
+                for j in col_start..col_end {
+                    gather(j, &mut buf);
+                    let d_jj: f64 = incident[first[j]..first[j + 1]]
+                        .iter()
+                        .map(|&f| {
+                            let face = faces[f as usize];
+                            let k = face.iter().position(|&v| v as usize == j).unwrap_or(0);
+                            corner_mass[f as usize][k]
+                        })
+                        .sum();
+                    diag[j - col_start] = d_jj;
+                    // Merge duplicates (an interior edge appears once per incident face).
+                    let mut w = 0;
+                    for r in 0..buf.len() {
+                        if w > 0 && row(buf[w - 1].0) == row(buf[r].0) {
+                            buf[w - 1].1 += buf[r].1;
+                            buf[w - 1].2 += buf[r].2;
+                        } else {
+                            buf[w] = buf[r];
+                            w += 1;
+                        }
                     }
-                    r[w] = e.0 as usize;
-                    l[w] = e.1;
-                    b[w] = e.2;
-                    d[w] = 0.0;
-                    w += 1;
-                }
-                if !diag_done {
-                    r[w] = j;
-                    l[w] = l_diag;
-                    b[w] = b_diag;
-                    d[w] = 2.0 * b_diag;
+                    let merged = &buf[..w];
+                    let l_diag = -merged.iter().map(|e| e.1).sum::<f64>();
+                    // Each incident face puts |T|/12 on two edges at j, so the off-diagonal
+                    // sum of column j of B is Σ_{T∋j}|T|/6 = B_jj.
+                    let b_diag = merged.iter().map(|e| e.2).sum::<f64>();
+                    let split = merged.partition_point(|e| (row(e.0) as usize) < j);
+                    let mut p = col_ptr[j] - base;
+                    let mut put = |i: usize, lv: f64, bv: f64, dv: f64| {
+                        r0[p] = i;
+                        r1[p] = i;
+                        r2[p] = i;
+                        l[p] = lv;
+                        b[p] = bv;
+                        d[p] = dv;
+                        p += 1;
+                    };
+                    for e in &merged[..split] {
+                        put(row(e.0) as usize, e.1, e.2, 0.0);
+                    }
+                    put(j, l_diag, b_diag, d_jj);
+                    for e in &merged[split..] {
+                        put(row(e.0) as usize, e.1, e.2, 0.0);
+                    }
                 }
             });
     }
 
-    if params.lumped == LumpedMassKind::Voronoi {
-        lumped_diagonal = voronoi_areas(mesh, &geometry);
-        for j in 0..n {
-            for p in col_ptr[j]..col_ptr[j + 1] {
-                if row_idx[p] == j {
-                    d_val[p] = lumped_diagonal[j];
-                }
-            }
-        }
-    }
-
-    let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+    let [r0, r1, r2] = rows;
+    let pattern = |row_idx: Vec<usize>| SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx);
     Ok(FemOperators {
-        stiffness: SparseColMat::new(symbolic.clone(), l_val),
-        mass: SparseColMat::new(symbolic.clone(), b_val),
-        lumped_mass: SparseColMat::new(symbolic, d_val),
+        stiffness: SparseColMat::new(pattern(r0), l_val),
+        mass: SparseColMat::new(pattern(r1), b_val),
+        lumped_mass: SparseColMat::new(pattern(r2), d_val),
         lumped_diagonal,
     })
 }
 
-/// Mixed Voronoi areas per vertex (Meyer et al. 2003, Fig. 4).
-fn voronoi_areas(mesh: &TriMesh, geometry: &[(f64, [f64; 3])]) -> Vec<f64> {
-    let mut areas = vec![0.0; mesh.n_vertices()];
-    for (f, face) in mesh.faces().iter().enumerate() {
-        let (area, cots) = geometry[f];
-        let p = mesh.corners(f);
-        let obtuse = (0..3).find(|&k| cots[k] < 0.0);
-        for k in 0..3 {
-            let a = match obtuse {
-                None => {
-                    // Voronoi area at corner k: (|e_kj|² cot θ_l + |e_kl|² cot θ_j)/8, where the
-                    // edge k→k+1 is opposite corner k+2 and the edge k→k+2 is opposite corner k+1.
-                    let e1 = sub(p[(k + 1) % 3], p[k]);
-                    let e2 = sub(p[(k + 2) % 3], p[k]);
-                    (dot(e1, e1) * cots[(k + 2) % 3] + dot(e2, e2) * cots[(k + 1) % 3]) / 8.0
-                }
-                Some(o) if o == k => area / 2.0,
-                Some(_) => area / 4.0,
-            };
-            areas[face[k] as usize] += a;
-        }
+/// Sort key of a half-edge: row in the high 32 bits, face in the low 32 bits.
+#[inline]
+fn key(row: u32, face: u32) -> u64 {
+    ((row as u64) << 32) | face as u64
+}
+
+/// The row of a sort key made by [`key`].
+#[inline]
+fn row(key: u64) -> u32 {
+    (key >> 32) as u32
+}
+
+/// Splits `v` into consecutive pieces ending at the increasing offsets `bounds` (the last
+/// bound must be `v.len()`).
+fn split_at_bounds<'a, T>(mut v: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [T]> {
+    let mut pieces = Vec::with_capacity(bounds.len());
+    let mut done = 0;
+    for &end in bounds {
+        let (head, tail) = v.split_at_mut(end - done);
+        pieces.push(head);
+        v = tail;
+        done = end;
     }
-    areas
+    pieces
+}
+
+/// Mixed Voronoi area of each corner of one triangle (Meyer, Desbrun, Schröder, Barr 2003,
+/// Fig. 4): the Voronoi region `(|e_kj|² cot θ_l + |e_kl|² cot θ_j)/8` on a non-obtuse
+/// triangle, otherwise |T|/2 at the obtuse corner and |T|/4 at the other two.
+fn voronoi_corner_areas(p: [[f64; 3]; 3], (area, cots): (f64, [f64; 3])) -> [f64; 3] {
+    let obtuse = (0..3).find(|&k| cots[k] < 0.0);
+    let mut out = [0.0; 3];
+    for (k, a) in out.iter_mut().enumerate() {
+        *a = match obtuse {
+            None => {
+                // The edge k→k+1 is opposite corner k+2 and the edge k→k+2 is opposite k+1.
+                let e1 = sub(p[(k + 1) % 3], p[k]);
+                let e2 = sub(p[(k + 2) % 3], p[k]);
+                (dot(e1, e1) * cots[(k + 2) % 3] + dot(e2, e2) * cots[(k + 1) % 3]) / 8.0
+            }
+            Some(o) if o == k => area / 2.0,
+            Some(_) => area / 4.0,
+        };
+    }
+    out
 }
