@@ -103,61 +103,43 @@ fn face_cotangents(p: [[f64; 3]; 3]) -> (f64, [f64; 3]) {
 /// slice bookkeeping, small enough to balance the load on a few cores.
 const COLUMNS_PER_CHUNK: usize = 2048;
 
+/// What one corner of a face contributes to the column of its vertex j: the two half-edges
+/// (j, i) to the other corners, with their stiffness values, and the face area.
+#[derive(Clone, Copy, Default)]
+struct CornerEntries {
+    /// The other two vertices of the face.
+    rows: [u32; 2],
+    /// `−½ cot` of the angle opposite each of the two edges.
+    stiffness: [f64; 2],
+    /// Face area |T|.
+    area: f64,
+}
+
 /// Assembles the stiffness L, the consistent mass B and the lumped mass D of `mesh`
 /// (paper, Eq. (3) and Eq. (7)).
 ///
 /// Runs in O(#faces) time and memory, in parallel (rayon):
-/// 1. per face, the area |T| and the three corner cotangents;
-/// 2. a counting sort of the 3·#faces corners by vertex (which faces touch column j);
-/// 3. per column j, gather the two half-edges (j, i) of every incident face, sort them by
-///    (row, face) and merge duplicates; a first pass only counts the distinct rows to lay
-///    out the column pointers, the second writes the entries of L, B and D directly into
-///    their final arrays (all three matrices get their own copy of the shared pattern).
+/// 1. a counting sort of the 3·#faces corners by vertex: in parallel over vertex ranges,
+///    every face's area and cotangents are computed and each corner's two half-edges are
+///    written to its vertex's segment, in face order (all later reads are sequential);
+/// 2. per column j, sort the half-edges of j by row (stably, so face order is kept) and
+///    merge duplicates: a first pass only counts the distinct rows to lay out the column
+///    pointers, the second writes the entries of L, B and D directly into their final
+///    arrays (each of the three matrices owns a copy of the shared pattern).
 ///
-/// Contributions to an entry are summed in face order from both sides of the diagonal, so
-/// L and B are exactly symmetric, even on non-manifold meshes.
+/// Contributions to an entry are summed in face order on both sides of the diagonal, so L
+/// and B are exactly symmetric, even on non-manifold meshes.
 ///
 /// # Errors
-/// * [`MeshError::DegenerateFace`] for a face of zero area (its cotangents are undefined);
-///   drop such faces first with [`crate::validate::repair`].
+/// * [`MeshError::DegenerateFace`] for a face of zero area (its cotangents are undefined),
+///   the first one in face order; drop such faces first with [`crate::validate::repair`].
 /// * [`MeshError::UnreferencedVertex`] for a vertex that belongs to no face (B would be
 ///   singular); drop such vertices first with [`crate::validate::repair`].
-/// * [`MeshError::Invalid`] for a mesh with 2³² faces or more (face indices are stored as
-///   `u32` during assembly).
 pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
     let n = mesh.n_vertices();
     let faces = mesh.faces();
-    if u32::try_from(faces.len()).is_err() {
-        return Err(MeshError::Invalid {
-            reason: format!("{} faces; assembly supports fewer than 2^32", faces.len()),
-        });
-    }
 
-    // 1. Per-face area and cotangents, in parallel; the first degenerate face is reported.
-    let geometry: Vec<(f64, [f64; 3])> = (0..faces.len())
-        .into_par_iter()
-        .map(|f| face_cotangents(mesh.corners(f)))
-        .collect();
-    if let Some(f) = geometry
-        .par_iter()
-        .position_first(|(a, c)| a.is_nan() || *a <= 0.0 || c.iter().any(|x| !x.is_finite()))
-    {
-        return Err(MeshError::DegenerateFace {
-            face: f,
-            vertices: faces[f],
-        });
-    }
-    // Lumped mass per corner: |T|/3 (barycentric) or the mixed Voronoi share.
-    let corner_mass: Vec<[f64; 3]> = match params.lumped {
-        LumpedMassKind::Barycentric => geometry.par_iter().map(|&(area, _)| [area / 3.0; 3]).collect(),
-        LumpedMassKind::Voronoi => (0..faces.len())
-            .into_par_iter()
-            .map(|f| voronoi_corner_areas(mesh.corners(f), geometry[f]))
-            .collect(),
-    };
-
-    // 2. Counting sort of the corners by vertex: incident[first[j]..first[j + 1]] are the
-    //    faces around vertex j, in increasing face order.
+    // 1a. Column segments: corners[first[j]..first[j + 1]] belong to vertex j.
     let mut first = vec![0usize; n + 1];
     for face in faces {
         for &v in face {
@@ -167,70 +149,111 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
     for j in 0..n {
         first[j + 1] += first[j];
     }
+    let n_corners = first[n];
+
+    // 1b. Scatter, in parallel over vertex ranges of about equal corner counts: each range
+    //     scans all faces (cheap, sequential) and handles the corners it owns, so every
+    //     task writes only its own slice. A face is measured once per range it touches.
+    let voronoi = params.lumped == LumpedMassKind::Voronoi;
+    let n_ranges = rayon::current_num_threads().clamp(1, n);
+    let vertex_bounds: Vec<usize> = (0..=n_ranges)
+        .map(|r| {
+            let target = n_corners * r / n_ranges;
+            first.partition_point(|&c| c < target).min(n)
+        })
+        .collect();
+    let mut corners = vec![CornerEntries::default(); n_corners];
+    let mut corner_mass = vec![0.0f64; if voronoi { n_corners } else { 0 }];
+    let corner_bounds: Vec<usize> = vertex_bounds[1..].iter().map(|&v| first[v]).collect();
+    let mass_bounds: Vec<usize> = if voronoi {
+        corner_bounds.clone()
+    } else {
+        vec![0; n_ranges]
+    };
+    let degenerate: Option<usize> = split_at_bounds(&mut corners, &corner_bounds)
+        .into_iter()
+        .zip(split_at_bounds(&mut corner_mass, &mass_bounds))
+        .zip(vertex_bounds.windows(2))
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|((out, mass_out), range)| {
+            let (v0, v1) = (range[0], range[1]);
+            let base = first[v0];
+            let mut cursor: Vec<usize> = first[v0..v1].iter().map(|&c| c - base).collect();
+            let mut degenerate = None;
+            for (f, face) in faces.iter().enumerate() {
+                if !face.iter().any(|&v| (v0..v1).contains(&(v as usize))) {
+                    continue;
+                }
+                let p = mesh.corners(f);
+                let (area, cots) = face_cotangents(p);
+                if area.is_nan() || area <= 0.0 || cots.iter().any(|c| !c.is_finite()) {
+                    degenerate.get_or_insert(f);
+                    continue;
+                }
+                let masses = if voronoi {
+                    voronoi_corner_areas(p, (area, cots))
+                } else {
+                    [0.0; 3]
+                };
+                for k in 0..3 {
+                    let v = face[k] as usize;
+                    if !(v0..v1).contains(&v) {
+                        continue;
+                    }
+                    let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+                    let c = &mut cursor[v - v0];
+                    // Edge v–face[k1] is opposite corner k2, edge v–face[k2] opposite k1.
+                    out[*c] = CornerEntries {
+                        rows: [face[k1], face[k2]],
+                        stiffness: [-0.5 * cots[k2], -0.5 * cots[k1]],
+                        area,
+                    };
+                    if voronoi {
+                        mass_out[*c] = masses[k];
+                    }
+                    *c += 1;
+                }
+            }
+            degenerate
+        })
+        .reduce(|| None, |a, b| a.into_iter().chain(b).min());
+    if let Some(f) = degenerate {
+        return Err(MeshError::DegenerateFace {
+            face: f,
+            vertices: faces[f],
+        });
+    }
     if let Some(v) = (0..n).find(|&j| first[j + 1] == first[j]) {
         return Err(MeshError::UnreferencedVertex { vertex: v });
     }
-    let mut incident = vec![0u32; first[n]];
-    {
-        let mut cursor = first[..n].to_vec();
-        for (f, face) in faces.iter().enumerate() {
-            for &v in face {
-                incident[cursor[v as usize]] = f as u32; // f < 2^32 checked above
-                cursor[v as usize] += 1;
-            }
-        }
-    }
 
-    // The off-diagonal half-edges (j, i) of column j, one per (incident face, other corner):
-    // sort key (row i, face f) so that merged sums are taken in face order, L value
-    // −½ cot(angle opposite ij), B value |T|/12.
-    let gather = |j: usize, buf: &mut Vec<(u64, f64, f64)>| {
-        buf.clear();
-        for &f in &incident[first[j]..first[j + 1]] {
-            let face = faces[f as usize];
-            let (area, cots) = geometry[f as usize];
-            // Corner k of the face is vertex j (a face never repeats a vertex: it would have
-            // zero area and was rejected above).
-            let k = if face[0] as usize == j {
-                0
-            } else if face[1] as usize == j {
-                1
-            } else {
-                2
-            };
-            let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
-            let b = area / 12.0;
-            // Edge j–face[k1] is opposite corner k2, edge j–face[k2] is opposite corner k1.
-            buf.push((key(face[k1], f), -0.5 * cots[k2], b));
-            buf.push((key(face[k2], f), -0.5 * cots[k1], b));
-        }
-        buf.sort_unstable_by_key(|e| e.0);
-    };
-
-    // 3a. Count the distinct rows of each column, then lay out the column pointers.
+    // 2a. Count the distinct rows of each column, then lay out the column pointers.
     let chunks: Vec<(usize, usize)> = (0..n)
         .step_by(COLUMNS_PER_CHUNK)
         .map(|c| (c, (c + COLUMNS_PER_CHUNK).min(n)))
         .collect();
-    let mut distinct = vec![0usize; n];
-    distinct
+    let mut col_ptr = vec![0usize; n + 1];
+    col_ptr[1..]
         .par_chunks_mut(COLUMNS_PER_CHUNK)
-        .enumerate()
-        .for_each(|(c, out)| {
-            let mut buf = Vec::new();
+        .zip(&chunks)
+        .for_each(|(out, &(col_start, _))| {
+            let mut rows: Vec<u32> = Vec::new();
             for (jj, count) in out.iter_mut().enumerate() {
-                gather(c * COLUMNS_PER_CHUNK + jj, &mut buf);
-                *count = 1 + buf.len() - buf.windows(2).filter(|w| row(w[0].0) == row(w[1].0)).count();
+                let j = col_start + jj;
+                rows.clear();
+                rows.extend(corners[first[j]..first[j + 1]].iter().flat_map(|c| c.rows));
+                rows.sort_unstable();
+                // Distinct off-diagonal rows plus the diagonal.
+                *count = 1 + rows.len() - rows.windows(2).filter(|w| w[0] == w[1]).count();
             }
         });
-    let mut col_ptr = vec![0usize; n + 1];
     for j in 0..n {
-        col_ptr[j + 1] = col_ptr[j] + distinct[j];
+        col_ptr[j + 1] += col_ptr[j];
     }
-    drop(distinct);
     let nnz = col_ptr[n];
 
-    // 3b. Write the merged entries of L, B, D and the three copies of the row indices into
+    // 2b. Write the merged entries of L, B, D and the three copies of the row indices into
     //     disjoint per-chunk slices of the final arrays, in parallel.
     let mut rows = [vec![0usize; nnz], vec![0usize; nnz], vec![0usize; nnz]];
     let mut l_val = vec![0.0f64; nnz];
@@ -252,23 +275,31 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
             .collect();
         work.into_par_iter()
             .for_each(|(((((((r0, r1), r2), l), b), d), diag), &(col_start, col_end))| {
-                let mut buf = Vec::new();
+                // Half-edges (row i, L value, B value) of column j.
+                let mut buf: Vec<(u32, f64, f64)> = Vec::new();
                 let base = col_ptr[col_start];
                 for j in col_start..col_end {
-                    gather(j, &mut buf);
-                    let d_jj: f64 = incident[first[j]..first[j + 1]]
-                        .iter()
-                        .map(|&f| {
-                            let face = faces[f as usize];
-                            let k = face.iter().position(|&v| v as usize == j).unwrap_or(0);
-                            corner_mass[f as usize][k]
-                        })
-                        .sum();
+                    let segment = first[j]..first[j + 1];
+                    buf.clear();
+                    let mut d_jj = 0.0;
+                    for c in &corners[segment.clone()] {
+                        // B_ij = Σ|T|/12 over the faces of edge ij.
+                        let b = c.area / 12.0;
+                        buf.push((c.rows[0], c.stiffness[0], b));
+                        buf.push((c.rows[1], c.stiffness[1], b));
+                        d_jj += c.area / 3.0;
+                    }
+                    if voronoi {
+                        d_jj = corner_mass[segment].iter().sum();
+                    }
+                    // Stable: equal rows stay in face order, the same order as on the other
+                    // side of the diagonal, so the merged sums are bitwise symmetric.
+                    buf.sort_by_key(|e| e.0);
                     diag[j - col_start] = d_jj;
                     // Merge duplicates (an interior edge appears once per incident face).
                     let mut w = 0;
                     for r in 0..buf.len() {
-                        if w > 0 && row(buf[w - 1].0) == row(buf[r].0) {
+                        if w > 0 && buf[w - 1].0 == buf[r].0 {
                             buf[w - 1].1 += buf[r].1;
                             buf[w - 1].2 += buf[r].2;
                         } else {
@@ -281,7 +312,7 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
                     // Each incident face puts |T|/12 on two edges at j, so the off-diagonal
                     // sum of column j of B is Σ_{T∋j}|T|/6 = B_jj.
                     let b_diag = merged.iter().map(|e| e.2).sum::<f64>();
-                    let split = merged.partition_point(|e| (row(e.0) as usize) < j);
+                    let split = merged.partition_point(|e| (e.0 as usize) < j);
                     let mut p = col_ptr[j] - base;
                     let mut put = |i: usize, lv: f64, bv: f64, dv: f64| {
                         r0[p] = i;
@@ -293,36 +324,28 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
                         p += 1;
                     };
                     for e in &merged[..split] {
-                        put(row(e.0) as usize, e.1, e.2, 0.0);
+                        put(e.0 as usize, e.1, e.2, 0.0);
                     }
                     put(j, l_diag, b_diag, d_jj);
                     for e in &merged[split..] {
-                        put(row(e.0) as usize, e.1, e.2, 0.0);
+                        put(e.0 as usize, e.1, e.2, 0.0);
                     }
                 }
             });
     }
+    drop(corners);
 
+    // faer checks that every column's rows are sorted and in range (O(nnz) each); the three
+    // checks run in parallel.
     let [r0, r1, r2] = rows;
     let pattern = |row_idx: Vec<usize>| SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx);
+    let ((s0, s1), s2) = rayon::join(|| rayon::join(|| pattern(r0), || pattern(r1)), || pattern(r2));
     Ok(FemOperators {
-        stiffness: SparseColMat::new(pattern(r0), l_val),
-        mass: SparseColMat::new(pattern(r1), b_val),
-        lumped_mass: SparseColMat::new(pattern(r2), d_val),
+        stiffness: SparseColMat::new(s0, l_val),
+        mass: SparseColMat::new(s1, b_val),
+        lumped_mass: SparseColMat::new(s2, d_val),
         lumped_diagonal,
     })
-}
-
-/// Sort key of a half-edge: row in the high 32 bits, face in the low 32 bits.
-#[inline]
-fn key(row: u32, face: u32) -> u64 {
-    ((row as u64) << 32) | face as u64
-}
-
-/// The row of a sort key made by [`key`].
-#[inline]
-fn row(key: u64) -> u32 {
-    (key >> 32) as u32
 }
 
 /// Splits `v` into consecutive pieces ending at the increasing offsets `bounds` (the last
