@@ -342,6 +342,81 @@ fn operators_match_dense_element_assembly() {
     }
 }
 
+/// A deterministic pseudo-random permutation of 0..n (LCG-driven Fisher–Yates).
+fn permutation(n: usize, seed: u64) -> Vec<usize> {
+    let mut p: Vec<usize> = (0..n).collect();
+    let mut state = seed;
+    for i in (1..n).rev() {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        p.swap(i, (state >> 33) as usize % (i + 1));
+    }
+    p
+}
+
+#[test]
+fn assembly_is_equivariant_under_vertex_and_face_permutations() {
+    // Renumbering the vertices by p permutes the operators: L'[p(i), p(j)] = L[i, j]; reordering
+    // the faces changes nothing but the summation order. A random numbering also destroys the
+    // locality of generated meshes, which exercises the vertex-range scatter.
+    let mesh = irregular_sphere(3, 5.6);
+    let n = mesh.n_vertices();
+    let p = permutation(n, 7);
+    let mut positions = vec![[0.0; 3]; n];
+    for (i, &pi) in p.iter().enumerate() {
+        positions[pi] = mesh.positions()[i];
+    }
+    let face_order = permutation(mesh.n_faces(), 11);
+    let faces: Vec<[u32; 3]> = face_order
+        .iter()
+        .map(|&f| mesh.faces()[f].map(|v| p[v as usize] as u32))
+        .collect();
+    let shuffled = TriMesh::new(positions, faces).unwrap();
+    for (a, b) in [
+        (ops(&mesh), ops(&shuffled)),
+        (voronoi_ops(&mesh), voronoi_ops(&shuffled)),
+    ] {
+        for (what, x, y) in [
+            ("L", &a.stiffness, &b.stiffness),
+            ("B", &a.mass, &b.mass),
+            ("D", &a.lumped_mass, &b.lumped_mass),
+        ] {
+            let y = entry_map(y);
+            assert_eq!(x.val().len(), y.len(), "{what}: pattern size");
+            let scale = max_abs(x.val());
+            for (i, j, v) in entries(x) {
+                let w = y[&(p[i], p[j])];
+                assert!((v - w).abs() <= 1e-14 * scale, "{what}[{i},{j}] = {v}, permuted {w}");
+            }
+        }
+        for i in 0..n {
+            let (u, w) = (a.lumped_diagonal[i], b.lumped_diagonal[p[i]]);
+            assert!((u - w).abs() <= 1e-14 * u, "diag D[{i}]");
+        }
+    }
+}
+
+#[test]
+fn assembly_is_bitwise_independent_of_the_thread_count() {
+    // Contributions are summed in face order whatever the parallel split, so the result is
+    // reproducible bit for bit on any number of threads.
+    let mesh = bumpy(3);
+    let reference = ops(&mesh);
+    for threads in [1, 3, 5] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let o = pool.install(|| ops(&mesh));
+        assert_eq!(
+            o.stiffness.symbolic().row_idx(),
+            reference.stiffness.symbolic().row_idx()
+        );
+        assert_eq!(o.stiffness.val(), reference.stiffness.val(), "{threads} threads: L");
+        assert_eq!(o.mass.val(), reference.mass.val(), "{threads} threads: B");
+        assert_eq!(o.lumped_mass.val(), reference.lumped_mass.val(), "{threads} threads: D");
+        assert_eq!(o.lumped_diagonal, reference.lumped_diagonal, "{threads} threads");
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Scale covariance
 // ---------------------------------------------------------------------------------------
