@@ -390,8 +390,8 @@ fn assembly_is_equivariant_under_vertex_and_face_permutations() {
                 assert!((v - w).abs() <= 1e-14 * scale, "{what}[{i},{j}] = {v}, permuted {w}");
             }
         }
-        for i in 0..n {
-            let (u, w) = (a.lumped_diagonal[i], b.lumped_diagonal[p[i]]);
+        for (i, &pi) in p.iter().enumerate() {
+            let (u, w) = (a.lumped_diagonal[i], b.lumped_diagonal[pi]);
             assert!((u - w).abs() <= 1e-14 * u, "diag D[{i}]");
         }
     }
