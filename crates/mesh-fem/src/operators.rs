@@ -151,9 +151,10 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
     }
     let n_corners = first[n];
 
-    // 1b. Scatter, in parallel over vertex ranges of about equal corner counts: each range
-    //     scans all faces (cheap, sequential) and handles the corners it owns, so every
-    //     task writes only its own slice. A face is measured once per range it touches.
+    // 1b. Scatter, in parallel over vertex ranges of about equal corner counts (one per
+    //     thread): each range scans all faces (cheap, sequential) and handles the corners it
+    //     owns, so every task writes only its own slice without locks or `unsafe`. A face is
+    //     measured once per range it touches, so at most three times.
     let voronoi = params.lumped == LumpedMassKind::Voronoi;
     let n_ranges = rayon::current_num_threads().clamp(1, n);
     let vertex_bounds: Vec<usize> = (0..=n_ranges)
