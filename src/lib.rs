@@ -9,3 +9,6 @@ pub use mesh_fem;
 pub use shape_retrieval;
 pub use shifted_solve;
 pub use wfem_heat;
+
+pub mod cli;
+pub mod render;

@@ -1,3 +1,47 @@
-fn main() {
-    println!("wfem");
+//! The `wfem` command-line tool. Without a subcommand it runs `wfem demo`
+//! (what `cargo run --release` does).
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+use wfem::cli;
+
+#[derive(Parser)]
+#[command(
+    name = "wfem",
+    version,
+    about = "The wFEM heat kernel on triangle meshes (runs `demo` without a subcommand)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Mesh statistics and the validation report.
+    Info(cli::InfoArgs),
+    /// Write the stiffness L, the mass B and the lumped mass D as Matrix Market files.
+    Operators(cli::OperatorsArgs),
+    /// Apply the heat kernel K_t to a source vertex (--source) or a field (--field).
+    Heat(cli::HeatArgs),
+    /// The demo: K_t e_i at four scales on a generated mesh, written to ./wfem-out/.
+    Demo(cli::DemoArgs),
+}
+
+fn main() -> ExitCode {
+    let parsed = Cli::parse();
+    let mut stdout = std::io::stdout().lock();
+    let result = match parsed.command.unwrap_or(Command::Demo(cli::DemoArgs::default())) {
+        Command::Info(a) => cli::info(&a, &mut stdout),
+        Command::Operators(a) => cli::operators(&a, &mut stdout),
+        Command::Heat(a) => cli::heat(&a, &mut stdout),
+        Command::Demo(a) => cli::demo(&a, &mut stdout),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("wfem: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

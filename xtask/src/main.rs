@@ -1,15 +1,96 @@
 //! Project chores: `cargo xtask <command>`.
 use clap::Parser;
+use std::path::PathBuf;
+use xtask::shrec::{generate, Class, GenerateOptions, DEFAULT_SHAPES};
 
 #[derive(Parser)]
 #[command(name = "xtask", about = "wfem project chores")]
 enum Cmd {
     /// Print the version of the workspace.
     Version,
+    /// Generate the synthetic SHREC'10-style benchmark (see docs/SHREC.md).
+    Shrec {
+        /// Mesh corpus folder (default: $WFEM_MESHES or the shared corpus).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, default_value = "data/shrec")]
+        out: PathBuf,
+        /// Comma-separated base shapes (`cat` = the null pose cat0; `cat3` = that pose).
+        #[arg(long, value_delimiter = ',')]
+        shapes: Option<Vec<String>>,
+        /// Comma-separated classes (default: all): isometry, topology, microholes, holes,
+        /// scale, localscale, noise, shotnoise, sampling.
+        #[arg(long, value_delimiter = ',')]
+        classes: Option<Vec<String>>,
+        /// Strengths: a range `1..5`, a list `1,3,5` or one number.
+        #[arg(long, default_value = "1..5")]
+        strengths: String,
+        /// Global seed.
+        #[arg(long, default_value_t = 2010)]
+        seed: u64,
+    },
+}
+
+fn parse_strengths(text: &str) -> Result<Vec<u8>, String> {
+    let bad = || format!("bad --strengths {text:?}: use e.g. 1..5, 2..=4 or 1,3,5");
+    if let Some((a, b)) = text.split_once("..") {
+        let b = b.trim_start_matches('=');
+        let (a, b): (u8, u8) = (
+            a.trim().parse().map_err(|_| bad())?,
+            b.trim().parse().map_err(|_| bad())?,
+        );
+        return Ok((a..=b).collect());
+    }
+    text.split(',').map(|s| s.trim().parse().map_err(|_| bad())).collect()
+}
+
+fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
+    match cmd {
+        Cmd::Version => println!("wfem xtask {}", env!("CARGO_PKG_VERSION")),
+        Cmd::Shrec {
+            meshes,
+            out,
+            shapes,
+            classes,
+            strengths,
+            seed,
+        } => {
+            let meshes_dir = match meshes {
+                Some(d) => d,
+                None => mesh_fem::corpus::meshes_dir()?,
+            };
+            let shapes = shapes.unwrap_or_else(|| DEFAULT_SHAPES.iter().map(|s| s.to_string()).collect());
+            let classes = match classes {
+                Some(names) => names
+                    .iter()
+                    .map(|n| Class::from_name(n))
+                    .collect::<Result<Vec<_>, _>>()?,
+                None => Class::ALL.to_vec(),
+            };
+            let opts = GenerateOptions {
+                meshes_dir,
+                out_dir: out.clone(),
+                shapes,
+                classes,
+                strengths: parse_strengths(&strengths)?,
+                seed,
+            };
+            let manifest = generate(&opts)?;
+            println!(
+                "wrote {} null shapes and {} transformed shapes to {} (manifest.json)",
+                manifest.bases.len(),
+                manifest.outputs.len(),
+                out.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 fn main() {
-    match Cmd::parse() {
-        Cmd::Version => println!("wfem xtask {}", env!("CARGO_PKG_VERSION")),
+    if let Err(e) = run(Cmd::parse()) {
+        eprintln!("error: {e}");
+        std::process::exit(1);
     }
 }

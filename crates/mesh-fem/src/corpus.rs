@@ -1,1 +1,101 @@
-//! TODO-module (filled by the mesh I/O work).
+//! The shared folder of real meshes used by tests, examples and benchmarks.
+//!
+//! The folder is `$WFEM_MESHES` if that variable is set, otherwise `shared/data/meshes` next
+//! to the workspace checkout: starting from this crate's directory we walk up until a
+//! directory `d` with `d/../shared/data/meshes` is found. Meshes are never copied into the
+//! repository.
+
+use crate::MeshError;
+use std::path::{Path, PathBuf};
+
+/// Extensions (lower case) of the mesh files [`all_mesh_files`] lists.
+pub const MESH_EXTENSIONS: [&str; 4] = ["obj", "ply", "off", "stl"];
+
+fn missing(path: PathBuf, message: &str) -> MeshError {
+    MeshError::Io {
+        path,
+        source: std::io::Error::new(std::io::ErrorKind::NotFound, message.to_string()),
+    }
+}
+
+/// The corpus folder.
+///
+/// # Errors
+/// [`MeshError::Io`] (kind `NotFound`) if `$WFEM_MESHES` names no directory, or if no
+/// `shared/data/meshes` folder is found above the workspace.
+pub fn meshes_dir() -> Result<PathBuf, MeshError> {
+    if let Some(dir) = std::env::var_os("WFEM_MESHES") {
+        let dir = PathBuf::from(dir);
+        return if dir.is_dir() {
+            Ok(dir)
+        } else {
+            Err(missing(dir, "WFEM_MESHES is set but does not name a directory"))
+        };
+    }
+    let start = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for d in start.ancestors() {
+        let candidate = d.join("..").join("shared").join("data").join("meshes");
+        if candidate.is_dir() {
+            // Normalise `a/b/../shared` for readable paths in messages.
+            return Ok(candidate.canonicalize().unwrap_or(candidate));
+        }
+    }
+    Err(missing(
+        start.to_path_buf(),
+        "no ../shared/data/meshes folder above this crate; set WFEM_MESHES to the mesh folder",
+    ))
+}
+
+/// The path of a corpus file given relative to the corpus folder, e.g.
+/// `mesh_path("common-3d-test-models/spot.obj")`.
+///
+/// # Errors
+/// The errors of [`meshes_dir`], and [`MeshError::Io`] (kind `NotFound`) if the file does not
+/// exist.
+pub fn mesh_path(rel: &str) -> Result<PathBuf, MeshError> {
+    let path = meshes_dir()?.join(rel);
+    if path.is_file() {
+        Ok(path)
+    } else {
+        Err(missing(path, "no such file in the mesh corpus"))
+    }
+}
+
+/// Every `.obj`, `.ply`, `.off` and `.stl` file (extension case-insensitive) below the corpus
+/// folder, sorted by path.
+///
+/// # Errors
+/// The errors of [`meshes_dir`], and [`MeshError::Io`] if a directory cannot be read.
+pub fn all_mesh_files() -> Result<Vec<PathBuf>, MeshError> {
+    let root = meshes_dir()?;
+    let mut out = Vec::new();
+    let mut stack = vec![root];
+    while let Some(dir) = stack.pop() {
+        let entries = std::fs::read_dir(&dir).map_err(|source| MeshError::Io {
+            path: dir.clone(),
+            source,
+        })?;
+        for entry in entries {
+            let entry = entry.map_err(|source| MeshError::Io {
+                path: dir.clone(),
+                source,
+            })?;
+            let path = entry.path();
+            let kind = entry.file_type().map_err(|source| MeshError::Io {
+                path: path.clone(),
+                source,
+            })?;
+            if kind.is_dir() {
+                stack.push(path);
+            } else if path
+                .extension()
+                .map(|e| e.to_string_lossy().to_ascii_lowercase())
+                .is_some_and(|e| MESH_EXTENSIONS.contains(&e.as_str()))
+            {
+                out.push(path);
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}

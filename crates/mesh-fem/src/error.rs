@@ -55,7 +55,7 @@ pub enum MeshError {
         vertices: [u32; 3],
     },
     /// A polygon with more than three corners was found and fan triangulation was not enabled.
-    #[error("{path}: face {face} has {corners} corners; enable triangulation (LoadOptions::triangulate) to fan-triangulate polygons")]
+    #[error("{path}: face {face} has {corners} corners; enable LoadOptions::triangulate_polygons to fan-triangulate polygons")]
     Polygon {
         /// File read.
         path: PathBuf,
@@ -111,4 +111,110 @@ pub enum MeshError {
         /// What was wrong.
         message: String,
     },
+    // ===== morse.rs: critical points and persistence (appended by branch `morse`) =====
+    /// A per-vertex scalar field does not have one value per vertex.
+    #[error("the scalar field has {len} values, but the mesh has {n_vertices} vertices")]
+    ScalarFieldLength {
+        /// Number of values given.
+        len: usize,
+        /// Number of vertices of the mesh.
+        n_vertices: usize,
+    },
+    /// A per-vertex scalar field holds a NaN or infinite value.
+    #[error("the scalar field value at vertex {vertex} is {value}, not a finite number")]
+    NonFiniteScalarField {
+        /// Vertex index (0-based).
+        vertex: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// The link of a vertex is neither one cycle (interior vertex) nor one path (boundary
+    /// vertex), so the vertex is not a manifold point of the surface.
+    #[error("vertex {vertex} is non-manifold: {reason}")]
+    NonManifoldVertex {
+        /// Vertex index (0-based).
+        vertex: usize,
+        /// What is wrong with its link.
+        reason: String,
+    },
+    // ===== end of morse.rs block =====
+    // ---- Variants added by the mesh I/O work (branch `io`); keep this block together. ----
+    /// A face in a mesh file names a negative vertex index (or an OBJ relative index that
+    /// points before the first vertex).
+    #[error("{path}:{line}: face {face} uses the negative vertex index {index}")]
+    NegativeIndex {
+        /// File read.
+        path: PathBuf,
+        /// 1-based line (0 for binary formats).
+        line: usize,
+        /// Face index in the file (0-based).
+        face: usize,
+        /// The index as written in the file.
+        index: i64,
+    },
+    /// A per-vertex field has the wrong number of values.
+    #[error("{path}: field {name:?} has {found} values, but the mesh has {expected} vertices")]
+    FieldLength {
+        /// File read or written.
+        path: PathBuf,
+        /// Field name (the file name for a field file being read).
+        name: String,
+        /// Number of values required (the number of vertices).
+        expected: usize,
+        /// Number of values found.
+        found: usize,
+    },
+    /// A per-vertex field holds a NaN or infinite value.
+    #[error("{path}: field {name:?} has the non-finite value {value} at vertex {vertex}")]
+    NonFiniteValue {
+        /// File read or written.
+        path: PathBuf,
+        /// Field name (the file name for a field file being read).
+        name: String,
+        /// Vertex index (0-based).
+        vertex: usize,
+        /// The value found.
+        value: f64,
+    },
+    // ---- end of the I/O block ----
+
+    // ---- variants added by the validate/stats/mtx work (branch `validate`) ----
+    /// A repair option has an invalid value.
+    #[error("invalid repair option {option}: {message}")]
+    InvalidRepairOption {
+        /// The option's name.
+        option: &'static str,
+        /// What was wrong.
+        message: String,
+    },
+    /// A line of a Matrix Market file could not be parsed.
+    #[error("{path}:{line}: matrix market: {message}")]
+    MatrixMarketLine {
+        /// File read.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What was wrong.
+        message: String,
+    },
+    // ---- end of variants added by the validate/stats/mtx work ----
+
+    // ===== transform.rs: mesh surgery (appended by branch `shrec`) =====
+    /// A per-vertex mask does not have one entry per vertex.
+    #[error("the vertex mask has {len} entries, but the mesh has {n_vertices} vertices")]
+    MaskLength {
+        /// Number of mask entries given.
+        len: usize,
+        /// Number of vertices of the mesh.
+        n_vertices: usize,
+    },
+    /// A vertex index given as input (source vertex, pair to weld) does not exist.
+    #[error("vertex index {index} is out of range: the mesh has {n_vertices} vertices")]
+    VertexIndex {
+        /// The offending index.
+        index: u32,
+        /// Number of vertices of the mesh.
+        n_vertices: usize,
+    },
+    // ===== end of transform.rs block =====
 }

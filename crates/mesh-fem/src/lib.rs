@@ -4,8 +4,10 @@
 //!
 //! * [`TriMesh`]: vertex positions and triangles, the one mesh type of wfem.
 //! * [`io`]: reading OBJ, PLY, OFF and STL files and writing fields (PLY/NPY/CSV), atomically.
-//! * [`validate`]: a [`validate::ValidationReport`] naming every problem, and explicit repairs.
-//! * [`stats`]: counts, topology (Euler characteristic, genus, boundary loops) and geometry.
+//! * [`validate`](mod@validate): a [`validate::ValidationReport`] naming every problem, and explicit repairs.
+//! * [`stats`](mod@stats): counts, topology (Euler characteristic, genus, boundary loops) and geometry.
+//! * [`mtx`]: Matrix Market reading and writing (atomic, 17 digits) and `nalgebra-sparse`
+//!   conversions.
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
 //! * [`operators`]: the cotangent stiffness L, the consistent mass B and the lumped mass D of
 //!   the paper's Eq. (3) and Eq. (7), assembled in parallel into faer sparse matrices.
@@ -19,15 +21,21 @@
 
 mod error;
 mod mesh;
+mod topology;
 
 pub mod corpus;
 pub mod generate;
 pub mod io;
+pub mod morse;
 pub mod mtx;
 pub mod operators;
 pub mod stats;
+pub mod transform;
 pub mod validate;
 
 pub use error::MeshError;
 pub use mesh::TriMesh;
+pub use mtx::{read_matrix_market, write_matrix_market, write_operators};
 pub use operators::{assemble, AssemblyParams, FemOperators, LumpedMassKind};
+pub use stats::{stats, MeshStats};
+pub use validate::{repair, validate, Problem, RepairOptions, RepairReport, Severity, ValidationReport};

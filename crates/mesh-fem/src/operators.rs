@@ -131,8 +131,9 @@ struct CornerEntries {
 /// and B are exactly symmetric, even on non-manifold meshes.
 ///
 /// # Errors
-/// * [`MeshError::DegenerateFace`] for a face of zero area (its cotangents are undefined),
-///   the first one in face order; drop such faces first with [`crate::validate::repair`].
+/// * [`MeshError::DegenerateFace`] for a face of zero or numerically zero area (its
+///   cotangents are undefined; the test is [`crate::validate::is_degenerate_triangle`]), the
+///   first one in face order; drop such faces first with [`crate::validate::repair`].
 /// * [`MeshError::UnreferencedVertex`] for a vertex that belongs to no face (B would be
 ///   singular); drop such vertices first with [`crate::validate::repair`].
 pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
@@ -188,7 +189,10 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
                 }
                 let p = mesh.corners(f);
                 let (area, cots) = face_cotangents(p);
-                if area.is_nan() || area <= 0.0 || cots.iter().any(|c| !c.is_finite()) {
+                // The degeneracy test is shared with `validate` (relative threshold, see
+                // `validate::is_degenerate_triangle`), so a mesh validates as usable iff it
+                // assembles.
+                if crate::validate::is_degenerate_triangle(p) || cots.iter().any(|c| !c.is_finite()) {
                     degenerate.get_or_insert(f);
                     continue;
                 }

@@ -5,4 +5,106 @@ pub enum RetrievalError {
     /// An error from the heat kernel.
     #[error(transparent)]
     Heat(#[from] wfem_heat::HeatError),
+
+    // ---- shape-retrieval (descriptors, vocabularies, retrieval metrics) ----
+    /// Two inputs that must agree in one dimension do not.
+    #[error("{what}: expected {expected}, got {actual}")]
+    DimensionMismatch {
+        /// Which quantity disagrees (e.g. "eigenvectors columns vs eigenvalues").
+        what: &'static str,
+        /// The size implied by the other input.
+        expected: usize,
+        /// The size found.
+        actual: usize,
+    },
+    /// An input that must not be empty is empty.
+    #[error("{what} is empty")]
+    Empty {
+        /// Which input is empty.
+        what: &'static str,
+    },
+    /// An input holds a NaN or an infinity.
+    #[error("{what} holds a non-finite value at index {index}")]
+    NonFinite {
+        /// Which input.
+        what: &'static str,
+        /// Flat index (row-major for matrices: `row · ncols + col`) of the first bad value.
+        index: usize,
+    },
+    /// A scalar parameter is outside its valid range.
+    #[error("parameter `{name}` = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// What is required of it.
+        reason: &'static str,
+    },
+    /// An eigenvalue is negative beyond round-off (L must be positive semidefinite).
+    #[error("eigenvalue {index} = {value} is negative (L is positive semidefinite, so λ ≥ 0)")]
+    NegativeEigenvalue {
+        /// Its index in the given spectrum.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// The matrix-diagonal convention needs the mass matrix B (or BX), and none was given.
+    #[error(
+        "the MatrixDiagonal HKS convention needs the mass matrix: call Spectrum::with_mass or with_mass_eigenvectors"
+    )]
+    MassRequired,
+    /// Every eigenvalue is (numerically) zero, so no automatic time range exists.
+    #[error("the spectrum has no nonzero eigenvalue, so no automatic time range exists")]
+    NoNonzeroEigenvalue,
+    /// A signature value is not positive where a logarithm is needed (SI-HKS).
+    #[error("signature value {value} at vertex {vertex}, time {time} is not positive, so its logarithm is undefined")]
+    NonPositiveSignature {
+        /// The vertex.
+        vertex: usize,
+        /// The diffusion time.
+        time: f64,
+        /// The offending value.
+        value: f64,
+    },
+    /// Fewer descriptors (points) than requested clusters / words.
+    #[error("{n_points} descriptors are too few for {k} clusters")]
+    TooFewDescriptors {
+        /// Number of descriptors given.
+        n_points: usize,
+        /// Number of clusters requested.
+        k: usize,
+    },
+    /// A vertex index is out of range.
+    #[error("{what}: vertex {index} is out of range for {n_vertices} vertices")]
+    VertexOutOfRange {
+        /// Which input holds the index.
+        what: &'static str,
+        /// The index.
+        index: usize,
+        /// The number of vertices.
+        n_vertices: usize,
+    },
+    /// A descriptor whose norm is zero was used as a normaliser.
+    #[error("the descriptor of vertex {vertex} is zero, so the relative distance is undefined")]
+    ZeroDescriptor {
+        /// The vertex.
+        vertex: usize,
+    },
+    /// No item qualifies for an average (e.g. no feature has a ground-truth correspondence).
+    #[error("nothing to average: {what}")]
+    NothingToAverage {
+        /// What was being averaged.
+        what: &'static str,
+    },
+    /// A distance oracle returned a negative or non-finite value.
+    #[error("distance between vertices {from} and {to} is {value}, not a finite non-negative number")]
+    InvalidDistance {
+        /// First vertex.
+        from: u32,
+        /// Second vertex.
+        to: u32,
+        /// The value returned.
+        value: f64,
+    },
 }

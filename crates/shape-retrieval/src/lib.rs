@@ -2,8 +2,38 @@
 //!
 //! Heat kernel shape descriptors (HKS, scale-invariant HKS), feature points, bags of
 //! features and retrieval metrics on top of [`wfem_heat`].
+//!
+//! Descriptors are computed from a truncated spectrum of the generalized eigenproblem
+//! `L φ_k = λ_k B φ_k`, `ΦᵀBΦ = I` (paper, Eq. (4)), with L the cotangent stiffness
+//! (symmetric positive semidefinite, positive diagonal) and B the mass matrix, given as plain
+//! inputs ([`Spectrum`]), so any eigensolver can feed them:
+//!
+//! * [`hks`]: heat kernel signature in the kernel-value and matrix-diagonal conventions,
+//!   scaled and scale-normalized variants;
+//! * [`sihks`]: the scale-invariant HKS of Bronstein & Kokkinos;
+//! * [`kmeans`](mod@kmeans), [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;
+//! * [`retrieval`]: ranking, average precision, mAP, precision/recall;
+//! * [`features`]: feature points (local maxima), their repeatability, and robustness of
+//!   dense descriptors.
 
 #![warn(missing_docs)]
 
+pub mod bof;
+mod check;
 mod error;
+pub mod features;
+pub mod hks;
+pub mod kmeans;
+pub mod retrieval;
+pub mod sihks;
+
+pub use bof::{l1_distance, pairwise_l1, vertex_areas, Vocabulary, VocabularyParams};
 pub use error::RetrievalError;
+pub use features::{descriptor_distance, local_maxima, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
+pub use hks::{
+    heat_kernel_signature, heat_trace, HeatKernelSignature, HksConvention, HksParams, Spectrum, SpectrumNormalization,
+    TimeSampling,
+};
+pub use kmeans::{kmeans, KmeansParams, KmeansReport};
+pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
+pub use sihks::{scale_invariant_hks, SihksParams};

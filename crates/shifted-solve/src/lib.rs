@@ -1,13 +1,43 @@
 //! # shifted-solve
 //!
-//! The linear-algebra engine behind the paper's Eq. (10)–(14): a rational approximation
-//! `e^{-x} ≈ c0 + 2 Re Σ_j c_j / (x − z_j)` of the exponential on [0, ∞) turns
-//! `exp(−t B⁻¹L) f` into shifted sparse solves `(tL − z_j B) g_j = B f`.
+//! The linear-algebra engine behind the paper's Eq. (10)–(14): a best uniform rational
+//! approximation `e^{-x} ≈ r_n(x) = c0 + 2 Re Σ_j c_j / (x − z_j)` of the exponential on
+//! [0, ∞) (Eq. (10)–(11), [`RationalApprox`]) turns the heat operator into shifted sparse
+//! solves (Eq. (12)–(13)):
 //!
-//! This crate knows nothing about meshes. It takes any symmetric positive semidefinite L
-//! (the stiffness, positive diagonal) and symmetric positive definite B (the mass).
+//! ```text
+//! K_t f = exp(−t B⁻¹L) f ≈ c0 f + 2 Re Σ_j c_j (tL − z_j B)⁻¹ (B f),
+//! ```
+//!
+//! with error ‖r_n(tB⁻¹L) − K_t‖_{B→B} ≤ E_n (Eq. (14)). This crate knows nothing about meshes.
+//! It takes any symmetric positive semidefinite L (the stiffness, positive diagonal — wfem's
+//! sign convention; libigl's `cotmatrix` is −L) and symmetric positive definite B (the mass),
+//! as faer `SparseColMat<usize, f64>`, possibly with different sparsity patterns.
+//!
+//! * [`ShiftedSolver`]: validates (L, B), owns them on one shared pattern, and applies
+//!   r_n(tB⁻¹L) or the resolvent sum to n × k right-hand sides, with backends
+//!   [`Backend::DirectLu`] (complex sparse LU, default) and [`Backend::Minres`] (the paper's
+//!   preconditioned MINRES on the real 2n×2n form).
+//! * [`RationalFactors`]: all poles of one t factored once, reused for many right-hand sides.
+//! * [`ConditionReport`]: 2-norm condition numbers of tL − zB and of the preconditioned
+//!   operator (paper Fig. 2c,d).
 
 #![warn(missing_docs)]
 
+mod condition;
 mod error;
+mod factor;
+mod iterative;
+mod ops;
+pub mod poles;
+mod solver;
+
+#[cfg(test)]
+mod cf;
+
+pub use condition::ConditionReport;
 pub use error::SolveError;
+pub use faer::c64;
+pub use iterative::{MinresParams, Preconditioner, PreconditionerShift};
+pub use poles::{RationalApprox, DEFAULT_DEGREE, PAPER_DEGREE, SHIPPED_DEGREES};
+pub use solver::{Backend, BatchReport, PoleReport, RationalFactors, ShiftedSolver, SolveMethod};

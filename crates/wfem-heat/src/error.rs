@@ -14,4 +14,87 @@ pub enum HeatError {
     /// An error from mesh loading or assembly.
     #[error(transparent)]
     Mesh(#[from] mesh_fem::MeshError),
+
+    // ---- wfem-heat core (HeatKernel, Eigenbasis, fast path) ----
+    /// An input vector (or matrix) has the wrong number of rows.
+    #[error("input has {found} rows, but the mesh has {expected} vertices")]
+    LengthMismatch {
+        /// The number of vertices n.
+        expected: usize,
+        /// The length given.
+        found: usize,
+    },
+    /// An input entry is NaN or infinite.
+    #[error("input entry (row {row}, column {column}) is not finite: {value}")]
+    NonFiniteInput {
+        /// Row (vertex) of the culprit.
+        row: usize,
+        /// Column (right-hand side) of the culprit; 0 for a vector.
+        column: usize,
+        /// The value found.
+        value: f64,
+    },
+    /// The dense reference was asked for a mesh too large for O(n³) work and O(n²) memory.
+    #[error("dense eigendecomposition refused for n = {n_vertices} vertices (limit {limit})")]
+    TooLargeForDense {
+        /// Number of vertices of the mesh.
+        n_vertices: usize,
+        /// The limit, [`crate::DENSE_MAX_VERTICES`].
+        limit: usize,
+    },
+    /// A parameter is outside its valid range.
+    #[error("invalid parameter `{name}`: {reason}")]
+    InvalidParameter {
+        /// Name of the parameter.
+        name: &'static str,
+        /// Why it was rejected.
+        reason: String,
+    },
+    /// The operators are inconsistent (size or sparsity pattern).
+    #[error("inconsistent operators: {reason}")]
+    InconsistentOperators {
+        /// What is wrong.
+        reason: String,
+    },
+    /// A sparse or dense Cholesky factorization failed: the matrix is not numerically
+    /// positive definite (e.g. a mass matrix of a mesh with degenerate faces).
+    #[error("Cholesky factorization of {matrix} failed (not positive definite)")]
+    NotPositiveDefinite {
+        /// Which matrix, e.g. "B + γtL".
+        matrix: String,
+    },
+    /// A dense eigendecomposition did not converge.
+    #[error("dense self-adjoint eigendecomposition did not converge")]
+    DenseEigen,
+    /// The shift-invert Lanczos eigensolver stopped before `requested` eigenpairs converged.
+    /// The pairs that did converge (the smallest ones) are returned in `found`.
+    #[error(
+        "eigensolver found {converged} of {requested} eigenpairs (Krylov dimension {dimension}, \
+         worst relative residual {max_residual:.2e})"
+    )]
+    EigenNoConvergence {
+        /// Number of eigenpairs asked for.
+        requested: usize,
+        /// Number of eigenpairs that met the tolerance.
+        converged: usize,
+        /// Krylov dimension reached.
+        dimension: usize,
+        /// Largest relative residual among the requested pairs.
+        max_residual: f64,
+        /// The converged pairs (smallest eigenvalues first).
+        found: Box<crate::Eigenbasis>,
+    },
+    /// The rational Krylov iteration of the fast path did not reach its tolerance.
+    #[error(
+        "fast path did not converge for column {column}: {iterations} iterations, \
+         error estimate {estimate:.2e}"
+    )]
+    KrylovNoConvergence {
+        /// Right-hand side that failed.
+        column: usize,
+        /// Iterations performed.
+        iterations: usize,
+        /// Last a-posteriori error estimate (relative, in the B-norm).
+        estimate: f64,
+    },
 }

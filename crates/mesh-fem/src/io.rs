@@ -1,1 +1,0 @@
-//! Mesh file reading and field writing (filled in by the I/O work).

@@ -1,0 +1,455 @@
+//! Atomic writing of per-vertex fields (PLY/NPY/CSV) and meshes (OFF/OBJ/PLY), and reading
+//! fields back (NPY/CSV).
+
+use super::text::{parse_f64, show, Lines};
+use super::{io_error, parse_error};
+use crate::{MeshError, TriMesh};
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Writes a file atomically: `write` fills a temporary file in the same directory, which is
+/// flushed, fsynced and renamed onto `path`. If `write` (or any step) fails, the temporary
+/// file is removed and `path` is left as it was (absent, or with its old content).
+///
+/// # Errors
+/// [`MeshError::Io`] naming `path` for any failure, including an error returned by `write`.
+pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<(), MeshError> {
+    static COUNTER: AtomicUsize = AtomicUsize::new(0);
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let file_name = path
+        .file_name()
+        .ok_or_else(|| {
+            io_error(
+                path,
+                std::io::Error::new(std::io::ErrorKind::InvalidInput, "path names no file"),
+            )
+        })?
+        .to_string_lossy()
+        .into_owned();
+    let tmp = dir.join(format!(
+        ".{file_name}.tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let file = OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+        .map_err(|e| io_error(path, e))?;
+    let result = (|| -> std::io::Result<()> {
+        let mut w = BufWriter::new(file);
+        write(&mut w)?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        drop(file);
+        std::fs::rename(&tmp, path)?;
+        // Make the rename itself durable where the platform allows syncing a directory.
+        #[cfg(unix)]
+        if let Ok(d) = File::open(&dir) {
+            let _ = d.sync_all();
+        }
+        Ok(())
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io_error(path, e));
+    }
+    Ok(())
+}
+
+fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+fn unsupported(path: &Path, supported: &str) -> MeshError {
+    MeshError::UnknownFormat {
+        path: path.to_path_buf(),
+        extension: format!("{} (supported here: {supported})", extension(path)),
+    }
+}
+
+fn check_fields(
+    path: &Path,
+    mesh: &TriMesh,
+    fields: &[(&str, &[f64])],
+    colors: Option<&[[u8; 3]]>,
+) -> Result<(), MeshError> {
+    let n = mesh.n_vertices();
+    for (name, values) in fields {
+        if values.len() != n {
+            return Err(MeshError::FieldLength {
+                path: path.to_path_buf(),
+                name: (*name).to_string(),
+                expected: n,
+                found: values.len(),
+            });
+        }
+        if let Some((vertex, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(MeshError::NonFiniteValue {
+                path: path.to_path_buf(),
+                name: (*name).to_string(),
+                vertex,
+                value,
+            });
+        }
+    }
+    if let Some(c) = colors {
+        if c.len() != n {
+            return Err(MeshError::FieldLength {
+                path: path.to_path_buf(),
+                name: "colors".to_string(),
+                expected: n,
+                found: c.len(),
+            });
+        }
+    }
+    Ok(())
+}
+
+fn invalid_name(path: &Path, name: &str, why: &str) -> MeshError {
+    MeshError::Invalid {
+        reason: format!("{}: field name {name:?} {why}", path.display()),
+    }
+}
+
+/// Writes per-vertex fields for `mesh`, atomically ([`write_atomic`]); the format follows
+/// the extension:
+///
+/// * `.ply`: binary little-endian PLY with `double x, y, z`, one `double` vertex property per
+///   field (named as given), optional `uchar red, green, blue`, and the faces as
+///   `list uchar int vertex_indices`. Viewers such as MeshLab and Polyscope show the fields.
+/// * `.npy`: an n × k float64 array in C order (1-D of length n when k = 1), NPY format 1.0.
+/// * `.csv`: a header line with the field names, then one row per vertex (values printed with
+///   Rust's shortest round-trip representation, so reading them back is exact).
+///
+/// `colors` is used by PLY only.
+///
+/// # Errors
+/// [`MeshError::FieldLength`] if a field (or `colors`) does not have one value per vertex,
+/// [`MeshError::NonFiniteValue`] for NaN/∞, [`MeshError::Invalid`] for an unusable field name
+/// or no field for NPY/CSV, [`MeshError::UnknownFormat`] for another extension,
+/// [`MeshError::Io`] on write failure.
+pub fn write_field(
+    path: &Path,
+    mesh: &TriMesh,
+    fields: &[(&str, &[f64])],
+    colors: Option<&[[u8; 3]]>,
+) -> Result<(), MeshError> {
+    check_fields(path, mesh, fields, colors)?;
+    match extension(path).as_str() {
+        "ply" => {
+            const RESERVED: [&str; 6] = ["x", "y", "z", "red", "green", "blue"];
+            for (i, (name, _)) in fields.iter().enumerate() {
+                if name.is_empty() || !name.chars().all(|c| c.is_ascii_graphic()) {
+                    return Err(invalid_name(
+                        path,
+                        name,
+                        "must be non-empty printable ASCII without spaces",
+                    ));
+                }
+                if RESERVED.contains(name) {
+                    return Err(invalid_name(path, name, "collides with a PLY vertex property"));
+                }
+                if fields[..i].iter().any(|(other, _)| other == name) {
+                    return Err(invalid_name(path, name, "appears twice"));
+                }
+            }
+            write_atomic(path, |w| write_ply(w, mesh, fields, colors))
+        }
+        "npy" => {
+            if fields.is_empty() {
+                return Err(invalid_name(
+                    path,
+                    "",
+                    "list is empty: an NPY file needs at least one field",
+                ));
+            }
+            write_atomic(path, |w| write_npy(w, mesh.n_vertices(), fields))
+        }
+        "csv" => {
+            if fields.is_empty() {
+                return Err(invalid_name(
+                    path,
+                    "",
+                    "list is empty: a CSV file needs at least one field",
+                ));
+            }
+            for (name, _) in fields {
+                if name.contains([',', '"', '\n', '\r']) {
+                    return Err(invalid_name(path, name, "contains a comma, quote or line break"));
+                }
+            }
+            write_atomic(path, |w| {
+                let names: Vec<&str> = fields.iter().map(|(n, _)| *n).collect();
+                writeln!(w, "{}", names.join(","))?;
+                for i in 0..mesh.n_vertices() {
+                    for (k, (_, values)) in fields.iter().enumerate() {
+                        if k > 0 {
+                            w.write_all(b",")?;
+                        }
+                        write!(w, "{:?}", values[i])?;
+                    }
+                    w.write_all(b"\n")?;
+                }
+                Ok(())
+            })
+        }
+        _ => Err(unsupported(path, ".ply, .npy, .csv")),
+    }
+}
+
+fn write_ply(
+    w: &mut dyn Write,
+    mesh: &TriMesh,
+    fields: &[(&str, &[f64])],
+    colors: Option<&[[u8; 3]]>,
+) -> std::io::Result<()> {
+    let n = mesh.n_vertices();
+    writeln!(w, "ply\nformat binary_little_endian 1.0\ncomment written by wfem")?;
+    writeln!(w, "element vertex {n}")?;
+    writeln!(w, "property double x\nproperty double y\nproperty double z")?;
+    for (name, _) in fields {
+        writeln!(w, "property double {name}")?;
+    }
+    if colors.is_some() {
+        writeln!(w, "property uchar red\nproperty uchar green\nproperty uchar blue")?;
+    }
+    writeln!(w, "element face {}", mesh.n_faces())?;
+    writeln!(w, "property list uchar int vertex_indices\nend_header")?;
+    for (i, p) in mesh.positions().iter().enumerate() {
+        for c in p {
+            w.write_all(&c.to_le_bytes())?;
+        }
+        for (_, values) in fields {
+            w.write_all(&values[i].to_le_bytes())?;
+        }
+        if let Some(c) = colors {
+            w.write_all(&c[i])?;
+        }
+    }
+    for f in mesh.faces() {
+        w.write_all(&[3u8])?;
+        for &i in f {
+            // Indices are < n_vertices, which a PLY `int` holds for any mesh we can store.
+            w.write_all(&(i as i32).to_le_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+/// NPY 1.0: magic, version, u16 header length, a Python-dict header padded with spaces so that
+/// the data starts at a multiple of 64 bytes, then the raw little-endian float64 data.
+fn write_npy(w: &mut dyn Write, n: usize, fields: &[(&str, &[f64])]) -> std::io::Result<()> {
+    let shape = if fields.len() == 1 {
+        format!("({n},)")
+    } else {
+        format!("({n}, {})", fields.len())
+    };
+    let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {shape}, }}");
+    let unpadded = 10 + header.len() + 1;
+    header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
+    header.push('\n');
+    w.write_all(b"\x93NUMPY\x01\x00")?;
+    let len = u16::try_from(header.len())
+        .map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidInput, "NPY header too long"))?;
+    w.write_all(&len.to_le_bytes())?;
+    w.write_all(header.as_bytes())?;
+    for i in 0..n {
+        for (_, values) in fields {
+            w.write_all(&values[i].to_le_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+/// Reads one per-vertex field for a mesh with `n_vertices` vertices.
+///
+/// * `.npy`: float64 or float32 (either byte order), shape `(n,)` or `(n, 1)`.
+/// * `.csv`: one value per line; a first line that is not a number is taken as a header;
+///   blank lines are skipped.
+///
+/// # Errors
+/// [`MeshError::FieldLength`] if the field does not have `n_vertices` values,
+/// [`MeshError::NonFiniteValue`] for NaN/∞, [`MeshError::Parse`] for malformed files,
+/// [`MeshError::UnknownFormat`] for another extension, [`MeshError::Io`] if unreadable.
+pub fn read_field(path: &Path, n_vertices: usize) -> Result<Vec<f64>, MeshError> {
+    let ext = extension(path);
+    if ext != "npy" && ext != "csv" {
+        return Err(unsupported(path, ".npy, .csv"));
+    }
+    let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
+    let values = if ext == "npy" {
+        parse_npy(&bytes, path)?
+    } else {
+        parse_csv(&bytes, path)?
+    };
+    let name = path
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    if values.len() != n_vertices {
+        return Err(MeshError::FieldLength {
+            path: path.to_path_buf(),
+            name,
+            expected: n_vertices,
+            found: values.len(),
+        });
+    }
+    if let Some((vertex, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(MeshError::NonFiniteValue {
+            path: path.to_path_buf(),
+            name,
+            vertex,
+            value,
+        });
+    }
+    Ok(values)
+}
+
+/// Value of `'key': value` in an NPY header dict (a tiny, sufficient reading of the literal).
+fn npy_entry<'a>(header: &'a str, key: &str) -> Option<&'a str> {
+    let start = header.find(&format!("'{key}'"))? + key.len() + 2;
+    let rest = header[start..].trim_start().strip_prefix(':')?.trim_start();
+    let end = if rest.starts_with('(') {
+        rest.find(')')? + 1
+    } else {
+        rest.find([',', '}']).unwrap_or(rest.len())
+    };
+    Some(rest[..end].trim())
+}
+
+fn parse_npy(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {
+    let bad = |m: String| parse_error(path, 0, format!("NPY: {m}"));
+    if !bytes.starts_with(b"\x93NUMPY") {
+        return Err(bad("missing the \\x93NUMPY magic".into()));
+    }
+    let major = *bytes.get(6).ok_or_else(|| bad("truncated preamble".into()))?;
+    let (len, start): (usize, usize) = match major {
+        1 => {
+            let b = bytes.get(8..10).ok_or_else(|| bad("truncated preamble".into()))?;
+            (usize::from(u16::from_le_bytes([b[0], b[1]])), 10)
+        }
+        2 | 3 => {
+            let b = bytes.get(8..12).ok_or_else(|| bad("truncated preamble".into()))?;
+            let l = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            (usize::try_from(l).map_err(|_| bad("header too long".into()))?, 12)
+        }
+        v => return Err(bad(format!("unsupported format version {v}"))),
+    };
+    let header_bytes = bytes
+        .get(start..start.saturating_add(len))
+        .ok_or_else(|| bad("truncated header".into()))?;
+    let header = std::str::from_utf8(header_bytes).map_err(|_| bad("header is not text".into()))?;
+    let descr = npy_entry(header, "descr").ok_or_else(|| bad("header has no 'descr'".into()))?;
+    let descr = descr.trim_matches(|c| c == '\'' || c == '"');
+    let (width, little) = match descr {
+        "<f8" => (8, true),
+        ">f8" => (8, false),
+        "<f4" => (4, true),
+        ">f4" => (4, false),
+        other => return Err(bad(format!("dtype {other:?} is not float64/float32"))),
+    };
+    let shape = npy_entry(header, "shape").ok_or_else(|| bad("header has no 'shape'".into()))?;
+    let dims: Vec<usize> = shape
+        .trim_matches(|c| c == '(' || c == ')')
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse::<usize>().map_err(|_| bad(format!("bad shape {shape}"))))
+        .collect::<Result<_, _>>()?;
+    let n = match dims.as_slice() {
+        [n] | [n, 1] => *n,
+        _ => return Err(bad(format!("shape {shape} is not (n,) or (n, 1)"))),
+    };
+    let data = &bytes[start + len..];
+    let needed = n
+        .checked_mul(width)
+        .ok_or_else(|| bad(format!("shape {shape} is too large")))?;
+    if data.len() < needed {
+        return Err(bad(format!(
+            "shape {shape} needs {needed} data bytes, the file has {}",
+            data.len()
+        )));
+    }
+    let values = data[..needed]
+        .chunks_exact(width)
+        .map(|c| match (width, little) {
+            (8, true) => f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]),
+            (8, false) => f64::from_be_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]),
+            (_, true) => f64::from(f32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+            (_, false) => f64::from(f32::from_be_bytes([c[0], c[1], c[2], c[3]])),
+        })
+        .collect();
+    Ok(values)
+}
+
+fn parse_csv(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {
+    let mut values = Vec::with_capacity(bytes.len() / 8);
+    let mut first = true;
+    for (line_no, line) in Lines::new(bytes) {
+        let t = line.trim_ascii();
+        if t.is_empty() {
+            continue;
+        }
+        if t.contains(&b',') {
+            return Err(parse_error(
+                path,
+                line_no,
+                "expected one value per line (a single-column field)",
+            ));
+        }
+        match parse_f64(t) {
+            Some(v) => values.push(v),
+            // A non-numeric first line is a header (e.g. the field name).
+            None if first => {}
+            None => {
+                return Err(parse_error(
+                    path,
+                    line_no,
+                    format!("cannot read {:?} as a number", show(t)),
+                ))
+            }
+        }
+        first = false;
+    }
+    Ok(values)
+}
+
+/// Writes a mesh atomically ([`write_atomic`]) as `.off`, `.obj` or `.ply` (binary
+/// little-endian, `double` coordinates). ASCII coordinates use Rust's shortest round-trip
+/// representation, so reading the file back gives bit-identical positions.
+///
+/// # Errors
+/// [`MeshError::UnknownFormat`] for another extension, [`MeshError::Io`] on write failure.
+pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), MeshError> {
+    match extension(path).as_str() {
+        "off" => write_atomic(path, |w| {
+            writeln!(w, "OFF\n{} {} 0", mesh.n_vertices(), mesh.n_faces())?;
+            for [x, y, z] in mesh.positions() {
+                writeln!(w, "{x:?} {y:?} {z:?}")?;
+            }
+            for [a, b, c] in mesh.faces() {
+                writeln!(w, "3 {a} {b} {c}")?;
+            }
+            Ok(())
+        }),
+        "obj" => write_atomic(path, |w| {
+            for [x, y, z] in mesh.positions() {
+                writeln!(w, "v {x:?} {y:?} {z:?}")?;
+            }
+            for [a, b, c] in mesh.faces() {
+                writeln!(w, "f {} {} {}", a + 1, b + 1, c + 1)?;
+            }
+            Ok(())
+        }),
+        "ply" => write_atomic(path, |w| write_ply(w, mesh, &[], None)),
+        _ => Err(unsupported(path, ".off, .obj, .ply")),
+    }
+}

@@ -1,0 +1,112 @@
+//! Costs of the shifted solves on mesh-like matrices (icospheres, consistent FEM mass):
+//! LU symbolic / numeric per pole / solve, Cholesky of the preconditioner, MINRES per pole, and
+//! all 8 poles of degree 16 for one right-hand side (the K_t f of paper Eq. (13)).
+//!
+//! Run: `cargo bench -p shifted-solve --bench shifted -- --warm-up-time 1 --measurement-time 5 --sample-size 10`
+//! (`WFEM_BENCH_LEVELS=5,6,7` selects icosphere levels; default 5,6).
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
+use faer::sparse::SparseColMat;
+use faer::{c64, Mat, Side};
+use shifted_solve::{Backend, MinresParams, Preconditioner, PreconditionerShift, RationalApprox, ShiftedSolver};
+
+const T: f64 = 0.01;
+
+fn shifted(l: &SparseColMat<usize, f64>, b: &SparseColMat<usize, f64>, z: c64) -> SparseColMat<usize, c64> {
+    // L and B share one pattern (mesh-fem guarantees it).
+    let vals = l
+        .val()
+        .iter()
+        .zip(b.val())
+        .map(|(&lv, &bv)| c64::new(T * lv - z.re * bv, -z.im * bv))
+        .collect();
+    SparseColMat::new(l.symbolic().to_owned().unwrap(), vals)
+}
+
+fn levels() -> Vec<u32> {
+    std::env::var("WFEM_BENCH_LEVELS")
+        .ok()
+        .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .unwrap_or_else(|| vec![5, 6])
+}
+
+fn bench(c: &mut Criterion) {
+    // The solver runs faer sequentially inside each pole and parallelises across poles; measure
+    // the faer primitives the same way.
+    faer::set_global_parallelism(faer::Par::Seq);
+    let approx = RationalApprox::cram(16).unwrap();
+    let z = approx.poles[7];
+    for level in levels() {
+        let mesh = mesh_fem::generate::icosphere(level);
+        let ops = mesh_fem::assemble(&mesh, &mesh_fem::AssemblyParams::default()).unwrap();
+        let (l, b) = (ops.stiffness, ops.mass);
+        let n = l.nrows();
+        let f = Mat::<f64>::from_fn(n, 1, |i, _| ((i * 7919) % 1000) as f64 / 1000.0 - 0.5);
+        let mut g = c.benchmark_group(format!("shifted-solve/n={n}"));
+
+        g.bench_function("lu_symbolic", |bch| {
+            bch.iter(|| SymbolicLu::try_new(l.symbolic()).unwrap())
+        });
+        let sym = SymbolicLu::try_new(l.symbolic()).unwrap();
+        let a = shifted(&l, &b, z);
+        g.bench_function("lu_numeric_per_pole", |bch| {
+            bch.iter(|| Lu::try_new_with_symbolic(sym.clone(), a.as_ref()).unwrap())
+        });
+        let lu = Lu::try_new_with_symbolic(sym.clone(), a.as_ref()).unwrap();
+        let rhs = Mat::<c64>::from_fn(n, 1, |i, _| c64::new(f[(i, 0)], 0.0));
+        g.bench_function("lu_solve_1rhs", |bch| bch.iter(|| lu.solve(&rhs)));
+
+        let lsym = SymbolicLlt::try_new(l.symbolic(), Side::Lower).unwrap();
+        let p = SparseColMat::new(
+            l.symbolic().to_owned().unwrap(),
+            l.val()
+                .iter()
+                .zip(b.val())
+                .map(|(&lv, &bv)| T * lv + z.norm() * bv)
+                .collect(),
+        );
+        g.bench_function("cholesky_numeric_P", |bch| {
+            bch.iter(|| Llt::try_new_with_symbolic(lsym.clone(), p.as_ref(), Side::Lower).unwrap())
+        });
+
+        let minres = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::Minres(MinresParams::default())).unwrap();
+        let one_pole = RationalApprox {
+            degree: 2,
+            c0: 0.0,
+            poles: &approx.poles[7..8],
+            residues: &approx.residues[7..8],
+            real_pole: None,
+            max_error: 0.0,
+        };
+        let factors = minres.factor(&one_pole, T).unwrap();
+        g.bench_function("minres_per_pole_solve_only", |bch| {
+            bch.iter(|| factors.apply(f.as_ref()).unwrap())
+        });
+
+        let direct = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::DirectLu).unwrap();
+        let shared = ShiftedSolver::new(
+            l.as_ref(),
+            b.as_ref(),
+            Backend::Minres(MinresParams {
+                preconditioner: Preconditioner::ShiftedCholesky(PreconditionerShift::Shared(10.0)),
+                ..MinresParams::default()
+            }),
+        )
+        .unwrap();
+        for (name, solver) in [
+            ("direct_lu", &direct),
+            ("minres_s=|z|", &minres),
+            ("minres_s=10", &shared),
+        ] {
+            g.bench_with_input(BenchmarkId::new("all_8_poles_deg16_1rhs", name), &f, |bch, f| {
+                bch.iter(|| solver.apply(approx, T, f.as_ref()).unwrap())
+            });
+        }
+        g.finish();
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,581 @@
+//! The shifted-system engine: r_n(tB⁻¹L)F = c0·F + 2 Re Σ_j c_j (tL − z_j B)⁻¹ (B F)
+//! (paper Eq. (12)–(13), written with upper-half-plane poles, see [`crate::poles`]).
+
+use std::sync::Arc;
+
+use crate::factor::{cholesky_symbolic, lu_symbolic, CholeskySymbolic, LuSymbolic, SeqLlt, SeqLu};
+use crate::iterative::{minres, pcg, MinresParams, PrecondFactor, Preconditioner, PreconditionerShift};
+use crate::ops::PairOperators;
+use crate::{RationalApprox, SolveError};
+use faer::c64;
+use faer::sparse::SparseColMatRef;
+use faer::{Mat, MatRef};
+use rayon::prelude::*;
+
+/// How each shifted system (tL − z_j B) x = b is solved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Backend {
+    /// Sparse complex LU (faer, COLAMD + partial pivoting) with one symbolic analysis shared by
+    /// every pole and every t; the real pole of odd degrees uses a real sparse Cholesky.
+    /// Factors are reused for any number of right-hand sides.
+    DirectLu,
+    /// Preconditioned MINRES on the real 2n×2n symmetric form (the paper's choice); the real
+    /// pole uses preconditioned CG on the SPD system tL + |z|B.
+    Minres(MinresParams),
+}
+
+/// Which method solved one pole.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SolveMethod {
+    /// Sparse complex LU.
+    ComplexLu,
+    /// Sparse real Cholesky (real pole).
+    RealCholesky,
+    /// Preconditioned MINRES on the real 2n form.
+    Minres,
+    /// Preconditioned conjugate gradients (real pole).
+    ConjugateGradient,
+}
+
+/// What happened for one pole of a batch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoleReport {
+    /// The pole z_j (upper half plane, or real negative).
+    pub pole: c64,
+    /// Its residue c_j.
+    pub residue: c64,
+    /// The method used.
+    pub method: SolveMethod,
+    /// Largest iteration count over the right-hand sides (0 for direct methods).
+    pub iterations: usize,
+    /// Largest true relative residual ‖b − (tL − zB)x‖₂ / ‖b‖₂ over the right-hand sides.
+    pub relative_residual: f64,
+    /// Convergence history of the first right-hand side (iterative methods only): the relative
+    /// preconditioned residual norm after each iteration.
+    pub residual_history: Vec<f64>,
+}
+
+/// Per-pole information of one [`RationalFactors::apply`] call.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BatchReport {
+    /// Diffusion time t.
+    pub t: f64,
+    /// Number of right-hand sides.
+    pub n_rhs: usize,
+    /// One entry per solve (complex pairs first, then the real pole).
+    pub poles: Vec<PoleReport>,
+}
+
+impl BatchReport {
+    /// Total iterations over all poles (largest per pole), 0 for direct methods.
+    pub fn total_iterations(&self) -> usize {
+        self.poles.iter().map(|p| p.iterations).sum()
+    }
+
+    /// Largest relative residual over all poles.
+    pub fn max_relative_residual(&self) -> f64 {
+        self.poles.iter().map(|p| p.relative_residual).fold(0.0, f64::max)
+    }
+}
+
+/// Owns copies of L and B on one shared sparsity pattern plus the symbolic analyses shared by
+/// every pole and every t.
+#[derive(Debug, Clone)]
+pub struct ShiftedSolver {
+    ops: Arc<PairOperators>,
+    backend: Backend,
+    llt_symbolic: CholeskySymbolic,
+    lu_symbolic: Option<LuSymbolic>,
+}
+
+pub(crate) fn check_time(t: f64) -> Result<(), SolveError> {
+    if t.is_finite() && t > 0.0 {
+        Ok(())
+    } else {
+        Err(SolveError::InvalidTime { t })
+    }
+}
+
+fn check_rhs(rhs: MatRef<'_, f64>, n: usize) -> Result<(), SolveError> {
+    if rhs.nrows() != n {
+        return Err(SolveError::DimensionMismatch {
+            what: "right-hand side rows vs matrix size",
+            expected: n,
+            got: rhs.nrows(),
+        });
+    }
+    for j in 0..rhs.ncols() {
+        for i in 0..n {
+            let v = rhs[(i, j)];
+            if !v.is_finite() {
+                return Err(SolveError::NonFinite {
+                    what: "right-hand side",
+                    row: i,
+                    col: j,
+                    value: v,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+impl ShiftedSolver {
+    /// Validates L (symmetric positive semidefinite stiffness, positive diagonal) and B
+    /// (symmetric positive definite mass), merges their patterns and runs the symbolic analyses.
+    ///
+    /// Checks: square, equal sizes, finite, symmetric (1e−10 relative), diag(B) > 0,
+    /// diag(L) ≥ 0, B positive definite (Cholesky), and L + δB positive definite with
+    /// δ = 1e−10·tr(L)/tr(B), which detects a negative generalized eigenvalue of (L, B) below −δ
+    /// (e.g. when −L is passed).
+    ///
+    /// # Errors
+    /// The [`SolveError`] variant naming the failed check.
+    pub fn new(
+        stiffness: SparseColMatRef<'_, usize, f64>,
+        mass: SparseColMatRef<'_, usize, f64>,
+        backend: Backend,
+    ) -> Result<Self, SolveError> {
+        if let Backend::Minres(p) = &backend {
+            p.validate()?;
+        }
+        let ops = PairOperators::new(stiffness, mass)?;
+        let llt_symbolic = cholesky_symbolic(ops.symbolic.as_ref()).map_err(|detail| SolveError::Factorization {
+            what: "symbolic Cholesky",
+            detail,
+        })?;
+        let b = ops.real_combination(0.0, 1.0);
+        SeqLlt::new(&llt_symbolic, b.as_ref()).map_err(|detail| SolveError::MassNotPositiveDefinite { detail })?;
+        let tr_l: f64 = ops.diagonal(1.0, 0.0).iter().sum();
+        let tr_b: f64 = ops.diagonal(0.0, 1.0).iter().sum();
+        let delta = 1e-10 * (tr_l / tr_b).max(f64::MIN_POSITIVE);
+        let reg = ops.real_combination(1.0, delta);
+        SeqLlt::new(&llt_symbolic, reg.as_ref()).map_err(|_| SolveError::StiffnessIndefinite { delta })?;
+        let lu_symbolic = match backend {
+            Backend::DirectLu => {
+                Some(
+                    lu_symbolic(ops.symbolic.as_ref()).map_err(|detail| SolveError::Factorization {
+                        what: "symbolic LU",
+                        detail,
+                    })?,
+                )
+            }
+            Backend::Minres(_) => None,
+        };
+        Ok(Self {
+            ops: Arc::new(ops),
+            backend,
+            llt_symbolic,
+            lu_symbolic,
+        })
+    }
+
+    /// Matrix size n.
+    pub fn n(&self) -> usize {
+        self.ops.n
+    }
+
+    /// Number of stored entries of the shared pattern of L and B.
+    pub fn nnz(&self) -> usize {
+        self.ops.row_idx.len()
+    }
+
+    /// The backend chosen at construction.
+    pub fn backend(&self) -> &Backend {
+        &self.backend
+    }
+
+    pub(crate) fn ops(&self) -> &PairOperators {
+        &self.ops
+    }
+
+    pub(crate) fn llt_symbolic(&self) -> &CholeskySymbolic {
+        &self.llt_symbolic
+    }
+
+    pub(crate) fn lu_symbolic(&self) -> Result<LuSymbolic, SolveError> {
+        match &self.lu_symbolic {
+            Some(s) => Ok(s.clone()),
+            None => lu_symbolic(self.ops.symbolic.as_ref()).map_err(|detail| SolveError::Factorization {
+                what: "symbolic LU",
+                detail,
+            }),
+        }
+    }
+
+    /// Approximates the heat operator, `r_n(t B⁻¹L) F = c0·F + 2 Re Σ_j c_j (tL − z_j B)⁻¹ (B F)`
+    /// (paper Eq. (13) in the sign convention of NUMERICS §0.1). `rhs` is n × k.
+    ///
+    /// # Errors
+    /// Invalid t, size/NaN problems in `rhs`, singular shifted matrices, non-convergence.
+    pub fn apply(
+        &self,
+        approx: &RationalApprox,
+        t: f64,
+        rhs: MatRef<'_, f64>,
+    ) -> Result<(Mat<f64>, BatchReport), SolveError> {
+        check_rhs(rhs, self.n())?;
+        self.factor(approx, t)?.apply(rhs)
+    }
+
+    /// `2 Re Σ_j c_j (tL − z_j B)⁻¹ G` (+ the real pole), without the c0 term and without the
+    /// multiplication by B: with G = e_i this is the heat-kernel column H_t e_i (NUMERICS §1).
+    ///
+    /// # Errors
+    /// As [`Self::apply`].
+    pub fn apply_resolvent(
+        &self,
+        approx: &RationalApprox,
+        t: f64,
+        rhs: MatRef<'_, f64>,
+    ) -> Result<(Mat<f64>, BatchReport), SolveError> {
+        check_rhs(rhs, self.n())?;
+        self.factor(approx, t)?.apply_resolvent(rhs)
+    }
+
+    /// Factors every pole of one t (in parallel): complex LUs for [`Backend::DirectLu`], the
+    /// SPD preconditioners for [`Backend::Minres`]. Reuse the result for any number of
+    /// right-hand sides.
+    ///
+    /// # Errors
+    /// [`SolveError::InvalidTime`], [`SolveError::SingularShiftedMatrix`],
+    /// [`SolveError::Factorization`].
+    pub fn factor(&self, approx: &RationalApprox, t: f64) -> Result<RationalFactors, SolveError> {
+        check_time(t)?;
+        let mut jobs: Vec<(c64, c64, bool)> = approx
+            .poles
+            .iter()
+            .zip(approx.residues)
+            .map(|(&z, &c)| (z, c, false))
+            .collect();
+        if let Some((z, c)) = approx.real_pole {
+            jobs.push((c64::new(z, 0.0), c64::new(c, 0.0), true));
+        }
+        let ops = &*self.ops;
+        let terms: Vec<PoleTerm> = match self.backend {
+            Backend::DirectLu => {
+                let sym = self.lu_symbolic()?;
+                jobs.par_iter()
+                    .map(|&(z, c, real)| {
+                        let solver = if real {
+                            let a = ops.real_combination(t, -z.re);
+                            let llt = SeqLlt::new(&self.llt_symbolic, a.as_ref())
+                                .map_err(|_| SolveError::SingularShiftedMatrix { t, pole: z })?;
+                            PoleSolver::Cholesky(llt)
+                        } else {
+                            let a = ops.shifted(t, z);
+                            let lu = SeqLu::new(&sym, a.as_ref())
+                                .map_err(|_| SolveError::SingularShiftedMatrix { t, pole: z })?;
+                            PoleSolver::Lu(Box::new(lu))
+                        };
+                        Ok(PoleTerm {
+                            pole: z,
+                            residue: c,
+                            solver,
+                        })
+                    })
+                    .collect::<Result<_, SolveError>>()?
+            }
+            Backend::Minres(params) => {
+                let shared = match params.preconditioner {
+                    Preconditioner::ShiftedCholesky(PreconditionerShift::Shared(s)) => Some(Arc::new(
+                        PrecondFactor::build(ops, &self.llt_symbolic, params.preconditioner, t, s)?,
+                    )),
+                    Preconditioner::None => Some(Arc::new(PrecondFactor::Identity)),
+                    _ => None,
+                };
+                jobs.par_iter()
+                    .map(|&(z, c, _)| {
+                        let precond = match &shared {
+                            Some(p) => p.clone(),
+                            None => Arc::new(PrecondFactor::build(
+                                ops,
+                                &self.llt_symbolic,
+                                params.preconditioner,
+                                t,
+                                z.norm(),
+                            )?),
+                        };
+                        Ok(PoleTerm {
+                            pole: z,
+                            residue: c,
+                            solver: PoleSolver::Krylov { precond, params },
+                        })
+                    })
+                    .collect::<Result<_, SolveError>>()?
+            }
+        };
+        Ok(RationalFactors {
+            ops: self.ops.clone(),
+            t,
+            c0: approx.c0,
+            terms,
+        })
+    }
+}
+
+#[derive(Debug)]
+enum PoleSolver {
+    Lu(Box<SeqLu>),
+    Cholesky(SeqLlt),
+    Krylov {
+        precond: Arc<PrecondFactor>,
+        params: MinresParams,
+    },
+}
+
+#[derive(Debug)]
+struct PoleTerm {
+    pole: c64,
+    residue: c64,
+    solver: PoleSolver,
+}
+
+/// All poles of one t, factored once (paper Eq. (12)); apply to any number of right-hand sides.
+#[derive(Debug)]
+pub struct RationalFactors {
+    ops: Arc<PairOperators>,
+    t: f64,
+    c0: f64,
+    terms: Vec<PoleTerm>,
+}
+
+fn norm2(x: &[f64]) -> f64 {
+    x.iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+impl RationalFactors {
+    /// Diffusion time t of these factors.
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// `r_n(t B⁻¹L) F = c0·F + 2 Re Σ_j c_j (tL − z_j B)⁻¹ (B F)` for F of size n × k.
+    ///
+    /// # Errors
+    /// Size/NaN problems in `rhs`, non-finite solutions, non-convergence.
+    pub fn apply(&self, rhs: MatRef<'_, f64>) -> Result<(Mat<f64>, BatchReport), SolveError> {
+        check_rhs(rhs, self.ops.n)?;
+        let n = self.ops.n;
+        let mut g = Mat::<f64>::zeros(n, rhs.ncols());
+        let mut col = vec![0.0; n];
+        let mut bx = vec![0.0; n];
+        for j in 0..rhs.ncols() {
+            for i in 0..n {
+                col[i] = rhs[(i, j)];
+            }
+            self.ops.mass_mul(&col, &mut bx);
+            g.col_as_slice_mut(j).copy_from_slice(&bx);
+        }
+        let (mut out, report) = self.resolvent(g.as_ref())?;
+        for j in 0..rhs.ncols() {
+            for i in 0..n {
+                out[(i, j)] += self.c0 * rhs[(i, j)];
+            }
+        }
+        Ok((out, report))
+    }
+
+    /// `2 Re Σ_j c_j (tL − z_j B)⁻¹ G` (+ real pole), no c0 term, no multiplication by B.
+    ///
+    /// # Errors
+    /// As [`Self::apply`].
+    pub fn apply_resolvent(&self, rhs: MatRef<'_, f64>) -> Result<(Mat<f64>, BatchReport), SolveError> {
+        check_rhs(rhs, self.ops.n)?;
+        self.resolvent(rhs)
+    }
+
+    fn resolvent(&self, g: MatRef<'_, f64>) -> Result<(Mat<f64>, BatchReport), SolveError> {
+        let n = self.ops.n;
+        let k = g.ncols();
+        let parts: Vec<(Mat<f64>, PoleReport)> = self
+            .terms
+            .par_iter()
+            .map(|term| self.solve_term(term, g))
+            .collect::<Result<_, SolveError>>()?;
+        let mut out = Mat::<f64>::zeros(n, k);
+        let mut poles = Vec::with_capacity(parts.len());
+        for (m, rep) in parts {
+            out += &m;
+            poles.push(rep);
+        }
+        Ok((
+            out,
+            BatchReport {
+                t: self.t,
+                n_rhs: k,
+                poles,
+            },
+        ))
+    }
+
+    /// Contribution 2 Re(c (tL − zB)⁻¹ G) (or c (tL − zB)⁻¹ G for the real pole).
+    fn solve_term(&self, term: &PoleTerm, g: MatRef<'_, f64>) -> Result<(Mat<f64>, PoleReport), SolveError> {
+        let ops = &*self.ops;
+        let (n, k, t, z, c) = (ops.n, g.ncols(), self.t, term.pole, term.residue);
+        let singular = || SolveError::SingularShiftedMatrix { t, pole: z };
+        let mut out = Mat::<f64>::zeros(n, k);
+        let mut report = PoleReport {
+            pole: z,
+            residue: c,
+            method: SolveMethod::ComplexLu,
+            iterations: 0,
+            relative_residual: 0.0,
+            residual_history: Vec::new(),
+        };
+        let is_real = z.im == 0.0;
+        let weight = if is_real { 1.0 } else { 2.0 };
+        match &term.solver {
+            PoleSolver::Lu(lu) => {
+                let mut x = Mat::<c64>::from_fn(n, k, |i, j| c64::new(g[(i, j)], 0.0));
+                lu.solve_in_place(x.as_mut());
+                let mut ax = vec![c64::new(0.0, 0.0); n];
+                for j in 0..k {
+                    let xj = x.col_as_slice(j);
+                    if xj.iter().any(|v| !v.re.is_finite() || !v.im.is_finite()) {
+                        return Err(singular());
+                    }
+                    ops.complex_mul(c64::new(t, 0.0), -z, xj, &mut ax);
+                    let (mut num, mut den) = (0.0, 0.0);
+                    for i in 0..n {
+                        num += (ax[i] - g[(i, j)]).norm_sqr();
+                        den += g[(i, j)] * g[(i, j)];
+                        out[(i, j)] = weight * (c * xj[i]).re;
+                    }
+                    report.relative_residual = report.relative_residual.max(rel(num, den));
+                }
+            }
+            PoleSolver::Cholesky(llt) => {
+                report.method = SolveMethod::RealCholesky;
+                let mut x = g.to_owned();
+                llt.solve_in_place(x.as_mut());
+                let (mut lx, mut bx) = (vec![0.0; n], vec![0.0; n]);
+                for j in 0..k {
+                    let xj = x.col_as_slice(j);
+                    if xj.iter().any(|v| !v.is_finite()) {
+                        return Err(singular());
+                    }
+                    ops.stiffness_mass_mul(xj, &mut lx, &mut bx);
+                    let (mut num, mut den) = (0.0, 0.0);
+                    for i in 0..n {
+                        let r = t * lx[i] - z.re * bx[i] - g[(i, j)];
+                        num += r * r;
+                        den += g[(i, j)] * g[(i, j)];
+                        out[(i, j)] = c.re * xj[i];
+                    }
+                    report.relative_residual = report.relative_residual.max(rel(num, den));
+                }
+            }
+            PoleSolver::Krylov { precond, params } => {
+                report.method = if is_real {
+                    SolveMethod::ConjugateGradient
+                } else {
+                    SolveMethod::Minres
+                };
+                let cols: Vec<(Vec<f64>, usize, Vec<f64>, f64)> = (0..k)
+                    .into_par_iter()
+                    .map(|j| {
+                        let b: Vec<f64> = (0..n).map(|i| g[(i, j)]).collect();
+                        solve_krylov(ops, t, z, &b, precond, params)
+                    })
+                    .collect::<Result<_, SolveError>>()?;
+                for (j, (x, its, hist, r)) in cols.into_iter().enumerate() {
+                    for i in 0..n {
+                        out[(i, j)] = if is_real {
+                            c.re * x[i]
+                        } else {
+                            2.0 * (c.re * x[i] - c.im * x[n + i])
+                        };
+                    }
+                    report.iterations = report.iterations.max(its);
+                    report.relative_residual = report.relative_residual.max(r);
+                    if j == 0 {
+                        report.residual_history = hist;
+                    }
+                }
+            }
+        }
+        Ok((out, report))
+    }
+}
+
+fn rel(num: f64, den: f64) -> f64 {
+    if den == 0.0 {
+        num.sqrt()
+    } else {
+        (num / den).sqrt()
+    }
+}
+
+/// One Krylov solve of (tL − zB)x = b with real b. Returns (x, iterations, history, true
+/// relative residual); for complex z, x = [Re x; Im x] has length 2n.
+fn solve_krylov(
+    ops: &PairOperators,
+    t: f64,
+    z: c64,
+    b: &[f64],
+    precond: &PrecondFactor,
+    params: &MinresParams,
+) -> Result<(Vec<f64>, usize, Vec<f64>, f64), SolveError> {
+    let n = ops.n;
+    let (p, q) = (z.re, z.im);
+    let mut lx = vec![0.0; n];
+    let mut bx = vec![0.0; n];
+    if q == 0.0 {
+        let outcome = pcg(
+            b,
+            |x, y| {
+                ops.stiffness_mass_mul(x, &mut lx, &mut bx);
+                for i in 0..n {
+                    y[i] = t * lx[i] - p * bx[i];
+                }
+            },
+            |x| precond.apply(x, n),
+            params.rel_tol,
+            params.max_iters,
+        );
+        let last = outcome.history.last().copied().unwrap_or(0.0);
+        if !outcome.converged {
+            return Err(SolveError::NoConvergence {
+                residual: last,
+                iterations: outcome.iterations,
+                pole: z,
+            });
+        }
+        return Ok((outcome.x, outcome.iterations, outcome.history, last));
+    }
+    // Real 2n form: [[K, qB], [qB, −K]] [u; v] = [b; 0], K = tL − pB.
+    let mut rhs = vec![0.0; 2 * n];
+    rhs[..n].copy_from_slice(b);
+    let (mut lu, mut bu, mut lv, mut bv) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut apply = |x: &[f64], y: &mut [f64]| {
+        ops.stiffness_mass_mul(&x[..n], &mut lu, &mut bu);
+        ops.stiffness_mass_mul(&x[n..], &mut lv, &mut bv);
+        for i in 0..n {
+            let ku = t * lu[i] - p * bu[i];
+            let kv = t * lv[i] - p * bv[i];
+            y[i] = ku + q * bv[i];
+            y[n + i] = q * bu[i] - kv;
+        }
+    };
+    let outcome = minres(
+        &rhs,
+        &mut apply,
+        |x| precond.apply(x, n),
+        params.rel_tol,
+        params.max_iters,
+    );
+    let last = outcome.history.last().copied().unwrap_or(0.0);
+    if !outcome.converged || outcome.x.iter().any(|v| !v.is_finite()) {
+        return Err(SolveError::NoConvergence {
+            residual: last,
+            iterations: outcome.iterations,
+            pole: z,
+        });
+    }
+    let mut ax = vec![0.0; 2 * n];
+    apply(&outcome.x, &mut ax);
+    let num: f64 = ax.iter().zip(&rhs).map(|(a, r)| (a - r) * (a - r)).sum();
+    let r = rel(num, norm2(&rhs).powi(2));
+    Ok((outcome.x, outcome.iterations, outcome.history, r))
+}

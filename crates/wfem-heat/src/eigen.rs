@@ -1,0 +1,416 @@
+//! Generalized eigenpairs `L x = λ M x` (paper, Eq. (4)–(6) and (8)): the dense reference
+//! and a shift-invert block Lanczos for the k smallest pairs.
+//!
+//! L (stiffness) is symmetric positive **semi**definite with a positive diagonal (wfem sign
+//! convention; the paper prints L with the opposite sign), M is the mass matrix of the
+//! kernel (B, D or I), symmetric positive definite.
+
+use crate::sparse::{spmm_sym, spmv_sym, CholeskyPattern};
+use crate::HeatError;
+use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+use faer::sparse::SparseColMat;
+use faer::{Mat, Par, Side};
+
+/// The largest mesh (number of vertices) for which [`Eigenbasis::dense`] runs: O(n³) time
+/// and 3 dense n × n matrices (≈ 600 MB at the limit).
+pub const DENSE_MAX_VERTICES: usize = 5000;
+
+/// Eigenpairs of the generalized problem `L xᵢ = λᵢ M xᵢ` (paper, Eq. (4)), sorted by
+/// increasing λ, with M-orthonormal eigenvectors `XᵀMX = I`.
+#[derive(Clone, Debug)]
+pub struct Eigenbasis {
+    /// Eigenvalues λ₁ ≤ λ₂ ≤ … (λ₁ ≈ 0 on a connected mesh, eigenvector the constant 1/√area).
+    pub values: Vec<f64>,
+    /// Eigenvectors as columns, n × k, M-orthonormal: `XᵀMX = I`.
+    pub vectors: Mat<f64>,
+}
+
+/// Options of [`Eigenbasis::partial`] (shift-invert block Lanczos).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EigenParams {
+    /// Shift σ < 0 of the factored matrix `L − σM` (SPD because L is PSD). `None` picks
+    /// σ = −0.01·4π/A with A = 1ᵀM1, i.e. 1% of the Weyl scale of the first eigenvalues.
+    pub shift: Option<f64>,
+    /// Block size b of the Lanczos iteration; must exceed the largest eigenvalue
+    /// multiplicity among the wanted pairs (sphere: 2l+1; icosphere: at most 5).
+    pub block_size: usize,
+    /// Relative residual tolerance ‖Sx − θx‖_M / θ on the shift-inverted operator
+    /// S = (L − σM)⁻¹M. The eigenvalue error is about the square of it.
+    pub tol: f64,
+    /// Maximum Krylov dimension (the basis is not restarted, so memory is 2·n·max_dim
+    /// doubles); `None` = min(n, max(6k, k + 200)).
+    pub max_dim: Option<usize>,
+    /// Seed of the random start block.
+    pub seed: u64,
+}
+
+impl Default for EigenParams {
+    fn default() -> Self {
+        Self {
+            shift: None,
+            block_size: 8,
+            tol: 1e-10,
+            max_dim: None,
+            seed: 0x5eed_2010,
+        }
+    }
+}
+
+/// SplitMix64: a tiny deterministic generator for start blocks (no `rand` dependency).
+pub(crate) struct SplitMix(pub u64);
+impl SplitMix {
+    pub(crate) fn next_f64(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+}
+
+fn to_dense(a: &SparseColMat<usize, f64>) -> Mat<f64> {
+    let n = a.nrows();
+    let mut d = Mat::<f64>::zeros(n, a.ncols());
+    let sym = a.symbolic();
+    for j in 0..a.ncols() {
+        for p in sym.col_range(j) {
+            d[(sym.row_idx()[p], j)] += a.val()[p];
+        }
+    }
+    d
+}
+
+fn check_square(stiffness: &SparseColMat<usize, f64>, mass: &SparseColMat<usize, f64>) -> Result<usize, HeatError> {
+    let n = stiffness.nrows();
+    if stiffness.ncols() != n || mass.nrows() != n || mass.ncols() != n {
+        return Err(HeatError::InconsistentOperators {
+            reason: format!(
+                "stiffness is {}×{}, mass is {}×{}",
+                stiffness.nrows(),
+                stiffness.ncols(),
+                mass.nrows(),
+                mass.ncols()
+            ),
+        });
+    }
+    Ok(n)
+}
+
+impl Eigenbasis {
+    /// All n eigenpairs by a dense generalized symmetric eigendecomposition: M = RRᵀ
+    /// (Cholesky), C = R⁻¹LR⁻ᵀ, C = YΛYᵀ, X = R⁻ᵀY, so that `XᵀMX = I` (paper, Eq. (4)–(6)).
+    /// This is the exact oracle of the test suite.
+    ///
+    /// # Errors
+    /// [`HeatError::TooLargeForDense`] above [`DENSE_MAX_VERTICES`];
+    /// [`HeatError::NotPositiveDefinite`] if M is not SPD; [`HeatError::DenseEigen`].
+    pub fn dense(stiffness: &SparseColMat<usize, f64>, mass: &SparseColMat<usize, f64>) -> Result<Self, HeatError> {
+        let n = check_square(stiffness, mass)?;
+        if n > DENSE_MAX_VERTICES {
+            return Err(HeatError::TooLargeForDense {
+                n_vertices: n,
+                limit: DENSE_MAX_VERTICES,
+            });
+        }
+        let l = to_dense(stiffness);
+        let m = to_dense(mass);
+        let llt = m.llt(Side::Lower).map_err(|_| HeatError::NotPositiveDefinite {
+            matrix: "mass matrix M (dense)".into(),
+        })?;
+        let r = llt.L();
+        // Y = R⁻¹ L, then C = R⁻¹ Yᵀ = R⁻¹ L R⁻ᵀ (L symmetric).
+        let mut y = l;
+        solve_lower_triangular_in_place(r, y.as_mut(), Par::rayon(0));
+        let mut c = y.transpose().to_owned();
+        solve_lower_triangular_in_place(r, c.as_mut(), Par::rayon(0));
+        // Symmetrize to remove rounding asymmetry before the symmetric solver.
+        let c = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (c[(i, j)] + c[(j, i)]));
+        let evd = c.self_adjoint_eigen(Side::Lower).map_err(|_| HeatError::DenseEigen)?;
+        let values: Vec<f64> = (0..n).map(|i| evd.S()[i]).collect();
+        let mut x = evd.U().to_owned();
+        solve_upper_triangular_in_place(r.transpose(), x.as_mut(), Par::rayon(0));
+        Ok(Self { values, vectors: x })
+    }
+
+    /// The `k` smallest eigenpairs by shift-invert block Lanczos with full
+    /// reorthogonalisation in the M-inner product (NUMERICS §5).
+    ///
+    /// The operator S = (L − σM)⁻¹M (σ < 0, one sparse Cholesky of the SPD matrix L − σM)
+    /// is self-adjoint in ⟨u, v⟩_M = uᵀMv and has eigenvalues θ = 1/(λ − σ), so the
+    /// smallest λ are the largest θ and converge first. Ritz pairs are accepted when
+    /// ‖Sx − θx‖_M ≤ tol·θ; then λ = σ + 1/θ and the Ritz vectors are M-orthonormal.
+    ///
+    /// # Errors
+    /// [`HeatError::InvalidParameter`] for k = 0, k > n, a shift ≥ 0 or block size 0;
+    /// [`HeatError::EigenNoConvergence`] (carrying the converged pairs) if the Krylov
+    /// dimension limit is hit first.
+    pub fn partial(
+        stiffness: &SparseColMat<usize, f64>,
+        mass: &SparseColMat<usize, f64>,
+        k: usize,
+        params: &EigenParams,
+    ) -> Result<Self, HeatError> {
+        let n = check_square(stiffness, mass)?;
+        if k == 0 || k > n {
+            return Err(HeatError::InvalidParameter {
+                name: "k",
+                reason: format!("k = {k} must be in 1..={n}"),
+            });
+        }
+        if params.block_size == 0 {
+            return Err(HeatError::InvalidParameter {
+                name: "block_size",
+                reason: "must be positive".into(),
+            });
+        }
+        if !(params.tol > 0.0 && params.tol < 1.0) {
+            return Err(HeatError::InvalidParameter {
+                name: "tol",
+                reason: format!("{} is not in (0, 1)", params.tol),
+            });
+        }
+        let sigma = match params.shift {
+            Some(s) if s < 0.0 && s.is_finite() => s,
+            Some(s) => {
+                return Err(HeatError::InvalidParameter {
+                    name: "shift",
+                    reason: format!("σ = {s} must be finite and negative (L − σM must be SPD)"),
+                })
+            }
+            None => {
+                // Weyl's law λ_k ≈ 4πk/A (A = 1ᵀM1): a shift 1% of the first nonzero
+                // eigenvalue's scale below zero keeps the wanted θ = 1/(λ − σ) well separated.
+                let area: f64 = spmv_sym(mass, &vec![1.0; n]).iter().sum();
+                -1e-2 * 4.0 * std::f64::consts::PI / area
+            }
+        };
+        if !crate::sparse::same_pattern(stiffness, mass) {
+            return Err(HeatError::InconsistentOperators {
+                reason: "stiffness and mass patterns differ".into(),
+            });
+        }
+        let pattern = CholeskyPattern::new(stiffness)?;
+        let shifted = crate::sparse::combine(1.0, stiffness, -sigma, mass);
+        let factor = pattern.factor(&shifted, || format!("L − σM with σ = {sigma:e}"))?;
+
+        let b = params.block_size.min(n);
+        let max_dim = params
+            .max_dim
+            .unwrap_or_else(|| (6 * k).max(k + 200))
+            .clamp(k.max(b), n);
+        let max_blocks = max_dim.div_ceil(b);
+        let cap = max_blocks * b;
+
+        // Basis V (n × cap), MV = M V, projected matrix H = VᵀMSV.
+        let mut v = Mat::<f64>::zeros(n, cap + b);
+        let mut mv = Mat::<f64>::zeros(n, cap + b);
+        let mut h = Mat::<f64>::zeros(cap + b, cap + b);
+        let mut rng = SplitMix(params.seed);
+        let start = Mat::<f64>::from_fn(n, b, |_, _| rng.next_f64());
+        let mut dim = 0usize; // number of basis columns so far
+        let (q0, _) = m_orthonormalize(start, mass, &v, &mv, 0, &mut rng);
+        let mq0 = spmm_sym(mass, q0.as_ref());
+        v.as_mut().get_mut(.., 0..b).copy_from(&q0);
+        mv.as_mut().get_mut(.., 0..b).copy_from(&mq0);
+        dim += b;
+
+        loop {
+            let j0 = dim - b;
+            // W = S V_j = (L − σM)⁻¹ M V_j.
+            let mut w = mv.as_ref().get(.., j0..dim).to_owned();
+            factor.solve_in_place(w.as_mut());
+            // Two passes of block classical Gram–Schmidt in the M-inner product.
+            for _ in 0..2 {
+                let coef = mv.as_ref().get(.., 0..dim).transpose() * &w;
+                w -= v.as_ref().get(.., 0..dim) * &coef;
+                let mut hb = h.as_mut().get_mut(0..dim, j0..dim);
+                hb += &coef;
+            }
+            let at_full = dim + b > n || dim >= cap;
+            // Ritz step: eigenpairs of the symmetrized projection.
+            let hm = Mat::<f64>::from_fn(dim, dim, |i, jj| 0.5 * (h[(i, jj)] + h[(jj, i)]));
+            let evd = hm.self_adjoint_eigen(Side::Lower).map_err(|_| HeatError::DenseEigen)?;
+            // Residual of Ritz pair i: ‖W_rest · Q[last block, i]‖_M where W = V_{j+1} B_j.
+            let (qn, bj) = if at_full {
+                (Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(0, b))
+            } else {
+                m_orthonormalize(w.clone(), mass, &v, &mv, dim, &mut rng)
+            };
+            let nk = k.min(dim);
+            let mut converged = 0usize;
+            let mut worst = 0.0f64;
+            let mut order = Vec::with_capacity(nk);
+            for r in 0..nk {
+                let i = dim - 1 - r; // largest θ first
+                let theta = evd.S()[i];
+                let res = if at_full {
+                    // Residual from the unnormalized remainder W (zero at n).
+                    let qi = evd.U().col(i).subrows(j0, b);
+                    let x = &w * qi;
+                    let xs: Vec<f64> = x.iter().copied().collect();
+                    let mx = spmv_sym(mass, &xs);
+                    xs.iter().zip(&mx).map(|(a, c)| a * c).sum::<f64>().max(0.0).sqrt()
+                } else {
+                    let qi = evd.U().col(i).subrows(j0, b);
+                    (&bj * qi).norm_l2()
+                };
+                let rel = res / theta.abs().max(f64::MIN_POSITIVE);
+                worst = worst.max(rel);
+                if rel <= params.tol && theta > 0.0 && converged == r {
+                    converged += 1;
+                }
+                order.push(i);
+            }
+            if converged >= k || at_full {
+                let take = if converged >= k { k } else { converged };
+                let basis = ritz(&evd, &v, dim, &order[..take], sigma);
+                if converged >= k {
+                    return Ok(basis);
+                }
+                return Err(HeatError::EigenNoConvergence {
+                    requested: k,
+                    converged,
+                    dimension: dim,
+                    max_residual: worst,
+                    found: Box::new(basis),
+                });
+            }
+            // Extend the basis with the next block.
+            let mq = spmm_sym(mass, qn.as_ref());
+            v.as_mut().get_mut(.., dim..dim + b).copy_from(&qn);
+            mv.as_mut().get_mut(.., dim..dim + b).copy_from(&mq);
+            h.as_mut().get_mut(dim..dim + b, j0..dim).copy_from(&bj);
+            dim += b;
+        }
+    }
+
+    /// Applies the (truncated) spectral heat kernel
+    /// `F_k = X_k e^{−tΛ_k} X_kᵀ M f` (paper, Eq. (8); Eq. (6) when k = n).
+    ///
+    /// # Errors
+    /// [`HeatError::InvalidTime`], [`HeatError::LengthMismatch`], [`HeatError::NonFiniteInput`].
+    pub fn apply_heat(&self, mass: &SparseColMat<usize, f64>, f: &[f64], t: f64) -> Result<Vec<f64>, HeatError> {
+        crate::kernel::check_time(t)?;
+        crate::kernel::check_vector(f, self.vectors.nrows())?;
+        if mass.nrows() != f.len() {
+            return Err(HeatError::LengthMismatch {
+                expected: mass.nrows(),
+                found: f.len(),
+            });
+        }
+        let mf = spmv_sym(mass, f);
+        let mfm = faer::ColRef::from_slice(&mf);
+        let mut c = self.vectors.transpose() * mfm;
+        for (i, ci) in c.iter_mut().enumerate() {
+            *ci *= (-t * self.values[i]).exp();
+        }
+        let g = &self.vectors * &c;
+        Ok(g.iter().copied().collect())
+    }
+
+    /// Applies the truncated kernel to many columns at once (n × m).
+    pub(crate) fn apply_heat_many(
+        &self,
+        mass: &SparseColMat<usize, f64>,
+        f: faer::MatRef<'_, f64>,
+        t: f64,
+    ) -> Mat<f64> {
+        let mf = spmm_sym(mass, f);
+        let mut c = self.vectors.transpose() * &mf;
+        for i in 0..c.nrows() {
+            let d = (-t * self.values[i]).exp();
+            for j in 0..c.ncols() {
+                c[(i, j)] *= d;
+            }
+        }
+        &self.vectors * &c
+    }
+}
+
+/// Ritz vectors of the chosen (largest-θ first) indices, converted to λ = σ + 1/θ and
+/// sorted by increasing λ.
+fn ritz(
+    evd: &faer::linalg::solvers::SelfAdjointEigen<f64>,
+    v: &Mat<f64>,
+    dim: usize,
+    idx: &[usize],
+    sigma: f64,
+) -> Eigenbasis {
+    let n = v.nrows();
+    let mut q = Mat::<f64>::zeros(dim, idx.len());
+    for (c, &i) in idx.iter().enumerate() {
+        q.as_mut().col_mut(c).copy_from(evd.U().col(i));
+    }
+    let x = v.as_ref().get(.., 0..dim) * &q;
+    let values: Vec<f64> = idx.iter().map(|&i| sigma + 1.0 / evd.S()[i]).collect();
+    // θ descending means λ ascending already; keep an explicit sort for safety.
+    let mut perm: Vec<usize> = (0..idx.len()).collect();
+    perm.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+    let vectors = Mat::<f64>::from_fn(n, idx.len(), |i, c| x[(i, perm[c])]);
+    Eigenbasis {
+        values: perm.iter().map(|&p| values[p]).collect(),
+        vectors,
+    }
+}
+
+/// M-orthonormalizes the columns of `w` against the first `dim` columns of `v` (already
+/// done by the caller, repeated here once for safety) and among themselves: returns (Q, R)
+/// with W = Q R, QᵀMQ = I. Directions lost to rank deficiency (an invariant subspace) are
+/// replaced by random vectors orthogonal to everything, with a zero row in R.
+fn m_orthonormalize(
+    mut w: Mat<f64>,
+    mass: &SparseColMat<usize, f64>,
+    v: &Mat<f64>,
+    mv: &Mat<f64>,
+    dim: usize,
+    rng: &mut SplitMix,
+) -> (Mat<f64>, Mat<f64>) {
+    let n = w.nrows();
+    let b = w.ncols();
+    let mut r_total = Mat::<f64>::identity(b, b);
+    let mut first = true;
+    for pass in 0..3 {
+        if dim > 0 && pass > 0 {
+            let coef = mv.as_ref().get(.., 0..dim).transpose() * &w;
+            w -= v.as_ref().get(.., 0..dim) * &coef;
+        }
+        let mw = spmm_sym(mass, w.as_ref());
+        let g = w.transpose() * &mw;
+        let g = Mat::<f64>::from_fn(b, b, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]));
+        let evd = match g.self_adjoint_eigen(Side::Lower) {
+            Ok(e) => e,
+            Err(_) => break,
+        };
+        let smax = evd.S()[b - 1].max(0.0);
+        // W = (W U S^{-1/2}) (S^{1/2} Uᵀ).
+        let mut q = Mat::<f64>::zeros(n, b);
+        let mut r = Mat::<f64>::zeros(b, b);
+        let wu = &w * evd.U();
+        let mut replaced = false;
+        for c in 0..b {
+            let s = evd.S()[c];
+            if s > 1e-24 * smax.max(f64::MIN_POSITIVE) && s > 0.0 {
+                let sq = s.sqrt();
+                for i in 0..n {
+                    q[(i, c)] = wu[(i, c)] / sq;
+                }
+                for j in 0..b {
+                    r[(c, j)] = sq * evd.U()[(j, c)];
+                }
+            } else {
+                for i in 0..n {
+                    q[(i, c)] = rng.next_f64();
+                }
+                replaced = true;
+            }
+        }
+        w = q;
+        r_total = if first { r } else { &r * &r_total };
+        first = false;
+        if !replaced && pass >= 1 {
+            break;
+        }
+    }
+    (w, r_total)
+}

@@ -1,0 +1,6 @@
+//! Library side of the wfem project chores (`cargo xtask …`), so that the generators can be
+//! tested.
+
+#![warn(missing_docs)]
+
+pub mod shrec;
