@@ -99,202 +99,294 @@ fn face_cotangents(p: [[f64; 3]; 3]) -> (f64, [f64; 3]) {
     (0.5 * double_area, cots)
 }
 
+/// Columns per parallel work item of [`assemble`]: large enough to amortise the task and
+/// slice bookkeeping, small enough to balance the load on a few cores.
+const COLUMNS_PER_CHUNK: usize = 2048;
+
+/// What one corner of a face contributes to the column of its vertex j: the two half-edges
+/// (j, i) to the other corners, with their stiffness values, and the face area.
+#[derive(Clone, Copy, Default)]
+struct CornerEntries {
+    /// The other two vertices of the face.
+    rows: [u32; 2],
+    /// `−½ cot` of the angle opposite each of the two edges.
+    stiffness: [f64; 2],
+    /// Face area |T|.
+    area: f64,
+}
+
 /// Assembles the stiffness L, the consistent mass B and the lumped mass D of `mesh`
 /// (paper, Eq. (3) and Eq. (7)).
 ///
-/// Runs in O(#faces) time, in parallel over columns.
+/// Runs in O(#faces) time and memory, in parallel (rayon):
+/// 1. a counting sort of the 3·#faces corners by vertex: in parallel over vertex ranges,
+///    every face's area and cotangents are computed and each corner's two half-edges are
+///    written to its vertex's segment, in face order (all later reads are sequential);
+/// 2. per column j, sort the half-edges of j by row (stably, so face order is kept) and
+///    merge duplicates: a first pass only counts the distinct rows to lay out the column
+///    pointers, the second writes the entries of L, B and D directly into their final
+///    arrays (each of the three matrices owns a copy of the shared pattern).
+///
+/// Contributions to an entry are summed in face order on both sides of the diagonal, so L
+/// and B are exactly symmetric, even on non-manifold meshes.
 ///
 /// # Errors
-/// * [`MeshError::DegenerateFace`] for a face of zero area (its cotangents are undefined);
-///   drop such faces first with [`crate::validate::repair`].
+/// * [`MeshError::DegenerateFace`] for a face of zero or numerically zero area (its
+///   cotangents are undefined; the test is [`crate::validate::is_degenerate_triangle`]), the
+///   first one in face order; drop such faces first with [`crate::validate::repair`].
 /// * [`MeshError::UnreferencedVertex`] for a vertex that belongs to no face (B would be
 ///   singular); drop such vertices first with [`crate::validate::repair`].
 pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
     let n = mesh.n_vertices();
     let faces = mesh.faces();
 
-    // Per-face area and cotangents, in parallel.
-    let geometry: Vec<(f64, [f64; 3])> = (0..faces.len())
-        .into_par_iter()
-        .map(|f| face_cotangents(mesh.corners(f)))
+    // 1a. Column segments: corners[first[j]..first[j + 1]] belong to vertex j.
+    let mut first = vec![0usize; n + 1];
+    for face in faces {
+        for &v in face {
+            first[v as usize + 1] += 1;
+        }
+    }
+    for j in 0..n {
+        first[j + 1] += first[j];
+    }
+    let n_corners = first[n];
+
+    // 1b. Scatter, in parallel over vertex ranges of about equal corner counts (one per
+    //     thread): each range scans all faces (cheap, sequential) and handles the corners it
+    //     owns, so every task writes only its own slice without locks or `unsafe`. A face is
+    //     measured once per range it touches, so at most three times.
+    let voronoi = params.lumped == LumpedMassKind::Voronoi;
+    let n_ranges = rayon::current_num_threads().clamp(1, n);
+    let vertex_bounds: Vec<usize> = (0..=n_ranges)
+        .map(|r| {
+            let target = n_corners * r / n_ranges;
+            first.partition_point(|&c| c < target).min(n)
+        })
         .collect();
-    // The degeneracy test is shared with `validate` (relative threshold, see
-    // `validate::is_degenerate_triangle`), so a mesh validates as usable iff it assembles.
-    if let Some(f) = (0..faces.len()).into_par_iter().find_first(|&f| {
-        crate::validate::is_degenerate_triangle(mesh.corners(f)) || geometry[f].1.iter().any(|x| !x.is_finite())
-    }) {
+    let mut corners = vec![CornerEntries::default(); n_corners];
+    let mut corner_mass = vec![0.0f64; if voronoi { n_corners } else { 0 }];
+    let corner_bounds: Vec<usize> = vertex_bounds[1..].iter().map(|&v| first[v]).collect();
+    let mass_bounds: Vec<usize> = if voronoi {
+        corner_bounds.clone()
+    } else {
+        vec![0; n_ranges]
+    };
+    let degenerate: Option<usize> = split_at_bounds(&mut corners, &corner_bounds)
+        .into_iter()
+        .zip(split_at_bounds(&mut corner_mass, &mass_bounds))
+        .zip(vertex_bounds.windows(2))
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|((out, mass_out), range)| {
+            let (v0, v1) = (range[0], range[1]);
+            let base = first[v0];
+            let mut cursor: Vec<usize> = first[v0..v1].iter().map(|&c| c - base).collect();
+            let mut degenerate = None;
+            for (f, face) in faces.iter().enumerate() {
+                if !face.iter().any(|&v| (v0..v1).contains(&(v as usize))) {
+                    continue;
+                }
+                let p = mesh.corners(f);
+                let (area, cots) = face_cotangents(p);
+                // The degeneracy test is shared with `validate` (relative threshold, see
+                // `validate::is_degenerate_triangle`), so a mesh validates as usable iff it
+                // assembles.
+                if crate::validate::is_degenerate_triangle(p) || cots.iter().any(|c| !c.is_finite()) {
+                    degenerate.get_or_insert(f);
+                    continue;
+                }
+                let masses = if voronoi {
+                    voronoi_corner_areas(p, (area, cots))
+                } else {
+                    [0.0; 3]
+                };
+                for k in 0..3 {
+                    let v = face[k] as usize;
+                    if !(v0..v1).contains(&v) {
+                        continue;
+                    }
+                    let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+                    let c = &mut cursor[v - v0];
+                    // Edge v–face[k1] is opposite corner k2, edge v–face[k2] opposite k1.
+                    out[*c] = CornerEntries {
+                        rows: [face[k1], face[k2]],
+                        stiffness: [-0.5 * cots[k2], -0.5 * cots[k1]],
+                        area,
+                    };
+                    if voronoi {
+                        mass_out[*c] = masses[k];
+                    }
+                    *c += 1;
+                }
+            }
+            degenerate
+        })
+        .reduce(|| None, |a, b| a.into_iter().chain(b).min());
+    if let Some(f) = degenerate {
         return Err(MeshError::DegenerateFace {
             face: f,
             vertices: faces[f],
         });
     }
-
-    // Counting sort of the six directed half-entries (row, col) of each face by column.
-    let mut col_count = vec![0usize; n + 1];
-    for f in faces {
-        for &v in f {
-            col_count[v as usize + 1] += 2;
-        }
-    }
-    for j in 0..n {
-        col_count[j + 1] += col_count[j];
-    }
-    if let Some(v) = (0..n).find(|&j| col_count[j + 1] == col_count[j]) {
+    if let Some(v) = (0..n).find(|&j| first[j + 1] == first[j]) {
         return Err(MeshError::UnreferencedVertex { vertex: v });
     }
-    let total = col_count[n];
-    let mut cursor = col_count.clone();
-    // (row, L value, B value) in column order.
-    let mut entries: Vec<(u32, f64, f64)> = vec![(0, 0.0, 0.0); total];
-    for (f, face) in faces.iter().enumerate() {
-        let (area, cots) = geometry[f];
-        let b = area / 12.0;
-        for k in 0..3 {
-            // The edge opposite corner k joins the other two corners.
-            let i = face[(k + 1) % 3];
-            let j = face[(k + 2) % 3];
-            let l = -0.5 * cots[k];
-            let pj = &mut cursor[j as usize];
-            entries[*pj] = (i, l, b);
-            *pj += 1;
-            let pi = &mut cursor[i as usize];
-            entries[*pi] = (j, l, b);
-            *pi += 1;
-        }
-    }
-    drop(cursor);
 
-    // Sort each column by row and merge the entries of an edge shared by several faces.
-    let mut segments: Vec<&mut [(u32, f64, f64)]> = Vec::with_capacity(n);
-    {
-        let mut rest: &mut [(u32, f64, f64)] = &mut entries;
-        for j in 0..n {
-            let (head, tail) = rest.split_at_mut(col_count[j + 1] - col_count[j]);
-            segments.push(head);
-            rest = tail;
-        }
-    }
-    let unique: Vec<usize> = segments
-        .par_iter_mut()
-        .map(|seg| {
-            seg.sort_unstable_by_key(|e| e.0);
-            let mut w = 0;
-            for r in 0..seg.len() {
-                if w > 0 && seg[w - 1].0 == seg[r].0 {
-                    seg[w - 1].1 += seg[r].1;
-                    seg[w - 1].2 += seg[r].2;
-                } else {
-                    seg[w] = seg[r];
-                    w += 1;
-                }
-            }
-            w
-        })
+    // 2a. Count the distinct rows of each column, then lay out the column pointers.
+    let chunks: Vec<(usize, usize)> = (0..n)
+        .step_by(COLUMNS_PER_CHUNK)
+        .map(|c| (c, (c + COLUMNS_PER_CHUNK).min(n)))
         .collect();
-
-    // Final CSC arrays: the merged off-diagonal entries plus the diagonal, rows sorted.
     let mut col_ptr = vec![0usize; n + 1];
+    col_ptr[1..]
+        .par_chunks_mut(COLUMNS_PER_CHUNK)
+        .zip(&chunks)
+        .for_each(|(out, &(col_start, _))| {
+            let mut rows: Vec<u32> = Vec::new();
+            for (jj, count) in out.iter_mut().enumerate() {
+                let j = col_start + jj;
+                rows.clear();
+                rows.extend(corners[first[j]..first[j + 1]].iter().flat_map(|c| c.rows));
+                rows.sort_unstable();
+                // Distinct off-diagonal rows plus the diagonal.
+                *count = 1 + rows.len() - rows.windows(2).filter(|w| w[0] == w[1]).count();
+            }
+        });
     for j in 0..n {
-        col_ptr[j + 1] = col_ptr[j] + unique[j] + 1;
+        col_ptr[j + 1] += col_ptr[j];
     }
     let nnz = col_ptr[n];
-    let mut row_idx = vec![0usize; nnz];
+
+    // 2b. Write the merged entries of L, B, D and the three copies of the row indices into
+    //     disjoint per-chunk slices of the final arrays, in parallel.
+    let mut rows = [vec![0usize; nnz], vec![0usize; nnz], vec![0usize; nnz]];
     let mut l_val = vec![0.0f64; nnz];
     let mut b_val = vec![0.0f64; nnz];
     let mut d_val = vec![0.0f64; nnz];
     let mut lumped_diagonal = vec![0.0f64; n];
     {
-        let mut outs = Vec::with_capacity(n);
-        let (mut r, mut l, mut b, mut d): (&mut [usize], &mut [f64], &mut [f64], &mut [f64]) =
-            (&mut row_idx, &mut l_val, &mut b_val, &mut d_val);
-        for j in 0..n {
-            let len = col_ptr[j + 1] - col_ptr[j];
-            let (r0, r1) = r.split_at_mut(len);
-            let (l0, l1) = l.split_at_mut(len);
-            let (b0, b1) = b.split_at_mut(len);
-            let (d0, d1) = d.split_at_mut(len);
-            outs.push((r0, l0, b0, d0));
-            (r, l, b, d) = (r1, l1, b1, d1);
-        }
-        outs.par_iter_mut()
-            .zip(segments.par_iter())
-            .zip(unique.par_iter())
-            .zip(lumped_diagonal.par_iter_mut())
-            .enumerate()
-            .for_each(|(j, ((((r, l, b, d), seg), &u), dj))| {
-                let seg = &seg[..u];
-                let l_diag: f64 = -seg.iter().map(|e| e.1).sum::<f64>();
-                // Each incident face contributes |T|/12 on two edges at vertex j, so the
-                // off-diagonal column sum of B is Σ|T|/6 = B_jj and the row sum is Σ|T|/3 = D_jj.
-                let b_diag: f64 = seg.iter().map(|e| e.2).sum::<f64>();
-                *dj = 2.0 * b_diag;
-                let mut w = 0;
-                let mut diag_done = false;
-                for e in seg {
-                    if !diag_done && (e.0 as usize) > j {
-                        r[w] = j;
-                        l[w] = l_diag;
-                        b[w] = b_diag;
-                        d[w] = 2.0 * b_diag;
-                        w += 1;
-                        diag_done = true;
+        let bounds: Vec<usize> = chunks.iter().map(|&(_, end)| col_ptr[end]).collect();
+        let [r0, r1, r2] = &mut rows;
+        let work: Vec<_> = split_at_bounds(r0, &bounds)
+            .into_iter()
+            .zip(split_at_bounds(r1, &bounds))
+            .zip(split_at_bounds(r2, &bounds))
+            .zip(split_at_bounds(&mut l_val, &bounds))
+            .zip(split_at_bounds(&mut b_val, &bounds))
+            .zip(split_at_bounds(&mut d_val, &bounds))
+            .zip(lumped_diagonal.chunks_mut(COLUMNS_PER_CHUNK))
+            .zip(&chunks)
+            .collect();
+        work.into_par_iter()
+            .for_each(|(((((((r0, r1), r2), l), b), d), diag), &(col_start, col_end))| {
+                // Half-edges (row i, L value, B value) of column j.
+                let mut buf: Vec<(u32, f64, f64)> = Vec::new();
+                let base = col_ptr[col_start];
+                for j in col_start..col_end {
+                    let segment = first[j]..first[j + 1];
+                    buf.clear();
+                    let mut d_jj = 0.0;
+                    for c in &corners[segment.clone()] {
+                        // B_ij = Σ|T|/12 over the faces of edge ij.
+                        let b = c.area / 12.0;
+                        buf.push((c.rows[0], c.stiffness[0], b));
+                        buf.push((c.rows[1], c.stiffness[1], b));
+                        d_jj += c.area / 3.0;
                     }
-                    r[w] = e.0 as usize;
-                    l[w] = e.1;
-                    b[w] = e.2;
-                    d[w] = 0.0;
-                    w += 1;
-                }
-                if !diag_done {
-                    r[w] = j;
-                    l[w] = l_diag;
-                    b[w] = b_diag;
-                    d[w] = 2.0 * b_diag;
+                    if voronoi {
+                        d_jj = corner_mass[segment].iter().sum();
+                    }
+                    // Stable: equal rows stay in face order, the same order as on the other
+                    // side of the diagonal, so the merged sums are bitwise symmetric.
+                    buf.sort_by_key(|e| e.0);
+                    diag[j - col_start] = d_jj;
+                    // Merge duplicates (an interior edge appears once per incident face).
+                    let mut w = 0;
+                    for r in 0..buf.len() {
+                        if w > 0 && buf[w - 1].0 == buf[r].0 {
+                            buf[w - 1].1 += buf[r].1;
+                            buf[w - 1].2 += buf[r].2;
+                        } else {
+                            buf[w] = buf[r];
+                            w += 1;
+                        }
+                    }
+                    let merged = &buf[..w];
+                    let l_diag = -merged.iter().map(|e| e.1).sum::<f64>();
+                    // Each incident face puts |T|/12 on two edges at j, so the off-diagonal
+                    // sum of column j of B is Σ_{T∋j}|T|/6 = B_jj.
+                    let b_diag = merged.iter().map(|e| e.2).sum::<f64>();
+                    let split = merged.partition_point(|e| (e.0 as usize) < j);
+                    let mut p = col_ptr[j] - base;
+                    let mut put = |i: usize, lv: f64, bv: f64, dv: f64| {
+                        r0[p] = i;
+                        r1[p] = i;
+                        r2[p] = i;
+                        l[p] = lv;
+                        b[p] = bv;
+                        d[p] = dv;
+                        p += 1;
+                    };
+                    for e in &merged[..split] {
+                        put(e.0 as usize, e.1, e.2, 0.0);
+                    }
+                    put(j, l_diag, b_diag, d_jj);
+                    for e in &merged[split..] {
+                        put(e.0 as usize, e.1, e.2, 0.0);
+                    }
                 }
             });
     }
 
-    if params.lumped == LumpedMassKind::Voronoi {
-        lumped_diagonal = voronoi_areas(mesh, &geometry);
-        for j in 0..n {
-            for p in col_ptr[j]..col_ptr[j + 1] {
-                if row_idx[p] == j {
-                    d_val[p] = lumped_diagonal[j];
-                }
-            }
-        }
-    }
-
-    let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+    // faer checks that every column's rows are sorted and in range (O(nnz) each); the three
+    // checks run in parallel, and meanwhile the corner records are freed (unmapping 32 bytes
+    // per corner takes a while too).
+    let [r0, r1, r2] = rows;
+    let pattern = |row_idx: Vec<usize>| SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx);
+    let (((s0, s1), s2), ()) = rayon::join(
+        || rayon::join(|| rayon::join(|| pattern(r0), || pattern(r1)), || pattern(r2)),
+        || drop(corners),
+    );
     Ok(FemOperators {
-        stiffness: SparseColMat::new(symbolic.clone(), l_val),
-        mass: SparseColMat::new(symbolic.clone(), b_val),
-        lumped_mass: SparseColMat::new(symbolic, d_val),
+        stiffness: SparseColMat::new(s0, l_val),
+        mass: SparseColMat::new(s1, b_val),
+        lumped_mass: SparseColMat::new(s2, d_val),
         lumped_diagonal,
     })
 }
 
-/// Mixed Voronoi areas per vertex (Meyer et al. 2003, Fig. 4).
-fn voronoi_areas(mesh: &TriMesh, geometry: &[(f64, [f64; 3])]) -> Vec<f64> {
-    let mut areas = vec![0.0; mesh.n_vertices()];
-    for (f, face) in mesh.faces().iter().enumerate() {
-        let (area, cots) = geometry[f];
-        let p = mesh.corners(f);
-        let obtuse = (0..3).find(|&k| cots[k] < 0.0);
-        for k in 0..3 {
-            let a = match obtuse {
-                None => {
-                    // Voronoi area at corner k: (|e_kj|² cot θ_l + |e_kl|² cot θ_j)/8, where the
-                    // edge k→k+1 is opposite corner k+2 and the edge k→k+2 is opposite corner k+1.
-                    let e1 = sub(p[(k + 1) % 3], p[k]);
-                    let e2 = sub(p[(k + 2) % 3], p[k]);
-                    (dot(e1, e1) * cots[(k + 2) % 3] + dot(e2, e2) * cots[(k + 1) % 3]) / 8.0
-                }
-                Some(o) if o == k => area / 2.0,
-                Some(_) => area / 4.0,
-            };
-            areas[face[k] as usize] += a;
-        }
+/// Splits `v` into consecutive pieces ending at the increasing offsets `bounds` (the last
+/// bound must be `v.len()`).
+fn split_at_bounds<'a, T>(mut v: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [T]> {
+    let mut pieces = Vec::with_capacity(bounds.len());
+    let mut done = 0;
+    for &end in bounds {
+        let (head, tail) = v.split_at_mut(end - done);
+        pieces.push(head);
+        v = tail;
+        done = end;
     }
-    areas
+    pieces
+}
+
+/// Mixed Voronoi area of each corner of one triangle (Meyer, Desbrun, Schröder, Barr 2003,
+/// Fig. 4): the Voronoi region `(|e_kj|² cot θ_l + |e_kl|² cot θ_j)/8` on a non-obtuse
+/// triangle, otherwise |T|/2 at the obtuse corner and |T|/4 at the other two.
+fn voronoi_corner_areas(p: [[f64; 3]; 3], (area, cots): (f64, [f64; 3])) -> [f64; 3] {
+    let obtuse = (0..3).find(|&k| cots[k] < 0.0);
+    let mut out = [0.0; 3];
+    for (k, a) in out.iter_mut().enumerate() {
+        *a = match obtuse {
+            None => {
+                // The edge k→k+1 is opposite corner k+2 and the edge k→k+2 is opposite k+1.
+                let e1 = sub(p[(k + 1) % 3], p[k]);
+                let e2 = sub(p[(k + 2) % 3], p[k]);
+                (dot(e1, e1) * cots[(k + 2) % 3] + dot(e2, e2) * cots[(k + 1) % 3]) / 8.0
+            }
+            Some(o) if o == k => area / 2.0,
+            Some(_) => area / 4.0,
+        };
+    }
+    out
 }
