@@ -31,12 +31,19 @@
 
 #![warn(missing_docs)]
 
+mod basis;
 mod eigen;
 mod error;
 mod kernel;
 mod krylov;
 mod sparse;
 
+pub use basis::{
+    auto_diffusion, canonical_basis, canonical_limit, eigenfunction_features, extrema, feature_approximation,
+    global_component, largest_eigenvalue, multiscale_times, ApproxParams, AutoDiffusion, Coefficients,
+    FeatureApproximation, LargestEigenParams, Normalization, NormalizedHeatKernel, Persistence, ScaleApproximation,
+    SIGNIFICANT_PERSISTENCE,
+};
 pub use eigen::{EigenParams, Eigenbasis, DENSE_MAX_VERTICES};
 pub use error::HeatError;
 pub use kernel::{heat, HeatKernel, HeatParams, KernelKind, Method};
