@@ -78,12 +78,12 @@ pub enum AutoDiffusion {
     #[default]
     MatrixDiagonal,
     /// The kernel function on the diagonal, `k_t(pᵢ,pᵢ) = Σ_k e^{−λ_k t} x_k(i)²` (the
-    /// usual HKS of [SOG09], i.e. the diagonal of `X D_t Xᵀ = K_t M⁻¹`); units 1/area.
+    /// usual HKS of \[SOG09\], i.e. the diagonal of `X D_t Xᵀ = K_t M⁻¹`); units 1/area.
     KernelValue,
 }
 
 /// The auto-diffusion map (heat kernel signature) at one time t, computed spectrally from
-/// the eigenpairs (paper, Sect. 4.2, [GBAL09]; Eq. (8) truncated to the pairs of `basis`):
+/// the eigenpairs (paper, Sect. 4.2, \[GBAL09\]; Eq. (8) truncated to the pairs of `basis`):
 /// `Σ_k e^{−λ_k t} x_k(i) (M x_k)(i)` ([`AutoDiffusion::MatrixDiagonal`]) or
 /// `Σ_k e^{−λ_k t} x_k(i)²` ([`AutoDiffusion::KernelValue`]). With all n pairs
 /// ([`Eigenbasis::dense`]) it is exact; with the k smallest it is accurate once
@@ -147,7 +147,7 @@ pub fn extrema(mesh: &TriMesh, f: &[f64], persistence: Option<f64>) -> Result<Ve
     Ok(all)
 }
 
-/// Feature points from the first Laplacian eigenfunctions (paper, Sect. 4.2, [RPSS10]): the
+/// Feature points from the first Laplacian eigenfunctions (paper, Sect. 4.2, \[RPSS10\]): the
 /// union of the [`extrema`] of the eigenvectors x₂, …, x_{count+1} of `basis` (x₁, the
 /// constant of λ₁ = 0, is skipped). Sorted, without repetition. Eigenvectors are defined up
 /// to sign, and the union of maxima and minima does not depend on it.
@@ -401,7 +401,7 @@ pub fn feature_approximation(
     }
     let eig = Eigenbasis::partial(&ops.stiffness, kernel.mass(), params.k, &params.eigen)?;
     let lambda_k = eig.values[params.k - 1];
-    if !(lambda_k > 0.0) {
+    if lambda_k.is_nan() || lambda_k <= 0.0 {
         return Err(HeatError::InvalidParameter {
             name: "k",
             reason: format!(

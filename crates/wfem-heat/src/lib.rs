@@ -11,6 +11,12 @@
 //!   Taylor and backward-Euler steps (Eq. (9)) and a fast exact path (shift-and-invert
 //!   rational Krylov, one real sparse Cholesky per t).
 //! * [`Eigenbasis`]: generalized eigenpairs `L x = λ M x`, dense or the k smallest.
+//! * Canonical basis and features (Sect. 4.1–4.2): [`canonical_basis`] (K_t eᵢ for many
+//!   anchors, one factorization set), [`canonical_limit`], [`auto_diffusion`],
+//!   [`eigenfunction_features`], [`feature_approximation`] (f = f_glob + f_loc over the
+//!   multiscale hierarchy tᵢ = (i/10)/λ_k).
+//! * Scale (Sect. 5): [`largest_eigenvalue`] (λ_n by Lanczos on M⁻¹L) and the scale-invariant
+//!   [`NormalizedHeatKernel`].
 //!
 //! ```
 //! use mesh_fem::{assemble, generate, AssemblyParams};
