@@ -252,7 +252,7 @@ fn global_component_is_linear_and_matches_columns() {
 /// 0.81, ‖f_loc − noise‖ / ‖noise‖ = 0.36) and f_glob has < 1/4 of the critical points of f
 /// (measured 20 vs 254).
 ///
-/// Measured (icosphere(3), noise ±0.3 on a field of range 2.6, 25 % persistence, 4 anchors):
+/// Measured (icosphere(3), noise ±0.3 on a field of range 2.6, 25 % persistence: 2 anchors):
 /// with sparse anchors ‖f − f_glob‖∞ / range ≈ 0.47–0.49 at every scale for both coefficient
 /// choices, and f_glob has 359 critical points at t₁ (more than f: rounding-level tails) down to
 /// 68 at t₁₀ (8 / 46 significant for feature values / interpolation). The
@@ -280,6 +280,7 @@ fn feature_approximation_separates_noise() {
         assert!((approx.lambda_k - dense.values[19]).abs() < 1e-9 * dense.values[19]);
         assert_eq!(approx.input_critical_points, noisy_cp);
         assert!(approx.anchors.len() < 12, "anchors {:?}", approx.anchors);
+        eprintln!("{} anchors", approx.anchors.len());
         assert_eq!(approx.scales.len(), 10);
         for (s, t) in approx.scales.iter().zip(&times) {
             assert!((s.t - t).abs() < 1e-9 * t);
@@ -311,4 +312,47 @@ fn feature_approximation_separates_noise() {
     let cp = morse::critical_points(&mesh, &glob).unwrap().len();
     eprintln!("critical points: f {noisy_cp}, K_t f {cp}");
     assert!(cp < noisy_cp / 4);
+}
+
+/// Feature points of the auto-diffusion map (Sect. 4.2, \[GBAL09\]) on the bumpy sphere: every
+/// returned vertex is a strict extremum over its edge neighbours (checked from the faces), the
+/// persistent ones are a subset, and a larger threshold keeps fewer.
+#[test]
+fn auto_diffusion_features_are_strict_extrema() {
+    let (mesh, ops) = ops_of(&generate::bumpy(3));
+    let n = mesh.n_vertices();
+    let basis = Eigenbasis::partial(&ops.stiffness, &ops.mass, 60, &EigenParams::default()).unwrap();
+    let hks = auto_diffusion(
+        &basis,
+        &ops.mass,
+        20.0 / basis.values[59],
+        AutoDiffusion::MatrixDiagonal,
+    )
+    .unwrap();
+    let mut neighbours = vec![Vec::new(); n];
+    for f in mesh.faces() {
+        for (a, b) in [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])] {
+            neighbours[a as usize].push(b as usize);
+            neighbours[b as usize].push(a as usize);
+        }
+    }
+    let all = wfem_heat::extrema(&mesh, &hks, None).unwrap();
+    assert!(all.len() >= 2);
+    for &v in &all {
+        let v = v as usize;
+        let above = neighbours[v].iter().all(|&w| hks[w] < hks[v]);
+        let below = neighbours[v].iter().all(|&w| hks[w] > hks[v]);
+        assert!(above || below, "vertex {v} is not a strict extremum");
+    }
+    let loose = wfem_heat::extrema(&mesh, &hks, Some(0.01)).unwrap();
+    let strict = wfem_heat::extrema(&mesh, &hks, Some(0.3)).unwrap();
+    assert!(strict.len() <= loose.len() && loose.len() <= all.len());
+    assert!(!strict.is_empty(), "the global extrema always persist");
+    assert!(strict.iter().all(|v| loose.contains(v)) && loose.iter().all(|v| all.contains(v)));
+    eprintln!(
+        "HKS extrema: {} all, {} at 1 %, {} at 30 %",
+        all.len(),
+        loose.len(),
+        strict.len()
+    );
 }
