@@ -356,3 +356,63 @@ fn auto_diffusion_features_are_strict_extrema() {
         strict.len()
     );
 }
+
+#[test]
+fn feature_approximation_rejects_bad_parameters() {
+    let (mesh, ops) = ops_of(&generate::icosphere(2));
+    let k = kernel(&ops, KernelKind::Wfem, Method::default());
+    let f = x_coordinate(&mesh);
+    let bad = |p: ApproxParams| feature_approximation(&mesh, &ops, &k, &f, &p);
+    for (params, name) in [
+        (
+            ApproxParams {
+                scales: 0,
+                ..ApproxParams::default()
+            },
+            "scales",
+        ),
+        (
+            ApproxParams {
+                persistence: Persistence::Relative(f64::NAN),
+                ..ApproxParams::default()
+            },
+            "persistence",
+        ),
+        (
+            ApproxParams {
+                persistence: Persistence::Absolute(-1.0),
+                ..ApproxParams::default()
+            },
+            "persistence",
+        ),
+        (
+            ApproxParams {
+                k: 0,
+                ..ApproxParams::default()
+            },
+            "k",
+        ),
+        (
+            ApproxParams {
+                k: 10_000,
+                ..ApproxParams::default()
+            },
+            "k",
+        ),
+    ] {
+        match bad(params) {
+            Err(HeatError::InvalidParameter { name: got, .. }) => assert_eq!(got, name),
+            other => panic!("{name}: expected InvalidParameter, got {other:?}"),
+        }
+    }
+    let mut nan = f.clone();
+    nan[7] = f64::NAN;
+    assert!(matches!(
+        feature_approximation(&mesh, &ops, &k, &nan, &ApproxParams::default()),
+        Err(HeatError::NonFiniteInput { row: 7, .. })
+    ));
+    assert!(matches!(
+        feature_approximation(&mesh, &ops, &k, &f[..10], &ApproxParams::default()),
+        Err(HeatError::LengthMismatch { .. })
+    ));
+}
