@@ -24,6 +24,8 @@ enum Command {
     Operators(cli::OperatorsArgs),
     /// Apply the heat kernel K_t to a source vertex (--source) or a field (--field).
     Heat(cli::HeatArgs),
+    /// Feature-driven approximation f = f_glob + f_loc on persistent critical points (Sect. 4.2).
+    Approx(cli::ApproxArgs),
     /// The demo: K_t e_i at four scales on a generated mesh, written to ./wfem-out/.
     Demo(cli::DemoArgs),
 }
@@ -36,6 +38,7 @@ fn main() -> ExitCode {
         Command::Operators(a) => cli::operators(&a, &mut stdout),
         Command::Heat(a) => cli::heat(&a, &mut stdout),
         Command::Demo(a) => cli::demo(&a, &mut stdout),
+        Command::Approx(a) => cli::approx(&a, &mut stdout),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

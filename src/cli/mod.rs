@@ -5,8 +5,10 @@
 //! over its input. Output formats are chosen by extension: `.ply` (mesh with named float
 //! vertex properties and vertex colors), `.npy`, `.csv`, and `.png` (a rendered figure).
 
+mod approx;
 mod heat;
 
+pub use approx::{approx, ApproxArgs, CoefficientsArg};
 pub use heat::{demo, heat, DemoArgs, HeatArgs, KernelArg, MethodArg};
 
 use crate::render::{render_png, symmetric_range, Colormap, RenderError, RenderParams};

@@ -11,6 +11,12 @@
 //!   Taylor and backward-Euler steps (Eq. (9)) and a fast exact path (shift-and-invert
 //!   rational Krylov, one real sparse Cholesky per t).
 //! * [`Eigenbasis`]: generalized eigenpairs `L x = λ M x`, dense or the k smallest.
+//! * Canonical basis and features (Sect. 4.1–4.2): [`canonical_basis`] (K_t eᵢ for many
+//!   anchors, one factorization set), [`canonical_limit`], [`auto_diffusion`],
+//!   [`eigenfunction_features`], [`feature_approximation`] (f = f_glob + f_loc over the
+//!   multiscale hierarchy tᵢ = (i/10)/λ_k).
+//! * Scale (Sect. 5): [`largest_eigenvalue`] (λ_n by Lanczos on M⁻¹L) and the scale-invariant
+//!   [`NormalizedHeatKernel`].
 //!
 //! ```
 //! use mesh_fem::{assemble, generate, AssemblyParams};
@@ -31,12 +37,19 @@
 
 #![warn(missing_docs)]
 
+mod basis;
 mod eigen;
 mod error;
 mod kernel;
 mod krylov;
 mod sparse;
 
+pub use basis::{
+    auto_diffusion, canonical_basis, canonical_limit, eigenfunction_features, extrema, feature_approximation,
+    global_component, largest_eigenvalue, multiscale_times, ApproxParams, AutoDiffusion, Coefficients,
+    FeatureApproximation, LargestEigenParams, Normalization, NormalizedHeatKernel, Persistence, ScaleApproximation,
+    SIGNIFICANT_PERSISTENCE,
+};
 pub use eigen::{EigenParams, Eigenbasis, DENSE_MAX_VERTICES};
 pub use error::HeatError;
 pub use kernel::{heat, HeatKernel, HeatParams, KernelKind, Method};

@@ -1,0 +1,165 @@
+//! End-to-end tests of `wfem approx` (feature-driven approximation, paper Sect. 4.2).
+
+use std::path::Path;
+use std::process::Command;
+
+fn wfem(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_wfem"))
+        .args(args)
+        .output()
+        .expect("the wfem binary runs")
+}
+
+fn stdout(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A level-3 icosphere and a noisy smooth field on it, written as OFF and CSV.
+fn setup(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf, Vec<f64>) {
+    let mesh = mesh_fem::generate::icosphere(3);
+    let path = dir.join("sphere.off");
+    mesh_fem::io::write_mesh(&path, &mesh).expect("write test mesh");
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let f: Vec<f64> = mesh
+        .positions()
+        .iter()
+        .map(|p| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            p[0] + 0.5 * p[1] * p[2] + 0.3 * ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+        })
+        .collect();
+    let field = dir.join("f.csv");
+    let text: String = f.iter().map(|v| format!("{v:.17e}\n")).collect();
+    std::fs::write(&field, text).unwrap();
+    (path, field, f)
+}
+
+#[test]
+fn approx_has_help() {
+    let o = wfem(&["approx", "--help"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("--persistence"));
+}
+
+/// The npy output holds f, then f_glob and f_loc for every scale, with f_glob + f_loc = f,
+/// and the report lists one row per scale with the L∞ error of that row's f_loc.
+#[test]
+fn approx_writes_components_and_prints_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, field, f) = setup(dir.path());
+    let out = dir.path().join("approx.csv");
+    let o = wfem(&[
+        "approx",
+        mesh.to_str().unwrap(),
+        "--field",
+        field.to_str().unwrap(),
+        "--persistence",
+        "0.25",
+        "--scales",
+        "4",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("642 vertices"), "{text}");
+    assert!(text.contains("Linf error"), "{text}");
+    let rows: Vec<Vec<String>> = text
+        .lines()
+        .filter(|l| l.split_whitespace().count() == 6 && l.split_whitespace().all(|w| w.parse::<f64>().is_ok()))
+        .map(|l| l.split_whitespace().map(String::from).collect())
+        .collect();
+    assert_eq!(rows.len(), 4, "{text}");
+    // The CSV has one column per field: f, glob_1..4, loc_1..4.
+    let csv = std::fs::read_to_string(&out).unwrap();
+    let lines: Vec<&str> = csv.lines().filter(|l| !l.starts_with('#')).collect();
+    assert!(lines[0].starts_with("f,glob_1,"), "header {}", lines[0]);
+    let header_skip = 1;
+    let data: Vec<Vec<f64>> = lines[header_skip..]
+        .iter()
+        .map(|l| l.split(',').map(|x| x.trim().parse::<f64>().unwrap()).collect())
+        .collect();
+    assert_eq!(data.len(), 642);
+    assert_eq!(data[0].len(), 9, "columns f, glob_1..4, loc_1..4");
+    for (i, row) in data.iter().enumerate() {
+        assert!((row[0] - f[i]).abs() < 1e-12);
+        for s in 0..4 {
+            assert!((row[1 + s] + row[5 + s] - f[i]).abs() < 1e-9, "vertex {i} scale {s}");
+        }
+    }
+    for (s, row) in rows.iter().enumerate() {
+        let linf = data.iter().fold(0.0f64, |m, r| m.max(r[5 + s].abs()));
+        let printed: f64 = row[2].parse().unwrap();
+        assert!((printed - linf).abs() <= 1e-5 * linf, "scale {s}: {printed} vs {linf}");
+    }
+}
+
+#[test]
+fn approx_png_writes_three_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, field, _) = setup(dir.path());
+    let out = dir.path().join("approx.png");
+    let o = wfem(&[
+        "approx",
+        mesh.to_str().unwrap(),
+        "--field",
+        field.to_str().unwrap(),
+        "--persistence",
+        "0.25",
+        "--scales",
+        "2",
+        "--coefficients",
+        "interpolate",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let pngs: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().extension().is_some_and(|x| x == "png"))
+        .collect();
+    assert_eq!(pngs.len(), 3, "{}", stdout(&o));
+    for p in pngs {
+        let bytes = std::fs::read(p.path()).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG");
+    }
+}
+
+#[test]
+fn approx_rejects_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mesh, field, _) = setup(dir.path());
+    let out = dir.path().join("o.npy");
+    let o = wfem(&[
+        "approx",
+        mesh.to_str().unwrap(),
+        "--field",
+        field.to_str().unwrap(),
+        "--persistence",
+        "-1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("persistence"), "{}", stderr(&o));
+    let short = dir.path().join("short.csv");
+    std::fs::write(&short, "1\n2\n3\n").unwrap();
+    let o = wfem(&[
+        "approx",
+        mesh.to_str().unwrap(),
+        "--field",
+        short.to_str().unwrap(),
+        "--persistence",
+        "0.1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).starts_with("wfem: error:"), "{}", stderr(&o));
+}
