@@ -24,6 +24,8 @@ enum Command {
     Operators(cli::OperatorsArgs),
     /// Apply the heat kernel K_t to a source vertex (--source) or a field (--field).
     Heat(cli::HeatArgs),
+    /// Diffusion distances d_t(i, ·) from one vertex (--from) to every vertex.
+    Distance(cli::DistanceArgs),
     /// The demo: K_t e_i at four scales on a generated mesh, written to ./wfem-out/.
     Demo(cli::DemoArgs),
 }
@@ -35,6 +37,7 @@ fn main() -> ExitCode {
         Command::Info(a) => cli::info(&a, &mut stdout),
         Command::Operators(a) => cli::operators(&a, &mut stdout),
         Command::Heat(a) => cli::heat(&a, &mut stdout),
+        Command::Distance(a) => cli::distance(&a, &mut stdout),
         Command::Demo(a) => cli::demo(&a, &mut stdout),
     };
     match result {

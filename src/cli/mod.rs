@@ -5,7 +5,9 @@
 //! over its input. Output formats are chosen by extension: `.ply` (mesh with named float
 //! vertex properties and vertex colors), `.npy`, `.csv`, and `.png` (a rendered figure).
 
+mod distance;
 mod heat;
+pub use distance::{distance, DistanceArgs, DistanceKindArg};
 
 pub use heat::{demo, heat, DemoArgs, HeatArgs, KernelArg, MethodArg};
 

@@ -343,7 +343,7 @@ pub fn inverse_cg(
     check_time(t)?;
     let n = kernel.n();
     check_vector(f, n)?;
-    if !(params.max_amplification >= 1.0) {
+    if params.max_amplification.is_nan() || params.max_amplification < 1.0 {
         return Err(HeatError::InvalidParameter {
             name: "max_amplification",
             reason: format!("{} must be at least 1", params.max_amplification),
@@ -394,7 +394,7 @@ pub fn inverse_cg(
         let q = kernel.apply(&p, t)?;
         let pq = bdot(&p, &q);
         let rel_res = rr.sqrt() / f_norm;
-        if !(pq > 0.0) || !pq.is_finite() {
+        if !pq.is_finite() || pq <= 0.0 {
             let amp = bdot(&g, &g).sqrt() / f_norm;
             return Err(refuse(
                 format!("⟨p, K_t p⟩_B = {pq:e} is not positive: K_t g = f is not solvable to rounding"),
