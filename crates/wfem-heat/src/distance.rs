@@ -22,8 +22,9 @@
 //!
 //! Cost: [`DiffusionDistance::pairs`] needs one column `A(e_i − e_j)` per pair, solved in blocks
 //! of columns with the factors of t reused. A whole row `d(i, ·)` needs the column `A e_i` and
-//! the diagonal of A; the diagonal is computed once exactly from unit-vector columns (n columns,
-//! in blocks, the factors reused) and cached, so every further row costs one column.
+//! the diagonal of A; the diagonal is computed once (by probing with a distance-p colouring of
+//! the mesh graph, or exactly from n unit-vector columns, see [`DiagonalMethod`]) and cached,
+//! so every further row costs one column.
 
 use crate::algebra::unit_columns;
 use crate::kernel::check_time;
@@ -54,6 +55,39 @@ pub struct DistanceParams {
     pub backend: Backend,
     /// Number of right-hand sides per multi-RHS solve (default 64).
     pub block: usize,
+    /// How the diagonal of A is computed for whole rows (default probing, tol 1e−10).
+    pub diagonal: DiagonalMethod,
+}
+
+/// How [`DiffusionDistance::diagonal`] computes `diag(A)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DiagonalMethod {
+    /// Exactly (to the rational error) from n unit-vector columns: cost grows like n × (one
+    /// multi-RHS solve), for small meshes or as a reference.
+    Exact,
+    /// Probing (Tang & Saad, NLAA 19 (2012) 485–501; NUMERICS §4): a greedy distance-p colouring
+    /// of the mesh graph (vertices within p edges get different colours), one column per colour,
+    /// `diag_j ≈ (A v_{c(j)})_j` with `v_c` the indicator of colour c. The error at j is the sum
+    /// of `A_jk` over same-coloured k, all more than p edges away. p is the smallest number of
+    /// hops such that the column `A e_i` of the queried vertex i has
+    /// `Σ_{dist(i,k) > p} |A_ik| ≤ tol · A_ii` (the heat kernel decays like e^{−d²/4t}, so p
+    /// and the number of colours depend on t/h², not on n). Falls back to [`Self::Exact`] when
+    /// the colouring would need more than n/4 colours (large t).
+    Probing {
+        /// Relative tail tolerance (default 1e−10).
+        tol: f64,
+    },
+}
+
+/// How the cached diagonal was computed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiagonalInfo {
+    /// Number of probe columns used (n for the exact method).
+    pub columns: usize,
+    /// Graph distance p of the colouring (`None` for the exact method).
+    pub hops: Option<usize>,
+    /// The relative tail `Σ_{dist(i,k) > p} |A_ik| / A_ii` of the column used to choose p.
+    pub relative_tail: f64,
 }
 
 impl Default for DistanceParams {
@@ -62,6 +96,7 @@ impl Default for DistanceParams {
             degree: shifted_solve::DEFAULT_DEGREE,
             backend: Backend::DirectLu,
             block: 64,
+            diagonal: DiagonalMethod::Probing { tol: 1e-10 },
         }
     }
 }
@@ -77,7 +112,8 @@ pub struct DiffusionDistance {
     factors: RationalFactors,
     c0: f64,
     mass_factor: Option<SpdFactor>,
-    diagonal: OnceLock<Vec<f64>>,
+    diagonal_method: DiagonalMethod,
+    diagonal: OnceLock<(Vec<f64>, DiagonalInfo)>,
 }
 
 impl DiffusionDistance {
@@ -90,6 +126,14 @@ impl DiffusionDistance {
     /// [`HeatError::NotPositiveDefinite`] (B, linear kind).
     pub fn new(ops: &FemOperators, kind: DistanceKind, t: f64, params: &DistanceParams) -> Result<Self, HeatError> {
         check_time(t)?;
+        if let DiagonalMethod::Probing { tol } = params.diagonal {
+            if !(tol > 0.0 && tol < 1.0) {
+                return Err(HeatError::InvalidParameter {
+                    name: "diagonal.tol",
+                    reason: format!("{tol} is not in (0, 1)"),
+                });
+            }
+        }
         if params.block == 0 {
             return Err(HeatError::InvalidParameter {
                 name: "block",
@@ -119,6 +163,7 @@ impl DiffusionDistance {
             factors,
             c0: approx.c0,
             mass_factor,
+            diagonal_method: params.diagonal,
             diagonal: OnceLock::new(),
         })
     }
@@ -215,35 +260,176 @@ impl DiffusionDistance {
     }
 
     /// The diagonal of A (`S_t(j,j)` or `H̃_{2t}(j,j)`, the latter being the heat kernel
-    /// signature HKS_{2t}), exact to the rational error: n unit-vector columns in blocks with
-    /// the factors reused. Computed on the first call and cached.
+    /// signature HKS_{2t}), by the [`DiagonalMethod`] of the parameters (probing chooses its
+    /// colouring from the column of vertex 0). Computed on the first call (of this or of
+    /// [`Self::row_squared`]) and cached; [`Self::diagonal_info`] says how.
     ///
     /// # Errors
     /// As [`Self::gram_apply`].
     pub fn diagonal(&self) -> Result<&[f64], HeatError> {
-        if let Some(d) = self.diagonal.get() {
+        if let Some((d, _)) = self.diagonal.get() {
+            return Ok(d);
+        }
+        let e = unit_columns(self.n(), &[0])?;
+        let y = self.gram_apply(e.as_ref())?;
+        let col: Vec<f64> = y.col(0).iter().copied().collect();
+        self.diagonal_from(0, &col)
+    }
+
+    /// How the cached diagonal was computed (`None` before the first row or diagonal).
+    pub fn diagonal_info(&self) -> Option<&DiagonalInfo> {
+        self.diagonal.get().map(|(_, info)| info)
+    }
+
+    fn diagonal_from(&self, i: usize, col: &[f64]) -> Result<&[f64], HeatError> {
+        if let Some((d, _)) = self.diagonal.get() {
             return Ok(d);
         }
         let n = self.n();
-        let mut d = vec![0.0; n];
-        let mut start = 0;
-        while start < n {
-            let end = (start + self.block).min(n);
-            let idx: Vec<usize> = (start..end).collect();
-            let e = unit_columns(n, &idx)?;
-            let y = self.gram_apply(e.as_ref())?;
-            for (c, &i) in idx.iter().enumerate() {
-                d[i] = y[(i, c)];
+        let probed = match self.diagonal_method {
+            DiagonalMethod::Exact => None,
+            DiagonalMethod::Probing { tol } => self.probe_colouring(i, col, tol),
+        };
+        let (d, info) = match probed {
+            Some((colour, n_colours, hops, relative_tail)) => {
+                let mut d = vec![0.0; n];
+                let mut start = 0;
+                while start < n_colours {
+                    let end = (start + self.block).min(n_colours);
+                    let mut p = Mat::<f64>::zeros(n, end - start);
+                    for (v, &c) in colour.iter().enumerate() {
+                        if (start..end).contains(&c) {
+                            p[(v, c - start)] = 1.0;
+                        }
+                    }
+                    let y = self.gram_apply(p.as_ref())?;
+                    for (v, &c) in colour.iter().enumerate() {
+                        if (start..end).contains(&c) {
+                            d[v] = y[(v, c - start)];
+                        }
+                    }
+                    start = end;
+                }
+                (
+                    d,
+                    DiagonalInfo {
+                        columns: n_colours,
+                        hops: Some(hops),
+                        relative_tail,
+                    },
+                )
             }
-            start = end;
+            None => {
+                let mut d = vec![0.0; n];
+                let mut start = 0;
+                while start < n {
+                    let end = (start + self.block).min(n);
+                    let idx: Vec<usize> = (start..end).collect();
+                    let e = unit_columns(n, &idx)?;
+                    let y = self.gram_apply(e.as_ref())?;
+                    for (c, &v) in idx.iter().enumerate() {
+                        d[v] = y[(v, c)];
+                    }
+                    start = end;
+                }
+                (
+                    d,
+                    DiagonalInfo {
+                        columns: n,
+                        hops: None,
+                        relative_tail: 0.0,
+                    },
+                )
+            }
+        };
+        Ok(&self.diagonal.get_or_init(|| (d, info)).0)
+    }
+
+    /// Chooses p from the tail of `col = A e_i` and colours the graph at distance p.
+    /// Returns (colour of each vertex, number of colours, p, relative tail), or `None` when
+    /// more than n/4 colours would be needed.
+    fn probe_colouring(&self, i: usize, col: &[f64], tol: f64) -> Option<(Vec<usize>, usize, usize, f64)> {
+        let n = self.n();
+        let sym = self.mass.symbolic();
+        let (ptr, idx) = (sym.col_ptr(), sym.row_idx());
+        // BFS distances from i.
+        let mut dist = vec![usize::MAX; n];
+        dist[i] = 0;
+        let mut queue = std::collections::VecDeque::from([i]);
+        let mut per_depth: Vec<f64> = Vec::new();
+        while let Some(v) = queue.pop_front() {
+            let d = dist[v];
+            if per_depth.len() <= d {
+                per_depth.resize(d + 1, 0.0);
+            }
+            per_depth[d] += col[v].abs();
+            for &w in &idx[ptr[v]..ptr[v + 1]] {
+                if dist[w] == usize::MAX {
+                    dist[w] = d + 1;
+                    queue.push_back(w);
+                }
+            }
         }
-        Ok(self.diagonal.get_or_init(|| d))
+        let aii = col[i].abs();
+        let mut tail: f64 = per_depth.iter().skip(1).sum();
+        let mut hops = 0;
+        while tail > tol * aii && hops + 1 < per_depth.len() {
+            hops += 1;
+            tail -= per_depth[hops];
+        }
+        let tail = tail.max(0.0);
+        if tail > tol * aii {
+            return None;
+        }
+        // Greedy distance-p colouring.
+        let max_colours = n / 4;
+        let mut colour = vec![usize::MAX; n];
+        let mut stamp = vec![usize::MAX; n];
+        let mut used: Vec<usize> = Vec::new();
+        let mut n_colours = 0;
+        let mut frontier = Vec::new();
+        let mut next = Vec::new();
+        for v in 0..n {
+            used.clear();
+            stamp[v] = v;
+            frontier.clear();
+            frontier.push(v);
+            for _ in 0..hops {
+                next.clear();
+                for &u in &frontier {
+                    for &w in &idx[ptr[u]..ptr[u + 1]] {
+                        if stamp[w] != v {
+                            stamp[w] = v;
+                            next.push(w);
+                            if colour[w] != usize::MAX {
+                                used.push(colour[w]);
+                            }
+                        }
+                    }
+                }
+                std::mem::swap(&mut frontier, &mut next);
+            }
+            used.sort_unstable();
+            used.dedup();
+            let c = used
+                .iter()
+                .enumerate()
+                .find(|(k, &u)| *k != u)
+                .map_or(used.len(), |(k, _)| k);
+            colour[v] = c;
+            n_colours = n_colours.max(c + 1);
+            if n_colours > max_colours {
+                return None;
+            }
+        }
+        Some((colour, n_colours, hops, if aii > 0.0 { tail / aii } else { 0.0 }))
     }
 
     /// Squared distances from vertex i to every vertex,
     /// `d²(i, j) = A_ii − 2A_ij + A_jj` (clamped at 0), from the column `A e_i` and the cached
-    /// [`Self::diagonal`]. The first call pays for the diagonal (n columns); each further row
-    /// costs one column.
+    /// [`Self::diagonal`]. The first call pays for the diagonal (a number of probe columns that
+    /// depends on t/h², not on n, with [`DiagonalMethod::Probing`]; n columns with
+    /// [`DiagonalMethod::Exact`]); each further row costs one column.
     ///
     /// # Errors
     /// [`HeatError::VertexOutOfRange`]; as [`Self::gram_apply`].
@@ -251,9 +437,10 @@ impl DiffusionDistance {
         let n = self.n();
         let e = unit_columns(n, &[i])?;
         let y = self.gram_apply(e.as_ref())?;
-        let d = self.diagonal()?;
-        let aii = y[(i, 0)];
-        let mut row: Vec<f64> = (0..n).map(|j| (aii - 2.0 * y[(j, 0)] + d[j]).max(0.0)).collect();
+        let col: Vec<f64> = y.col(0).iter().copied().collect();
+        let d = self.diagonal_from(i, &col)?;
+        let aii = col[i];
+        let mut row: Vec<f64> = (0..n).map(|j| (aii - 2.0 * col[j] + d[j]).max(0.0)).collect();
         row[i] = 0.0;
         Ok(row)
     }

@@ -44,7 +44,7 @@ pub use algebra::{
     embedding_g, embedding_h, embeddings_h, inner_b, inner_t, inverse_cg, inverse_spectral, norm_b, rkhs_apply,
     InverseParams, InverseReport, TruncationReport,
 };
-pub use distance::{DiffusionDistance, DistanceKind, DistanceParams};
+pub use distance::{DiagonalInfo, DiagonalMethod, DiffusionDistance, DistanceKind, DistanceParams};
 
 pub use eigen::{EigenParams, Eigenbasis, DENSE_MAX_VERTICES};
 pub use error::HeatError;

@@ -160,3 +160,71 @@ fn errors_are_typed() {
     };
     assert!(DiffusionDistance::new(&ops, DistanceKind::Wfem, 0.1, &bad).is_err());
 }
+
+/// Probing: the colouring needs a number of columns set by the decay of A (about a factor 6 per
+/// edge hop here), not by n; the probed diagonal agrees with exact unit-vector columns. On
+/// small meshes (or at large t) it falls back to the exact diagonal.
+#[test]
+fn probed_diagonal_matches_exact_columns() {
+    use wfem_heat::DiagonalMethod;
+    let (_, ops) = ops_of(&generate::icosphere(4));
+    let n = ops.stiffness.nrows();
+    // A short time (√(4t) < edge length): the kernel is local.
+    let t = 2e-4;
+    for kind in [DistanceKind::Wfem, DistanceKind::Linear] {
+        let params = DistanceParams {
+            diagonal: DiagonalMethod::Probing { tol: 1e-8 },
+            ..Default::default()
+        };
+        let dd = DiffusionDistance::new(&ops, kind, t, &params).unwrap();
+        let row = dd.row_squared(n / 2).unwrap();
+        let info = dd.diagonal_info().unwrap().clone();
+        assert!(
+            info.hops.is_some() && info.columns < n / 4,
+            "{kind:?}: {info:?} (n = {n})"
+        );
+        let d = dd.diagonal().unwrap();
+        let sample: Vec<usize> = (0..n).step_by(97).collect();
+        let e = {
+            let mut e = faer::Mat::<f64>::zeros(n, sample.len());
+            for (c, &j) in sample.iter().enumerate() {
+                e[(j, c)] = 1.0;
+            }
+            e
+        };
+        let y = dd.gram_apply(e.as_ref()).unwrap();
+        let mut worst = 0.0f64;
+        for (c, &j) in sample.iter().enumerate() {
+            worst = worst.max((d[j] - y[(j, c)]).abs() / y[(j, c)].abs());
+        }
+        eprintln!("{kind:?} t={t}: {info:?}, worst sampled diagonal error {worst:e} (n = {n})");
+        assert!(worst < 1e-7, "{kind:?}: diagonal error {worst:e}");
+        // The row is consistent with pairs (which need no diagonal).
+        let pairs: Vec<(usize, usize)> = sample.iter().map(|&j| (n / 2, j)).collect();
+        let p = dd.pairs_squared(&pairs).unwrap();
+        let scale = row.iter().fold(0.0f64, |a, &b| a.max(b));
+        for (&(_, j), pj) in pairs.iter().zip(&p) {
+            assert!((row[j] - pj).abs() < 1e-7 * scale, "{kind:?} j={j}: {} vs {pj}", row[j]);
+        }
+    }
+    // Small mesh and large t: the colouring would need more than n/4 columns, so the diagonal
+    // is exact.
+    let (_, ops) = ops_of(&generate::icosphere(2));
+    for t in [0.002, 1.0] {
+        let dd = DiffusionDistance::new(&ops, DistanceKind::Wfem, t, &DistanceParams::default()).unwrap();
+        dd.diagonal().unwrap();
+        let info = dd.diagonal_info().unwrap();
+        assert_eq!((info.columns, info.hops), (ops.stiffness.nrows(), None));
+    }
+    let bad = DistanceParams {
+        diagonal: DiagonalMethod::Probing { tol: 0.0 },
+        ..Default::default()
+    };
+    assert!(matches!(
+        DiffusionDistance::new(&ops, DistanceKind::Wfem, 0.1, &bad),
+        Err(HeatError::InvalidParameter {
+            name: "diagonal.tol",
+            ..
+        })
+    ));
+}
