@@ -259,7 +259,9 @@ pub(crate) fn unit_columns(n: usize, vertices: &[usize]) -> Result<Mat<f64>, Hea
 
 /// The RKHS embedding of vertex i, `g_i^t = H_{t/2} e_i = X D_{−t/2} Xᵀ e_i` (paper, Eq. (18a),
 /// (20)), truncated to the eigenpairs of `basis` (see [`rkhs_apply`] for why), so that
-/// `⟨g_i, g_j⟩_B = H_t(i, j)` for the truncated H_t.
+/// `⟨g_i, g_j⟩_B = H_t(i, j)` for the truncated H_t, hence
+/// `‖g_i − g_j‖_B² = H_t(i,i) − 2H_t(i,j) + H_t(j,j)` (the display after Eq. (20) prints
+/// `H_{t/2}` entries: with `g_i = H_{t/2} e_i` the Gram matrix is H_t, by Eq. (19)).
 ///
 /// # Errors
 /// [`HeatError::VertexOutOfRange`]; as [`rkhs_apply`].

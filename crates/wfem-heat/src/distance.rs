@@ -18,7 +18,8 @@
 //!   (|c0| = E_n) is included through one sparse Cholesky of B. (The paper's "linear
 //!   diffusion distance" `‖g_i − g_j‖_B²` uses the RKHS kernel `H_t = X D_{−t} Xᵀ`, whose
 //!   weights e^{+λt} grow with λ; it is an anti-diffusion quantity, available only truncated,
-//!   see [`crate::embedding_g`].)
+//!   see [`crate::embedding_g`]. By Eq. (18a) it equals `H_t(i,i) − 2H_t(i,j) + H_t(j,j)`; the
+//!   display after Eq. (20) prints `H_{t/2}` entries, another index slip.)
 //!
 //! Cost: [`DiffusionDistance::pairs`] needs one column `A(e_i − e_j)` per pair, solved in blocks
 //! of columns with the factors of t reused. A whole row `d(i, ·)` needs the column `A e_i` and
