@@ -58,6 +58,7 @@ fn rows_and_pairs_match_the_dense_spectral_formula() {
                         "{name} {kind:?} t={t} row {i}: error {:e}",
                         err / scale
                     );
+                    eprintln!("{name} {kind:?} t={t} row {i}: max error / max d² = {:e}", err / scale);
                     // Pairs: one column per pair, relative to each entry (no cancellation).
                     let pairs: Vec<(usize, usize)> = (0..n).step_by(7).map(|j| (i, j)).collect();
                     let got = dd.pairs_squared(&pairs).unwrap();
