@@ -26,6 +26,8 @@ enum Command {
     Heat(cli::HeatArgs),
     /// Feature-driven approximation f = f_glob + f_loc on persistent critical points (Sect. 4.2).
     Approx(cli::ApproxArgs),
+    /// Diffusion distances d_t(i, ·) from one vertex (--from) to every vertex.
+    Distance(cli::DistanceArgs),
     /// The demo: K_t e_i at four scales on a generated mesh, written to ./wfem-out/.
     Demo(cli::DemoArgs),
 }
@@ -37,6 +39,7 @@ fn main() -> ExitCode {
         Command::Info(a) => cli::info(&a, &mut stdout),
         Command::Operators(a) => cli::operators(&a, &mut stdout),
         Command::Heat(a) => cli::heat(&a, &mut stdout),
+        Command::Distance(a) => cli::distance(&a, &mut stdout),
         Command::Demo(a) => cli::demo(&a, &mut stdout),
         Command::Approx(a) => cli::approx(&a, &mut stdout),
     };

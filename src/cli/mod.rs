@@ -6,7 +6,9 @@
 //! vertex properties and vertex colors), `.npy`, `.csv`, and `.png` (a rendered figure).
 
 mod approx;
+mod distance;
 mod heat;
+pub use distance::{distance, DistanceArgs, DistanceKindArg};
 
 pub use approx::{approx, ApproxArgs, CoefficientsArg};
 pub use heat::{demo, heat, DemoArgs, HeatArgs, KernelArg, MethodArg};

@@ -97,4 +97,34 @@ pub enum HeatError {
         /// Last a-posteriori error estimate (relative, in the B-norm).
         estimate: f64,
     },
+
+    // ---- operator algebra, RKHS and diffusion distances (algebra.rs, distance.rs) ----
+    /// The inverse heat operator `K_{−t} = K_t⁻¹` (paper, Sect. 4) was refused: the data are
+    /// not band-limited enough for the requested t, so the answer would be amplified noise.
+    #[error(
+        "inverse heat operator K_(-t) refused at t = {t}: {reason} (amplification {amplification:.3e}, \
+         cap {cap:.1e}, {iterations} iterations, relative residual {relative_residual:.2e})"
+    )]
+    IllConditionedInverse {
+        /// The diffusion time t of K_{−t}.
+        t: f64,
+        /// Why: the amplification cap was exceeded, or the residual stalled.
+        reason: String,
+        /// The amplification ‖g‖_B / ‖f‖_B reached (or e^{tλ_k} for the spectral inverse).
+        amplification: f64,
+        /// The user's cap on the amplification.
+        cap: f64,
+        /// Iterations performed (0 for the spectral inverse).
+        iterations: usize,
+        /// Last relative residual ‖f − K_t g‖_B / ‖f‖_B.
+        relative_residual: f64,
+    },
+    /// A vertex index is out of range.
+    #[error("vertex {index} does not exist (the mesh has {n_vertices} vertices)")]
+    VertexOutOfRange {
+        /// The index given.
+        index: usize,
+        /// Number of vertices n.
+        n_vertices: usize,
+    },
 }

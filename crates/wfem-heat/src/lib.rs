@@ -50,6 +50,15 @@ pub use basis::{
     FeatureApproximation, LargestEigenParams, Normalization, NormalizedHeatKernel, Persistence, ScaleApproximation,
     SIGNIFICANT_PERSISTENCE,
 };
+// ---- operator algebra, RKHS and diffusion distances ----
+mod algebra;
+mod distance;
+pub use algebra::{
+    embedding_g, embedding_h, embeddings_h, inner_b, inner_t, inverse_cg, inverse_spectral, norm_b, rkhs_apply,
+    InverseParams, InverseReport, TruncationReport,
+};
+pub use distance::{DiagonalInfo, DiagonalMethod, DiffusionDistance, DistanceKind, DistanceParams};
+
 pub use eigen::{EigenParams, Eigenbasis, DENSE_MAX_VERTICES};
 pub use error::HeatError;
 pub use kernel::{heat, HeatKernel, HeatParams, KernelKind, Method};
