@@ -16,7 +16,7 @@
 //! Every routine that changes the vertex set returns a [`DerivedMesh`]: the new mesh and, for
 //! every new vertex, the index of the input vertex it comes from (a ground-truth map).
 
-use crate::mesh::{dot, sub};
+use crate::mesh::{cross, dot, norm, sub};
 use crate::{MeshError, TriMesh};
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap, HashSet};
@@ -47,19 +47,6 @@ impl DerivedMesh {
     }
 }
 
-#[inline]
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-#[inline]
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
 
 fn check_vertex(index: u32, n_vertices: usize) -> Result<(), MeshError> {
     if (index as usize) < n_vertices {
@@ -72,15 +59,7 @@ fn check_vertex(index: u32, n_vertices: usize) -> Result<(), MeshError> {
 /// Length of the diagonal of the axis-aligned bounding box, a cheap stand-in for the shape
 /// diameter (within a factor √3 of the extrinsic diameter).
 pub fn bounding_box_diagonal(mesh: &TriMesh) -> f64 {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in mesh.positions() {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    norm(sub(hi, lo))
+    crate::validate::bbox_diagonal(mesh.positions())
 }
 
 /// Area-weighted unit vertex normals n(v) = Σ_{T∋v} (b − a) × (c − a) / ‖·‖ (outward for
