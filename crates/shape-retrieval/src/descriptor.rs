@@ -191,6 +191,12 @@ impl ShapeDescriptors {
         })
     }
 
+    /// Replaces the HKS times of later [`Self::dense`] calls, keeping the eigenbases (e.g. to
+    /// evaluate DHK3 at times in units of 1/λ_max after DHK2 at absolute times).
+    pub fn set_times(&mut self, times: TimeSampling) {
+        self.params.times = times;
+    }
+
     /// The mesh.
     pub fn mesh(&self) -> &TriMesh {
         &self.mesh
