@@ -26,6 +26,8 @@ enum Command {
     Heat(cli::HeatArgs),
     /// The demo: K_t e_i at four scales on a generated mesh, written to ./wfem-out/.
     Demo(cli::DemoArgs),
+    /// Heat kernel signature (n × T) of the wFEM or lumped kernel from its k smallest eigenpairs.
+    Hks(cli::hks::HksArgs),
 }
 
 fn main() -> ExitCode {
@@ -36,6 +38,7 @@ fn main() -> ExitCode {
         Command::Operators(a) => cli::operators(&a, &mut stdout),
         Command::Heat(a) => cli::heat(&a, &mut stdout),
         Command::Demo(a) => cli::demo(&a, &mut stdout),
+        Command::Hks(a) => cli::hks::hks(&a, &mut stdout),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

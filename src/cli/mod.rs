@@ -6,6 +6,7 @@
 //! vertex properties and vertex colors), `.npy`, `.csv`, and `.png` (a rendered figure).
 
 mod heat;
+pub mod hks;
 
 pub use heat::{demo, heat, DemoArgs, HeatArgs, KernelArg, MethodArg};
 
