@@ -28,6 +28,8 @@ enum Command {
     Demo(cli::DemoArgs),
     /// Heat kernel signature (n × T) of the wFEM or lumped kernel from its k smallest eigenpairs.
     Hks(cli::hks::HksArgs),
+    /// Shape retrieval with bags of features: `build` an index, `query` it with a mesh.
+    Retrieval(cli::retrieval::RetrievalArgs),
 }
 
 fn main() -> ExitCode {
@@ -39,6 +41,7 @@ fn main() -> ExitCode {
         Command::Heat(a) => cli::heat(&a, &mut stdout),
         Command::Demo(a) => cli::demo(&a, &mut stdout),
         Command::Hks(a) => cli::hks::hks(&a, &mut stdout),
+        Command::Retrieval(a) => cli::retrieval::run(&a, &mut stdout),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

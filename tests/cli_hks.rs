@@ -150,3 +150,47 @@ fn hks_rejects_bad_input() {
     assert!(!o.status.success());
     assert_eq!(std::fs::read(&path).unwrap(), before);
 }
+
+#[test]
+fn retrieval_build_then_query_finds_the_same_shape_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let shapes = [
+        ("bumpy.off", mesh_fem::generate::bumpy(2)),
+        ("sphere.off", mesh_fem::generate::icosphere(2)),
+        ("torus.off", mesh_fem::generate::torus(1.0, 0.4, 20, 10)),
+    ];
+    let mut files = Vec::new();
+    for (name, mesh) in &shapes {
+        let p = dir.path().join(name);
+        mesh_fem::io::write_mesh(&p, mesh).unwrap();
+        files.push(p.to_str().unwrap().to_string());
+    }
+    let index = dir.path().join("index.json");
+    let mut args = vec!["retrieval", "build"];
+    args.extend(files.iter().map(|s| s.as_str()));
+    args.extend(["--out", index.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+    let o = wfem(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A rescaled copy of the bumpy sphere retrieves the bumpy sphere first (DHK3 is
+    // scale-invariant), at distance ≈ 0.
+    let query = dir.path().join("query.off");
+    mesh_fem::io::write_mesh(&query, &mesh_fem::generate::bumpy(2).scaled(5.0).unwrap()).unwrap();
+    let o = wfem(&[
+        "retrieval",
+        "query",
+        index.to_str().unwrap(),
+        query.to_str().unwrap(),
+        "--top",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    let first: Vec<&str> = text.lines().next().unwrap().split('\t').collect();
+    assert_eq!(first[0], "1");
+    assert!(first[2].ends_with("bumpy.off"), "{text}");
+    assert!(first[1].parse::<f64>().unwrap() < 1e-6, "{text}");
+    assert_eq!(text.lines().count(), 2);
+    // A file that is not an index is refused.
+    let o = wfem(&["retrieval", "query", files[0].as_str(), query.to_str().unwrap()]);
+    assert!(!o.status.success());
+}

@@ -7,6 +7,7 @@
 
 mod heat;
 pub mod hks;
+pub mod retrieval;
 
 pub use heat::{demo, heat, DemoArgs, HeatArgs, KernelArg, MethodArg};
 
