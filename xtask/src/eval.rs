@@ -64,7 +64,8 @@ pub enum EvalError {
 /// Which part of the benchmark to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Subset {
-    /// 4 TOSCA shapes × 9 synthetic classes × strengths 1–5, k = 100 (≈ 10 min release, 2 cores).
+    /// The 8 default TOSCA shapes × 9 synthetic classes × strengths 1–5, k = 100 (360 shapes;
+    /// measured ≈ 3 min per 4 shapes with the release build on a shared 2-core machine).
     Default,
     /// 2 shapes × 4 classes × strengths 1 and 5, k = 24 (the xtask test).
     Small,
@@ -74,7 +75,7 @@ impl Subset {
     /// Base shapes.
     pub fn shapes(self) -> Vec<String> {
         let names: &[&str] = match self {
-            Subset::Default => &["cat", "centaur", "david", "horse"],
+            Subset::Default => &crate::shrec::DEFAULT_SHAPES,
             Subset::Small => &["cat", "wolf"],
         };
         names.iter().map(|s| s.to_string()).collect()
@@ -412,9 +413,17 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, EvalError> {
     };
 
     // Descriptors of every shape, in parallel.
+    let done = std::sync::atomic::AtomicUsize::new(0);
     let mut analysed: Vec<Analysed> = loaded
         .par_iter()
-        .map(|l| analyse(&l.mesh, &params, &dhk3_times, &l.file))
+        .map(|l| {
+            let a = analyse(&l.mesh, &params, &dhk3_times, &l.file)?;
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if d % 10 == 0 || d == loaded.len() {
+                eprintln!("shrec-eval: descriptors of {d}/{} shapes", loaded.len());
+            }
+            Ok(a)
+        })
         .collect::<Result<_, EvalError>>()?;
 
     // Vocabularies on the null shapes' descriptors.
