@@ -30,6 +30,10 @@ enum Command {
     Distance(cli::DistanceArgs),
     /// The demo: K_t e_i at four scales on a generated mesh, written to ./wfem-out/.
     Demo(cli::DemoArgs),
+    /// Heat kernel signature (n × T) of the wFEM or lumped kernel from its k smallest eigenpairs.
+    Hks(cli::hks::HksArgs),
+    /// Shape retrieval with bags of features: `build` an index, `query` it with a mesh.
+    Retrieval(cli::retrieval::RetrievalArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +46,8 @@ fn main() -> ExitCode {
         Command::Distance(a) => cli::distance(&a, &mut stdout),
         Command::Demo(a) => cli::demo(&a, &mut stdout),
         Command::Approx(a) => cli::approx(&a, &mut stdout),
+        Command::Hks(a) => cli::hks::hks(&a, &mut stdout),
+        Command::Retrieval(a) => cli::retrieval::run(&a, &mut stdout),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -9,6 +9,8 @@ mod approx;
 mod distance;
 mod heat;
 pub use distance::{distance, DistanceArgs, DistanceKindArg};
+pub mod hks;
+pub mod retrieval;
 
 pub use approx::{approx, ApproxArgs, CoefficientsArg};
 pub use heat::{demo, heat, DemoArgs, HeatArgs, KernelArg, MethodArg};

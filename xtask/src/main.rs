@@ -30,6 +30,22 @@ enum Cmd {
         #[arg(long, default_value_t = 2010)]
         seed: u64,
     },
+    /// Evaluate DHK1–3 / SI-HKS, SHK1/2 and Shape Google retrieval on the SHREC-style data
+    /// (generated into --data if missing) and write a markdown report.
+    ShrecEval {
+        /// Data folder (reused if its manifest covers the subset).
+        #[arg(long)]
+        data: Option<PathBuf>,
+        /// Report file (default: print to stdout).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Which subset to run.
+        #[arg(long, value_enum, default_value = "default")]
+        subset: xtask::eval::Subset,
+        /// Mesh corpus folder for generation.
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+    },
 }
 
 fn parse_strengths(text: &str) -> Result<Vec<u8>, String> {
@@ -83,6 +99,28 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 manifest.outputs.len(),
                 out.display()
             );
+        }
+        Cmd::ShrecEval {
+            data,
+            out,
+            subset,
+            meshes,
+        } => {
+            let data_dir = data.unwrap_or_else(|| PathBuf::from(format!("data/shrec/eval-{subset:?}").to_lowercase()));
+            let report = xtask::eval::run(&xtask::eval::EvalOptions {
+                data_dir,
+                meshes_dir: meshes,
+                subset,
+                seed: 2010,
+            })?;
+            let text = xtask::eval::markdown(&report);
+            match out {
+                Some(path) => {
+                    mesh_fem::io::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+                    println!("wrote {}", path.display());
+                }
+                None => print!("{text}"),
+            }
         }
     }
     Ok(())

@@ -47,7 +47,6 @@ impl DerivedMesh {
     }
 }
 
-
 fn check_vertex(index: u32, n_vertices: usize) -> Result<(), MeshError> {
     if (index as usize) < n_vertices {
         Ok(())

@@ -5,6 +5,9 @@ pub enum RetrievalError {
     /// An error from the heat kernel.
     #[error(transparent)]
     Heat(#[from] wfem_heat::HeatError),
+    /// An error from mesh assembly or a mesh algorithm.
+    #[error(transparent)]
+    Mesh(#[from] mesh_fem::MeshError),
 
     // ---- shape-retrieval (descriptors, vocabularies, retrieval metrics) ----
     /// Two inputs that must agree in one dimension do not.

@@ -13,6 +13,7 @@
 //! * [`sihks`]: the scale-invariant HKS of Bronstein & Kokkinos;
 //! * [`kmeans`](mod@kmeans), [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;
 //! * [`retrieval`]: ranking, average precision, mAP, precision/recall;
+//! * [`descriptor`]: from a mesh to DHK1–DHK3, SI-HKS and the SHK1/SHK2 feature points;
 //! * [`features`]: feature points (local maxima), their repeatability, and robustness of
 //!   dense descriptors.
 
@@ -20,6 +21,7 @@
 
 pub mod bof;
 mod check;
+pub mod descriptor;
 mod error;
 pub mod features;
 pub mod hks;
@@ -28,6 +30,10 @@ pub mod retrieval;
 pub mod sihks;
 
 pub use bof::{l1_distance, pairwise_l1, vertex_areas, Vocabulary, VocabularyParams};
+pub use descriptor::{
+    dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, ShapeDescriptors,
+    DEFAULT_EIGENPAIRS,
+};
 pub use error::RetrievalError;
 pub use features::{descriptor_distance, local_maxima, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
 pub use hks::{

@@ -1,0 +1,354 @@
+//! From a mesh to descriptors: the dense signatures DHK1–DHK3 and SI-HKS, and the sparse
+//! feature points SHK1/SHK2 of the paper's Sect. 5 (Tables 3–5).
+//!
+//! Every descriptor is computed from the k smallest eigenpairs of a generalized problem
+//! `L φ = λ M φ`, `ΦᵀMΦ = I` (paper, Eq. (4)), found by the shift-invert block Lanczos of
+//! [`wfem_heat::Eigenbasis::partial`]. L is the cotangent stiffness (symmetric positive
+//! semidefinite, positive diagonal); M is the mass of the kernel:
+//!
+//! | descriptor | kernel | mass M | HKS |
+//! |---|---|---|---|
+//! | [`Descriptor::Dhk1`] | Voronoi-cot, `K*_t = X D_t Xᵀ D` (Eq. (7)) | lumped D (mixed Voronoi areas) | `Σ_k e^{−λ_k t} φ_k(i)²` |
+//! | [`Descriptor::Dhk2`] | wFEM, `K_t = X D_t Xᵀ B` (Eq. (6)) | consistent B | `Σ_k e^{−λ_k t} φ_k(i)²` |
+//! | [`Descriptor::Dhk3`] | wFEM, eigenvalues divided by λ_max (Sect. 5) | consistent B | `Σ_k e^{−(λ_k/λ_max) t} φ_k(i)²/λ_max` |
+//! | [`Descriptor::SiHks`] | wFEM | consistent B | [`crate::scale_invariant_hks`] |
+//!
+//! (all in the kernel-value convention `h(i, t) = K_t(x_i, x_i)` of [`crate::hks`]).
+//! DHK1/DHK2 are scale-covariant (`K_t(αM) = K_{α⁻²t}(M)`), DHK3 and SI-HKS scale-invariant.
+//! λ_max is the largest of the k computed eigenvalues, so DHK3 compares shapes consistently
+//! only when they use the same k (λ_k ≈ 4πk/area by Weyl's law, so it is an area normalisation
+//! in disguise).
+//!
+//! **Number of eigenpairs.** The default k = 100 (pyFM and DiffusionNet use 100–128; Sun's and
+//! Aubry's codes 300). The truncation error of the HKS at time t is about e^{−λ_k t}
+//! (NUMERICS §4), so times below ≈ 4 ln10/λ_k are not resolved; the automatic time range
+//! starts there.
+//!
+//! When n ≤ max(3k, 400) (small meshes) the eigenpairs come from the dense decomposition
+//! [`wfem_heat::Eigenbasis::dense`] instead, truncated to k: it costs well under a second there,
+//! and the block Lanczos can stall when its Krylov space reaches n.
+//!
+//! **Sparse features.** SHK1 = strict local maxima (within `rings` edge rings) of the DHK2
+//! signature at one large time `t_f = feature_time_factor · 4 ln10/λ_2`; SHK2 = the maxima of
+//! the same function that survive persistence simplification at `persistence_fraction` of its
+//! range ([`mesh_fem::morse`], \[EMP06\]).
+
+use crate::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalization, TimeSampling};
+use crate::sihks::{scale_invariant_hks, SihksParams};
+use crate::RetrievalError;
+use faer::Mat;
+use mesh_fem::{assemble, AssemblyParams, FemOperators, LumpedMassKind, TriMesh};
+use wfem_heat::{EigenParams, Eigenbasis};
+
+/// Default number k of eigenpairs (see the module docs).
+pub const DEFAULT_EIGENPAIRS: usize = 100;
+
+/// Meshes with at most this many vertices use the dense eigendecomposition.
+const DENSE_BELOW: usize = 400;
+
+/// A dense (per-vertex) descriptor of the paper's Sect. 5.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Descriptor {
+    /// HKS of the lumped Voronoi-cot kernel, spectrum of (L, D) with D the mixed Voronoi areas (Eq. (7)).
+    Dhk1,
+    /// HKS of the wFEM kernel, spectrum of (L, B) (Eq. (6)).
+    Dhk2,
+    /// Scale-invariant wFEM HKS: eigenvalues divided by λ_max ([`SpectrumNormalization::MaxEigenvalue`]).
+    Dhk3,
+    /// Scale-invariant HKS of Bronstein & Kokkinos on the wFEM spectrum ([`crate::sihks`]).
+    SiHks,
+}
+
+impl Descriptor {
+    /// All four, in table order.
+    pub const ALL: [Descriptor; 4] = [Descriptor::Dhk1, Descriptor::Dhk2, Descriptor::Dhk3, Descriptor::SiHks];
+
+    /// The paper's short name (`DHK1`, …, `SI-HKS`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Descriptor::Dhk1 => "DHK1",
+            Descriptor::Dhk2 => "DHK2",
+            Descriptor::Dhk3 => "DHK3",
+            Descriptor::SiHks => "SI-HKS",
+        }
+    }
+
+    fn uses_lumped(self) -> bool {
+        matches!(self, Descriptor::Dhk1)
+    }
+}
+
+/// Sparse feature detectors of the paper's Sect. 5 (Table 4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FeatureDetector {
+    /// Local maxima of the HKS at a large time.
+    Shk1,
+    /// Maxima of the same function after persistence simplification.
+    Shk2,
+}
+
+/// Options of the descriptor pipeline.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DescriptorParams {
+    /// Number k of eigenpairs (default [`DEFAULT_EIGENPAIRS`]); clamped to the vertex count.
+    pub eigenpairs: usize,
+    /// The Lanczos options.
+    pub eigen: EigenParams,
+    /// Times of DHK1/DHK2 (in the units of the mesh) and of DHK3 (in units of 1/λ_max).
+    /// Default: 16 automatic times per shape ([`TimeSampling::Auto`]); give explicit times to
+    /// compare shapes, since automatic times adapt to each spectrum.
+    pub times: TimeSampling,
+    /// SI-HKS options (default [`SihksParams::default`], which assumes TOSCA-like units).
+    pub sihks: SihksParams,
+    /// Feature time `t_f = feature_time_factor · 4 ln10/λ_2` of SHK1/SHK2 (default 0.1).
+    pub feature_time_factor: f64,
+    /// Edge rings within which an SHK1 feature must be the maximum (default 1: the local maxima
+    /// of the piecewise-linear function, so that SHK2 ⊆ SHK1).
+    pub feature_rings: usize,
+    /// SHK2 keeps maxima whose persistence is at least this fraction of the range (default 0.05).
+    pub persistence_fraction: f64,
+}
+
+impl Default for DescriptorParams {
+    fn default() -> Self {
+        Self {
+            eigenpairs: DEFAULT_EIGENPAIRS,
+            eigen: EigenParams::default(),
+            times: TimeSampling::Auto { num_times: 16 },
+            sihks: SihksParams::default(),
+            feature_time_factor: 0.1,
+            feature_rings: 1,
+            persistence_fraction: 0.05,
+        }
+    }
+}
+
+/// One shape with its operators and lazily computed eigenbases, serving many descriptors.
+#[derive(Clone, Debug)]
+pub struct ShapeDescriptors {
+    mesh: TriMesh,
+    operators: FemOperators,
+    params: DescriptorParams,
+    wfem: Option<Eigenbasis>,
+    lumped: Option<Eigenbasis>,
+}
+
+impl ShapeDescriptors {
+    /// Assembles L, B and the Voronoi lumped mass D of `mesh`.
+    ///
+    /// # Errors
+    /// [`RetrievalError::Mesh`] if assembly fails, [`RetrievalError::InvalidParameter`] for
+    /// k = 0 or bad feature parameters.
+    pub fn new(mesh: &TriMesh, params: &DescriptorParams) -> Result<Self, RetrievalError> {
+        let operators = assemble(
+            mesh,
+            &AssemblyParams {
+                lumped: LumpedMassKind::Voronoi,
+            },
+        )?;
+        Self::from_operators(mesh, operators, params)
+    }
+
+    /// Uses given operators (their `lumped_mass` is the D of DHK1, whatever its kind).
+    ///
+    /// # Errors
+    /// [`RetrievalError::DimensionMismatch`] if the operators do not match the mesh,
+    /// [`RetrievalError::InvalidParameter`] for bad parameters.
+    pub fn from_operators(
+        mesh: &TriMesh,
+        operators: FemOperators,
+        params: &DescriptorParams,
+    ) -> Result<Self, RetrievalError> {
+        crate::check::same("operator size vs mesh vertices", mesh.n_vertices(), operators.n())?;
+        if params.eigenpairs == 0 {
+            return Err(RetrievalError::InvalidParameter {
+                name: "eigenpairs",
+                value: 0.0,
+                reason: "must be at least 1",
+            });
+        }
+        crate::check::positive("feature_time_factor", params.feature_time_factor)?;
+        if params.feature_rings == 0 {
+            return Err(RetrievalError::InvalidParameter {
+                name: "feature_rings",
+                value: 0.0,
+                reason: "must be at least 1",
+            });
+        }
+        if !(params.persistence_fraction.is_finite() && (0.0..=1.0).contains(&params.persistence_fraction)) {
+            return Err(RetrievalError::InvalidParameter {
+                name: "persistence_fraction",
+                value: params.persistence_fraction,
+                reason: "must be in [0, 1]",
+            });
+        }
+        Ok(Self {
+            mesh: mesh.clone(),
+            operators,
+            params: params.clone(),
+            wfem: None,
+            lumped: None,
+        })
+    }
+
+    /// Replaces the HKS times of later [`Self::dense`] calls, keeping the eigenbases (e.g. to
+    /// evaluate DHK3 at times in units of 1/λ_max after DHK2 at absolute times).
+    pub fn set_times(&mut self, times: TimeSampling) {
+        self.params.times = times;
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> &TriMesh {
+        &self.mesh
+    }
+
+    /// The operators (L, B, D).
+    pub fn operators(&self) -> &FemOperators {
+        &self.operators
+    }
+
+    /// The k smallest eigenpairs of (L, D) if `lumped`, else of (L, B), computed once.
+    ///
+    /// # Errors
+    /// [`RetrievalError::Heat`] if the eigensolver fails.
+    pub fn eigenbasis(&mut self, lumped: bool) -> Result<&Eigenbasis, RetrievalError> {
+        let k = self.params.eigenpairs.min(self.operators.n());
+        let ops = &self.operators;
+        let (slot, mass) = if lumped {
+            (&mut self.lumped, &ops.lumped_mass)
+        } else {
+            (&mut self.wfem, &ops.mass)
+        };
+        let basis = match slot.take() {
+            Some(basis) => basis,
+            // When k is a large fraction of n, the Krylov space fills the whole space and a dense
+            // decomposition is both cheaper and exact (block Lanczos also stalls there).
+            None if ops.n() <= (3 * k).max(DENSE_BELOW) && ops.n() <= wfem_heat::DENSE_MAX_VERTICES => {
+                let mut full = Eigenbasis::dense(&ops.stiffness, mass)?;
+                full.values.truncate(k);
+                full.vectors = full.vectors.subcols(0, k).to_owned();
+                full
+            }
+            None => Eigenbasis::partial(&ops.stiffness, mass, k, &self.params.eigen)?,
+        };
+        Ok(slot.insert(basis))
+    }
+
+    /// The dense descriptor (n × T for the HKS variants, n × K for SI-HKS); see the module docs.
+    ///
+    /// # Errors
+    /// [`RetrievalError::Heat`] from the eigensolver, and those of
+    /// [`heat_kernel_signature`] / [`scale_invariant_hks`].
+    pub fn dense(&mut self, descriptor: Descriptor) -> Result<Mat<f64>, RetrievalError> {
+        let params = self.params.clone();
+        let basis = self.eigenbasis(descriptor.uses_lumped())?;
+        let spectrum = Spectrum::new(&basis.values, basis.vectors.as_ref())?;
+        match descriptor {
+            Descriptor::SiHks => scale_invariant_hks(&spectrum, &params.sihks),
+            _ => {
+                let normalization = if descriptor == Descriptor::Dhk3 {
+                    SpectrumNormalization::MaxEigenvalue
+                } else {
+                    SpectrumNormalization::None
+                };
+                let hks = heat_kernel_signature(
+                    &spectrum,
+                    &HksParams {
+                        times: params.times.clone(),
+                        normalization,
+                        ..Default::default()
+                    },
+                )?;
+                Ok(hks.values)
+            }
+        }
+    }
+
+    /// The feature function of SHK1/SHK2: the wFEM HKS at `t_f = feature_time_factor · 4 ln10/λ_2`.
+    /// Returns (t_f, values).
+    ///
+    /// # Errors
+    /// As [`Self::dense`]; [`RetrievalError::NoNonzeroEigenvalue`] if k = 1.
+    pub fn feature_function(&mut self) -> Result<(f64, Vec<f64>), RetrievalError> {
+        let factor = self.params.feature_time_factor;
+        let basis = self.eigenbasis(false)?;
+        let spectrum = Spectrum::new(&basis.values, basis.vectors.as_ref())?;
+        let lambda_max = spectrum.max_eigenvalue();
+        let lambda_2 = basis
+            .values
+            .iter()
+            .copied()
+            .filter(|&v| v > 1e-8 * lambda_max)
+            .fold(f64::INFINITY, f64::min);
+        if !lambda_2.is_finite() {
+            return Err(RetrievalError::NoNonzeroEigenvalue);
+        }
+        let t = factor * 4.0 * std::f64::consts::LN_10 / lambda_2;
+        let hks = heat_kernel_signature(
+            &spectrum,
+            &HksParams {
+                times: TimeSampling::Explicit(vec![t]),
+                ..Default::default()
+            },
+        )?;
+        Ok((t, hks.values.col(0).iter().copied().collect()))
+    }
+
+    /// Sparse feature points (vertex indices, increasing).
+    ///
+    /// # Errors
+    /// As [`Self::feature_function`]; [`RetrievalError::Mesh`] from the persistence computation.
+    pub fn features(&mut self, detector: FeatureDetector) -> Result<Vec<u32>, RetrievalError> {
+        let (_, f) = self.feature_function()?;
+        match detector {
+            FeatureDetector::Shk1 => crate::features::local_maxima(self.mesh.faces(), &f, self.params.feature_rings),
+            FeatureDetector::Shk2 => {
+                let diagram = mesh_fem::morse::persistence(&self.mesh, &f)?;
+                let threshold = self.params.persistence_fraction * diagram.value_range;
+                let mut out: Vec<u32> = diagram
+                    .maxima
+                    .iter()
+                    .filter(|p| p.is_essential() || p.persistence >= threshold)
+                    .map(|p| p.birth)
+                    .collect();
+                out.sort_unstable();
+                out.dedup();
+                Ok(out)
+            }
+        }
+    }
+}
+
+/// One-shot dense descriptor of a mesh (see [`ShapeDescriptors`]); for several descriptors of
+/// one shape, use [`ShapeDescriptors`] to share the eigenbases.
+///
+/// ```
+/// use shape_retrieval::{dense_descriptor, Descriptor, DescriptorParams};
+/// let mesh = mesh_fem::generate::icosphere(2);
+/// let params = DescriptorParams { eigenpairs: 20, ..Default::default() };
+/// let d = dense_descriptor(&mesh, Descriptor::Dhk2, &params)?;
+/// assert_eq!((d.nrows(), d.ncols()), (mesh.n_vertices(), 16));
+/// # Ok::<(), shape_retrieval::RetrievalError>(())
+/// ```
+///
+/// # Errors
+/// Those of [`ShapeDescriptors::new`] and [`ShapeDescriptors::dense`].
+pub fn dense_descriptor(
+    mesh: &TriMesh,
+    descriptor: Descriptor,
+    params: &DescriptorParams,
+) -> Result<Mat<f64>, RetrievalError> {
+    ShapeDescriptors::new(mesh, params)?.dense(descriptor)
+}
+
+/// One-shot sparse features of a mesh (see [`ShapeDescriptors::features`]).
+///
+/// # Errors
+/// Those of [`ShapeDescriptors::new`] and [`ShapeDescriptors::features`].
+pub fn sparse_features(
+    mesh: &TriMesh,
+    detector: FeatureDetector,
+    params: &DescriptorParams,
+) -> Result<Vec<u32>, RetrievalError> {
+    ShapeDescriptors::new(mesh, params)?.features(detector)
+}

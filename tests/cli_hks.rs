@@ -1,0 +1,196 @@
+//! End-to-end tests of `wfem hks` against a dense generalized eigendecomposition.
+
+use mesh_fem::{assemble, AssemblyParams, LumpedMassKind};
+use std::path::Path;
+use std::process::Command;
+use wfem_heat::Eigenbasis;
+
+fn wfem(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_wfem"))
+        .args(args)
+        .output()
+        .expect("the wfem binary runs")
+}
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Reads a little-endian float64 C-order NPY file: (shape, values).
+fn read_npy(path: &Path) -> (Vec<usize>, Vec<f64>) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..6], b"\x93NUMPY");
+    let header_len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = std::str::from_utf8(&bytes[10..10 + header_len]).unwrap();
+    assert!(
+        header.contains("'descr': '<f8'") && header.contains("'fortran_order': False"),
+        "{header}"
+    );
+    let shape_text = header.split("'shape': (").nth(1).unwrap().split(')').next().unwrap();
+    let shape: Vec<usize> = shape_text
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(|s| s.trim().parse().unwrap())
+        .collect();
+    let values = bytes[10 + header_len..]
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    (shape, values)
+}
+
+/// `Σ_{k<K} e^{−λ_k t} φ_k(i)²`, row-major n × T.
+fn reference(basis: &Eigenbasis, k: usize, times: &[f64]) -> Vec<f64> {
+    let n = basis.vectors.nrows();
+    let mut out = Vec::new();
+    for i in 0..n {
+        for &t in times {
+            out.push(
+                (0..k)
+                    .map(|c| (-basis.values[c] * t).exp() * basis.vectors[(i, c)].powi(2))
+                    .sum(),
+            );
+        }
+    }
+    out
+}
+
+fn max_rel(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+}
+
+#[test]
+fn hks_matches_dense_reference_for_both_kernels() {
+    let dir = tempfile::tempdir().unwrap();
+    // 642 vertices: the block Lanczos path.
+    let mesh = mesh_fem::generate::bumpy(3);
+    let path = dir.path().join("bumpy.off");
+    mesh_fem::io::write_mesh(&path, &mesh).unwrap();
+    let ops = assemble(
+        &mesh,
+        &AssemblyParams {
+            lumped: LumpedMassKind::Voronoi,
+        },
+    )
+    .unwrap();
+    let times = [0.01, 0.1, 1.0];
+    for (kernel, mass) in [("wfem", &ops.mass), ("lumped", &ops.lumped_mass)] {
+        let out = dir.path().join(format!("{kernel}.npy"));
+        let o = wfem(&[
+            "hks",
+            path.to_str().unwrap(),
+            "--times",
+            "0.01",
+            "0.1",
+            "1",
+            "--kernel",
+            kernel,
+            "--eigs",
+            "30",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let (shape, values) = read_npy(&out);
+        assert_eq!(shape, vec![mesh.n_vertices(), 3]);
+        let dense = Eigenbasis::dense(&ops.stiffness, mass).unwrap();
+        let e = max_rel(&values, &reference(&dense, 30, &times));
+        assert!(e < 1e-8, "{kernel}: {e}");
+    }
+}
+
+#[test]
+fn hks_automatic_scales_and_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("sphere.off");
+    mesh_fem::io::write_mesh(&path, &mesh_fem::generate::bumpy(2)).unwrap();
+    let out = dir.path().join("hks.csv");
+    let o = wfem(&[
+        "hks",
+        path.to_str().unwrap(),
+        "--scales",
+        "5",
+        "--eigs",
+        "20",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap().split(',').count(), 5);
+    assert_eq!(lines.count(), 162);
+    // The HKS decreases in t at every vertex.
+    for line in text.lines().skip(1) {
+        let v: Vec<f64> = line.split(',').map(|s| s.parse().unwrap()).collect();
+        assert!(v.windows(2).all(|w| w[1] < w[0]), "{line}");
+    }
+}
+
+#[test]
+fn hks_rejects_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("sphere.off");
+    mesh_fem::io::write_mesh(&path, &mesh_fem::generate::icosphere(1)).unwrap();
+    let out = dir.path().join("x.npy");
+    for args in [vec!["--times", "-1"], vec!["--scales", "0"], vec!["--eigs", "0"]] {
+        let mut all = vec!["hks", path.to_str().unwrap()];
+        all.extend(args.iter().copied());
+        all.extend(["-o", out.to_str().unwrap()]);
+        let o = wfem(&all);
+        assert!(!o.status.success());
+        assert!(stderr(&o).starts_with("wfem: error:"), "{}", stderr(&o));
+        assert!(!out.exists());
+    }
+    // Never writes over the input.
+    let before = std::fs::read(&path).unwrap();
+    let o = wfem(&["hks", path.to_str().unwrap(), "-o", path.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert_eq!(std::fs::read(&path).unwrap(), before);
+}
+
+#[test]
+fn retrieval_build_then_query_finds_the_same_shape_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let shapes = [
+        ("bumpy.off", mesh_fem::generate::bumpy(2)),
+        ("sphere.off", mesh_fem::generate::icosphere(2)),
+        ("torus.off", mesh_fem::generate::torus(1.0, 0.4, 20, 10)),
+    ];
+    let mut files = Vec::new();
+    for (name, mesh) in &shapes {
+        let p = dir.path().join(name);
+        mesh_fem::io::write_mesh(&p, mesh).unwrap();
+        files.push(p.to_str().unwrap().to_string());
+    }
+    let index = dir.path().join("index.json");
+    let mut args = vec!["retrieval", "build"];
+    args.extend(files.iter().map(|s| s.as_str()));
+    args.extend(["--out", index.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+    let o = wfem(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A rescaled copy of the bumpy sphere retrieves the bumpy sphere first (DHK3 is
+    // scale-invariant), at distance ≈ 0.
+    let query = dir.path().join("query.off");
+    mesh_fem::io::write_mesh(&query, &mesh_fem::generate::bumpy(2).scaled(5.0).unwrap()).unwrap();
+    let o = wfem(&[
+        "retrieval",
+        "query",
+        index.to_str().unwrap(),
+        query.to_str().unwrap(),
+        "--top",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    let first: Vec<&str> = text.lines().next().unwrap().split('\t').collect();
+    assert_eq!(first[0], "1");
+    assert!(first[2].ends_with("bumpy.off"), "{text}");
+    assert!(first[1].parse::<f64>().unwrap() < 1e-6, "{text}");
+    assert_eq!(text.lines().count(), 2);
+    // A file that is not an index is refused.
+    let o = wfem(&["retrieval", "query", files[0].as_str(), query.to_str().unwrap()]);
+    assert!(!o.status.success());
+}
