@@ -26,7 +26,15 @@ fn bench(c: &mut Criterion) {
             },
         )
         .unwrap();
-        let fast = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+        // The default method is the rational one; the fast path is named explicitly.
+        let fast = HeatKernel::new(
+            &ops,
+            HeatParams {
+                method: Method::Fast(FastParams::default()),
+                ..Default::default()
+            },
+        )
+        .unwrap();
         for gamma in [0.05, 0.1, 0.2, 0.4] {
             let params = HeatParams {
                 method: Method::Fast(FastParams {
