@@ -46,6 +46,23 @@ pub fn meshes_dir() -> Result<PathBuf, MeshError> {
     ))
 }
 
+/// The folder of reference values computed by other libraries (`shared/reference`, e.g.
+/// libigl's L, B, D as Matrix Market files), if present: `$WFEM_REFERENCE`, otherwise the
+/// first `../shared/reference` above this crate. It is optional: cross-checks against it run
+/// only where it exists.
+pub fn reference_dir() -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os("WFEM_REFERENCE") {
+        let dir = PathBuf::from(dir);
+        return dir.is_dir().then_some(dir);
+    }
+    let start = Path::new(env!("CARGO_MANIFEST_DIR"));
+    start
+        .ancestors()
+        .map(|d| d.join("..").join("shared").join("reference"))
+        .find(|c| c.is_dir())
+        .map(|c| c.canonicalize().unwrap_or(c))
+}
+
 /// The path of a corpus file given relative to the corpus folder, e.g.
 /// `mesh_path("common-3d-test-models/spot.obj")`.
 ///

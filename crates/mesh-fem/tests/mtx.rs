@@ -12,8 +12,6 @@ use mesh_fem::{
 use std::collections::BTreeMap;
 use std::path::Path;
 
-const REFERENCE: &str = "/work/shared/reference";
-
 /// All stored entries as a map (row, col) → value (duplicates summed).
 fn entries(m: &SparseColMat<usize, f64>) -> BTreeMap<(usize, usize), f64> {
     let mut out = BTreeMap::new();
@@ -33,12 +31,12 @@ fn from_triplets(nrows: usize, ncols: usize, t: &[(usize, usize, f64)]) -> Spars
 
 #[test]
 fn libigl_reference_files_read_and_match_assembly() {
-    if !Path::new(REFERENCE).is_dir() {
-        eprintln!("{REFERENCE} not found: skipping");
+    let Some(reference) = mesh_fem::corpus::reference_dir() else {
+        eprintln!("../shared/reference is not present: the libigl cross-check does not run");
         return;
-    }
+    };
     for name in ["irregular_sphere_L4", "grid_70x70", "ellipsoid_L4"] {
-        let (p, f) = minimal_reader::read_parts(&Path::new(REFERENCE).join(format!("{name}.obj")));
+        let (p, f) = minimal_reader::read_parts(&reference.join(format!("{name}.obj")));
         let mesh = TriMesh::new(p, f).unwrap();
         let s = stats(&mesh);
         let n = mesh.n_vertices();
@@ -48,7 +46,7 @@ fn libigl_reference_files_read_and_match_assembly() {
             ("mass", &ops.mass),
             ("lumped_mass", &ops.lumped_mass),
         ] {
-            let m = read_matrix_market(Path::new(REFERENCE).join(format!("{name}_{kind}.mtx"))).unwrap();
+            let m = read_matrix_market(reference.join(format!("{name}_{kind}.mtx"))).unwrap();
             assert_eq!((m.nrows(), m.ncols()), (n, n), "{name} {kind}");
             let e = entries(&m);
             // The pattern of L and B is the vertex–edge graph plus the diagonal; D is diagonal.
@@ -73,7 +71,7 @@ fn libigl_reference_files_read_and_match_assembly() {
                 }
             }
         }
-        let l = read_matrix_market(Path::new(REFERENCE).join(format!("{name}_stiffness.mtx"))).unwrap();
+        let l = read_matrix_market(reference.join(format!("{name}_stiffness.mtx"))).unwrap();
         let mut row_sum = vec![0.0; n];
         let mut diag_positive = true;
         for (&(i, j), &v) in &entries(&l) {
@@ -82,7 +80,7 @@ fn libigl_reference_files_read_and_match_assembly() {
         }
         assert!(diag_positive, "{name}: L has positive diagonal");
         assert!(row_sum.iter().all(|r| r.abs() < 1e-10), "{name}: L·1 = 0");
-        let b = read_matrix_market(Path::new(REFERENCE).join(format!("{name}_mass.mtx"))).unwrap();
+        let b = read_matrix_market(reference.join(format!("{name}_mass.mtx"))).unwrap();
         assert!(
             (entries(&b).values().sum::<f64>() - s.area).abs() < 1e-12 * s.area,
             "{name}: 1ᵀB1 = area"
@@ -317,13 +315,13 @@ fn reader_and_writer_agree_with_nalgebra_sparse() {
         assert_eq!(nalgebra_entries(&dir.path().join(file)), entries(m), "{file}");
     }
     // libigl's reference files read identically with both readers.
-    if Path::new(REFERENCE).is_dir() {
+    if let Some(reference) = mesh_fem::corpus::reference_dir() {
         for name in [
             "grid_70x70_stiffness.mtx",
             "ellipsoid_L4_mass.mtx",
             "irregular_sphere_L4_lumped_mass.mtx",
         ] {
-            let path = Path::new(REFERENCE).join(name);
+            let path = reference.join(name);
             assert_eq!(
                 entries(&read_matrix_market(&path).unwrap()),
                 nalgebra_entries(&path),

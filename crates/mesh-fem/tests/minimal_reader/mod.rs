@@ -6,17 +6,12 @@
 use mesh_fem::TriMesh;
 use std::path::PathBuf;
 
-/// The corpus folder (`WFEM_MESHES` overrides the default), or `None` if it is missing.
+/// The corpus folder through the one corpus helper (`WFEM_MESHES` overrides it). The corpus
+/// is required: `.ci/run` checks that it is there, so a missing folder is a failure, not a skip.
 pub fn corpus_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("WFEM_MESHES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/work/shared/data/meshes"));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("mesh corpus {} not found: skipping real-mesh checks", dir.display());
-        None
-    }
+    Some(
+        mesh_fem::corpus::meshes_dir().expect("the mesh corpus ../shared/data/meshes is required (or set WFEM_MESHES)"),
+    )
 }
 
 /// Positions and fan-triangulated faces of an OBJ or OFF file.

@@ -60,15 +60,11 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// A real mesh: Spot (low resolution, 829 vertices) from the odedstein-meshes collection,
-/// read with tobj from `$WFEM_MESHES` (default `/work/shared/data/meshes`). Returns `None`
-/// (and says so) when the corpus is not installed.
+/// read with tobj from the corpus (`mesh_fem::corpus`; `$WFEM_MESHES` overrides it). Returns `None`
+/// Panics when the corpus is missing: `.ci/run` guarantees it.
 pub fn spot() -> Option<(TriMesh, FemOperators)> {
-    let root = std::env::var("WFEM_MESHES").unwrap_or_else(|_| "/work/shared/data/meshes".into());
-    let path = std::path::Path::new(&root).join("odedstein-meshes/spot/spot_low_resolution.obj");
-    if !path.exists() {
-        eprintln!("mesh corpus not found at {}: real-mesh check skipped", path.display());
-        return None;
-    }
+    let path = mesh_fem::corpus::mesh_path("odedstein-meshes/spot/spot_low_resolution.obj")
+        .expect("the mesh corpus ../shared/data/meshes is required (or set WFEM_MESHES)");
     let (models, _) = tobj::load_obj(
         &path,
         &tobj::LoadOptions {
