@@ -124,10 +124,28 @@ impl Eigenbasis {
         solve_lower_triangular_in_place(r, y.as_mut(), Par::rayon(0));
         let mut c = y.transpose().to_owned();
         solve_lower_triangular_in_place(r, c.as_mut(), Par::rayon(0));
-        // Symmetrize to remove rounding asymmetry before the symmetric solver.
-        let c = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (c[(i, j)] + c[(j, i)]));
+        // Symmetrize to remove rounding asymmetry before the symmetric solver, and scale C
+        // by a power of two 2⁻ᵉ ≈ 1/max|cᵢⱼ| (exact, so the eigenvectors are unchanged and
+        // λ = 2ᵉ·μ). faer 0.24's self-adjoint solver is not scale invariant: unlike LAPACK's
+        // dstedc it does not normalise the tridiagonal matrix, and its secular-equation root
+        // finder (svd/bidiag_svd.rs, `secular_eq_root_finder`) stops the secant iteration
+        // when |f_cur − f_prev| ≤ ε, an ABSOLUTE bound on a function of units 1/λ. Mesh
+        // scaling by α multiplies C by α⁻², so for α ≲ 1/32 the roots stopped early
+        // (α = 2⁻¹⁰: λ₁ = 0 came out ≈ 5e−3, λ off by ≈ 2e−6 relative). With max|cᵢⱼ| ≈ 1
+        // the solver always works at the scale where that bound is relative.
+        let cmax = (0..n)
+            .flat_map(|j| (0..n).map(move |i| (i, j)))
+            .fold(0.0f64, |acc, (i, j)| acc.max(c[(i, j)].abs()));
+        let exponent = if cmax > 0.0 && cmax.is_finite() {
+            cmax.log2().round() as i32
+        } else {
+            0
+        };
+        let down = 2f64.powi(-exponent);
+        let up = 2f64.powi(exponent);
+        let c = Mat::<f64>::from_fn(n, n, |i, j| (0.5 * down) * (c[(i, j)] + c[(j, i)]));
         let evd = c.self_adjoint_eigen(Side::Lower).map_err(|_| HeatError::DenseEigen)?;
-        let values: Vec<f64> = (0..n).map(|i| evd.S()[i]).collect();
+        let values: Vec<f64> = (0..n).map(|i| up * evd.S()[i]).collect();
         let mut x = evd.U().to_owned();
         solve_upper_triangular_in_place(r.transpose(), x.as_mut(), Par::rayon(0));
         Ok(Self { values, vectors: x })
