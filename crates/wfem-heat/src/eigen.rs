@@ -159,6 +159,12 @@ impl Eigenbasis {
     /// smallest λ are the largest θ and converge first. Ritz pairs are accepted when
     /// ‖Sx − θx‖_M ≤ tol·θ; then λ = σ + 1/θ and the Ritz vectors are M-orthonormal.
     ///
+    /// Small problems are handled exactly: when fewer than b directions remain, the last
+    /// block is the (n − dim)-dimensional M-orthogonal complement of the basis, so the Krylov
+    /// basis reaches Rⁿ and the Rayleigh–Ritz pairs are exact (any k ≤ n, any block size).
+    /// An invariant block (rank-deficient remainder) is deflated by continuing with random
+    /// directions M-orthogonal to the basis.
+    ///
     /// # Errors
     /// [`HeatError::InvalidParameter`] for k = 0, k > n, a shift ≥ 0 or block size 0;
     /// [`HeatError::EigenNoConvergence`] (carrying the converged pairs) if the Krylov
@@ -232,9 +238,11 @@ impl Eigenbasis {
         v.as_mut().get_mut(.., 0..b).copy_from(&q0);
         mv.as_mut().get_mut(.., 0..b).copy_from(&mq0);
         dim += b;
+        // Size of the newest block: b, except a last partial block that completes Rⁿ.
+        let mut bc = b;
 
         loop {
-            let j0 = dim - b;
+            let j0 = dim - bc;
             // W = S V_j = (L − σM)⁻¹ M V_j.
             let mut w = mv.as_ref().get(.., j0..dim).to_owned();
             factor.solve_in_place(w.as_mut());
@@ -245,13 +253,22 @@ impl Eigenbasis {
                 let mut hb = h.as_mut().get_mut(0..dim, j0..dim);
                 hb += &coef;
             }
-            let at_full = dim + b > n || dim >= cap;
+            // The basis spans Rⁿ: the Rayleigh–Ritz pairs are the exact eigenpairs.
+            let exhausted = dim >= n;
+            let at_full = exhausted || dim >= cap;
+            // Size of the next block: b, or the n − dim columns that complete the basis.
+            let bn = b.min(n.saturating_sub(dim));
             // Ritz step: eigenpairs of the symmetrized projection.
             let hm = Mat::<f64>::from_fn(dim, dim, |i, jj| 0.5 * (h[(i, jj)] + h[(jj, i)]));
             let evd = hm.self_adjoint_eigen(Side::Lower).map_err(|_| HeatError::DenseEigen)?;
             // Residual of Ritz pair i: ‖W_rest · Q[last block, i]‖_M where W = V_{j+1} B_j.
             let (qn, bj) = if at_full {
-                (Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(0, b))
+                (Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(0, bc))
+            } else if bn < bc {
+                // Fewer than b directions remain: W (already M-orthogonal to V) lies in the
+                // (n − dim)-dimensional M-orthogonal complement of V; take an M-orthonormal
+                // basis Q of that complement (random block, projected) and B = QᵀMW.
+                complement_block(w.as_ref(), bn, mass, &v, &mv, dim, &mut rng)
             } else {
                 m_orthonormalize(w.clone(), mass, &v, &mv, dim, &mut rng)
             };
@@ -262,15 +279,17 @@ impl Eigenbasis {
             for r in 0..nk {
                 let i = dim - 1 - r; // largest θ first
                 let theta = evd.S()[i];
-                let res = if at_full {
-                    // Residual from the unnormalized remainder W (zero at n).
-                    let qi = evd.U().col(i).subrows(j0, b);
+                let res = if exhausted {
+                    0.0
+                } else if at_full {
+                    // Residual from the unnormalized remainder W.
+                    let qi = evd.U().col(i).subrows(j0, bc);
                     let x = &w * qi;
                     let xs: Vec<f64> = x.iter().copied().collect();
                     let mx = spmv_sym(mass, &xs);
                     xs.iter().zip(&mx).map(|(a, c)| a * c).sum::<f64>().max(0.0).sqrt()
                 } else {
-                    let qi = evd.U().col(i).subrows(j0, b);
+                    let qi = evd.U().col(i).subrows(j0, bc);
                     (&bj * qi).norm_l2()
                 };
                 let rel = res / theta.abs().max(f64::MIN_POSITIVE);
@@ -296,10 +315,11 @@ impl Eigenbasis {
             }
             // Extend the basis with the next block.
             let mq = spmm_sym(mass, qn.as_ref());
-            v.as_mut().get_mut(.., dim..dim + b).copy_from(&qn);
-            mv.as_mut().get_mut(.., dim..dim + b).copy_from(&mq);
-            h.as_mut().get_mut(dim..dim + b, j0..dim).copy_from(&bj);
-            dim += b;
+            v.as_mut().get_mut(.., dim..dim + bn).copy_from(&qn);
+            mv.as_mut().get_mut(.., dim..dim + bn).copy_from(&mq);
+            h.as_mut().get_mut(dim..dim + bn, j0..dim).copy_from(&bj);
+            dim += bn;
+            bc = bn;
         }
     }
 
@@ -370,6 +390,31 @@ fn ritz(
         values: perm.iter().map(|&p| values[p]).collect(),
         vectors,
     }
+}
+
+/// The last, partial Lanczos block when only `r` < b directions remain outside span(V)
+/// (V = first `dim` columns of `v`, r = n − dim): an M-orthonormal basis Q (n × r) of the
+/// M-orthogonal complement of V, from a random block projected twice against V and then
+/// M-orthonormalized, and B = QᵀM·W (r × b), so that W = QB for W ⟂_M V.
+fn complement_block(
+    w: faer::MatRef<'_, f64>,
+    r: usize,
+    mass: &SparseColMat<usize, f64>,
+    v: &Mat<f64>,
+    mv: &Mat<f64>,
+    dim: usize,
+    rng: &mut SplitMix,
+) -> (Mat<f64>, Mat<f64>) {
+    let n = w.nrows();
+    let mut z = Mat::<f64>::from_fn(n, r, |_, _| rng.next_f64());
+    for _ in 0..2 {
+        let coef = mv.as_ref().get(.., 0..dim).transpose() * &z;
+        z -= v.as_ref().get(.., 0..dim) * &coef;
+    }
+    let (q, _) = m_orthonormalize(z, mass, v, mv, dim, rng);
+    let mq = spmm_sym(mass, q.as_ref());
+    let bj = mq.transpose() * w;
+    (q, bj)
 }
 
 /// M-orthonormalizes the columns of `w` against the first `dim` columns of `v` (already
