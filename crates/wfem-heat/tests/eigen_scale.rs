@@ -16,9 +16,9 @@ fn assert_m_orthonormal(name: &str, e: &Eigenbasis, m: &faer::sparse::SparseColM
     let k = e.vectors.ncols();
     let cols: Vec<Vec<f64>> = (0..k).map(|c| e.vectors.col(c).iter().copied().collect()).collect();
     let mcols: Vec<Vec<f64>> = cols.iter().map(|x| matvec(m, x)).collect();
-    for a in 0..k {
-        for b in 0..k {
-            let ip = dot(&cols[a], &mcols[b]);
+    for (a, xa) in cols.iter().enumerate() {
+        for (b, mxb) in mcols.iter().enumerate() {
+            let ip = dot(xa, mxb);
             let expect = if a == b { 1.0 } else { 0.0 };
             assert!((ip - expect).abs() < tol, "{name}: <x{a}, x{b}>_M = {ip}");
         }
