@@ -133,16 +133,7 @@ impl Eigenbasis {
         // scaling by α multiplies C by α⁻², so for α ≲ 1/32 the roots stopped early
         // (α = 2⁻¹⁰: λ₁ = 0 came out ≈ 5e−3, λ off by ≈ 2e−6 relative). With max|cᵢⱼ| ≈ 1
         // the solver always works at the scale where that bound is relative.
-        let cmax = (0..n)
-            .flat_map(|j| (0..n).map(move |i| (i, j)))
-            .fold(0.0f64, |acc, (i, j)| acc.max(c[(i, j)].abs()));
-        let exponent = if cmax > 0.0 && cmax.is_finite() {
-            cmax.log2().round() as i32
-        } else {
-            0
-        };
-        let down = 2f64.powi(-exponent);
-        let up = 2f64.powi(exponent);
+        let (down, up) = pow2_scale(c.as_ref());
         let c = Mat::<f64>::from_fn(n, n, |i, j| (0.5 * down) * (c[(i, j)] + c[(j, i)]));
         let evd = c.self_adjoint_eigen(Side::Lower).map_err(|_| HeatError::DenseEigen)?;
         let values: Vec<f64> = (0..n).map(|i| up * evd.S()[i]).collect();
@@ -259,7 +250,9 @@ impl Eigenbasis {
             // Size of the next block: b, or the n − dim columns that complete the basis.
             let bn = b.min(n.saturating_sub(dim));
             // Ritz step: eigenpairs of the symmetrized projection.
-            let hm = Mat::<f64>::from_fn(dim, dim, |i, jj| 0.5 * (h[(i, jj)] + h[(jj, i)]));
+            // θ = up·(eigenvalue of the power-of-two-normalised projection), see `pow2_scale`.
+            let (down, up) = pow2_scale(h.as_ref().get(0..dim, 0..dim));
+            let hm = Mat::<f64>::from_fn(dim, dim, |i, jj| (0.5 * down) * (h[(i, jj)] + h[(jj, i)]));
             let evd = hm.self_adjoint_eigen(Side::Lower).map_err(|_| HeatError::DenseEigen)?;
             // Residual of Ritz pair i: ‖W_rest · Q[last block, i]‖_M where W = V_{j+1} B_j.
             let (qn, bj) = if at_full {
@@ -278,7 +271,7 @@ impl Eigenbasis {
             let mut order = Vec::with_capacity(nk);
             for r in 0..nk {
                 let i = dim - 1 - r; // largest θ first
-                let theta = evd.S()[i];
+                let theta = up * evd.S()[i];
                 let res = if exhausted {
                     0.0
                 } else if at_full {
@@ -301,7 +294,7 @@ impl Eigenbasis {
             }
             if converged >= k || at_full {
                 let take = if converged >= k { k } else { converged };
-                let basis = ritz(&evd, &v, dim, &order[..take], sigma);
+                let basis = ritz(&evd, up, &v, dim, &order[..take], sigma);
                 if converged >= k {
                     return Ok(basis);
                 }
@@ -366,10 +359,30 @@ impl Eigenbasis {
     }
 }
 
+/// (2⁻ᵉ, 2ᵉ) with 2ᵉ ≈ max|aᵢⱼ| (1 for a zero or non-finite matrix): multiplying by a power
+/// of two is exact, so a matrix scaled by 2⁻ᵉ has the same eigenvectors and eigenvalues
+/// exactly 2⁻ᵉ times the original. faer's self-adjoint eigensolver needs this (see
+/// [`Eigenbasis::dense`]).
+fn pow2_scale(a: faer::MatRef<'_, f64>) -> (f64, f64) {
+    let mut amax = 0.0f64;
+    for j in 0..a.ncols() {
+        for i in 0..a.nrows() {
+            amax = amax.max(a[(i, j)].abs());
+        }
+    }
+    if amax > 0.0 && amax.is_finite() {
+        let e = amax.log2().round().clamp(-1000.0, 1000.0) as i32;
+        (2f64.powi(-e), 2f64.powi(e))
+    } else {
+        (1.0, 1.0)
+    }
+}
+
 /// Ritz vectors of the chosen (largest-θ first) indices, converted to λ = σ + 1/θ and
 /// sorted by increasing λ.
 fn ritz(
     evd: &faer::linalg::solvers::SelfAdjointEigen<f64>,
+    up: f64,
     v: &Mat<f64>,
     dim: usize,
     idx: &[usize],
@@ -381,7 +394,7 @@ fn ritz(
         q.as_mut().col_mut(c).copy_from(evd.U().col(i));
     }
     let x = v.as_ref().get(.., 0..dim) * &q;
-    let values: Vec<f64> = idx.iter().map(|&i| sigma + 1.0 / evd.S()[i]).collect();
+    let values: Vec<f64> = idx.iter().map(|&i| sigma + 1.0 / (up * evd.S()[i])).collect();
     // θ descending means λ ascending already; keep an explicit sort for safety.
     let mut perm: Vec<usize> = (0..idx.len()).collect();
     perm.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
@@ -440,19 +453,20 @@ fn m_orthonormalize(
         }
         let mw = spmm_sym(mass, w.as_ref());
         let g = w.transpose() * &mw;
-        let g = Mat::<f64>::from_fn(b, b, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]));
+        let (down, up) = pow2_scale(g.as_ref());
+        let g = Mat::<f64>::from_fn(b, b, |i, j| (0.5 * down) * (g[(i, j)] + g[(j, i)]));
         let evd = match g.self_adjoint_eigen(Side::Lower) {
             Ok(e) => e,
             Err(_) => break,
         };
-        let smax = evd.S()[b - 1].max(0.0);
+        let smax = (up * evd.S()[b - 1]).max(0.0);
         // W = (W U S^{-1/2}) (S^{1/2} Uᵀ).
         let mut q = Mat::<f64>::zeros(n, b);
         let mut r = Mat::<f64>::zeros(b, b);
         let wu = &w * evd.U();
         let mut replaced = false;
         for c in 0..b {
-            let s = evd.S()[c];
+            let s = up * evd.S()[c];
             if s > 1e-24 * smax.max(f64::MIN_POSITIVE) && s > 0.0 {
                 let sq = s.sqrt();
                 for i in 0..n {

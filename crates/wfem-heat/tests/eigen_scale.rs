@@ -119,3 +119,29 @@ fn partial_more_pairs_than_vertices_is_typed_error() {
         other => panic!("expected InvalidParameter(k), got {other:?}"),
     }
 }
+
+/// Shift-invert Lanczos (default shift, which scales with the area) is scale invariant too:
+/// on icosphere(3) scaled by α its k = 30 smallest eigenvalues are α⁻² times the unscaled
+/// dense ones to 1e−10 relative.
+#[test]
+fn partial_eigenvalues_scale_as_alpha_minus_two() {
+    let mesh = generate::icosphere(3);
+    let base_ops = ops_raw(&mesh);
+    let base = Eigenbasis::dense(&base_ops.stiffness, &base_ops.mass).unwrap();
+    let k = 30;
+    for alpha in [1e-8, 1e-3, 1.0, 1e3, 1e8] {
+        let ops = ops_raw(&mesh.scaled(alpha).expect("scaled mesh"));
+        let part = Eigenbasis::partial(&ops.stiffness, &ops.mass, k, &EigenParams::default())
+            .unwrap_or_else(|e| panic!("α={alpha:e}: {e}"));
+        for i in 0..k {
+            let expect = base.values[i] / (alpha * alpha);
+            let err = (part.values[i] - expect).abs() / expect.max(base.values[1] / (alpha * alpha));
+            assert!(
+                err < 1e-10,
+                "α={alpha:e} λ_{i}: {:e} vs {expect:e} ({err:e})",
+                part.values[i]
+            );
+        }
+        assert_m_orthonormal(&format!("partial α={alpha:e}"), &part, &ops.mass, 1e-10);
+    }
+}
