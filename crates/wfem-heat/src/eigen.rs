@@ -124,10 +124,19 @@ impl Eigenbasis {
         solve_lower_triangular_in_place(r, y.as_mut(), Par::rayon(0));
         let mut c = y.transpose().to_owned();
         solve_lower_triangular_in_place(r, c.as_mut(), Par::rayon(0));
-        // Symmetrize to remove rounding asymmetry before the symmetric solver.
-        let c = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (c[(i, j)] + c[(j, i)]));
+        // Symmetrize to remove rounding asymmetry before the symmetric solver, and scale C
+        // by a power of two 2⁻ᵉ ≈ 1/max|cᵢⱼ| (exact, so the eigenvectors are unchanged and
+        // λ = 2ᵉ·μ). faer 0.24's self-adjoint solver is not scale invariant: unlike LAPACK's
+        // dstedc it does not normalise the tridiagonal matrix, and its secular-equation root
+        // finder (svd/bidiag_svd.rs, `secular_eq_root_finder`) stops the secant iteration
+        // when |f_cur − f_prev| ≤ ε, an ABSOLUTE bound on a function of units 1/λ. Mesh
+        // scaling by α multiplies C by α⁻², so for α ≲ 1/32 the roots stopped early
+        // (α = 2⁻¹⁰: λ₁ = 0 came out ≈ 5e−3, λ off by ≈ 2e−6 relative). With max|cᵢⱼ| ≈ 1
+        // the solver always works at the scale where that bound is relative.
+        let (down, up) = pow2_scale(c.as_ref());
+        let c = Mat::<f64>::from_fn(n, n, |i, j| (0.5 * down) * (c[(i, j)] + c[(j, i)]));
         let evd = c.self_adjoint_eigen(Side::Lower).map_err(|_| HeatError::DenseEigen)?;
-        let values: Vec<f64> = (0..n).map(|i| evd.S()[i]).collect();
+        let values: Vec<f64> = (0..n).map(|i| up * evd.S()[i]).collect();
         let mut x = evd.U().to_owned();
         solve_upper_triangular_in_place(r.transpose(), x.as_mut(), Par::rayon(0));
         Ok(Self { values, vectors: x })
@@ -140,6 +149,12 @@ impl Eigenbasis {
     /// is self-adjoint in ⟨u, v⟩_M = uᵀMv and has eigenvalues θ = 1/(λ − σ), so the
     /// smallest λ are the largest θ and converge first. Ritz pairs are accepted when
     /// ‖Sx − θx‖_M ≤ tol·θ; then λ = σ + 1/θ and the Ritz vectors are M-orthonormal.
+    ///
+    /// Small problems are handled exactly: when fewer than b directions remain, the last
+    /// block is the (n − dim)-dimensional M-orthogonal complement of the basis, so the Krylov
+    /// basis reaches Rⁿ and the Rayleigh–Ritz pairs are exact (any k ≤ n, any block size).
+    /// An invariant block (rank-deficient remainder) is deflated by continuing with random
+    /// directions M-orthogonal to the basis.
     ///
     /// # Errors
     /// [`HeatError::InvalidParameter`] for k = 0, k > n, a shift ≥ 0 or block size 0;
@@ -214,9 +229,11 @@ impl Eigenbasis {
         v.as_mut().get_mut(.., 0..b).copy_from(&q0);
         mv.as_mut().get_mut(.., 0..b).copy_from(&mq0);
         dim += b;
+        // Size of the newest block: b, except a last partial block that completes Rⁿ.
+        let mut bc = b;
 
         loop {
-            let j0 = dim - b;
+            let j0 = dim - bc;
             // W = S V_j = (L − σM)⁻¹ M V_j.
             let mut w = mv.as_ref().get(.., j0..dim).to_owned();
             factor.solve_in_place(w.as_mut());
@@ -227,13 +244,24 @@ impl Eigenbasis {
                 let mut hb = h.as_mut().get_mut(0..dim, j0..dim);
                 hb += &coef;
             }
-            let at_full = dim + b > n || dim >= cap;
+            // The basis spans Rⁿ: the Rayleigh–Ritz pairs are the exact eigenpairs.
+            let exhausted = dim >= n;
+            let at_full = exhausted || dim >= cap;
+            // Size of the next block: b, or the n − dim columns that complete the basis.
+            let bn = b.min(n.saturating_sub(dim));
             // Ritz step: eigenpairs of the symmetrized projection.
-            let hm = Mat::<f64>::from_fn(dim, dim, |i, jj| 0.5 * (h[(i, jj)] + h[(jj, i)]));
+            // θ = up·(eigenvalue of the power-of-two-normalised projection), see `pow2_scale`.
+            let (down, up) = pow2_scale(h.as_ref().get(0..dim, 0..dim));
+            let hm = Mat::<f64>::from_fn(dim, dim, |i, jj| (0.5 * down) * (h[(i, jj)] + h[(jj, i)]));
             let evd = hm.self_adjoint_eigen(Side::Lower).map_err(|_| HeatError::DenseEigen)?;
             // Residual of Ritz pair i: ‖W_rest · Q[last block, i]‖_M where W = V_{j+1} B_j.
             let (qn, bj) = if at_full {
-                (Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(0, b))
+                (Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(0, bc))
+            } else if bn < bc {
+                // Fewer than b directions remain: W (already M-orthogonal to V) lies in the
+                // (n − dim)-dimensional M-orthogonal complement of V; take an M-orthonormal
+                // basis Q of that complement (random block, projected) and B = QᵀMW.
+                complement_block(w.as_ref(), bn, mass, &v, &mv, dim, &mut rng)
             } else {
                 m_orthonormalize(w.clone(), mass, &v, &mv, dim, &mut rng)
             };
@@ -243,16 +271,18 @@ impl Eigenbasis {
             let mut order = Vec::with_capacity(nk);
             for r in 0..nk {
                 let i = dim - 1 - r; // largest θ first
-                let theta = evd.S()[i];
-                let res = if at_full {
-                    // Residual from the unnormalized remainder W (zero at n).
-                    let qi = evd.U().col(i).subrows(j0, b);
+                let theta = up * evd.S()[i];
+                let res = if exhausted {
+                    0.0
+                } else if at_full {
+                    // Residual from the unnormalized remainder W.
+                    let qi = evd.U().col(i).subrows(j0, bc);
                     let x = &w * qi;
                     let xs: Vec<f64> = x.iter().copied().collect();
                     let mx = spmv_sym(mass, &xs);
                     xs.iter().zip(&mx).map(|(a, c)| a * c).sum::<f64>().max(0.0).sqrt()
                 } else {
-                    let qi = evd.U().col(i).subrows(j0, b);
+                    let qi = evd.U().col(i).subrows(j0, bc);
                     (&bj * qi).norm_l2()
                 };
                 let rel = res / theta.abs().max(f64::MIN_POSITIVE);
@@ -264,7 +294,7 @@ impl Eigenbasis {
             }
             if converged >= k || at_full {
                 let take = if converged >= k { k } else { converged };
-                let basis = ritz(&evd, &v, dim, &order[..take], sigma);
+                let basis = ritz(&evd, up, &v, dim, &order[..take], sigma);
                 if converged >= k {
                     return Ok(basis);
                 }
@@ -278,10 +308,11 @@ impl Eigenbasis {
             }
             // Extend the basis with the next block.
             let mq = spmm_sym(mass, qn.as_ref());
-            v.as_mut().get_mut(.., dim..dim + b).copy_from(&qn);
-            mv.as_mut().get_mut(.., dim..dim + b).copy_from(&mq);
-            h.as_mut().get_mut(dim..dim + b, j0..dim).copy_from(&bj);
-            dim += b;
+            v.as_mut().get_mut(.., dim..dim + bn).copy_from(&qn);
+            mv.as_mut().get_mut(.., dim..dim + bn).copy_from(&mq);
+            h.as_mut().get_mut(dim..dim + bn, j0..dim).copy_from(&bj);
+            dim += bn;
+            bc = bn;
         }
     }
 
@@ -328,10 +359,30 @@ impl Eigenbasis {
     }
 }
 
+/// (2⁻ᵉ, 2ᵉ) with 2ᵉ ≈ max|aᵢⱼ| (1 for a zero or non-finite matrix): multiplying by a power
+/// of two is exact, so a matrix scaled by 2⁻ᵉ has the same eigenvectors and eigenvalues
+/// exactly 2⁻ᵉ times the original. faer's self-adjoint eigensolver needs this (see
+/// [`Eigenbasis::dense`]).
+fn pow2_scale(a: faer::MatRef<'_, f64>) -> (f64, f64) {
+    let mut amax = 0.0f64;
+    for j in 0..a.ncols() {
+        for i in 0..a.nrows() {
+            amax = amax.max(a[(i, j)].abs());
+        }
+    }
+    if amax > 0.0 && amax.is_finite() {
+        let e = amax.log2().round().clamp(-1000.0, 1000.0) as i32;
+        (2f64.powi(-e), 2f64.powi(e))
+    } else {
+        (1.0, 1.0)
+    }
+}
+
 /// Ritz vectors of the chosen (largest-θ first) indices, converted to λ = σ + 1/θ and
 /// sorted by increasing λ.
 fn ritz(
     evd: &faer::linalg::solvers::SelfAdjointEigen<f64>,
+    up: f64,
     v: &Mat<f64>,
     dim: usize,
     idx: &[usize],
@@ -343,7 +394,7 @@ fn ritz(
         q.as_mut().col_mut(c).copy_from(evd.U().col(i));
     }
     let x = v.as_ref().get(.., 0..dim) * &q;
-    let values: Vec<f64> = idx.iter().map(|&i| sigma + 1.0 / evd.S()[i]).collect();
+    let values: Vec<f64> = idx.iter().map(|&i| sigma + 1.0 / (up * evd.S()[i])).collect();
     // θ descending means λ ascending already; keep an explicit sort for safety.
     let mut perm: Vec<usize> = (0..idx.len()).collect();
     perm.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
@@ -352,6 +403,31 @@ fn ritz(
         values: perm.iter().map(|&p| values[p]).collect(),
         vectors,
     }
+}
+
+/// The last, partial Lanczos block when only `r` < b directions remain outside span(V)
+/// (V = first `dim` columns of `v`, r = n − dim): an M-orthonormal basis Q (n × r) of the
+/// M-orthogonal complement of V, from a random block projected twice against V and then
+/// M-orthonormalized, and B = QᵀM·W (r × b), so that W = QB for W ⟂_M V.
+fn complement_block(
+    w: faer::MatRef<'_, f64>,
+    r: usize,
+    mass: &SparseColMat<usize, f64>,
+    v: &Mat<f64>,
+    mv: &Mat<f64>,
+    dim: usize,
+    rng: &mut SplitMix,
+) -> (Mat<f64>, Mat<f64>) {
+    let n = w.nrows();
+    let mut z = Mat::<f64>::from_fn(n, r, |_, _| rng.next_f64());
+    for _ in 0..2 {
+        let coef = mv.as_ref().get(.., 0..dim).transpose() * &z;
+        z -= v.as_ref().get(.., 0..dim) * &coef;
+    }
+    let (q, _) = m_orthonormalize(z, mass, v, mv, dim, rng);
+    let mq = spmm_sym(mass, q.as_ref());
+    let bj = mq.transpose() * w;
+    (q, bj)
 }
 
 /// M-orthonormalizes the columns of `w` against the first `dim` columns of `v` (already
@@ -377,19 +453,20 @@ fn m_orthonormalize(
         }
         let mw = spmm_sym(mass, w.as_ref());
         let g = w.transpose() * &mw;
-        let g = Mat::<f64>::from_fn(b, b, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]));
+        let (down, up) = pow2_scale(g.as_ref());
+        let g = Mat::<f64>::from_fn(b, b, |i, j| (0.5 * down) * (g[(i, j)] + g[(j, i)]));
         let evd = match g.self_adjoint_eigen(Side::Lower) {
             Ok(e) => e,
             Err(_) => break,
         };
-        let smax = evd.S()[b - 1].max(0.0);
+        let smax = (up * evd.S()[b - 1]).max(0.0);
         // W = (W U S^{-1/2}) (S^{1/2} Uᵀ).
         let mut q = Mat::<f64>::zeros(n, b);
         let mut r = Mat::<f64>::zeros(b, b);
         let wu = &w * evd.U();
         let mut replaced = false;
         for c in 0..b {
-            let s = evd.S()[c];
+            let s = up * evd.S()[c];
             if s > 1e-24 * smax.max(f64::MIN_POSITIVE) && s > 0.0 {
                 let sq = s.sqrt();
                 for i in 0..n {
