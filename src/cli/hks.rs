@@ -37,7 +37,7 @@ pub struct HksArgs {
     #[arg(long, default_value_t = shape_retrieval::DEFAULT_EIGENPAIRS)]
     pub eigs: usize,
     /// Output: .npy (n × T array), .csv, .ply (fields hks_t<t>) or .png.
-    #[arg(short = 'o', long = "out")]
+    #[arg(short = 'o', long = "output", visible_alias = "out")]
     pub output: PathBuf,
 }
 
