@@ -879,6 +879,43 @@ const CASES: &[Case] = &[
             assembly: Verdict::Ok,
         },
     },
+    // ---------------------------------------------------------------- more hostile cases
+    // A 32-bit list length of 2^31 − 1 corners with 3 present: refused, no giant allocation.
+    fails(
+        "ply_binary_huge_list_count.ply",
+        |e| parse_at(e, 0, "binary element 'face' (expected 1, got 0)"),
+        &["ply_binary_huge_list_count.ply:0:"],
+    ),
+    fails(
+        "ply_binary_two_corner_face.ply",
+        |e| parse_at(e, 0, "face 3 has 2 corners"),
+        &["ply_binary_two_corner_face.ply:0:"],
+    ),
+    // `nan` is no PLY number: the ASCII PLY grammar refuses the line.
+    fails(
+        "ply_ascii_nan.ply",
+        |e| parse_at(e, 12, "Couldn't read element line"),
+        &["ply_ascii_nan.ply:12:", "0 nan 0"],
+    ),
+    // Big-endian doubles with unsigned indices: the binary baseline that must load.
+    clean_tet("ply_binary_big_endian.ply", 0, &["binary big-endian PLY"]),
+    fails(
+        "off_huge_corner_count.off",
+        |e| parse_at(e, 10, "face 3 declares 1000000000 corners but lists 3"),
+        &["off_huge_corner_count.off:10:"],
+    ),
+    fails(
+        "off_negative_counts.off",
+        |e| parse_at(e, 2, "vertex count \"-1\""),
+        &["off_negative_counts.off:2:"],
+    ),
+    fails(
+        "obj_index_overflow.obj",
+        |e| parse_at(e, 8, "\"99999999999999999999\" as a vertex index"),
+        &["obj_index_overflow.obj:8:"],
+    ),
+    // A binary STL whose header starts with "solid" (as many exporters write it) is still binary.
+    clean_tet("stl_binary_starts_with_solid.stl", 8, &["binary STL"]),
 ];
 
 fn bad_dir() -> PathBuf {
@@ -1019,7 +1056,10 @@ fn every_file_in_the_bad_folder_is_in_the_table() {
         })
         .collect();
     let in_table: BTreeSet<String> = CASES.iter().map(|c| c.file.to_string()).collect();
-    assert_eq!(on_disk, in_table, "files on disk vs. files in CASES");
+    let untested: Vec<_> = on_disk.difference(&in_table).collect();
+    let missing: Vec<_> = in_table.difference(&on_disk).collect();
+    assert!(untested.is_empty(), "files with no entry in CASES: {untested:?}");
+    assert!(missing.is_empty(), "CASES names files that do not exist: {missing:?}");
     assert!(on_disk.len() >= 40, "the corpus has only {} files", on_disk.len());
 }
 

@@ -161,3 +161,22 @@ w("stl_ascii_crlf.stl", stl_ascii(TET_TRIS).replace("\n", "\r\n"))
 # ---- no format
 w("unknown_extension.xyz", obj(TV, OBJ_TET))
 w("no_extension", obj(TV, OBJ_TET))
+
+# ---- more hostile cases
+# a face list whose 32-bit length prefix claims 2^31 − 1 corners (must not allocate for them)
+w("ply_binary_huge_list_count.ply",
+  ("ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+   "element face 1\nproperty list int int vertex_indices\nend_header\n").encode()
+  + b"".join(struct.pack("<3f", *p) for p in TV) + struct.pack("<i", 2**31 - 1) + struct.pack("<3i", 0, 1, 2))
+w("ply_binary_two_corner_face.ply",
+  ply_binary(TV, TF)[:-len(struct.pack("<B3i", 3, 1, 2, 3))] + struct.pack("<B2i", 2, 1, 2))
+w("ply_binary_big_endian.ply",
+  ("ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+   "element face 4\nproperty list uchar uint vertex_indices\nend_header\n").encode()
+  + b"".join(struct.pack(">3d", *p) for p in TV) + b"".join(struct.pack(">B3I", 3, *f) for f in TF))
+w("ply_ascii_nan.ply", ply_ascii(TV[:2] + [(0, "nan", 0)] + TV[3:], TF))
+w("off_huge_corner_count.off", off(TV, TF[:3], counts=(4, 4)) + "1000000000 1 2 3\n")
+w("off_negative_counts.off", "OFF\n-1 4 0\n0 0 0\n")
+w("obj_index_overflow.obj", obj(TV, OBJ_TET[:3] + [("2", "3", "99999999999999999999")]))
+# a binary STL whose 80-byte header starts with "solid", as many exporters write it
+w("stl_binary_starts_with_solid.stl", b"solid exported by a CAD tool".ljust(80, b" ") + stl_binary(TET_TRIS)[80:])
