@@ -916,6 +916,63 @@ const CASES: &[Case] = &[
     ),
     // A binary STL whose header starts with "solid" (as many exporters write it) is still binary.
     clean_tet("stl_binary_starts_with_solid.stl", 8, &["binary STL"]),
+    // A quad that repeats a corner: refused by default; fan triangulation makes the
+    // repeated-index triangle [1, 2, 2] (which counts edge 1–2 twice), and dropping it gives
+    // back the closed tetrahedron.
+    fails(
+        "obj_polygon_repeated_corner.obj",
+        |e| {
+            matches!(
+                e,
+                MeshError::Polygon {
+                    face: 3,
+                    corners: 4,
+                    ..
+                }
+            )
+        },
+        &["obj_polygon_repeated_corner.obj", "face 3 has 4 corners"],
+    ),
+    Case {
+        file: "obj_polygon_repeated_corner.obj",
+        triangulate: true,
+        expect: Expect::Loads {
+            counts: (4, 5),
+            triangulated: 1,
+            welded: 0,
+            notes: &[],
+            problems: &[
+                "RepeatedIndex { face: 3, vertices: [1, 2, 2] }",
+                "NonManifoldEdge { edge: [1, 2], n_faces: 4 }",
+            ],
+            validation: Verdict::Err(
+                |e| matches!(e, MeshError::RepeatedIndex { face: 3, vertices } if vertices == &[1, 2, 2]),
+            ),
+            assembly: Verdict::Err(|e| {
+                matches!(
+                    e,
+                    MeshError::DegenerateFace {
+                        face: 3,
+                        vertices: [1, 2, 2]
+                    }
+                )
+            }),
+        },
+    },
+    Case {
+        file: "obj_polygon_repeated_corner.obj",
+        triangulate: true,
+        expect: Expect::Repairs {
+            opts: DROP_DEGENERATE,
+            counts: (4, 4),
+            vertex_map: &[Some(0), Some(1), Some(2), Some(3)],
+            dropped_faces: &[3],
+            dropped_degenerate_faces: &[3],
+            dropped_vertices: 0,
+            validation: Verdict::Ok,
+            assembly: Verdict::Ok,
+        },
+    },
 ];
 
 fn bad_dir() -> PathBuf {

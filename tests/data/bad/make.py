@@ -180,3 +180,5 @@ w("off_negative_counts.off", "OFF\n-1 4 0\n0 0 0\n")
 w("obj_index_overflow.obj", obj(TV, OBJ_TET[:3] + [("2", "3", "99999999999999999999")]))
 # a binary STL whose 80-byte header starts with "solid", as many exporters write it
 w("stl_binary_starts_with_solid.stl", b"solid exported by a CAD tool".ljust(80, b" ") + stl_binary(TET_TRIS)[80:])
+# a quad that repeats a corner: fan triangulation turns it into a repeated-index triangle
+w("obj_polygon_repeated_corner.obj", obj(TV, OBJ_TET[:3] + [(2, 3, 3, 4)]))
