@@ -14,6 +14,8 @@ use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, Symbolic
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{c64, Conj, MatMut, Par, Side};
 
+use crate::SolveError;
+
 /// Shared symbolic Cholesky analysis (AMD ordering) of the pattern of L and B.
 pub(crate) type CholeskySymbolic = Arc<SymbolicCholesky<usize>>;
 /// Shared symbolic LU analysis (COLAMD) of the pattern of L and B.
@@ -36,18 +38,60 @@ pub(crate) fn lu_symbolic(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result
         .map_err(|e| format!("{e:?}"))
 }
 
-/// Real sparse Cholesky factor L Lᵀ of an SPD matrix.
+/// Symbolic Cholesky analysis (AMD ordering, elimination tree, supernodes) of a symmetric
+/// pattern, computed once and reused for every numeric factorization on that pattern (every
+/// shift `A = M + sL`, every t).
+#[derive(Clone, Debug)]
+pub struct CholeskyPattern {
+    symbolic: CholeskySymbolic,
+}
+
+impl CholeskyPattern {
+    /// Analyses the pattern of `a` (lower triangle used).
+    ///
+    /// # Errors
+    /// [`SolveError::Factorization`] if faer's symbolic analysis fails.
+    pub fn new(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result<Self, SolveError> {
+        let symbolic = cholesky_symbolic(pattern).map_err(|detail| SolveError::Factorization {
+            what: "symbolic Cholesky",
+            detail,
+        })?;
+        Ok(Self { symbolic })
+    }
+
+    /// Numeric factorization `A = PᵀRRᵀP` of a symmetric positive definite `a` on the analysed
+    /// pattern, with faer parallelism `par` (use `Par::Seq` when parallelising over many
+    /// factorizations yourself).
+    ///
+    /// # Errors
+    /// [`SolveError::Factorization`] when `a` is not numerically positive definite.
+    pub fn factor(&self, a: SparseColMatRef<'_, usize, f64>, par: Par) -> Result<SpdFactor, SolveError> {
+        SpdFactor::with_par(&self.symbolic, a, par).map_err(|detail| SolveError::Factorization {
+            what: "numeric Cholesky",
+            detail,
+        })
+    }
+}
+
+/// Real sparse Cholesky factor `A = PᵀRRᵀP` of a symmetric positive definite matrix.
 #[derive(Debug)]
-pub(crate) struct SeqLlt {
+pub struct SpdFactor {
     symbolic: CholeskySymbolic,
     values: Vec<f64>,
 }
 
-impl SeqLlt {
-    /// Fails (with faer's message) when the matrix is not numerically positive definite.
-    pub fn new(symbolic: &CholeskySymbolic, a: SparseColMatRef<'_, usize, f64>) -> Result<Self, String> {
+/// The sequential factor used inside one pole.
+pub(crate) type SeqLlt = SpdFactor;
+
+impl SpdFactor {
+    /// Sequential factorization; fails (with faer's message) when the matrix is not
+    /// numerically positive definite.
+    pub(crate) fn new(symbolic: &CholeskySymbolic, a: SparseColMatRef<'_, usize, f64>) -> Result<Self, String> {
+        Self::with_par(symbolic, a, Par::Seq)
+    }
+
+    fn with_par(symbolic: &CholeskySymbolic, a: SparseColMatRef<'_, usize, f64>, par: Par) -> Result<Self, String> {
         let mut values = vec![0.0; symbolic.len_val()];
-        let par = Par::Seq;
         let mut buf = MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
             .map_err(|e| format!("{e:?}"))?;
         symbolic
@@ -67,10 +111,19 @@ impl SeqLlt {
         })
     }
 
+    /// Overwrites `rhs` (n × k) with `A⁻¹ rhs`. Triangular solves are memory bound and run
+    /// sequentially: parallelise over right-hand sides or poles instead.
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         let par = Par::Seq;
         let mut buf = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), par));
         LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut buf));
+    }
+
+    /// `A⁻¹ b` for one vector.
+    pub fn solve_vec(&self, b: &[f64]) -> Vec<f64> {
+        let mut m = faer::Mat::<f64>::from_fn(b.len(), 1, |i, _| b[i]);
+        self.solve_in_place(m.as_mut());
+        (0..b.len()).map(|i| m[(i, 0)]).collect()
     }
 }
 

@@ -37,6 +37,7 @@ mod cf;
 
 pub use condition::ConditionReport;
 pub use error::SolveError;
+pub use factor::{CholeskyPattern, SpdFactor};
 pub use faer::c64;
 pub use iterative::{MinresParams, Preconditioner, PreconditionerShift};
 pub use poles::{RationalApprox, DEFAULT_DEGREE, PAPER_DEGREE, SHIPPED_DEGREES};

@@ -2,15 +2,9 @@
 //! sparse Cholesky factorization whose symbolic analysis is reused across shifts.
 
 use crate::HeatError;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
-};
 use faer::sparse::SparseColMat;
-use faer::{get_global_parallelism, Conj, Mat, MatMut, MatRef, Par, Side};
+use faer::{get_global_parallelism, Mat, MatRef};
 use rayon::prelude::*;
-use std::sync::Arc;
 
 /// `A x` for a symmetric CSC matrix, computed row-wise (column j of A is row j) in parallel.
 pub(crate) fn spmv_sym(a: &SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
@@ -74,76 +68,35 @@ pub(crate) fn same_pattern(a: &SparseColMat<usize, f64>, b: &SparseColMat<usize,
         && a.symbolic().row_idx() == b.symbolic().row_idx()
 }
 
-/// The symbolic Cholesky analysis (AMD ordering, elimination tree, supernodes) of the
-/// shared pattern, computed once and reused for every shift.
+/// The symbolic Cholesky analysis of the shared pattern, computed once and reused for every
+/// shift; a thin wrapper over [`shifted_solve::CholeskyPattern`] that names the failing matrix
+/// in a [`HeatError`].
 #[derive(Clone, Debug)]
 pub(crate) struct CholeskyPattern {
-    symbolic: Arc<SymbolicCholesky<usize>>,
+    inner: shifted_solve::CholeskyPattern,
 }
+
+/// A numeric sparse Cholesky factor `A = PᵀRRᵀP` (from shifted-solve).
+pub(crate) use shifted_solve::SpdFactor;
 
 impl CholeskyPattern {
     pub(crate) fn new(pattern: &SparseColMat<usize, f64>) -> Result<Self, HeatError> {
-        let symbolic = factorize_symbolic_cholesky(
-            pattern.symbolic(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| HeatError::InconsistentOperators {
-            reason: format!("symbolic Cholesky analysis failed: {e:?}"),
-        })?;
-        Ok(Self {
-            symbolic: Arc::new(symbolic),
-        })
+        let inner =
+            shifted_solve::CholeskyPattern::new(pattern.symbolic()).map_err(|e| HeatError::InconsistentOperators {
+                reason: format!("symbolic Cholesky analysis failed: {e}"),
+            })?;
+        Ok(Self { inner })
     }
 
-    /// Numeric factorization of an SPD matrix on the analysed pattern (parallel).
+    /// Numeric factorization of an SPD matrix on the analysed pattern (faer's global
+    /// parallelism: one large factorization at a time is where it pays).
     pub(crate) fn factor(
         &self,
         a: &SparseColMat<usize, f64>,
         what: impl FnOnce() -> String,
     ) -> Result<SpdFactor, HeatError> {
-        let sym = &self.symbolic;
-        let mut values = vec![0.0f64; sym.len_val()];
-        let par = get_global_parallelism();
-        let mut buf = MemBuffer::new(sym.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
-        sym.factorize_numeric_llt::<f64>(
-            &mut values,
-            a.as_ref(),
-            Side::Lower,
-            LltRegularization::default(),
-            par,
-            MemStack::new(&mut buf),
-            Default::default(),
-        )
-        .map_err(|_| HeatError::NotPositiveDefinite { matrix: what() })?;
-        Ok(SpdFactor {
-            symbolic: self.symbolic.clone(),
-            values,
-        })
-    }
-}
-
-/// A numeric sparse Cholesky factor `A = PᵀRRᵀP`.
-#[derive(Debug)]
-pub(crate) struct SpdFactor {
-    symbolic: Arc<SymbolicCholesky<usize>>,
-    values: Vec<f64>,
-}
-
-impl SpdFactor {
-    /// Overwrites `rhs` with `A⁻¹ rhs`. Triangular solves are memory bound, so they run
-    /// sequentially: callers parallelise over right-hand sides instead.
-    pub(crate) fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
-        let par = Par::Seq;
-        let mut buf = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), par));
-        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut buf));
-    }
-
-    /// `A⁻¹ b` for a vector.
-    pub(crate) fn solve_vec(&self, b: &[f64]) -> Vec<f64> {
-        let mut m = Mat::<f64>::from_fn(b.len(), 1, |i, _| b[i]);
-        self.solve_in_place(m.as_mut());
-        (0..b.len()).map(|i| m[(i, 0)]).collect()
+        self.inner
+            .factor(a.as_ref(), get_global_parallelism())
+            .map_err(|_| HeatError::NotPositiveDefinite { matrix: what() })
     }
 }
