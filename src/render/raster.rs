@@ -368,8 +368,8 @@ fn bounding_box(positions: &[[f64; 3]]) -> (V3, V3) {
     (lo, hi)
 }
 
-/// Width and height of the projected bounding box.
-fn extent(positions: &[[f64; 3]], cam: &Camera) -> (f64, f64) {
+/// The projected bounding box `(x0, x1, y0, y1)`, or `None` for no positions.
+fn projected_bounds(positions: &[[f64; 3]], cam: &Camera) -> Option<(f64, f64, f64, f64)> {
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
     for &p in positions {
         let (x, y, _) = cam.project(p);
@@ -378,23 +378,17 @@ fn extent(positions: &[[f64; 3]], cam: &Camera) -> (f64, f64) {
         y0 = y0.min(y);
         y1 = y1.max(y);
     }
-    ((x1 - x0).max(0.0), (y1 - y0).max(0.0))
+    (x0 <= x1).then_some((x0, x1, y0, y1))
+}
+
+/// Width and height of the projected bounding box.
+fn extent(positions: &[[f64; 3]], cam: &Camera) -> (f64, f64) {
+    projected_bounds(positions, cam).map_or((0.0, 0.0), |(x0, x1, y0, y1)| ((x1 - x0).max(0.0), (y1 - y0).max(0.0)))
 }
 
 /// Centre of the projected bounding box.
 fn centre(positions: &[[f64; 3]], cam: &Camera) -> (f64, f64) {
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
-    for &p in positions {
-        let (x, y, _) = cam.project(p);
-        x0 = x0.min(x);
-        x1 = x1.max(x);
-        y0 = y0.min(y);
-        y1 = y1.max(y);
-    }
-    if x0 > x1 {
-        return (0.0, 0.0);
-    }
-    (0.5 * (x0 + x1), 0.5 * (y0 + y1))
+    projected_bounds(positions, cam).map_or((0.0, 0.0), |(x0, x1, y0, y1)| (0.5 * (x0 + x1), 0.5 * (y0 + y1)))
 }
 
 /// Area-weighted vertex normals (the unnormalised face normal is twice the area times the unit
