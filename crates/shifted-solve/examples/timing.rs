@@ -30,6 +30,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let approx = RationalApprox::cram(16)?;
     for (name, backend) in [
         ("direct_lu", Backend::DirectLu),
+        ("direct_ldlt", Backend::DirectLdlt),
         ("minres_s=|z|", Backend::Minres(MinresParams::default())),
     ] {
         let solver = ShiftedSolver::new(l.as_ref(), b.as_ref(), backend)?;

@@ -16,8 +16,9 @@
 //!
 //! * [`ShiftedSolver`]: validates (L, B), owns them on one shared pattern, and applies
 //!   r_n(tB⁻¹L) or the resolvent sum to n × k right-hand sides, with backends
-//!   [`Backend::DirectLu`] (complex sparse LU, default) and [`Backend::Minres`] (the paper's
-//!   preconditioned MINRES on the real 2n×2n form).
+//!   [`Backend::DirectLdlt`] (complex-symmetric supernodal LDLᵀ without pivoting, the fastest;
+//!   module `ldlt`), [`Backend::DirectLu`] (pivoted complex sparse LU) and [`Backend::Minres`]
+//!   (the paper's preconditioned MINRES on the real 2n×2n form).
 //! * [`RationalFactors`]: all poles of one t factored once, reused for many right-hand sides.
 //! * [`ConditionReport`]: 2-norm condition numbers of tL − zB and of the preconditioned
 //!   operator (paper Fig. 2c,d).
@@ -28,6 +29,7 @@ mod condition;
 mod error;
 mod factor;
 mod iterative;
+mod ldlt;
 mod ops;
 pub mod poles;
 mod solver;

@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use crate::factor::{cholesky_symbolic, lu_symbolic, CholeskySymbolic, LuSymbolic, SeqLlt, SeqLu};
 use crate::iterative::{minres, pcg, MinresParams, PrecondFactor, Preconditioner, PreconditionerShift};
+use crate::ldlt::{LdltFactor, LdltSymbolic};
 use crate::ops::PairOperators;
 use crate::{RationalApprox, SolveError};
 use faer::c64;
@@ -19,6 +20,11 @@ pub enum Backend {
     /// every pole and every t; the real pole of odd degrees uses a real sparse Cholesky.
     /// Factors are reused for any number of right-hand sides.
     DirectLu,
+    /// Complex-symmetric supernodal LDLᵀ without pivoting (NUMERICS §3.3d, [`crate::ldlt`]
+    /// docs): it exists because the Hermitian part of i(tL − zB) is qB ≻ 0, reuses the real
+    /// Cholesky's AMD ordering and supernodes, and does about half the work of the LU. Every
+    /// solve reports its true residual; the real pole uses a real sparse Cholesky.
+    DirectLdlt,
     /// Preconditioned MINRES on the real 2n×2n symmetric form (the paper's choice); the real
     /// pole uses preconditioned CG on the SPD system tL + |z|B.
     Minres(MinresParams),
@@ -29,6 +35,8 @@ pub enum Backend {
 pub enum SolveMethod {
     /// Sparse complex LU.
     ComplexLu,
+    /// Sparse complex-symmetric LDLᵀ.
+    ComplexLdlt,
     /// Sparse real Cholesky (real pole).
     RealCholesky,
     /// Preconditioned MINRES on the real 2n form.
@@ -86,6 +94,7 @@ pub struct ShiftedSolver {
     backend: Backend,
     llt_symbolic: CholeskySymbolic,
     lu_symbolic: Option<LuSymbolic>,
+    ldlt_symbolic: Option<Arc<LdltSymbolic>>,
 }
 
 pub(crate) fn check_time(t: f64) -> Result<(), SolveError> {
@@ -160,13 +169,23 @@ impl ShiftedSolver {
                     })?,
                 )
             }
-            Backend::Minres(_) => None,
+            Backend::Minres(_) | Backend::DirectLdlt => None,
+        };
+        let ldlt_symbolic = match backend {
+            Backend::DirectLdlt => Some(Arc::new(LdltSymbolic::new(ops.symbolic.as_ref()).map_err(
+                |detail| SolveError::Factorization {
+                    what: "symbolic LDLᵀ",
+                    detail,
+                },
+            )?)),
+            _ => None,
         };
         Ok(Self {
             ops: Arc::new(ops),
             backend,
             llt_symbolic,
             lu_symbolic,
+            ldlt_symbolic,
         })
     }
 
@@ -253,8 +272,11 @@ impl ShiftedSolver {
         }
         let ops = &*self.ops;
         let terms: Vec<PoleTerm> = match self.backend {
-            Backend::DirectLu => {
-                let sym = self.lu_symbolic()?;
+            Backend::DirectLu | Backend::DirectLdlt => {
+                let direct = match &self.ldlt_symbolic {
+                    Some(ldlt) => DirectSymbolic::Ldlt(ldlt.clone()),
+                    None => DirectSymbolic::Lu(self.lu_symbolic()?),
+                };
                 jobs.par_iter()
                     .map(|&(z, c, real)| {
                         let solver = if real {
@@ -264,9 +286,15 @@ impl ShiftedSolver {
                             PoleSolver::Cholesky(llt)
                         } else {
                             let a = ops.shifted(t, z);
-                            let lu = SeqLu::new(&sym, a.as_ref())
-                                .map_err(|_| SolveError::SingularShiftedMatrix { t, pole: z })?;
-                            PoleSolver::Lu(Box::new(lu))
+                            let singular = SolveError::SingularShiftedMatrix { t, pole: z };
+                            match &direct {
+                                DirectSymbolic::Ldlt(sym) => {
+                                    PoleSolver::Ldlt(Box::new(LdltFactor::new(sym, a.val()).map_err(|_| singular)?))
+                                }
+                                DirectSymbolic::Lu(sym) => {
+                                    PoleSolver::Lu(Box::new(SeqLu::new(sym, a.as_ref()).map_err(|_| singular)?))
+                                }
+                            }
                         };
                         Ok(PoleTerm {
                             pole: z,
@@ -314,9 +342,15 @@ impl ShiftedSolver {
     }
 }
 
+enum DirectSymbolic {
+    Lu(LuSymbolic),
+    Ldlt(Arc<LdltSymbolic>),
+}
+
 #[derive(Debug)]
 enum PoleSolver {
     Lu(Box<SeqLu>),
+    Ldlt(Box<LdltFactor>),
     Cholesky(SeqLlt),
     Krylov {
         precond: Arc<PrecondFactor>,
@@ -426,9 +460,16 @@ impl RationalFactors {
         let is_real = z.im == 0.0;
         let weight = if is_real { 1.0 } else { 2.0 };
         match &term.solver {
-            PoleSolver::Lu(lu) => {
+            PoleSolver::Lu(_) | PoleSolver::Ldlt(_) => {
                 let mut x = Mat::<c64>::from_fn(n, k, |i, j| c64::new(g[(i, j)], 0.0));
-                lu.solve_in_place(x.as_mut());
+                match &term.solver {
+                    PoleSolver::Lu(lu) => lu.solve_in_place(x.as_mut()),
+                    PoleSolver::Ldlt(f) => {
+                        report.method = SolveMethod::ComplexLdlt;
+                        f.solve_in_place(x.as_mut())
+                    }
+                    _ => {}
+                }
                 let mut ax = vec![c64::new(0.0, 0.0); n];
                 for j in 0..k {
                     let xj = x.col_as_slice(j);

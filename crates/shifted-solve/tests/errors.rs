@@ -217,10 +217,33 @@ fn invalid_time_and_parameters() {
 #[test]
 fn zero_rhs_gives_zero() {
     let (l, b) = mesh_pair(1);
-    for backend in [Backend::DirectLu, Backend::Minres(MinresParams::default())] {
+    for backend in [
+        Backend::DirectLu,
+        Backend::DirectLdlt,
+        Backend::Minres(MinresParams::default()),
+    ] {
         let s = ShiftedSolver::new(l.as_ref(), b.as_ref(), backend).unwrap();
         let f = Mat::<f64>::zeros(l.nrows(), 1);
         let (x, _) = s.apply(RationalApprox::cram(5).unwrap(), 0.3, f.as_ref()).unwrap();
         assert!((0..l.nrows()).all(|i| x[(i, 0)] == 0.0));
+    }
+}
+
+/// Overflow inside a factorization (t = 1e308) is a typed error for both direct backends,
+/// never NaN in the result.
+#[test]
+fn overflowing_shift_is_a_typed_error() {
+    let (l, b) = mesh_pair(1);
+    let f = Mat::<f64>::from_fn(l.nrows(), 1, |i, _| i as f64);
+    for backend in [Backend::DirectLu, Backend::DirectLdlt] {
+        let s = ShiftedSolver::new(l.as_ref(), b.as_ref(), backend).unwrap();
+        match s.apply(RationalApprox::cram(16).unwrap(), 1e308, f.as_ref()) {
+            Err(SolveError::SingularShiftedMatrix { t, .. }) => assert_eq!(t, 1e308),
+            Err(e) => panic!("{backend:?}: unexpected error {e}"),
+            Ok((x, _)) => assert!(
+                (0..l.nrows()).all(|i| x[(i, 0)].is_finite()),
+                "{backend:?}: non-finite result"
+            ),
+        }
     }
 }

@@ -95,7 +95,7 @@ impl Default for DistanceParams {
     fn default() -> Self {
         Self {
             degree: shifted_solve::DEFAULT_DEGREE,
-            backend: Backend::DirectLu,
+            backend: Backend::DirectLdlt,
             block: 64,
             diagonal: DiagonalMethod::Probing { tol: 1e-10 },
         }

@@ -146,7 +146,10 @@ fn apply_many_and_one_shot_agree_with_apply() {
     for (c, v) in [(0, &f), (1, &e)] {
         let single = kernel.apply(v, 0.05).unwrap();
         let col: Vec<f64> = many.col(c).iter().copied().collect();
-        assert!(rel_err(&col, &single) < 1e-14);
+        // Several right-hand sides go through blocked (GEMM) triangular solves, one through
+        // GEMV: same arithmetic, different summation order, so agreement is to rounding level.
+        let err = rel_err(&col, &single);
+        assert!(err < 1e-13, "column {c}: {err:e}");
     }
     let one_shot = wfem_heat::heat(&ops, &f, 0.05).unwrap();
     assert!(rel_err(&one_shot, &kernel.apply(&f, 0.05).unwrap()) < 1e-14);
