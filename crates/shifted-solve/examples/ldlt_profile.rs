@@ -8,7 +8,9 @@ use shifted_solve::{Backend, CholeskyPattern, RationalApprox, ShiftedSolver};
 
 fn main() {
     let level: u32 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(5);
-    let mesh = mesh_fem::generate::icosphere(level).with_area(4.0 * std::f64::consts::PI).expect("area");
+    let mesh = mesh_fem::generate::icosphere(level)
+        .with_area(4.0 * std::f64::consts::PI)
+        .expect("area");
     let ops = mesh_fem::assemble(&mesh, &mesh_fem::AssemblyParams::default()).expect("assembly");
     let (l, b) = (ops.stiffness, ops.mass);
     let n = l.nrows();
@@ -19,7 +21,10 @@ fn main() {
         n,
         &l.triplet_iter()
             .map(|e| faer::sparse::Triplet::new(e.row, e.col, t * *e.val))
-            .chain(b.triplet_iter().map(|e| faer::sparse::Triplet::new(e.row, e.col, *e.val)))
+            .chain(
+                b.triplet_iter()
+                    .map(|e| faer::sparse::Triplet::new(e.row, e.col, *e.val)),
+            )
             .collect::<Vec<_>>(),
     )
     .expect("B + tL");
@@ -31,16 +36,35 @@ fn main() {
     let t0 = Instant::now();
     f.solve_in_place(x.as_mut());
     let solve = t0.elapsed().as_secs_f64();
-    let sym = factorize_symbolic_cholesky(l.symbolic(), Side::Lower, SymmetricOrdering::Amd, CholeskySymbolicParams::default()).expect("sym");
-    println!("n={n} nnz(L factor)={} real Cholesky B+tL: {chol:.3} s, 1 solve {solve:.4} s", sym.len_val());
+    let sym = factorize_symbolic_cholesky(
+        l.symbolic(),
+        Side::Lower,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams::default(),
+    )
+    .expect("sym");
+    println!(
+        "n={n} nnz(L factor)={} real Cholesky B+tL: {chol:.3} s, 1 solve {solve:.4} s",
+        sym.len_val()
+    );
     let solver = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::DirectLdlt).expect("solver");
     let approx = RationalApprox::cram(16).expect("cram");
-    let single = RationalApprox { degree: 2, c0: 0.0, poles: &approx.poles[..1], residues: &approx.residues[..1], real_pole: None, max_error: 0.0 };
+    let single = RationalApprox {
+        degree: 2,
+        c0: 0.0,
+        poles: &approx.poles[..1],
+        residues: &approx.residues[..1],
+        real_pole: None,
+        max_error: 0.0,
+    };
     let t0 = Instant::now();
     let fac = solver.factor(&single, t).expect("factor");
     let ldlt = t0.elapsed().as_secs_f64();
     let t0 = Instant::now();
     let _ = fac.apply_resolvent(rhs.as_ref()).expect("solve");
     let lsolve = t0.elapsed().as_secs_f64();
-    println!("complex LDLᵀ one pole: factor {ldlt:.3} s ({:.1}× real Cholesky), solve+residual {lsolve:.4} s", ldlt / chol);
+    println!(
+        "complex LDLᵀ one pole: factor {ldlt:.3} s ({:.1}× real Cholesky), solve+residual {lsolve:.4} s",
+        ldlt / chol
+    );
 }

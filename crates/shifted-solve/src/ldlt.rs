@@ -26,7 +26,7 @@ use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::triangular_solve::{solve_unit_lower_triangular_in_place, solve_unit_upper_triangular_in_place};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::SymbolicSparseColMatRef;
@@ -67,15 +67,20 @@ pub(crate) struct LdltFactor {
 }
 
 impl LdltSymbolic {
-    /// Analyses a symmetric pattern given with both triangles (`col_ptr`, `row_idx`, sorted).
-    pub fn new(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result<Self, String> {
-        let n = pattern.nrows();
+    /// The supernodal symbolic Cholesky (AMD) this factorization needs; the real Cholesky of the
+    /// same pattern can share it.
+    pub fn cholesky_analysis(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result<SymbolicCholesky<usize>, String> {
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        let sym = factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, params)
-            .map_err(|e| format!("{e:?}"))?;
+        factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, params).map_err(|e| format!("{e:?}"))
+    }
+
+    /// Builds the factor layout from a pattern given with both triangles (sorted columns) and
+    /// its supernodal analysis from [`Self::cholesky_analysis`].
+    pub fn new(pattern: SymbolicSparseColMatRef<'_, usize>, sym: &SymbolicCholesky<usize>) -> Result<Self, String> {
+        let n = pattern.nrows();
         let perm: Vec<usize> = match sym.perm() {
             Some(p) => p.arrays().0.to_vec(),
             None => (0..n).collect(),
@@ -448,7 +453,8 @@ mod tests {
         let ops = mesh_fem::assemble(&mesh, &mesh_fem::AssemblyParams::default()).unwrap();
         let (l, b) = (ops.stiffness, ops.mass);
         let pair = crate::ops::PairOperators::new(l.as_ref(), b.as_ref()).unwrap();
-        let sym = std::sync::Arc::new(LdltSymbolic::new(pair.symbolic.as_ref()).unwrap());
+        let analysis = LdltSymbolic::cholesky_analysis(pair.symbolic.as_ref()).unwrap();
+        let sym = std::sync::Arc::new(LdltSymbolic::new(pair.symbolic.as_ref(), &analysis).unwrap());
         let widest = (0..sym.n_supernodes())
             .map(|s| sym.begin[s + 1] - sym.begin[s])
             .max()

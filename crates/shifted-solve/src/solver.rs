@@ -149,10 +149,22 @@ impl ShiftedSolver {
             p.validate()?;
         }
         let ops = PairOperators::new(stiffness, mass)?;
-        let llt_symbolic = cholesky_symbolic(ops.symbolic.as_ref()).map_err(|detail| SolveError::Factorization {
+        let symbolic_error = |detail| SolveError::Factorization {
             what: "symbolic Cholesky",
             detail,
-        })?;
+        };
+        // The LDLᵀ needs a supernodal analysis; the real Cholesky factors then share it (one AMD).
+        let (llt_symbolic, ldlt_symbolic) = if backend == Backend::DirectLdlt {
+            let analysis = LdltSymbolic::cholesky_analysis(ops.symbolic.as_ref()).map_err(symbolic_error)?;
+            let ldlt =
+                LdltSymbolic::new(ops.symbolic.as_ref(), &analysis).map_err(|detail| SolveError::Factorization {
+                    what: "symbolic LDLᵀ",
+                    detail,
+                })?;
+            (Arc::new(analysis), Some(Arc::new(ldlt)))
+        } else {
+            (cholesky_symbolic(ops.symbolic.as_ref()).map_err(symbolic_error)?, None)
+        };
         let b = ops.real_combination(0.0, 1.0);
         SeqLlt::new(&llt_symbolic, b.as_ref()).map_err(|detail| SolveError::MassNotPositiveDefinite { detail })?;
         let tr_l: f64 = ops.diagonal(1.0, 0.0).iter().sum();
@@ -170,15 +182,6 @@ impl ShiftedSolver {
                 )
             }
             Backend::Minres(_) | Backend::DirectLdlt => None,
-        };
-        let ldlt_symbolic = match backend {
-            Backend::DirectLdlt => Some(Arc::new(LdltSymbolic::new(ops.symbolic.as_ref()).map_err(
-                |detail| SolveError::Factorization {
-                    what: "symbolic LDLᵀ",
-                    detail,
-                },
-            )?)),
-            _ => None,
         };
         Ok(Self {
             ops: Arc::new(ops),
