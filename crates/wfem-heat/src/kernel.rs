@@ -2,6 +2,7 @@
 
 use crate::eigen::{EigenParams, Eigenbasis};
 use crate::krylov::{rational_krylov_exp, FastParams};
+use crate::null_space::NullSpace;
 use crate::sparse::{combine, same_pattern, spmm_sym, CholeskyPattern, SpdFactor};
 use crate::HeatError;
 use faer::sparse::SparseColMat;
@@ -129,6 +130,8 @@ pub struct HeatKernel {
     pattern: CholeskyPattern,
     params: HeatParams,
     prepared: Prepared,
+    /// The constants on the connected components, deflated exactly (see `null_space.rs`).
+    null_space: NullSpace,
     /// The last t-dependent factor `M + sL` and its s.
     cache: Mutex<Option<(f64, Arc<SpdFactor>)>>,
     /// The rational factors of the last t (`Rational` method).
@@ -211,12 +214,14 @@ impl HeatKernel {
                 Prepared::Rational(solver, approx)
             }
         };
+        let null_space = NullSpace::new(&stiffness, &mass);
         Ok(Self {
             stiffness,
             mass,
             pattern,
             params,
             prepared,
+            null_space,
             cache: Mutex::new(None),
             rational_cache: Mutex::new(None),
         })
@@ -283,6 +288,17 @@ impl HeatKernel {
                 }
             }
         }
+        // K_t f = P f + (I − P) K_t (I − P) f with P the M-orthogonal projector onto the
+        // constants of each component (exact: K_t P = P); see `null_space.rs`.
+        let (deflated, coefs) = self.null_space.split(f);
+        let mut g = self.apply_method(deflated.as_ref(), t)?;
+        self.null_space.restore(&mut g, &coefs);
+        Ok(g)
+    }
+
+    /// `K_t f` by the method of the kernel, without the null-space deflation (`f` validated).
+    fn apply_method(&self, f: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
+        let n = self.n();
         match (&self.params.method, &self.prepared) {
             (_, Prepared::Eigen(e)) => Ok(e.apply_heat_many(&self.mass, f, t)),
             (Method::Taylor, Prepared::MassFactor(mf)) => {

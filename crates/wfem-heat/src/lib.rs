@@ -42,6 +42,7 @@ mod eigen;
 mod error;
 mod kernel;
 mod krylov;
+mod null_space;
 mod sparse;
 
 pub use basis::{
