@@ -159,6 +159,51 @@ pub(crate) fn check_vector(f: &[f64], n: usize) -> Result<(), HeatError> {
     Ok(())
 }
 
+/// Validates the operators of every method (O(nnz)): all entries of L and M finite, every
+/// diagonal entry of M positive. Without it a NaN in L passed through the Taylor step as NaN
+/// output, and a zero row of M (singular M, K_t undefined) went through the fast path as a
+/// finite answer.
+pub(crate) fn check_operators(
+    stiffness: &SparseColMat<usize, f64>,
+    mass: &SparseColMat<usize, f64>,
+) -> Result<(), HeatError> {
+    for (matrix, a) in [("stiffness L", stiffness), ("mass M", mass)] {
+        let s = a.symbolic();
+        for col in 0..a.ncols() {
+            for p in s.col_range(col) {
+                let value = a.val()[p];
+                if !value.is_finite() {
+                    return Err(HeatError::InvalidOperatorEntry {
+                        matrix,
+                        row: s.row_idx()[p],
+                        col,
+                        value,
+                        requirement: "finite",
+                    });
+                }
+            }
+        }
+    }
+    let s = mass.symbolic();
+    for col in 0..mass.ncols() {
+        let value: f64 = s
+            .col_range(col)
+            .filter(|&p| s.row_idx()[p] == col)
+            .map(|p| mass.val()[p])
+            .sum();
+        if value <= 0.0 {
+            return Err(HeatError::InvalidOperatorEntry {
+                matrix: "mass M",
+                row: col,
+                col,
+                value,
+                requirement: "> 0 on the diagonal",
+            });
+        }
+    }
+    Ok(())
+}
+
 impl HeatKernel {
     /// Prepares the kernel: picks the mass matrix of `params.kernel`, runs the symbolic
     /// Cholesky analysis of the shared pattern and the t-independent work of the method
@@ -166,7 +211,8 @@ impl HeatKernel {
     ///
     /// # Errors
     /// [`HeatError::InconsistentOperators`] if L and M differ in size or pattern;
-    /// [`HeatError::TooLargeForDense`]; [`HeatError::EigenNoConvergence`];
+    /// [`HeatError::InvalidOperatorEntry`] for a NaN/∞ entry or a non-positive diagonal
+    /// entry of M; [`HeatError::TooLargeForDense`]; [`HeatError::EigenNoConvergence`];
     /// [`HeatError::InvalidParameter`] for bad method parameters;
     /// [`HeatError::NotPositiveDefinite`].
     pub fn new(ops: &FemOperators, params: HeatParams) -> Result<Self, HeatError> {
@@ -181,6 +227,7 @@ impl HeatKernel {
                 reason: format!("stiffness and {:?} mass do not share one square pattern", params.kernel),
             });
         }
+        check_operators(&stiffness, &mass)?;
         let pattern = CholeskyPattern::new(&stiffness)?;
         let prepared = match &params.method {
             Method::Dense => Prepared::Eigen(Eigenbasis::dense(&stiffness, &mass)?),
