@@ -451,6 +451,7 @@ pub fn write_operators(dir: impl AsRef<Path>, ops: &FemOperators) -> Result<(), 
 
 /// Converts a faer sparse matrix to `nalgebra_sparse::CscMatrix` (same entries; row indices
 /// sorted and duplicates summed, as nalgebra requires).
+#[allow(clippy::expect_used)]
 pub fn to_nalgebra_csc(matrix: &SparseColMat<usize, f64>) -> nalgebra_sparse::CscMatrix<f64> {
     let entries = sorted_entries(matrix);
     let mut col_offsets = vec![0usize; matrix.ncols() + 1];
@@ -463,6 +464,7 @@ pub fn to_nalgebra_csc(matrix: &SparseColMat<usize, f64>) -> nalgebra_sparse::Cs
     let row_indices = entries.iter().map(|e| e.0).collect();
     let values = entries.iter().map(|e| e.2).collect();
     nalgebra_sparse::CscMatrix::try_from_csc_data(matrix.nrows(), matrix.ncols(), col_offsets, row_indices, values)
+        // invariant: `sorted_entries` yields sorted, deduplicated, in-range CSC data.
         .expect("sorted, deduplicated, in-range CSC data is valid")
 }
 
