@@ -42,7 +42,10 @@ fn listing(dir: &Path) -> Vec<String> {
 }
 
 fn temporaries(dir: &Path) -> Vec<String> {
-    listing(dir).into_iter().filter(|n| n.contains(".tmp-")).collect()
+    listing(dir)
+        .into_iter()
+        .filter(|n| n.contains(".tmp-") || n.contains(".staged-"))
+        .collect()
 }
 
 /// The input's bytes and modification time.
@@ -66,7 +69,6 @@ fn unwritable_output_paths_fail_cleanly() {
     let before = fingerprint(&mesh);
     let as_dir = dir.path().join("k.csv");
     std::fs::create_dir(&as_dir).unwrap();
-    let listing_before = listing(dir.path());
     for ext in ["csv", "npy", "ply", "png"] {
         let target = dir.path().join(format!("k.{ext}"));
         if !target.exists() {
@@ -88,7 +90,6 @@ fn unwritable_output_paths_fail_cleanly() {
             "{ext}: temporary file left"
         );
     }
-    let _ = listing_before;
 
     // A parent "folder" that is a regular file.
     let file = dir.path().join("plain");
@@ -114,6 +115,38 @@ fn unwritable_output_paths_fail_cleanly() {
     let o = wfem(&["operators", mesh.to_str().unwrap(), "--out", file.to_str().unwrap()]);
     assert!(!o.status.success());
     assert!(stderr(&o).starts_with("wfem: error:"), "{}", stderr(&o));
+
+    // Several PNG figures (one per t) are one output set: when the second target is a
+    // directory, the first figure is not written either.
+    let figs = dir.path().join("figs");
+    std::fs::create_dir_all(figs.join("k-t_0.1.png")).unwrap();
+    let png = figs.join("k.png");
+    let args = [
+        "heat",
+        mesh.to_str().unwrap(),
+        "--t",
+        "0.01",
+        "0.1",
+        "--source",
+        "3",
+        "-o",
+        png.to_str().unwrap(),
+    ];
+    let o = wfem(&args);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("k-t_0.1.png"), "{}", stderr(&o));
+    assert_eq!(
+        listing(&figs),
+        vec!["k-t_0.1.png".to_string()],
+        "partial set of figures"
+    );
+    std::fs::remove_dir(figs.join("k-t_0.1.png")).unwrap();
+    let o = wfem(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        listing(&figs),
+        vec!["k-t_0.01.png".to_string(), "k-t_0.1.png".to_string()]
+    );
 
     assert_eq!(fingerprint(&mesh), before, "the input mesh changed");
 }
