@@ -300,6 +300,11 @@ impl HeatKernel {
     /// Applies the heat kernel, `g = K_t f = exp(−t M⁻¹L) f = X e^{−tΛ} XᵀM f`
     /// (paper, Eq. (6)), with the method of the kernel. `f` has length n.
     ///
+    /// The null space of L (the constants on every connected component) is deflated exactly,
+    /// `K_t f = Pf + (I − P) K_t (I − P) f` with P the M-orthogonal projector onto it, so every
+    /// method conserves each component's mass `1_cᵀM K_t f = 1_cᵀM f` to rounding for any t
+    /// (without it the drift grew like ε·t·λ_max: 1.6e−5 at t = 1e8·h̄²).
+    ///
     /// # Errors
     /// [`HeatError::InvalidTime`] unless t is finite and positive;
     /// [`HeatError::LengthMismatch`]; [`HeatError::NonFiniteInput`];
