@@ -5,6 +5,10 @@
 //! shifted sparse solvers), [`wfem_heat`] (K_t f, distances) and [`shape_retrieval`]
 //! (descriptors and retrieval).
 
+// Robustness (issue #8): no unwrap()/expect() on user-controlled data in library code
+// (checked by tests/no_unwrap.rs).
+#![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
+
 pub use mesh_fem;
 pub use shape_retrieval;
 pub use shifted_solve;

@@ -99,7 +99,8 @@ pub fn write_fields(
         return Err(CliError::Usage("nothing to write".into()));
     }
     if ext == "png" {
-        let mut written = Vec::new();
+        // Render every figure first, then write the set all-or-nothing (`write_set`).
+        let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::with_capacity(fields.len());
         for (name, values) in fields {
             let target = if fields.len() == 1 {
                 path.to_path_buf()
@@ -118,10 +119,10 @@ pub fn write_fields(
                 path.with_file_name(format!("{stem}-{safe}.png"))
             };
             let png = render_png(mesh, values, &figure_params(name, values, highlight))?;
-            write_atomic(&target, |w| w.write_all(&png))?;
-            written.push(target);
+            files.push((target, png));
         }
-        return Ok(written);
+        write_set(&files)?;
+        return Ok(files.into_iter().map(|(p, _)| p).collect());
     }
     let refs: Vec<(&str, &[f64])> = fields.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
     let colors = if ext == "ply" {
@@ -131,6 +132,64 @@ pub fn write_fields(
     };
     write_field(path, mesh, &refs, colors.as_deref())?;
     Ok(vec![path.to_path_buf()])
+}
+
+/// Writes several files all-or-nothing: each is first written atomically
+/// ([`write_atomic`]) under a hidden staging name `.NAME.staged-PID` beside its target; only
+/// when all are written (and no target is a directory) are they renamed onto their targets.
+/// On failure the staged files are removed and no target has changed.
+pub(crate) fn write_set(files: &[(PathBuf, Vec<u8>)]) -> Result<(), CliError> {
+    let staged_name = |target: &Path| -> PathBuf {
+        let name = target
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        target.with_file_name(format!(".{name}.staged-{}", std::process::id()))
+    };
+    let remove = |upto: usize| {
+        for (target, _) in &files[..upto] {
+            let _ = std::fs::remove_file(staged_name(target));
+        }
+    };
+    if files.len() == 1 {
+        let (target, bytes) = &files[0];
+        return Ok(write_atomic(target, |w| w.write_all(bytes))?);
+    }
+    for (k, (target, bytes)) in files.iter().enumerate() {
+        if target.is_dir() {
+            remove(k);
+            return Err(MeshError::Io {
+                path: target.clone(),
+                source: std::io::Error::new(std::io::ErrorKind::IsADirectory, "the output path is a directory"),
+            }
+            .into());
+        }
+        if let Err(e) = write_atomic(&staged_name(target), |w| w.write_all(bytes)) {
+            remove(k);
+            return Err(match e {
+                // Name the file the user asked for, not the staging name.
+                MeshError::Io { source, .. } => MeshError::Io {
+                    path: target.clone(),
+                    source,
+                },
+                other => other,
+            }
+            .into());
+        }
+    }
+    for (k, (target, _)) in files.iter().enumerate() {
+        if let Err(source) = std::fs::rename(staged_name(target), target) {
+            for (t, _) in &files[k..] {
+                let _ = std::fs::remove_file(staged_name(t));
+            }
+            return Err(MeshError::Io {
+                path: target.clone(),
+                source,
+            }
+            .into());
+        }
+    }
+    Ok(())
 }
 
 /// Render parameters for a field: Viridis for one-signed fields, Coolwarm centred on zero for

@@ -46,8 +46,9 @@ fn normalize(p: [f64; 3]) -> [f64; 3] {
     [p[0] / r, p[1] / r, p[2] / r]
 }
 
+#[allow(clippy::expect_used)]
 fn build(positions: Vec<[f64; 3]>, faces: Vec<[u32; 3]>) -> TriMesh {
-    // Generators only produce finite coordinates and in-range indices.
+    // invariant: generators only produce finite coordinates and in-range indices.
     TriMesh::new(positions, faces).expect("generated meshes are valid by construction")
 }
 

@@ -42,17 +42,12 @@ fn mm_err(path: &Path, message: impl Into<String>) -> MeshError {
     }
 }
 
-/// Writes `bytes` to `path` atomically: into a temporary file in the same folder, synced,
-/// then renamed over `path`. Readers never see a half-written file.
-pub(crate) fn write_atomically(
-    path: &Path,
-    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<(), MeshError> {
+/// Writes a staged copy of `path`: a new temporary file `.NAME.tmp-PID-N` in the same folder,
+/// filled by `fill`, flushed and fsynced. On any failure the temporary file is removed and
+/// the error names `path` (the file the user asked for, not the temporary one).
+fn stage(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<PathBuf, MeshError> {
     static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    let dir = parent_dir(path);
     let name = path
         .file_name()
         .ok_or_else(|| mm_err(path, "the path names no file"))?
@@ -63,18 +58,63 @@ pub(crate) fn write_atomically(
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
-    let result = (|| {
-        let file = std::fs::File::create(&tmp).map_err(|e| io_err(&tmp, e))?;
+    let file = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+        .map_err(|e| io_err(path, e))?;
+    let result = (|| -> std::io::Result<()> {
         let mut w = std::io::BufWriter::new(file);
-        fill(&mut w).map_err(|e| io_err(&tmp, e))?;
-        let file = w.into_inner().map_err(|e| io_err(&tmp, e.into_error()))?;
-        file.sync_all().map_err(|e| io_err(&tmp, e))?;
-        std::fs::rename(&tmp, path).map_err(|e| io_err(path, e))
+        fill(&mut w)?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    match result {
+        Ok(()) => Ok(tmp),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(io_err(path, e))
+        }
     }
-    result
+}
+
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Renames every staged file onto its target, after checking that no target is a directory
+/// (the only common reason for a rename to fail once the data is written), so that a set of
+/// files is replaced as a whole or not at all; the staged files are removed on failure.
+fn commit(staged: &[(PathBuf, PathBuf)]) -> Result<(), MeshError> {
+    let cleanup = || {
+        for (tmp, _) in staged {
+            let _ = std::fs::remove_file(tmp);
+        }
+    };
+    if let Some((_, target)) = staged.iter().find(|(_, target)| target.is_dir()) {
+        cleanup();
+        return Err(io_err(
+            target,
+            std::io::Error::new(std::io::ErrorKind::IsADirectory, "the output path is a directory"),
+        ));
+    }
+    for (tmp, target) in staged {
+        if let Err(e) = std::fs::rename(tmp, target) {
+            cleanup();
+            return Err(io_err(target, e));
+        }
+    }
+    // Make the renames durable where the platform allows syncing a directory.
+    #[cfg(unix)]
+    for (_, target) in staged {
+        if let Ok(d) = std::fs::File::open(parent_dir(target)) {
+            let _ = d.sync_all();
+        }
+    }
+    Ok(())
 }
 
 /// Writes `matrix` to `path` in Matrix Market coordinate format.
@@ -94,6 +134,12 @@ pub fn write_matrix_market(
     symmetric: bool,
 ) -> Result<(), MeshError> {
     let path = path.as_ref();
+    let tmp = stage_matrix_market(path, matrix, symmetric)?;
+    commit(&[(tmp, path.to_path_buf())])
+}
+
+/// The checks and the staged file of [`write_matrix_market`] (not yet renamed onto `path`).
+fn stage_matrix_market(path: &Path, matrix: &SparseColMat<usize, f64>, symmetric: bool) -> Result<PathBuf, MeshError> {
     let entries = sorted_entries(matrix);
     if let Some(&(i, j, v)) = entries.iter().find(|e| !e.2.is_finite()) {
         return Err(mm_err(
@@ -105,7 +151,7 @@ pub fn write_matrix_market(
         check_symmetric(path, matrix.nrows(), matrix.ncols(), &entries)?;
     }
     let kept: Vec<&(usize, usize, f64)> = entries.iter().filter(|&&(i, j, _)| !symmetric || i >= j).collect();
-    write_atomically(path, |w| {
+    stage(path, |w| {
         writeln!(
             w,
             "%%MatrixMarket matrix coordinate real {}",
@@ -364,15 +410,14 @@ pub fn read_matrix_market(path: impl AsRef<Path>) -> Result<SparseColMat<usize, 
 /// Writes the operators of `ops` into the folder `dir` (created if missing):
 /// `stiffness.mtx` (L, symmetric positive semidefinite — the negative of libigl's
 /// `cotmatrix`), `mass.mtx` (consistent B) and `lumped_mass.mtx` (D, its diagonal only),
-/// all `coordinate real symmetric` (paper, Eq. (3) and Eq. (7)).
+/// all `coordinate real symmetric` (paper, Eq. (3) and Eq. (7)). The three files are written
+/// to temporary files first and renamed together: after a failure none of them has changed.
 ///
 /// # Errors
 /// [`MeshError::Io`] if the folder or a file cannot be written.
 pub fn write_operators(dir: impl AsRef<Path>, ops: &FemOperators) -> Result<(), MeshError> {
     let dir = dir.as_ref();
     std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
-    write_matrix_market(dir.join("stiffness.mtx"), &ops.stiffness, true)?;
-    write_matrix_market(dir.join("mass.mtx"), &ops.mass, true)?;
     let n = ops.lumped_diagonal.len();
     let diagonal: Vec<Triplet<usize, usize, f64>> = ops
         .lumped_diagonal
@@ -382,11 +427,31 @@ pub fn write_operators(dir: impl AsRef<Path>, ops: &FemOperators) -> Result<(), 
         .collect();
     let d = SparseColMat::try_new_from_triplets(n, n, &diagonal)
         .map_err(|e| mm_err(dir, format!("cannot build the lumped mass: {e:?}")))?;
-    write_matrix_market(dir.join("lumped_mass.mtx"), &d, true)
+    // All three files are staged first and renamed together, so a failure (disk full, a
+    // target that is a directory, …) leaves the folder as it was: no partial set of files.
+    let mut staged: Vec<(PathBuf, PathBuf)> = Vec::with_capacity(3);
+    for (name, matrix) in [
+        ("stiffness.mtx", &ops.stiffness),
+        ("mass.mtx", &ops.mass),
+        ("lumped_mass.mtx", &d),
+    ] {
+        let target = dir.join(name);
+        match stage_matrix_market(&target, matrix, true) {
+            Ok(tmp) => staged.push((tmp, target)),
+            Err(e) => {
+                for (tmp, _) in &staged {
+                    let _ = std::fs::remove_file(tmp);
+                }
+                return Err(e);
+            }
+        }
+    }
+    commit(&staged)
 }
 
 /// Converts a faer sparse matrix to `nalgebra_sparse::CscMatrix` (same entries; row indices
 /// sorted and duplicates summed, as nalgebra requires).
+#[allow(clippy::expect_used)]
 pub fn to_nalgebra_csc(matrix: &SparseColMat<usize, f64>) -> nalgebra_sparse::CscMatrix<f64> {
     let entries = sorted_entries(matrix);
     let mut col_offsets = vec![0usize; matrix.ncols() + 1];
@@ -399,6 +464,7 @@ pub fn to_nalgebra_csc(matrix: &SparseColMat<usize, f64>) -> nalgebra_sparse::Cs
     let row_indices = entries.iter().map(|e| e.0).collect();
     let values = entries.iter().map(|e| e.2).collect();
     nalgebra_sparse::CscMatrix::try_from_csc_data(matrix.nrows(), matrix.ncols(), col_offsets, row_indices, values)
+        // invariant: `sorted_entries` yields sorted, deduplicated, in-range CSC data.
         .expect("sorted, deduplicated, in-range CSC data is valid")
 }
 

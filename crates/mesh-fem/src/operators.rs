@@ -67,6 +67,7 @@ impl FemOperators {
     }
 
     /// The identity matrix on the shared pattern (the mass of the "linear FEM" kernel, B = I).
+    #[allow(clippy::expect_used)]
     pub fn identity_mass(&self) -> SparseColMat<usize, f64> {
         let sym = self.stiffness.symbolic();
         let mut val = vec![0.0; sym.row_idx().len()];
@@ -78,6 +79,7 @@ impl FemOperators {
             }
         }
         SparseColMat::new(
+            // invariant: cloning an existing valid pattern can only fail to allocate.
             self.stiffness.symbolic().to_owned().expect("clone of a valid pattern"),
             val,
         )

@@ -18,6 +18,9 @@
 //!   dense descriptors.
 
 #![warn(missing_docs)]
+// Robustness (issue #8): no unwrap()/expect() on user-controlled data in library code; the few
+// justified ones carry `#[allow]` and an `// invariant:` comment (checked by tests/no_unwrap.rs).
+#![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod bof;
 mod check;

@@ -24,6 +24,9 @@
 //!   operator (paper Fig. 2c,d).
 
 #![warn(missing_docs)]
+// Robustness (issue #8): no unwrap()/expect() on user-controlled data in library code; the few
+// justified ones carry `#[allow]` and an `// invariant:` comment (checked by tests/no_unwrap.rs).
+#![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 mod condition;
 mod error;

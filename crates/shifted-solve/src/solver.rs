@@ -578,7 +578,8 @@ fn solve_krylov(
             params.rel_tol,
             params.max_iters,
         );
-        let last = outcome.history.last().copied().unwrap_or(0.0);
+        // The last finite residual estimate (a breakdown can end the history with NaN).
+        let last = last_finite(&outcome.history);
         if !outcome.converged {
             return Err(SolveError::NoConvergence {
                 residual: last,
@@ -609,7 +610,8 @@ fn solve_krylov(
         params.rel_tol,
         params.max_iters,
     );
-    let last = outcome.history.last().copied().unwrap_or(0.0);
+    // The last finite residual estimate (a breakdown can end the history with NaN).
+    let last = last_finite(&outcome.history);
     if !outcome.converged || outcome.x.iter().any(|v| !v.is_finite()) {
         return Err(SolveError::NoConvergence {
             residual: last,
@@ -622,4 +624,9 @@ fn solve_krylov(
     let num: f64 = ax.iter().zip(&rhs).map(|(a, r)| (a - r) * (a - r)).sum();
     let r = rel(num, norm2(&rhs).powi(2));
     Ok((outcome.x, outcome.iterations, outcome.history, r))
+}
+
+/// The last finite entry of a residual history (1.0, the initial relative residual, if none).
+fn last_finite(history: &[f64]) -> f64 {
+    history.iter().rev().copied().find(|r| r.is_finite()).unwrap_or(1.0)
 }

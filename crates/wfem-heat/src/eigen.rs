@@ -104,9 +104,11 @@ impl Eigenbasis {
     ///
     /// # Errors
     /// [`HeatError::TooLargeForDense`] above [`DENSE_MAX_VERTICES`];
+    /// [`HeatError::InvalidOperatorEntry`] for a NaN/∞ entry or a non-positive diagonal of M;
     /// [`HeatError::NotPositiveDefinite`] if M is not SPD; [`HeatError::DenseEigen`].
     pub fn dense(stiffness: &SparseColMat<usize, f64>, mass: &SparseColMat<usize, f64>) -> Result<Self, HeatError> {
         let n = check_square(stiffness, mass)?;
+        crate::kernel::check_operators(stiffness, mass)?;
         if n > DENSE_MAX_VERTICES {
             return Err(HeatError::TooLargeForDense {
                 n_vertices: n,
@@ -158,6 +160,7 @@ impl Eigenbasis {
     ///
     /// # Errors
     /// [`HeatError::InvalidParameter`] for k = 0, k > n, a shift ≥ 0 or block size 0;
+    /// [`HeatError::InvalidOperatorEntry`] for a NaN/∞ entry or a non-positive diagonal of M;
     /// [`HeatError::EigenNoConvergence`] (carrying the converged pairs) if the Krylov
     /// dimension limit is hit first.
     pub fn partial(
@@ -167,6 +170,7 @@ impl Eigenbasis {
         params: &EigenParams,
     ) -> Result<Self, HeatError> {
         let n = check_square(stiffness, mass)?;
+        crate::kernel::check_operators(stiffness, mass)?;
         if k == 0 || k > n {
             return Err(HeatError::InvalidParameter {
                 name: "k",

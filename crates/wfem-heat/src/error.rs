@@ -127,4 +127,22 @@ pub enum HeatError {
         /// Number of vertices n.
         n_vertices: usize,
     },
+
+    // ---- robustness (issue #8): operator validation ----
+    /// An entry of the stiffness or mass matrix is invalid: NaN or infinite, or a diagonal
+    /// entry of the mass matrix that is not positive (M would be singular and
+    /// K_t = exp(−tM⁻¹L) undefined).
+    #[error("{matrix} entry ({row}, {col}) = {value} is invalid (must be {requirement})")]
+    InvalidOperatorEntry {
+        /// Which matrix, e.g. "stiffness L" or "mass M".
+        matrix: &'static str,
+        /// Row of the culprit.
+        row: usize,
+        /// Column of the culprit.
+        col: usize,
+        /// The value found.
+        value: f64,
+        /// What is required, e.g. "finite" or "> 0 on the diagonal".
+        requirement: &'static str,
+    },
 }

@@ -36,12 +36,16 @@
 //! the paper prints it with the opposite sign.
 
 #![warn(missing_docs)]
+// Robustness (issue #8): no unwrap()/expect() on user-controlled data in library code; the few
+// justified ones carry `#[allow]` and an `// invariant:` comment (checked by tests/no_unwrap.rs).
+#![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 mod basis;
 mod eigen;
 mod error;
 mod kernel;
 mod krylov;
+mod null_space;
 mod sparse;
 
 pub use basis::{

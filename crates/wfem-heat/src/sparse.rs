@@ -50,6 +50,7 @@ pub(crate) fn spmm_sym(a: &SparseColMat<usize, f64>, x: MatRef<'_, f64>) -> Mat<
 }
 
 /// `a·A + b·C` for two matrices on the same pattern (checked by the caller).
+#[allow(clippy::expect_used)]
 pub(crate) fn combine(
     a: f64,
     m1: &SparseColMat<usize, f64>,
@@ -57,6 +58,7 @@ pub(crate) fn combine(
     m2: &SparseColMat<usize, f64>,
 ) -> SparseColMat<usize, f64> {
     let val: Vec<f64> = m1.val().iter().zip(m2.val()).map(|(x, y)| a * x + b * y).collect();
+    // invariant: cloning an existing valid pattern can only fail to allocate.
     SparseColMat::new(m1.symbolic().to_owned().expect("clone of a valid pattern"), val)
 }
 

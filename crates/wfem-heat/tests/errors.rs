@@ -145,8 +145,26 @@ fn invalid_parameters() {
 #[test]
 fn not_positive_definite_mass() {
     let mut ops = small();
+    // A negated mass is refused by the entry check, naming the first diagonal entry.
     let neg: Vec<f64> = ops.mass.val().iter().map(|x| -x).collect();
-    ops.mass = faer::sparse::SparseColMat::new(ops.mass.symbolic().to_owned().unwrap(), neg);
+    let mut negated = ops.clone();
+    negated.mass = faer::sparse::SparseColMat::new(ops.mass.symbolic().to_owned().unwrap(), neg);
+    let err = HeatKernel::new(&negated, HeatParams::default()).unwrap_err();
+    assert!(
+        matches!(err, HeatError::InvalidOperatorEntry { row: 0, col: 0, .. }),
+        "{err}"
+    );
+    // Positive diagonal but indefinite (off-diagonal entries × 10): the Cholesky refuses it.
+    let s = ops.mass.symbolic().to_owned().unwrap();
+    let mut vals = ops.mass.val().to_vec();
+    for j in 0..s.ncols() {
+        for p in s.col_range(j) {
+            if s.row_idx()[p] != j {
+                vals[p] *= 10.0;
+            }
+        }
+    }
+    ops.mass = faer::sparse::SparseColMat::new(s, vals);
     let err = HeatKernel::new(
         &ops,
         HeatParams {
