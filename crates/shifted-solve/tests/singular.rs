@@ -68,11 +68,17 @@ fn assert_singular(result: Result<(Mat<f64>, BatchReport), SolveError>, z: f64, 
 fn pole_at_an_eigenvalue_is_a_typed_error() {
     let (l, b) = path();
     let s = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::DirectLu).unwrap();
+    let ldlt = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::DirectLdlt).unwrap();
     for z in [0.0, 1.0, 3.0] {
         assert_singular(
             s.apply(&complex_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref()),
             z,
             "complex LU",
+        );
+        assert_singular(
+            ldlt.apply(&complex_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref()),
+            z,
+            "complex-symmetric LDLᵀ",
         );
         assert_singular(s.apply(&real_pole(z), 1.0, rhs().as_ref()), z, "real Cholesky");
         assert_singular(
