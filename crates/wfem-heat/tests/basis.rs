@@ -34,7 +34,10 @@ fn canonical_basis_matches_dense_reference() {
             for (j, &a) in anchors.iter().enumerate() {
                 let single = rational.apply(&unit(n, a as usize), t).unwrap();
                 let b = col(&block, j);
-                assert!(rel_err(&b, &single) < 1e-13, "{name} t={t}: block vs single");
+                // Blocked (GEMM) and single-column (GEMV) triangular solves sum in a different
+                // order: agreement is to rounding level, not bitwise.
+                let d = rel_err(&b, &single);
+                assert!(d < 1e-12, "{name} t={t}: block vs single {d:e}");
                 let e = rel_err(&b, &col(&reference, j));
                 assert!(e < 1e-10, "{name} t={t} anchor {a}: rational vs dense {e:e}");
             }
