@@ -1387,10 +1387,14 @@ pub fn merge_generated(existing: Option<&str>, generated: &str) -> String {
     let mut out = format!("{PREAMBLE}\n{block}");
     if let Some(text) = existing.filter(|t| !t.trim().is_empty()) {
         let _ = write!(out, "\n{NOTES_HEADING}\n\n");
-        for line in text.lines() {
-            if line.starts_with("# ") {
-                continue; // the old title
+        let mut lines = text.lines().peekable();
+        if lines.peek().is_some_and(|l| l.starts_with("# ")) {
+            lines.next(); // the old title, and the blank lines after it
+            while lines.peek().is_some_and(|l| l.trim().is_empty()) {
+                lines.next();
             }
+        }
+        for line in lines {
             if line.starts_with("##") {
                 let _ = writeln!(out, "#{line}");
             } else {
@@ -1499,7 +1503,7 @@ mod tests {
         assert!(first.starts_with(PREAMBLE));
         assert!(first.contains("GEN 1"));
         assert!(
-            first.contains(&format!("{NOTES_HEADING}\n\n\n### Old\ntext\n")),
+            first.contains(&format!("{NOTES_HEADING}\n\n### Old\ntext\n")),
             "{first}"
         );
         let second = merge_generated(Some(&first), "GEN 2");

@@ -128,7 +128,7 @@ fn smoke_report_end_to_end() {
     bench::write(&report, dir.path()).unwrap();
     let text = std::fs::read_to_string(&md).unwrap();
     assert_eq!(text, before_rewrite);
-    assert!(text.contains(&format!("{NOTES_HEADING}\n\n\n### Hand-written\n\nkeep me\n")));
+    assert!(text.contains(&format!("{NOTES_HEADING}\n\n### Hand-written\n\nkeep me\n")));
     let generated = &text[text.find(BEGIN_MARKER).unwrap()..text.find(END_MARKER).unwrap()];
     for section in [
         "**Machine:**",
