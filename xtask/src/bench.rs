@@ -229,7 +229,7 @@ impl BenchOptions {
                 accuracy_levels: vec![3, 4],
                 figure_level: 4,
                 spectral_ks: vec![100, 200, 300],
-                spectral_max_level: 5,
+                spectral_max_level: 6,
                 figure3_ks: vec![10, 20, 50, 100, 150, 200, 300],
                 t: 1e-2,
                 times,
@@ -539,6 +539,8 @@ pub struct Report {
     pub sizes: Vec<usize>,
     /// Scaling series (assembly first, backward Euler second).
     pub series: Vec<Series>,
+    /// Scaling measurements skipped because their predicted peak memory exceeded 60% of RAM.
+    pub skipped: Vec<String>,
     /// Figure 3.
     pub figure3: Figure3,
     /// Figure 2(c,d), one per degree (the paper's 7, our default 16).
@@ -616,7 +618,27 @@ thread_local! {
     static START: Instant = Instant::now();
 }
 
-fn scaling(options: &BenchOptions) -> Result<(Vec<usize>, Vec<Series>), BenchError> {
+/// Peak memory predicted at `n` from the earlier measurements `(sizes[i], values[i])` of a
+/// series: the last measured peak times (n / n_last)^q, with q the fitted memory exponent of
+/// the earlier points (at least 1; 1 with a single point). `None` without earlier points.
+pub fn predict_peak(sizes: &[usize], values: &[Option<Measurement>], n: usize) -> Option<f64> {
+    let points: Vec<(f64, f64)> = sizes
+        .iter()
+        .zip(values)
+        .filter_map(|(&m, v)| v.map(|v| (m as f64, v.peak_bytes as f64)))
+        .collect();
+    let &(last_n, last_peak) = points.last()?;
+    let q = fit_exponent(&points).unwrap_or(1.0).max(1.0);
+    Some(last_peak * (n as f64 / last_n).powf(q))
+}
+
+/// Runs the scaling measurements. A measurement whose predicted peak memory
+/// ([`predict_peak`]) exceeds `memory_limit` bytes is skipped and listed in the returned notes.
+fn scaling(
+    options: &BenchOptions,
+    memory_limit: Option<f64>,
+) -> Result<(Vec<usize>, Vec<Series>, Vec<String>), BenchError> {
+    let mut skipped = Vec::new();
     let methods = methods();
     let mut names = vec![ASSEMBLY.to_string()];
     names.extend(methods.iter().map(|(name, _)| name.clone()));
@@ -644,7 +666,28 @@ fn scaling(options: &BenchOptions) -> Result<(Vec<usize>, Vec<Series>), BenchErr
         let ops = assemble(&mesh, &AssemblyParams::default())?;
         let e = unit_vector(n, n / 3);
         let mut row = vec![Some(assembly)];
-        for (name, method) in &methods {
+        let earlier = &sizes[..sizes.len() - 1];
+        let mut too_big = |index: usize| -> bool {
+            let predicted = predict_peak(earlier, &series[index].values, n);
+            match (predicted, memory_limit) {
+                (Some(p), Some(limit)) if p > limit => {
+                    skipped.push(format!(
+                        "{} at n = {}: predicted peak {} > {} (60% of RAM)",
+                        series[index].name,
+                        format_count(n),
+                        format_bytes(p as usize),
+                        format_bytes(limit as usize)
+                    ));
+                    true
+                }
+                _ => false,
+            }
+        };
+        for (index, (name, method)) in methods.iter().enumerate() {
+            if too_big(1 + index) {
+                row.push(None);
+                continue;
+            }
             progress(&format!("n = {n}: {name}"));
             row.push(Some(measure(reps, budget, || {
                 let k = kernel(&ops, method.clone()).map_err(heat_err(name.clone()))?;
@@ -652,8 +695,8 @@ fn scaling(options: &BenchOptions) -> Result<(Vec<usize>, Vec<Series>), BenchErr
             })?));
         }
         let mut eig_rows = Vec::new();
-        for &k in &options.spectral_ks {
-            if level > options.spectral_max_level || k >= n {
+        for (index, &k) in options.spectral_ks.iter().enumerate() {
+            if level > options.spectral_max_level || k >= n || too_big(1 + methods.len() + index) {
                 row.push(None);
                 eig_rows.push(None);
                 continue;
@@ -681,7 +724,7 @@ fn scaling(options: &BenchOptions) -> Result<(Vec<usize>, Vec<Series>), BenchErr
             s.values.push(m);
         }
     }
-    Ok((sizes, series))
+    Ok((sizes, series, skipped))
 }
 
 fn figure3(options: &BenchOptions) -> Result<Figure3, BenchError> {
@@ -822,13 +865,15 @@ pub fn run(options: &BenchOptions) -> Result<Report, BenchError> {
     let accuracy = accuracy(options)?;
     let figure2 = figure2(options)?;
     let figure3 = figure3(options)?;
-    let (sizes, series) = scaling(options)?;
+    let memory_limit = machine.memory_bytes.map(|b| 0.6 * b as f64);
+    let (sizes, series, skipped) = scaling(options, memory_limit)?;
     machine.load.1 = load_average();
     Ok(Report {
         machine,
         options: options.clone(),
         sizes,
         series,
+        skipped,
         figure3,
         figure2,
         accuracy,
@@ -1136,6 +1181,9 @@ pub fn markdown(report: &Report) -> String {
          are the eigensolve alone.\n",
         format_count(generate::icosphere_vertex_count(o.spectral_max_level))
     );
+    if !report.skipped.is_empty() {
+        let _ = writeln!(s, "Skipped (memory): {}.\n", report.skipped.join("; "));
+    }
 
     // Accuracy.
     let acc = &report.accuracy;
@@ -1471,6 +1519,26 @@ mod tests {
         // The paper's table at one of its own rows returns that row.
         let paper: Vec<(f64, f64)> = PAPER_TABLE2.iter().map(|r| (r.0, r.1)).collect();
         assert!((interpolate_loglog(&paper, 40e3).unwrap() - 0.6067).abs() < 1e-12);
+    }
+
+    #[test]
+    fn peak_prediction_follows_the_fitted_exponent() {
+        let m = |mb: f64| {
+            Some(Measurement {
+                seconds: 1.0,
+                peak_bytes: (mb * 1e6) as usize,
+                repetitions: 1,
+            })
+        };
+        // Peak ∝ n^1.5: 1 MB at 1000, 8 MB at 4000 → 64 MB at 16000.
+        let p = predict_peak(&[1000, 4000], &[m(1.0), m(8.0)], 16000).unwrap();
+        assert!((p / 64e6 - 1.0).abs() < 1e-9, "{p}");
+        // Sub-linear fits are raised to linear; one point scales linearly; none predicts nothing.
+        let p = predict_peak(&[1000, 4000], &[m(4.0), m(8.0)], 8000).unwrap();
+        assert!((p / 16e6 - 1.0).abs() < 1e-9, "{p}");
+        let p = predict_peak(&[1000, 4000], &[None, m(8.0)], 8000).unwrap();
+        assert!((p / 16e6 - 1.0).abs() < 1e-9, "{p}");
+        assert_eq!(predict_peak(&[1000], &[None], 8000), None);
     }
 
     #[test]
