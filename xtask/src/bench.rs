@@ -632,12 +632,15 @@ pub fn predict_peak(sizes: &[usize], values: &[Option<Measurement>], n: usize) -
     Some(last_peak * (n as f64 / last_n).powf(q))
 }
 
+struct Scaling {
+    sizes: Vec<usize>,
+    series: Vec<Series>,
+    skipped: Vec<String>,
+}
+
 /// Runs the scaling measurements. A measurement whose predicted peak memory
 /// ([`predict_peak`]) exceeds `memory_limit` bytes is skipped and listed in the returned notes.
-fn scaling(
-    options: &BenchOptions,
-    memory_limit: Option<f64>,
-) -> Result<(Vec<usize>, Vec<Series>, Vec<String>), BenchError> {
+fn scaling(options: &BenchOptions, memory_limit: Option<f64>) -> Result<Scaling, BenchError> {
     let mut skipped = Vec::new();
     let methods = methods();
     let mut names = vec![ASSEMBLY.to_string()];
@@ -724,7 +727,7 @@ fn scaling(
             s.values.push(m);
         }
     }
-    Ok((sizes, series, skipped))
+    Ok(Scaling { sizes, series, skipped })
 }
 
 fn figure3(options: &BenchOptions) -> Result<Figure3, BenchError> {
@@ -866,7 +869,7 @@ pub fn run(options: &BenchOptions) -> Result<Report, BenchError> {
     let figure2 = figure2(options)?;
     let figure3 = figure3(options)?;
     let memory_limit = machine.memory_bytes.map(|b| 0.6 * b as f64);
-    let (sizes, series, skipped) = scaling(options, memory_limit)?;
+    let Scaling { sizes, series, skipped } = scaling(options, memory_limit)?;
     machine.load.1 = load_average();
     Ok(Report {
         machine,
@@ -1243,20 +1246,34 @@ fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
 }
 
 /// A line plot with markers, log y axis, log or linear x axis, as an SVG string.
-fn line_plot(
-    file: &str,
-    title: &str,
-    x_desc: &str,
-    y_desc: &str,
+struct PlotSpec<'a> {
+    file: &'a str,
+    title: &'a str,
+    x_desc: &'a str,
+    y_desc: &'a str,
     log_x: bool,
-    curves: &[Curve],
-) -> Result<String, BenchError> {
+    /// Where the legend goes; the y range gets `headroom` (a factor) above the data for it.
+    legend: SeriesLabelPosition,
+    headroom: f64,
+    size: (u32, u32),
+}
+
+fn line_plot(spec: &PlotSpec<'_>, curves: &[Curve]) -> Result<String, BenchError> {
+    let PlotSpec {
+        file,
+        title,
+        x_desc,
+        y_desc,
+        log_x,
+        ..
+    } = *spec;
     let err = plot_err(file);
     let mut buf = String::new();
     {
-        let root = SVGBackend::with_string(&mut buf, (900, 560)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut buf, spec.size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
         let ys = log_range(curves.iter().flat_map(|c| c.1.iter().map(|p| p.1)));
+        let ys = ys.start..ys.end * spec.headroom;
         let xs: Vec<f64> = curves.iter().flat_map(|c| c.1.iter().map(|p| p.0)).collect();
         let mut builder = ChartBuilder::on(&root);
         builder
@@ -1271,7 +1288,16 @@ fn line_plot(
                     .configure_mesh()
                     .x_desc(x_desc)
                     .y_desc(y_desc)
+                    .label_style(("sans-serif", 14))
+                    .axis_desc_style(("sans-serif", 15))
                     .y_label_formatter(&|v| format!("{v:.0e}"))
+                    .x_label_formatter(&|v| {
+                        if log_x {
+                            format_count(v.round() as usize)
+                        } else {
+                            format!("{v:.0}")
+                        }
+                    })
                     .draw()
                     .map_err(|e| err(e.to_string()))?;
                 for (i, (name, points)) in curves.iter().enumerate() {
@@ -1288,7 +1314,8 @@ fn line_plot(
                 }
                 chart
                     .configure_series_labels()
-                    .position(SeriesLabelPosition::UpperLeft)
+                    .position(spec.legend.clone())
+                    .label_font(("sans-serif", 13))
                     .background_style(WHITE.mix(0.85))
                     .border_style(BLACK)
                     .draw()
@@ -1335,11 +1362,16 @@ pub fn plots(report: &Report) -> Result<Vec<(String, String)>, BenchError> {
     out.push((
         name.to_string(),
         line_plot(
-            name,
-            &format!("Spectral (k eigenpairs) vs rational K_t e_i, n = {}", f3.n),
-            "k (eigenpairs)",
-            "relative L-inf error",
-            false,
+            &PlotSpec {
+                file: name,
+                title: &format!("Spectral (k eigenpairs) vs rational K_t e_i, n = {}", f3.n),
+                x_desc: "k (eigenpairs)",
+                y_desc: "relative L-inf error",
+                log_x: false,
+                legend: SeriesLabelPosition::MiddleRight,
+                headroom: 1.0,
+                size: (900, 560),
+            },
             &curves,
         )?,
     ));
@@ -1359,11 +1391,16 @@ pub fn plots(report: &Report) -> Result<Vec<(String, String)>, BenchError> {
         out.push((
             name.clone(),
             line_plot(
-                &name,
-                &format!("cond_2(tL - z_j B), degree {}, n = {}", f2.degree, f2.n),
-                "pole index j",
-                "2-norm condition number",
-                false,
+                &PlotSpec {
+                    file: &name,
+                    title: &format!("cond_2(tL - z_j B), degree {}, n = {}", f2.degree, f2.n),
+                    x_desc: "pole index j",
+                    y_desc: "2-norm condition number",
+                    log_x: false,
+                    legend: SeriesLabelPosition::UpperLeft,
+                    headroom: 30.0,
+                    size: (900, 560),
+                },
                 &curves,
             )?,
         ));
@@ -1394,11 +1431,16 @@ pub fn plots(report: &Report) -> Result<Vec<(String, String)>, BenchError> {
         out.push((
             name.to_string(),
             line_plot(
-                name,
-                &format!("{y} against n (log-log, fitted exponent p)"),
-                "n (vertices)",
-                y,
-                true,
+                &PlotSpec {
+                    file: name,
+                    title: &format!("{y} against n (log-log, fitted exponent p)"),
+                    x_desc: "n (vertices)",
+                    y_desc: y,
+                    log_x: true,
+                    legend: SeriesLabelPosition::UpperLeft,
+                    headroom: 3.0,
+                    size: (1100, 760),
+                },
                 &curves,
             )?,
         ));
