@@ -1265,9 +1265,9 @@ struct PlotSpec<'a> {
     x_desc: &'a str,
     y_desc: &'a str,
     log_x: bool,
-    /// Where the legend goes; the y range gets `headroom` (a factor) above the data for it.
+    /// Where the legend goes; with `UpperLeft` the log y range is extended upwards so that the
+    /// legend sits above the data.
     legend: SeriesLabelPosition,
-    headroom: f64,
     size: (u32, u32),
 }
 
@@ -1286,7 +1286,16 @@ fn line_plot(spec: &PlotSpec<'_>, curves: &[Curve]) -> Result<String, BenchError
         let root = SVGBackend::with_string(&mut buf, spec.size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
         let ys = log_range(curves.iter().flat_map(|c| c.1.iter().map(|p| p.1)));
-        let ys = ys.start..ys.end * spec.headroom;
+        let ys = if matches!(spec.legend, SeriesLabelPosition::UpperLeft) {
+            // The legend needs about 17 px per entry of the plot height (size − captions and
+            // axis labels); give it that fraction f of the log range: log H = f·D / (1 − f).
+            let plot_height = f64::from(spec.size.1) - 110.0;
+            let f = ((curves.len() as f64 * 17.0 + 24.0) / plot_height).min(0.6);
+            let decades = (ys.end / ys.start).log10();
+            ys.start..ys.end * 10f64.powf(f * decades / (1.0 - f))
+        } else {
+            ys
+        };
         let xs: Vec<f64> = curves.iter().flat_map(|c| c.1.iter().map(|p| p.0)).collect();
         let mut builder = ChartBuilder::on(&root);
         builder
@@ -1382,7 +1391,6 @@ pub fn plots(report: &Report) -> Result<Vec<(String, String)>, BenchError> {
                 y_desc: "relative L-inf error",
                 log_x: false,
                 legend: SeriesLabelPosition::MiddleRight,
-                headroom: 1.0,
                 size: (900, 560),
             },
             &curves,
@@ -1411,7 +1419,6 @@ pub fn plots(report: &Report) -> Result<Vec<(String, String)>, BenchError> {
                     y_desc: "2-norm condition number",
                     log_x: false,
                     legend: SeriesLabelPosition::UpperLeft,
-                    headroom: 30.0,
                     size: (900, 560),
                 },
                 &curves,
@@ -1451,7 +1458,6 @@ pub fn plots(report: &Report) -> Result<Vec<(String, String)>, BenchError> {
                     y_desc: y,
                     log_x: true,
                     legend: SeriesLabelPosition::UpperLeft,
-                    headroom: 3.0,
                     size: (1100, 760),
                 },
                 &curves,
