@@ -1425,9 +1425,9 @@ pub fn plots(report: &Report) -> Result<Vec<(String, String)>, BenchError> {
             )?,
         ));
     }
-    for (name, field, y) in [
-        ("scaling_time.svg", 0, "seconds"),
-        ("scaling_memory.svg", 1, "peak heap bytes"),
+    for (name, field, y, symbol) in [
+        ("scaling_time.svg", 0, "seconds", "p"),
+        ("scaling_memory.svg", 1, "peak heap bytes", "q"),
     ] {
         let curves: Vec<Curve> = report
             .series
@@ -1443,7 +1443,7 @@ pub fn plots(report: &Report) -> Result<Vec<(String, String)>, BenchError> {
                         }
                     },
                 );
-                let e = fit_exponent(&p).map_or(String::new(), |e| format!(" (p = {e:.2})"));
+                let e = fit_exponent(&p).map_or(String::new(), |e| format!(" ({symbol} = {e:.2})"));
                 (format!("{}{e}", s.name), p)
             })
             .filter(|c| !c.1.is_empty())
@@ -1453,7 +1453,7 @@ pub fn plots(report: &Report) -> Result<Vec<(String, String)>, BenchError> {
             line_plot(
                 &PlotSpec {
                     file: name,
-                    title: &format!("{y} against n (log-log, fitted exponent p)"),
+                    title: &format!("{y} against n (log-log, fitted exponent {symbol})"),
                     x_desc: "n (vertices)",
                     y_desc: y,
                     log_x: true,
