@@ -5,11 +5,12 @@
 //!   log-spaced times) from k = 100 eigenpairs (the eigensolve is benched in
 //!   `wfem-heat/benches/heat.rs`);
 //! * 1000 canonical basis functions `K_t e_i` (paper Sect. 4.1, `wfem_heat::canonical_basis`,
-//!   rational r = 16 with LU factors shared by all 1000 right-hand sides), t = 0.01; by default
-//!   only up to 41K vertices (the n × 1000 result alone is 1.3 GB at 164K), all levels with
-//!   `WFEM_BENCH_LARGE=1`;
+//!   rational r = 16 with LU factors shared by all 1000 right-hand sides), t = 0.01;
 //! * wFEM diffusion distances from one vertex to all (`DiffusionDistance::row`), t = 0.01:
 //!   cold (factorization and probed diagonal included) and warm (one more row).
+//!
+//! The last two run at 164K vertices only with `WFEM_BENCH_LARGE=1` (the n × 1000 result alone
+//! is 1.3 GB there, and the 8 complex LU factors take ~10 GB).
 //!
 //! Run: `cargo bench --bench applications`.
 
@@ -27,7 +28,6 @@ mod levels;
 
 fn bench(c: &mut Criterion) {
     let t = 0.01;
-    let large = std::env::var("WFEM_BENCH_LARGE").is_ok_and(|v| v == "1");
     for level in levels::levels() {
         let mesh = generate::icosphere(level).with_area(4.0 * PI).expect("area");
         let ops = assemble(&mesh, &AssemblyParams::default()).expect("assembly");
@@ -45,7 +45,11 @@ fn bench(c: &mut Criterion) {
             b.iter(|| heat_kernel_signature(black_box(&spectrum), &HksParams::default()).unwrap())
         });
 
-        if level <= 6 || large {
+        if !levels::heavy(level) {
+            group.finish();
+            continue;
+        }
+        {
             let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
             let anchors: Vec<u32> = (0..1000u32).map(|i| (i as usize * n / 1000) as u32).collect();
             let mut i = 0u64;

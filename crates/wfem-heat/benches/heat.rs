@@ -6,13 +6,13 @@
 //! * the fast exact path (shift-and-invert rational Krylov), f = x coordinate and f = e_i, and
 //!   repeated calls at the same t (factor cached);
 //! * the paper's rational method (Eq. (13)): degree 16 with the direct LU and the MINRES
-//!   backends, and degree 7 (the paper's r) with LU;
+//!   backends, and degree 7 (the paper's r) with LU (164K only with `WFEM_BENCH_LARGE=1`);
 //! * the spectral method (Eq. (8)) with k = 100, 200, 300 eigenpairs, eigensolve included
-//!   (`HeatKernel::new` + `apply`), and the eigensolve alone.
+//!   (`HeatKernel::new` + `apply`), and the apply alone with the eigenpairs precomputed
+//!   (41K and above only with `WFEM_BENCH_LARGE=1`: tens of seconds per iteration).
 //!
-//! Run: `cargo bench -p wfem-heat --bench heat` (about an hour for the default sizes; the
-//! spectral method dominates). The generated report (`cargo xtask bench`) measures the same
-//! quantities as one-shot medians with peak memory.
+//! Run: `cargo bench -p wfem-heat --bench heat`. The generated report (`cargo xtask bench`)
+//! measures the same quantities at every size as one-shot medians with peak memory.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
 use mesh_fem::{assemble, generate, AssemblyParams};
 use shifted_solve::{Backend, MinresParams};
@@ -71,26 +71,33 @@ fn bench(c: &mut Criterion) {
         group.bench_function("fast_x", |b| b.iter(|| fast.apply(black_box(&f), next_t()).unwrap()));
         group.bench_function("fast_e_i", |b| b.iter(|| fast.apply(black_box(&e), next_t()).unwrap()));
         group.bench_function("fast_e_i_same_t", |b| b.iter(|| fast.apply(black_box(&e), t).unwrap()));
-        for (name, method) in [
-            ("rational_r16_lu", Method::rational(16)),
-            (
-                "rational_r16_minres",
-                Method::Rational {
-                    degree: 16,
-                    backend: Backend::Minres(MinresParams::default()),
-                },
-            ),
-            ("rational_r7_lu", Method::rational(7)),
-        ] {
+        let rational = if levels::heavy(level) {
+            vec![
+                ("rational_r16_lu", Method::rational(16)),
+                (
+                    "rational_r16_minres",
+                    Method::Rational {
+                        degree: 16,
+                        backend: Backend::Minres(MinresParams::default()),
+                    },
+                ),
+                ("rational_r7_lu", Method::rational(7)),
+            ]
+        } else {
+            Vec::new()
+        };
+        for (name, method) in rational {
             let k = kernel(&ops, method);
             group.bench_function(name, |b| b.iter(|| k.apply(black_box(&e), next_t()).unwrap()));
         }
-        for k in [100usize, 200, 300] {
+        let ks: &[usize] = if levels::spectral(level) { &[100, 200, 300] } else { &[] };
+        for &k in ks {
             group.bench_with_input(BenchmarkId::new("spectral_incl_eigensolve", k), &k, |b, &k| {
                 b.iter(|| kernel(&ops, Method::spectral(k)).apply(black_box(&e), t).unwrap())
             });
-            group.bench_with_input(BenchmarkId::new("eigensolve", k), &k, |b, &k| {
-                b.iter(|| Eigenbasis::partial(&ops.stiffness, &ops.mass, k, &EigenParams::default()).unwrap())
+            let basis = Eigenbasis::partial(&ops.stiffness, &ops.mass, k, &EigenParams::default()).unwrap();
+            group.bench_with_input(BenchmarkId::new("spectral_apply_only", k), &k, |b, _| {
+                b.iter(|| basis.apply_heat(&ops.mass, black_box(&e), t).unwrap())
             });
         }
         group.finish();
