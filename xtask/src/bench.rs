@@ -1480,7 +1480,8 @@ up to about 12 GB of RAM (the eight complex LU factors of the rational method at
 a measurement whose extrapolated peak memory exceeds 60% of the RAM is skipped and listed. \
 Everything outside the markers is hand-written and preserved by the generator. \
 Criterion benches of the same operations: `cargo bench` (see `benches/` and the crates' \
-`benches/`; `WFEM_BENCH_LARGE=1` adds the 655K mesh).\n";
+`benches/`; `WFEM_BENCH_LARGE=1` adds the 655K mesh and the heavy benches at 164K, see \
+`benches/common/levels.rs`).\n";
 
 /// Replaces the generated block of `existing` by `generated`, preserving everything outside
 /// the markers. Without markers (or without a file) the result is [`PREAMBLE`], the block, and
