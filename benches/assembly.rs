@@ -1,5 +1,6 @@
 //! Assembly of the FEM operators L, B and D (`mesh_fem::assemble`) on icospheres of
-//! 10K, 160K and 655K vertices, and, separately, the generation of those meshes.
+//! 10K, 41K and 164K vertices (655K with `WFEM_BENCH_LARGE=1`, see `benches/common/levels.rs`),
+//! and, separately, the generation of those meshes.
 //!
 //! Run: `cargo bench --bench assembly -- --warm-up-time 1 --measurement-time 5 --sample-size 10`.
 //! The timed region is the call to `assemble`; freeing the returned matrices is not timed
@@ -11,11 +12,12 @@ use mesh_fem::generate::icosphere;
 use mesh_fem::{assemble, AssemblyParams, LumpedMassKind};
 use std::hint::black_box;
 
-const LEVELS: [u32; 3] = [5, 7, 8];
+#[path = "common/levels.rs"]
+mod levels;
 
 fn bench_assembly(c: &mut Criterion) {
     let mut group = c.benchmark_group("assemble_LBD");
-    for level in LEVELS {
+    for level in levels::levels() {
         let mesh = icosphere(level);
         let n = mesh.n_vertices();
         group.throughput(Throughput::Elements(mesh.n_faces() as u64));
@@ -26,7 +28,7 @@ fn bench_assembly(c: &mut Criterion) {
     group.finish();
 
     let mut group = c.benchmark_group("assemble_LBD_voronoi");
-    let mesh = icosphere(8);
+    let mesh = icosphere(levels::levels().into_iter().max().unwrap_or(5));
     let params = AssemblyParams {
         lumped: LumpedMassKind::Voronoi,
     };
@@ -38,7 +40,7 @@ fn bench_assembly(c: &mut Criterion) {
 
 fn bench_generation(c: &mut Criterion) {
     let mut group = c.benchmark_group("generate_icosphere");
-    for level in LEVELS {
+    for level in levels::levels() {
         let n = mesh_fem::generate::icosphere_vertex_count(level);
         group.bench_with_input(BenchmarkId::new("vertices", n), &level, |b, &level| {
             b.iter(|| icosphere(black_box(level)).n_vertices())

@@ -46,6 +46,22 @@ enum Cmd {
         #[arg(long)]
         meshes: Option<PathBuf>,
     },
+    /// Measure and write the benchmark report: DIR/BENCHMARKS.md (generated section) and
+    /// DIR/bench/*.svg. Full run: 10K/41K/164K vertices (see docs/BENCHMARKS.md).
+    Bench {
+        /// 2.5K/10K/41K vertices: a few minutes on 2 cores.
+        #[arg(long, conflicts_with = "smoke")]
+        quick: bool,
+        /// Tiny meshes (162/642 vertices): checks the pipeline in seconds.
+        #[arg(long)]
+        smoke: bool,
+        /// Add the 655K-vertex mesh to the full run.
+        #[arg(long, conflicts_with_all = ["quick", "smoke"])]
+        large: bool,
+        /// Output folder (BENCHMARKS.md and bench/*.svg).
+        #[arg(long, default_value = "docs")]
+        out: PathBuf,
+    },
 }
 
 fn parse_strengths(text: &str) -> Result<Vec<u8>, String> {
@@ -121,6 +137,27 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 }
                 None => print!("{text}"),
             }
+        }
+        Cmd::Bench {
+            quick,
+            smoke,
+            large,
+            out,
+        } => {
+            use xtask::bench::{self, BenchOptions, Setting};
+            let setting = if smoke {
+                Setting::Smoke
+            } else if quick {
+                Setting::Quick
+            } else {
+                Setting::Full
+            };
+            let options = BenchOptions::for_setting(setting, large);
+            let report = bench::run(&options)?;
+            for path in bench::write(&report, &out)? {
+                println!("wrote {}", path.display());
+            }
+            println!("benchmark report finished in {:.0} s", report.total_seconds);
         }
     }
     Ok(())

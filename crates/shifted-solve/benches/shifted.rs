@@ -2,8 +2,14 @@
 //! LU symbolic / numeric per pole / solve, Cholesky of the preconditioner, MINRES per pole, and
 //! all 8 poles of degree 16 for one right-hand side (the K_t f of paper Eq. (13)).
 //!
+//! Per-pole factor and solve of each backend: `DirectLu` = `lu_numeric_per_pole` (factor) +
+//! `lu_solve_1rhs` (solve); `Minres` = `cholesky_numeric_P` (its per-pole preconditioner
+//! factor) + `minres_per_pole_solve_only` (solve).
+//!
 //! Run: `cargo bench -p shifted-solve --bench shifted -- --warm-up-time 1 --measurement-time 5 --sample-size 10`
-//! (`WFEM_BENCH_LEVELS=5,6,7` selects icosphere levels; default 5,6).
+//! (icosphere levels 5, 6, 7 = 10K/41K/164K vertices, all 8 poles at 164K only with
+//! `WFEM_BENCH_LARGE=1`, which also adds 655K;
+//! `WFEM_BENCH_LEVELS=5,6` replaces the list: see `benches/common/levels.rs` at the root).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use faer::linalg::solvers::Solve;
@@ -25,12 +31,9 @@ fn shifted(l: &SparseColMat<usize, f64>, b: &SparseColMat<usize, f64>, z: c64) -
     SparseColMat::new(l.symbolic().to_owned().unwrap(), vals)
 }
 
-fn levels() -> Vec<u32> {
-    std::env::var("WFEM_BENCH_LEVELS")
-        .ok()
-        .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect())
-        .unwrap_or_else(|| vec![5, 6])
-}
+#[path = "../../../benches/common/levels.rs"]
+mod levels;
+use levels::levels;
 
 fn bench(c: &mut Criterion) {
     // The solver runs faer sequentially inside each pole and parallelises across poles; measure
@@ -45,6 +48,10 @@ fn bench(c: &mut Criterion) {
         let n = l.nrows();
         let f = Mat::<f64>::from_fn(n, 1, |i, _| ((i * 7919) % 1000) as f64 / 1000.0 - 0.5);
         let mut g = c.benchmark_group(format!("shifted-solve/n={n}"));
+        g.sample_size(10)
+            .sampling_mode(criterion::SamplingMode::Flat)
+            .warm_up_time(std::time::Duration::from_secs(1))
+            .measurement_time(std::time::Duration::from_secs(5));
 
         g.bench_function("lu_symbolic", |bch| {
             bch.iter(|| SymbolicLu::try_new(l.symbolic()).unwrap())
@@ -95,11 +102,18 @@ fn bench(c: &mut Criterion) {
             }),
         )
         .unwrap();
-        for (name, solver) in [
-            ("direct_lu", &direct),
-            ("minres_s=|z|", &minres),
-            ("minres_s=10", &shared),
-        ] {
+        // All 8 poles of the rational method (8 complex factorizations): 164K only with
+        // WFEM_BENCH_LARGE=1 (tens of seconds per iteration).
+        let all_poles = if levels::heavy(level) {
+            vec![
+                ("direct_lu", &direct),
+                ("minres_s=|z|", &minres),
+                ("minres_s=10", &shared),
+            ]
+        } else {
+            Vec::new()
+        };
+        for (name, solver) in all_poles {
             g.bench_with_input(BenchmarkId::new("all_8_poles_deg16_1rhs", name), &f, |bch, f| {
                 bch.iter(|| solver.apply(approx, T, f.as_ref()).unwrap())
             });

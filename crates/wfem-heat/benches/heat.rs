@@ -1,72 +1,105 @@
-//! Fast exact path vs one backward-Euler step (one real sparse Cholesky of M + tL and one
-//! solve) on icospheres of area 4π at t = 0.01.
+//! K_t f by every method on icospheres of area 4π at t = 0.01 (10K/41K/164K vertices; 655K
+//! with `WFEM_BENCH_LARGE=1`; see `benches/common/levels.rs` at the workspace root):
 //!
-//! Run: `cargo bench -p wfem-heat --bench heat`.
-use criterion::{criterion_group, criterion_main, Criterion};
+//! * one backward-Euler step (one real sparse Cholesky of M + tL and one solve) and one Taylor
+//!   step (Eq. (9));
+//! * the fast exact path (shift-and-invert rational Krylov), f = x coordinate and f = e_i, and
+//!   repeated calls at the same t (factor cached);
+//! * the paper's rational method (Eq. (13)): degree 16 with the direct LU and the MINRES
+//!   backends, and degree 7 (the paper's r) with LU (164K only with `WFEM_BENCH_LARGE=1`);
+//! * the spectral method (Eq. (8)) with k = 100, 200, 300 eigenpairs, eigensolve included
+//!   (`HeatKernel::new` + `apply`), and the apply alone with the eigenpairs precomputed
+//!   (41K and above only with `WFEM_BENCH_LARGE=1`: tens of seconds per iteration).
+//!
+//! Run: `cargo bench -p wfem-heat --bench heat`. The generated report (`cargo xtask bench`)
+//! measures the same quantities at every size as one-shot medians with peak memory.
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
 use mesh_fem::{assemble, generate, AssemblyParams};
+use shifted_solve::{Backend, MinresParams};
 use std::f64::consts::PI;
 use std::hint::black_box;
 use std::time::Duration;
-use wfem_heat::{FastParams, HeatKernel, HeatParams, Method};
+use wfem_heat::{EigenParams, Eigenbasis, FastParams, HeatKernel, HeatParams, Method};
+
+#[path = "../../../benches/common/levels.rs"]
+mod levels;
+
+fn kernel(ops: &mesh_fem::FemOperators, method: Method) -> HeatKernel {
+    HeatKernel::new(
+        ops,
+        HeatParams {
+            method,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
 
 fn bench(c: &mut Criterion) {
     let t = 0.01;
-    for level in [5u32, 6] {
+    for level in levels::levels() {
         let mesh = generate::icosphere(level).with_area(4.0 * PI).expect("area");
         let ops = assemble(&mesh, &AssemblyParams::default()).expect("assembly");
         let n = ops.n();
         let f: Vec<f64> = mesh.positions().iter().map(|p| p[0]).collect();
         let mut e = vec![0.0; n];
         e[n / 3] = 1.0;
-        let be = HeatKernel::new(
-            &ops,
-            HeatParams {
-                method: Method::BackwardEuler,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        // The default method is the rational one; the fast path is named explicitly.
-        let fast = HeatKernel::new(
-            &ops,
-            HeatParams {
-                method: Method::Fast(FastParams::default()),
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        for gamma in [0.05, 0.1, 0.2, 0.4] {
-            let params = HeatParams {
-                method: Method::Fast(FastParams {
-                    gamma,
-                    ..Default::default()
-                }),
-                ..Default::default()
-            };
-            let k = HeatKernel::new(&ops, params).unwrap();
-            for (what, v) in [("x", &f), ("e_i", &e)] {
-                let (_, iters, est) = k.apply_fast_report(v, t).unwrap();
-                eprintln!("n = {n}, γ = {gamma}, f = {what}: fast path {iters} iterations (estimate {est:.1e})");
-            }
+        let fast = kernel(&ops, Method::Fast(FastParams::default()));
+        for (what, v) in [("x", &f), ("e_i", &e)] {
+            let (_, iters, est) = fast.apply_fast_report(v, t).unwrap();
+            eprintln!("n = {n}, f = {what}: fast path {iters} iterations (estimate {est:.1e})");
         }
         let mut group = c.benchmark_group(format!("heat_n{n}_t0.01"));
         group
             .sample_size(10)
+            .sampling_mode(SamplingMode::Flat)
             .warm_up_time(Duration::from_secs(1))
             .measurement_time(Duration::from_secs(4));
-        // HeatKernel caches the factor of the last t, so every timed call below uses a new t
-        // (relative change 1e−12) to include one full factorization, except `*_same_t`.
+        // HeatKernel caches the factors of the last t, so every timed call below uses a new t
+        // (relative change 1e−12) to include every t-dependent factorization, except `*_same_t`.
         let mut i = 0u64;
         let mut next_t = move || {
             i += 1;
             t * (1.0 + 1e-12 * i as f64)
         };
+        let be = kernel(&ops, Method::BackwardEuler);
         group.bench_function("backward_euler", |b| {
-            b.iter(|| be.apply(black_box(&f), next_t()).unwrap())
+            b.iter(|| be.apply(black_box(&e), next_t()).unwrap())
         });
+        let taylor = kernel(&ops, Method::Taylor);
+        group.bench_function("taylor", |b| b.iter(|| taylor.apply(black_box(&e), t).unwrap()));
         group.bench_function("fast_x", |b| b.iter(|| fast.apply(black_box(&f), next_t()).unwrap()));
         group.bench_function("fast_e_i", |b| b.iter(|| fast.apply(black_box(&e), next_t()).unwrap()));
         group.bench_function("fast_e_i_same_t", |b| b.iter(|| fast.apply(black_box(&e), t).unwrap()));
+        let rational = if levels::heavy(level) {
+            vec![
+                ("rational_r16_lu", Method::rational(16)),
+                (
+                    "rational_r16_minres",
+                    Method::Rational {
+                        degree: 16,
+                        backend: Backend::Minres(MinresParams::default()),
+                    },
+                ),
+                ("rational_r7_lu", Method::rational(7)),
+            ]
+        } else {
+            Vec::new()
+        };
+        for (name, method) in rational {
+            let k = kernel(&ops, method);
+            group.bench_function(name, |b| b.iter(|| k.apply(black_box(&e), next_t()).unwrap()));
+        }
+        let ks: &[usize] = if levels::spectral(level) { &[100, 200, 300] } else { &[] };
+        for &k in ks {
+            group.bench_with_input(BenchmarkId::new("spectral_incl_eigensolve", k), &k, |b, &k| {
+                b.iter(|| kernel(&ops, Method::spectral(k)).apply(black_box(&e), t).unwrap())
+            });
+            let basis = Eigenbasis::partial(&ops.stiffness, &ops.mass, k, &EigenParams::default()).unwrap();
+            group.bench_with_input(BenchmarkId::new("spectral_apply_only", k), &k, |b, _| {
+                b.iter(|| basis.apply_heat(&ops.mass, black_box(&e), t).unwrap())
+            });
+        }
         group.finish();
     }
 }
