@@ -582,7 +582,14 @@ fn methods() -> Vec<(String, Method)> {
             "fast path (rational Krylov)".into(),
             Method::Fast(FastParams::default()),
         ),
-        ("rational r=16, LU".into(), Method::rational(16)),
+        ("rational r=16, LDLᵀ (default)".into(), Method::rational(16)),
+        (
+            "rational r=16, LU".into(),
+            Method::Rational {
+                degree: 16,
+                backend: Backend::DirectLu,
+            },
+        ),
         (
             "rational r=16, MINRES".into(),
             Method::Rational {
@@ -590,7 +597,7 @@ fn methods() -> Vec<(String, Method)> {
                 backend: Backend::Minres(MinresParams::default()),
             },
         ),
-        ("rational r=7, LU (paper's degree)".into(), Method::rational(7)),
+        ("rational r=7, LDLᵀ (paper's degree)".into(), Method::rational(7)),
     ]
 }
 
@@ -1020,7 +1027,8 @@ pub fn markdown(report: &Report) -> String {
          per method as in the scaling section.\n"
     );
     let kt_methods = [
-        "rational r=7, LU (paper's degree)",
+        "rational r=7, LDLᵀ (paper's degree)",
+        "rational r=16, LDLᵀ (default)",
         "rational r=16, LU",
         "rational r=16, MINRES",
         "fast path (rational Krylov)",

@@ -82,6 +82,7 @@ fn smoke_report_end_to_end() {
     // L∞ on an impulse, so a few times larger), one backward-Euler step does not.
     for (j, &(_, t)) in report.accuracy.columns.iter().enumerate() {
         for exact in [
+            "rational r=16, LDLᵀ (default)",
             "rational r=16, LU",
             "rational r=16, MINRES",
             "fast path (rational Krylov)",
@@ -89,7 +90,7 @@ fn smoke_report_end_to_end() {
             let e = cell(&report, exact, j).unwrap();
             assert!(e < 1e-10, "{exact} t={t}: {e}");
         }
-        let e7 = cell(&report, "rational r=7, LU (paper's degree)", j).unwrap();
+        let e7 = cell(&report, "rational r=7, LDLᵀ (paper's degree)", j).unwrap();
         assert!(e7 < 1e-5 && e7 > 1e-10, "r=7 t={t}: {e7}");
         assert!(cell(&report, bench::BACKWARD_EULER, j).unwrap() > 1e-4);
     }

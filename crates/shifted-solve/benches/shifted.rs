@@ -2,8 +2,9 @@
 //! LU symbolic / numeric per pole / solve, Cholesky of the preconditioner, MINRES per pole, and
 //! all 8 poles of degree 16 for one right-hand side (the K_t f of paper Eq. (13)).
 //!
-//! Per-pole factor and solve of each backend: `DirectLu` = `lu_numeric_per_pole` (factor) +
-//! `lu_solve_1rhs` (solve); `Minres` = `cholesky_numeric_P` (its per-pole preconditioner
+//! Per-pole factor and solve of each backend: `DirectLdlt` = `ldlt_numeric_per_pole` (factor,
+//! including the assembly of tL − zB) + `ldlt_solve_1rhs` (solve, including the residual check);
+//! `DirectLu` = `lu_numeric_per_pole` (factor) + `lu_solve_1rhs` (solve); `Minres` = `cholesky_numeric_P` (its per-pole preconditioner
 //! factor) + `minres_per_pole_solve_only` (solve).
 //!
 //! Run: `cargo bench -p shifted-solve --bench shifted -- --warm-up-time 1 --measurement-time 5 --sample-size 10`
@@ -92,6 +93,15 @@ fn bench(c: &mut Criterion) {
             bch.iter(|| factors.apply(f.as_ref()).unwrap())
         });
 
+        let ldlt = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::DirectLdlt).unwrap();
+        g.bench_function("ldlt_numeric_per_pole", |bch| {
+            bch.iter(|| ldlt.factor(&one_pole, T).unwrap())
+        });
+        let ldlt_factors = ldlt.factor(&one_pole, T).unwrap();
+        g.bench_function("ldlt_solve_1rhs", |bch| {
+            bch.iter(|| ldlt_factors.apply_resolvent(f.as_ref()).unwrap())
+        });
+
         let direct = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::DirectLu).unwrap();
         let shared = ShiftedSolver::new(
             l.as_ref(),
@@ -106,6 +116,7 @@ fn bench(c: &mut Criterion) {
         // WFEM_BENCH_LARGE=1 (tens of seconds per iteration).
         let all_poles = if levels::heavy(level) {
             vec![
+                ("direct_ldlt", &ldlt),
                 ("direct_lu", &direct),
                 ("minres_s=|z|", &minres),
                 ("minres_s=10", &shared),
