@@ -36,7 +36,7 @@ pub struct HksArgs {
     /// Number k of eigenpairs of the truncated spectral sum (Eq. (8)).
     #[arg(long, default_value_t = shape_retrieval::DEFAULT_EIGENPAIRS)]
     pub eigs: usize,
-    /// Output: .npy (n × T array), .csv, .ply (fields hks_t<t>) or .png.
+    /// Output: .npy (n × T array), .csv, .ply (fields `hks_t<t>`) or .png.
     #[arg(short = 'o', long = "output", visible_alias = "out")]
     pub output: PathBuf,
 }

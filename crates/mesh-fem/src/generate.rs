@@ -162,7 +162,7 @@ pub fn uv_sphere(rings: usize, segments: usize) -> TriMesh {
     build(positions, faces)
 }
 
-/// Flat grid on the unit square [0,1]² in the plane z = 0, with `nx` × `ny` vertices and an
+/// Flat grid on the unit square \[0,1\]² in the plane z = 0, with `nx` × `ny` vertices and an
 /// open boundary. Cells are split along alternating diagonals so the mesh has no preferred
 /// direction.
 ///

@@ -20,7 +20,7 @@ pub enum Backend {
     /// every pole and every t; the real pole of odd degrees uses a real sparse Cholesky.
     /// Factors are reused for any number of right-hand sides.
     DirectLu,
-    /// Complex-symmetric supernodal LDLᵀ without pivoting (NUMERICS §3.3d, [`crate::ldlt`]
+    /// Complex-symmetric supernodal LDLᵀ without pivoting (NUMERICS §3.3d; module `ldlt`
     /// docs): it exists because the Hermitian part of i(tL − zB) is qB ≻ 0, reuses the real
     /// Cholesky's AMD ordering and supernodes, and does about half the work of the LU. Every
     /// solve reports its true residual; the real pole uses a real sparse Cholesky.
