@@ -284,6 +284,8 @@ const CASES: &[Case] = &[
         },
     },
     clean_tet("obj_crlf.obj", 0, &[]),
+    // A UTF-8 byte order mark before the first record is skipped, not an unknown keyword.
+    clean_tet("obj_utf8_bom.obj", 0, &[]),
     clean_tet("obj_negative_relative_ok.obj", 0, &[]),
     Case {
         file: "obj_repeated_vertex.obj",
