@@ -1,12 +1,11 @@
-//! Inputs found while fuzzing (issue #8, `docs/FUZZING.md`), kept in `tests/data/fuzz/`
+//! Inputs found during the fuzzing work (issue #8, `docs/FUZZING.md`), kept in `tests/data/fuzz/`
 //! (written by `tests/data/fuzz/make.py`; minimised `cargo fuzz tmin` outputs are committed
 //! as they are). Every file of the folder must appear in [`CASES`] with its exact outcome
 //! through load → validate → assemble, and none may panic.
 //!
 //! The tetrahedra `tet_<s>.obj` have corners 0, s·e₁, s·e₂, s·e₃. Before the fix a valid
-//! triangle with edges above ~1e77 or below ~1e−154 overflowed or underflowed in ‖e₁×e₂‖ and
-//! was refused as "zero area", and one whose areas summed beyond f64::MAX assembled into
-//! infinite B and D. Now the geometry is computed on exactly rescaled edges: the operators
+//! triangle with edges above ~1e77 or below ~1e−77 overflowed or underflowed in ‖e₁×e₂‖ and
+//! was refused as "zero area". Now the geometry is computed on exactly rescaled edges: the operators
 //! follow the scale laws L(s) = L(1), B(s) = s²·B(1) over the whole range where the areas are
 //! normal doubles, and beyond it the error names the real culprit.
 
