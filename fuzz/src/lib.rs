@@ -79,7 +79,9 @@ pub fn read_and_check(data: &[u8], format: MeshFormat) -> Option<TriMesh> {
 /// positive diagonal of L, B and D, and D's diagonal equal to the row sums of B (the
 /// barycentric lumped mass, the paper's Eq. (7)).
 pub fn pipeline(data: &[u8]) {
-    let Some((&selector, file)) = data.split_first() else { return };
+    let Some((&selector, file)) = data.split_first() else {
+        return;
+    };
     let format = match selector % 4 {
         0 => MeshFormat::Obj,
         1 => MeshFormat::Ply,
@@ -124,7 +126,10 @@ fn check_operators(mesh: &TriMesh, ops: &mesh_fem::FemOperators) {
         assert_eq!((m.nrows(), m.ncols()), (n, n), "{what} has the wrong shape");
         assert!(m.val().iter().all(|v| v.is_finite()), "{what} has a non-finite entry");
     }
-    assert!(ops.lumped_diagonal.iter().all(|d| d.is_finite() && *d > 0.0), "D is not positive");
+    assert!(
+        ops.lumped_diagonal.iter().all(|d| d.is_finite() && *d > 0.0),
+        "D is not positive"
+    );
     let l = &ops.stiffness;
     let s = l.symbolic();
     let mut row_sum = vec![0.0f64; n];
