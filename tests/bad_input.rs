@@ -139,20 +139,13 @@ const CASES: &[Case] = &[
         &["empty.stl:0:"],
     ),
     // ---------------------------------------------------------------- garbage bytes
-    // BUG: binary garbage in an .obj is silently skipped line by line (unknown records are
-    // ignored), so the user is told "the mesh is empty" instead of "not an OBJ file".
+    // Binary data is not skipped record by record (which ended in a misleading "empty
+    // mesh"): the first line whose keyword is not an OBJ keyword is named. Line 1 is the
+    // garbage's leading lone CR.
     fails(
         "garbage.obj",
-        |e| {
-            matches!(
-                e,
-                MeshError::Empty {
-                    n_vertices: 0,
-                    n_faces: 0
-                }
-            )
-        },
-        &["empty"],
+        |e| parse_at(e, 2, "is not an OBJ record keyword"),
+        &["garbage.obj:2:", "\\xcf"],
     ),
     fails(
         "garbage.off",
@@ -291,6 +284,8 @@ const CASES: &[Case] = &[
         },
     },
     clean_tet("obj_crlf.obj", 0, &[]),
+    // A UTF-8 byte order mark before the first record is skipped, not an unknown keyword.
+    clean_tet("obj_utf8_bom.obj", 0, &[]),
     clean_tet("obj_negative_relative_ok.obj", 0, &[]),
     Case {
         file: "obj_repeated_vertex.obj",
@@ -777,21 +772,13 @@ const CASES: &[Case] = &[
         |e| parse_at(e, 1, "magic number 'ply'"),
         &["ply_bad_magic.ply:1:"],
     ),
-    // BUG: one face fewer declared than present: the extra face line is dropped silently —
-    // no note in the LoadReport (the OFF reader notes "ignored content after the declared faces").
-    Case {
-        file: "ply_ascii_counts_too_small.ply",
-        triangulate: false,
-        expect: Expect::Loads {
-            counts: (4, 3),
-            triangulated: 0,
-            welded: 0,
-            notes: &["ASCII PLY"],
-            problems: &["Boundary { loops: 1, edges: 3 }"],
-            validation: Verdict::Ok,
-            assembly: Verdict::Ok,
-        },
-    },
+    // One face fewer declared than present: the extra face line (17: 9 header lines, 4
+    // vertices, 3 declared faces) is an error naming the line, not silently dropped.
+    fails(
+        "ply_ascii_counts_too_small.ply",
+        |e| parse_at(e, 17, "data after the last declared element"),
+        &["ply_ascii_counts_too_small.ply:17:", "too few elements"],
+    ),
     clean_tet("ply_ascii_crlf.ply", 0, &["ASCII PLY"]),
     // CRLF header lines followed by binary data.
     clean_tet("ply_binary_crlf_header.ply", 0, &["binary little-endian PLY"]),

@@ -33,7 +33,7 @@ pub enum MeshError {
         n_vertices: usize,
     },
     /// The whole mesh has zero (or non-finite) area.
-    #[error("the mesh has total area {area}, so it has no geometry to work on")]
+    #[error("the mesh has total area {area}: zero or not a finite number, so there is no usable geometry")]
     DegenerateMesh {
         /// Total area found.
         area: f64,

@@ -85,8 +85,7 @@ impl TriMesh {
     /// Area of face `f`, |T| = ½‖(b − a) × (c − a)‖.
     #[inline]
     pub fn face_area(&self, f: usize) -> f64 {
-        let [a, b, c] = self.corners(f);
-        0.5 * norm(cross(sub(b, a), sub(c, a)))
+        triangle_area(self.corners(f))
     }
 
     /// Total surface area Σ|T|.
@@ -139,4 +138,63 @@ pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 #[inline]
 pub(crate) fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
+}
+
+// ---------------------------------------------------------------- overflow-free triangle geometry
+// (added with the fuzzing work of issue #8: a valid triangle with edges beyond ~1e154 or below
+// ~1e-154 overflowed or underflowed in ‖e₁×e₂‖ and was reported as having zero area.)
+
+/// `x · 2ⁿ`, exact unless the result over- or underflows (the power is applied in steps that
+/// are each representable).
+#[inline]
+pub(crate) fn mul_pow2(mut x: f64, mut n: i32) -> f64 {
+    while n != 0 {
+        let step = n.clamp(-1000, 1000);
+        // 2^step as a normal double: biased exponent step + 1023 ∈ [23, 2023].
+        x *= f64::from_bits(((step + 1023) as u64) << 52);
+        n -= step;
+    }
+    x
+}
+
+/// The edge vectors `[p₁−p₀, p₂−p₁, p₀−p₂]` of a triangle multiplied by the power of two
+/// 2⁻ᵏ that brings their largest component into [1, 2), together with k.
+///
+/// Multiplying by a power of two is exact, so dot products, cross products and norms of the
+/// scaled edges are the unscaled ones times 2⁻²ᵏ exactly, with neither overflow (edges beyond
+/// ~1e154) nor underflow (edges below ~1e−154), and scale-free ratios such as cotangents are
+/// bitwise the values an unscaled computation gives whenever that one does not overflow.
+/// `None` if an edge is not finite or all three edges are zero.
+#[inline]
+pub(crate) fn scaled_edges(p: [[f64; 3]; 3]) -> Option<([[f64; 3]; 3], i32)> {
+    let edges = [sub(p[1], p[0]), sub(p[2], p[1]), sub(p[0], p[2])];
+    let m = edges.iter().flatten().fold(0.0f64, |m, c| m.max(c.abs()));
+    if !m.is_finite() || m == 0.0 || edges.iter().flatten().any(|c| !c.is_finite()) {
+        return None;
+    }
+    // Binary exponent of m (subnormals first lifted by 2⁶⁴).
+    let k = if m >= f64::MIN_POSITIVE {
+        ((m.to_bits() >> 52) & 0x7ff) as i32 - 1023
+    } else {
+        (((m * 18446744073709551616.0).to_bits() >> 52) & 0x7ff) as i32 - 1023 - 64
+    };
+    let s = |e: [f64; 3]| e.map(|c| mul_pow2(c, -k));
+    Some((edges.map(s), k))
+}
+
+#[inline]
+pub(crate) fn neg(a: [f64; 3]) -> [f64; 3] {
+    [-a[0], -a[1], -a[2]]
+}
+
+/// Area of a triangle, computed on exactly scaled edges ([`scaled_edges`]) so that it neither
+/// overflows nor underflows unless the area itself does; 0 for coincident corners, +∞ for
+/// non-finite edges.
+#[inline]
+pub(crate) fn triangle_area(p: [[f64; 3]; 3]) -> f64 {
+    match scaled_edges(p) {
+        Some(([d01, _, d20], k)) => 0.5 * mul_pow2(norm(cross(d01, neg(d20))), 2 * k),
+        None if p[0] == p[1] && p[1] == p[2] => 0.0,
+        None => f64::INFINITY,
+    }
 }

@@ -18,7 +18,7 @@
 //! every shifted matrix `tL − zB`. Assembly is O(#faces): a counting sort of the half-edges
 //! by column, then a parallel (rayon) merge per column.
 
-use crate::mesh::{cross, dot, norm, sub};
+use crate::mesh::{cross, dot, mul_pow2, neg, norm, scaled_edges};
 use crate::{MeshError, TriMesh};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use rayon::prelude::*;
@@ -87,18 +87,26 @@ impl FemOperators {
 }
 
 /// Per-face geometry: area and the cotangent of the angle at each corner.
+///
+/// Computed on the edges scaled by an exact power of two ([`crate::mesh::scaled_edges`]), so
+/// the cotangents are scale invariant and nothing overflows for huge or tiny (but valid)
+/// triangles; the area is scaled back exactly. NaN for coincident corners or non-finite
+/// edges (such faces are degenerate and never assembled).
 #[inline]
 fn face_cotangents(p: [[f64; 3]; 3]) -> (f64, [f64; 3]) {
+    let Some(([d01, d12, d20], k)) = scaled_edges(p) else {
+        return (f64::NAN, [f64::NAN; 3]);
+    };
+    // The two edges leaving each corner: p_{k+1} − p_k and p_{k+2} − p_k.
+    let legs = [(d01, neg(d20)), (d12, neg(d01)), (d20, neg(d12))];
+    let double_area = norm(cross(legs[0].0, legs[0].1));
     let mut cots = [0.0; 3];
-    let double_area = norm(cross(sub(p[1], p[0]), sub(p[2], p[0])));
-    for k in 0..3 {
-        let e1 = sub(p[(k + 1) % 3], p[k]);
-        let e2 = sub(p[(k + 2) % 3], p[k]);
+    for (cot, (e1, e2)) in cots.iter_mut().zip(legs) {
         // cot θ = cos/sin = (e1·e2)/‖e1×e2‖, and ‖e1×e2‖ is twice the area for every corner;
         // using the common value keeps the three cotangents consistent.
-        cots[k] = dot(e1, e2) / double_area;
+        *cot = dot(e1, e2) / double_area;
     }
-    (0.5 * double_area, cots)
+    (0.5 * mul_pow2(double_area, 2 * k), cots)
 }
 
 /// Columns per parallel work item of [`assemble`]: large enough to amortise the task and
@@ -138,6 +146,8 @@ struct CornerEntries {
 ///   first one in face order; drop such faces first with [`crate::validate::repair`].
 /// * [`MeshError::UnreferencedVertex`] for a vertex that belongs to no face (B would be
 ///   singular); drop such vertices first with [`crate::validate::repair`].
+/// * [`MeshError::DegenerateMesh`] if the total area Σ|T| overflows (coordinates beyond
+///   ~1e154): B and D would hold infinities; scale the mesh down first.
 pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
     let n = mesh.n_vertices();
     let faces = mesh.faces();
@@ -233,6 +243,12 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
     }
     if let Some(v) = (0..n).find(|&j| first[j + 1] == first[j]) {
         return Err(MeshError::UnreferencedVertex { vertex: v });
+    }
+    // Every entry of B and D is a partial sum of the face areas, so a finite total keeps them
+    // all finite (L is scale free). Same test, same order as `validate`.
+    let total_area = mesh.area();
+    if !total_area.is_finite() {
+        return Err(MeshError::DegenerateMesh { area: total_area });
     }
 
     // 2a. Count the distinct rows of each column, then lay out the column pointers.
@@ -375,16 +391,23 @@ fn split_at_bounds<'a, T>(mut v: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [
 /// Mixed Voronoi area of each corner of one triangle (Meyer, Desbrun, Schröder, Barr 2003,
 /// Fig. 4): the Voronoi region `(|e_kj|² cot θ_l + |e_kl|² cot θ_j)/8` on a non-obtuse
 /// triangle, otherwise |T|/2 at the obtuse corner and |T|/4 at the other two.
+///
+/// Squared edge lengths are taken on exactly scaled edges ([`crate::mesh::scaled_edges`]) and
+/// scaled back, so they do not overflow for huge triangles whose areas are finite.
 fn voronoi_corner_areas(p: [[f64; 3]; 3], (area, cots): (f64, [f64; 3])) -> [f64; 3] {
+    let Some(([d01, d12, d20], scale)) = scaled_edges(p) else {
+        return [f64::NAN; 3];
+    };
+    let legs = [(d01, neg(d20)), (d12, neg(d01)), (d20, neg(d12))];
     let obtuse = (0..3).find(|&k| cots[k] < 0.0);
     let mut out = [0.0; 3];
     for (k, a) in out.iter_mut().enumerate() {
         *a = match obtuse {
             None => {
                 // The edge k→k+1 is opposite corner k+2 and the edge k→k+2 is opposite k+1.
-                let e1 = sub(p[(k + 1) % 3], p[k]);
-                let e2 = sub(p[(k + 2) % 3], p[k]);
-                (dot(e1, e1) * cots[(k + 2) % 3] + dot(e2, e2) * cots[(k + 1) % 3]) / 8.0
+                let (e1, e2) = legs[k];
+                let scaled = (dot(e1, e1) * cots[(k + 2) % 3] + dot(e2, e2) * cots[(k + 1) % 3]) / 8.0;
+                mul_pow2(scaled, 2 * scale)
             }
             Some(o) if o == k => area / 2.0,
             Some(_) => area / 4.0,

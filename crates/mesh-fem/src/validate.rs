@@ -21,7 +21,7 @@
 //! [`repair`] applies only the repairs the caller turns on in [`RepairOptions`] and returns a
 //! [`RepairReport`] that says exactly what changed (index maps for vertices and faces).
 
-use crate::mesh::{cross, dot, norm, sub};
+use crate::mesh::{cross, dot, mul_pow2, neg, norm, scaled_edges, sub};
 use crate::topology::{Topology, NONE};
 use crate::{MeshError, TriMesh};
 use rayon::prelude::*;
@@ -46,16 +46,26 @@ fn counted(n: usize, one: &str, many: &str) -> String {
 pub const DEGENERATE_AREA_RATIO: f64 = 1e-14;
 
 /// Whether a triangle with the given corners is degenerate (zero or numerically zero area):
-/// `|T| ≤ DEGENERATE_AREA_RATIO · ℓ_max²`, or a non-finite area.
+/// `|T| ≤ DEGENERATE_AREA_RATIO · ℓ_max²`, an area that underflows (below the smallest
+/// normal double, ~2.2e−308, where B and D would hold zeros), or an edge that is not finite.
+/// (An area that overflows is not degenerate; [`validate`] reports it as
+/// [`Problem::AreaOverflow`].)
+///
+/// The test is computed on the edges scaled by an exact power of two, so it is exactly
+/// scale invariant: a triangle with edges of 1e100 or 1e−160 is judged like the same
+/// triangle with unit edges (an unscaled cross product would overflow or underflow there).
 ///
 /// This is the one test used by both [`validate`] and [`crate::assemble`], so the two agree.
 #[inline]
 pub fn is_degenerate_triangle(corners: [[f64; 3]; 3]) -> bool {
-    let [a, b, c] = corners;
-    let (e0, e1, e2) = (sub(b, a), sub(c, b), sub(a, c));
+    let Some(([e0, e1, e2], k)) = scaled_edges(corners) else {
+        return true; // coincident corners, or an edge that is not finite
+    };
     let longest_sq = dot(e0, e0).max(dot(e1, e1)).max(dot(e2, e2));
-    let area = 0.5 * norm(cross(e0, sub(c, a)));
-    !(area.is_finite() && longest_sq.is_finite() && area > DEGENERATE_AREA_RATIO * longest_sq)
+    // c − a = −(a − c) exactly.
+    let area = 0.5 * norm(cross(e0, neg(e2)));
+    let true_area = mul_pow2(area, 2 * k);
+    !(area > DEGENERATE_AREA_RATIO * longest_sq && true_area >= f64::MIN_POSITIVE)
 }
 
 /// How serious a [`Problem`] is.
@@ -89,6 +99,12 @@ pub enum Problem {
     UnreferencedVertex {
         /// Vertex index.
         vertex: usize,
+    },
+    /// The total area Σ|T| is not a finite double (coordinates beyond ~1e154), so the mass
+    /// matrices B and D cannot be stored; scale the mesh down ([`TriMesh::scaled`]).
+    AreaOverflow {
+        /// The total area computed (+∞).
+        area: f64,
     },
     /// An edge shared by more than two faces.
     NonManifoldEdge {
@@ -138,9 +154,10 @@ impl Problem {
     /// Severity of this kind of problem.
     pub fn severity(&self) -> Severity {
         match self {
-            Problem::RepeatedIndex { .. } | Problem::ZeroAreaFace { .. } | Problem::UnreferencedVertex { .. } => {
-                Severity::Error
-            }
+            Problem::RepeatedIndex { .. }
+            | Problem::ZeroAreaFace { .. }
+            | Problem::UnreferencedVertex { .. }
+            | Problem::AreaOverflow { .. } => Severity::Error,
             _ => Severity::Warning,
         }
     }
@@ -154,6 +171,7 @@ impl Problem {
             }),
             Problem::ZeroAreaFace { face, vertices } => Some(MeshError::DegenerateFace { face, vertices }),
             Problem::UnreferencedVertex { vertex } => Some(MeshError::UnreferencedVertex { vertex }),
+            Problem::AreaOverflow { area } => Some(MeshError::DegenerateMesh { area }),
             _ => None,
         }
     }
@@ -170,6 +188,12 @@ impl fmt::Display for Problem {
             }
             Problem::UnreferencedVertex { vertex } => {
                 write!(f, "vertex {vertex} belongs to no face")
+            }
+            Problem::AreaOverflow { area } => {
+                write!(
+                    f,
+                    "the total area {area} is not a finite number (coordinates too large)"
+                )
             }
             Problem::NonManifoldEdge { edge, n_faces } => {
                 write!(f, "edge {edge:?} is shared by {n_faces} faces")
@@ -305,6 +329,7 @@ impl ValidationReport {
                     "; fix: RepairOptions::drop_degenerate_faces"
                 }
                 Problem::UnreferencedVertex { .. } => "; fix: RepairOptions::drop_unreferenced_vertices",
+                Problem::AreaOverflow { .. } => "; fix: scale the mesh down (TriMesh::scaled)",
                 Problem::NonManifoldEdge { .. } | Problem::NonManifoldVertex { .. } => {
                     "; FEM assembly is per face, so the operators still assemble"
                 }
@@ -365,6 +390,10 @@ pub fn validate(mesh: &TriMesh) -> ValidationReport {
             counts.unreferenced_vertices += 1;
             problems.push(Problem::UnreferencedVertex { vertex });
         }
+    }
+    let total_area = mesh.area();
+    if !total_area.is_finite() {
+        problems.push(Problem::AreaOverflow { area: total_area });
     }
 
     // Warnings.

@@ -26,6 +26,9 @@ fn assert_agrees_with_assemble(m: &TriMesh) {
         | (Err(MeshError::UnreferencedVertex { vertex: a }), Err(MeshError::UnreferencedVertex { vertex: b })) => {
             assert_eq!(a, b)
         }
+        (Err(MeshError::DegenerateMesh { area: a }), Err(MeshError::DegenerateMesh { area: b })) => {
+            assert_eq!(a, b)
+        }
         (v, a) => panic!("validate says {v:?}, assemble says {a:?}"),
     }
 }
@@ -129,11 +132,19 @@ fn needle_threshold_is_relative_and_shared_with_assemble() {
         [1.0, 0.0, 0.0],
         [0.5, 4.0 * ratio, 0.0]
     ]));
-    // Overflowing coordinates give an infinite area: degenerate, never NaN cotangents.
+    // Huge coordinates: the area 5e599 is not a double, but the triangle is well shaped, so it
+    // is not degenerate (its cotangents are computed on exactly rescaled edges, finite); the
+    // overflowing total area is the mesh-level problem that validate and assemble both name.
+    let big = [[0.0, 0.0, 0.0], [1e300, 0.0, 0.0], [0.0, 1e300, 0.0]];
+    assert!(!is_degenerate_triangle(big));
+    let m = mesh(big.to_vec(), vec![[0, 1, 2]]);
+    assert_eq!(validate(&m).problems[0], Problem::AreaOverflow { area: f64::INFINITY });
+    assert_agrees_with_assemble(&m);
+    // Coordinates whose differences overflow have no finite edge: degenerate.
     assert!(is_degenerate_triangle([
-        [0.0, 0.0, 0.0],
-        [1e300, 0.0, 0.0],
-        [0.0, 1e300, 0.0]
+        [-1e308, 0.0, 0.0],
+        [1e308, 0.0, 0.0],
+        [0.0, 1.0, 0.0]
     ]));
 }
 

@@ -107,6 +107,7 @@ w("obj_mixed_polygons.obj", obj([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (2,
                                 [(1, 2, 4), (2, 5, 6, 3), (5, 7, 8, 6)]))
 w("obj_collinear.obj", obj([(0, 0, 0), (1, 1, 1), (2, 2, 2), (3, 3, 3)], [(1, 2, 3), (2, 3, 4)]))
 w("obj_crlf.obj", obj(TV, OBJ_TET).replace("\n", "\r\n"))
+w("obj_utf8_bom.obj", "\ufeff" + obj(TV, OBJ_TET))  # BOM before the first record
 w("obj_bad_number.obj", obj(TV, OBJ_TET).replace("v 1 0 0", "v 1 zero 0"))
 w("obj_face_two_corners.obj", obj(TV, OBJ_TET[:3] + [(2, 3)]))
 

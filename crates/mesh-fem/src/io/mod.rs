@@ -156,6 +156,9 @@ pub fn load_bytes(
 /// `v/vt/vn` or `v//vn`; negative indices count back from the last vertex read; values after
 /// x y z on a `v` line (w or colours) and `l`/`p` records are ignored). `o`/`g`
 /// groups share the one vertex list of the file, so the mesh stays connected across groups.
+/// Records with other keywords (`vt`, `vn`, `usemtl`, …) are skipped, but a keyword that is not
+/// made of ASCII letters, digits and `_` is a [`MeshError::Parse`] naming its line: the data
+/// is binary or not OBJ at all. A leading UTF-8 byte order mark is ignored.
 ///
 /// # Errors
 /// See [`load_bytes`].
@@ -165,7 +168,10 @@ pub fn read_obj(bytes: &[u8], name: &Path, opts: &LoadOptions) -> Result<(TriMes
 
 /// Reads a PLY mesh (ASCII, binary little or big endian) from memory: `x`, `y`, `z` of the
 /// `vertex` element (any scalar type) and the `vertex_indices` or `vertex_index` list of the
-/// `face` element (any integer type). Other properties and elements are skipped.
+/// `face` element (any integer type). Other properties and elements are skipped. In ASCII
+/// PLY a non-blank line after the last declared element is a [`MeshError::Parse`] naming that
+/// line (the header declares too few elements, and the extra records would otherwise be
+/// dropped); in binary PLY extra bytes at the end are reported in [`LoadReport::notes`].
 ///
 /// # Errors
 /// See [`load_bytes`].

@@ -19,6 +19,8 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<(Tri
     let mut sink = FaceSink::new(path, opts.triangulate_polygons, bytes.len() / 64);
     let mut corners: Vec<u32> = Vec::with_capacity(8);
     let mut n_lines_records = 0usize;
+    // A UTF-8 byte order mark before the first record is not part of it.
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     for (line_no, raw) in Lines::new(bytes) {
         let line = strip_comment(raw);
         let mut it = tokens(line);
@@ -70,7 +72,21 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<(Tri
                 sink.push(&corners, line_no)?;
             }
             b"l" | b"p" => n_lines_records += 1,
-            _ => {} // vt, vn, o, g, s, usemtl, mtllib, … carry nothing we need.
+            // vt, vn, o, g, s, usemtl, mtllib, … carry nothing we need. Every OBJ keyword
+            // (and every vendor extension seen in the wild) is ASCII letters, digits and
+            // `_`; anything else means the data is not OBJ (binary data, another format), and
+            // skipping it would end in a misleading "empty mesh".
+            other if other.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'_') => {}
+            other => {
+                return Err(parse_error(
+                    path,
+                    line_no,
+                    format!(
+                        "\"{}\" is not an OBJ record keyword (binary data or not an OBJ file?)",
+                        escaped(other)
+                    ),
+                ))
+            }
         }
     }
     if n_lines_records > 0 {
@@ -79,4 +95,18 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<(Tri
             .push(format!("ignored {n_lines_records} line/point records (l, p)"));
     }
     finish(positions, sink, report)
+}
+
+/// The first bytes of a token with non-printable bytes escaped (`\xcf`), for error messages.
+fn escaped(token: &[u8]) -> String {
+    let mut s: String = token
+        .iter()
+        .take(16)
+        .flat_map(|b| b.escape_ascii())
+        .map(char::from)
+        .collect();
+    if token.len() > 16 {
+        s.push('…');
+    }
+    s
 }

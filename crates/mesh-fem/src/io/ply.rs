@@ -4,6 +4,7 @@
 //! `vertex` (any scalar type), the `vertex_indices`/`vertex_index` list of `face` (any
 //! integer list type). Other elements are parsed with a struct that ignores everything.
 
+use super::text::{show, Lines};
 use super::{checked_index, finish, parse_error, FaceSink, LoadOptions, LoadReport, MeshFormat};
 use crate::{MeshError, TriMesh};
 use ply_rs_bw::parser::{Parser, Reader};
@@ -215,5 +216,44 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<(Tri
             }
         }
     }
+    check_trailing(path, &header, reader.line(), reader.get_ref(), &mut report)?;
     finish(positions, sink, report)
+}
+
+/// Data after the last declared element. In ASCII PLY a non-blank line there almost always
+/// means an element count that is too small (the records it would have covered would be
+/// dropped silently), so it is an error naming the line. In binary PLY the extra bytes are
+/// reported in a note (there are no lines to name, and some writers pad files).
+fn check_trailing(
+    path: &Path,
+    header: &Header,
+    next_line: usize,
+    rest: &[u8],
+    report: &mut LoadReport,
+) -> Result<(), MeshError> {
+    match header.encoding {
+        Encoding::Ascii => {
+            // `next_line` is the 1-based number of the first line after the last element.
+            let extra = Lines::new(rest).find(|(_, line)| !line.iter().all(|b| b.is_ascii_whitespace()));
+            match extra {
+                Some((k, line)) => Err(parse_error(
+                    path,
+                    next_line + k - 1,
+                    format!(
+                        "data after the last declared element ({:?}); does the header declare too few elements?",
+                        show(line)
+                    ),
+                )),
+                None => Ok(()),
+            }
+        }
+        _ => {
+            if !rest.is_empty() {
+                report
+                    .notes
+                    .push(format!("ignored {} bytes after the last declared element", rest.len()));
+            }
+            Ok(())
+        }
+    }
 }
