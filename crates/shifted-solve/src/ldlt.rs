@@ -273,6 +273,19 @@ impl LdltFactor {
         })
     }
 
+    /// Supernode s: its column range s₀..s₁, off-diagonal row pattern, diagonal block (unit L
+    /// below the diagonal, D on it) and the panel below.
+    fn block(&self, s: usize) -> (usize, usize, &[usize], MatRef<'_, c64>, MatRef<'_, c64>) {
+        let sym = &*self.symbolic;
+        let (s0, s1) = (sym.begin[s], sym.begin[s + 1]);
+        let nc = s1 - s0;
+        let pat = sym.pattern(s);
+        let nr = nc + pat.len();
+        let l = MatRef::from_column_major_slice(&self.values[sym.val_ptr[s]..sym.val_ptr[s] + nr * nc], nr, nc);
+        let (top, bot) = l.split_at_row(nc);
+        (s0, s1, pat, top, bot)
+    }
+
     /// Overwrites the n × k `rhs` with `A⁻¹ rhs`.
     pub fn solve_in_place(&self, mut rhs: MatMut<'_, c64>) {
         let sym = &*self.symbolic;
@@ -281,12 +294,8 @@ impl LdltFactor {
         let mut tmp: Vec<c64> = Vec::new();
         // Forward: L y = P b.
         for s in 0..sym.n_supernodes() {
-            let (s0, s1) = (sym.begin[s], sym.begin[s + 1]);
+            let (s0, s1, pat, top, bot) = self.block(s);
             let nc = s1 - s0;
-            let pat = sym.pattern(s);
-            let nr = nc + pat.len();
-            let l = MatRef::from_column_major_slice(&self.values[sym.val_ptr[s]..sym.val_ptr[s] + nr * nc], nr, nc);
-            let (top, bot) = l.split_at_row(nc);
             let (upper, lower) = x.as_mut().split_at_row_mut(s1);
             let mut xs = upper.subrows_mut(s0, nc);
             solve_unit_lower_triangular_in_place(top, xs.rb_mut(), Par::Seq);
@@ -305,11 +314,9 @@ impl LdltFactor {
         }
         // Diagonal: D.
         for s in 0..sym.n_supernodes() {
-            let (s0, s1) = (sym.begin[s], sym.begin[s + 1]);
-            let nr = (s1 - s0) + sym.pattern(s).len();
+            let (s0, s1, _, top, _) = self.block(s);
             for c in s0..s1 {
-                let d = self.values[sym.val_ptr[s] + (c - s0) * nr + (c - s0)];
-                let dinv = d.inv();
+                let dinv = top[(c - s0, c - s0)].inv();
                 for j in 0..k {
                     x[(c, j)] *= dinv;
                 }
@@ -317,12 +324,8 @@ impl LdltFactor {
         }
         // Backward: Lᵀ x = y.
         for s in (0..sym.n_supernodes()).rev() {
-            let (s0, s1) = (sym.begin[s], sym.begin[s + 1]);
+            let (s0, s1, pat, top, bot) = self.block(s);
             let nc = s1 - s0;
-            let pat = sym.pattern(s);
-            let nr = nc + pat.len();
-            let l = MatRef::from_column_major_slice(&self.values[sym.val_ptr[s]..sym.val_ptr[s] + nr * nc], nr, nc);
-            let (top, bot) = l.split_at_row(nc);
             let (upper, lower) = x.as_mut().split_at_row_mut(s1);
             let mut xs = upper.subrows_mut(s0, nc);
             if !pat.is_empty() {

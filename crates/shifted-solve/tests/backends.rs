@@ -5,17 +5,6 @@ use common::*;
 use faer::Mat;
 use shifted_solve::*;
 
-fn single_pole(z: c64) -> RationalApprox {
-    RationalApprox {
-        degree: 2,
-        c0: 0.0,
-        poles: Box::leak(vec![z].into_boxed_slice()),
-        residues: Box::leak(vec![c64::new(1.0, 0.0)].into_boxed_slice()),
-        real_pole: None,
-        max_error: 0.0,
-    }
-}
-
 fn backends() -> Vec<(&'static str, Backend)> {
     vec![
         ("lu", Backend::DirectLu),

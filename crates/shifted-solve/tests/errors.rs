@@ -6,18 +6,6 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
 use shifted_solve::*;
 
-fn from_dense(rows: &[&[f64]]) -> SparseColMat<usize, f64> {
-    let mut t = Vec::new();
-    for (i, r) in rows.iter().enumerate() {
-        for (j, &v) in r.iter().enumerate() {
-            if v != 0.0 {
-                t.push(Triplet::new(i, j, v));
-            }
-        }
-    }
-    SparseColMat::try_new_from_triplets(rows.len(), rows[0].len(), &t).unwrap()
-}
-
 fn path_laplacian() -> SparseColMat<usize, f64> {
     from_dense(&[&[1.0, -1.0, 0.0], &[-1.0, 2.0, -1.0], &[0.0, -1.0, 1.0]])
 }

@@ -2,21 +2,12 @@
 //! [`SolveError::SingularShiftedMatrix`], never NaN, ∞ or a huge finite garbage answer, for
 //! complex-pole LU and real-pole Cholesky alike; and MINRES that runs out of iterations must
 //! report it ([`SolveError::NoConvergence`] with the residual reached), never fall back to LU.
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::SparseColMat;
 use faer::{c64, Mat};
 use shifted_solve::*;
 
-fn from_dense(rows: &[&[f64]]) -> SparseColMat<usize, f64> {
-    let mut t = Vec::new();
-    for (i, r) in rows.iter().enumerate() {
-        for (j, &v) in r.iter().enumerate() {
-            if v != 0.0 {
-                t.push(Triplet::new(i, j, v));
-            }
-        }
-    }
-    SparseColMat::try_new_from_triplets(rows.len(), rows[0].len(), &t).unwrap()
-}
+mod common;
+use common::{from_dense, single_pole};
 
 /// Path Laplacian on 3 vertices with B = I: generalized eigenvalues exactly 0, 1 and 3
 /// (eigenvectors (1,1,1), (1,0,−1), (1,−2,1)).
@@ -24,17 +15,6 @@ fn path() -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
     let l = from_dense(&[&[1.0, -1.0, 0.0], &[-1.0, 2.0, -1.0], &[0.0, -1.0, 1.0]]);
     let b = from_dense(&[&[1.0, 0.0, 0.0], &[0.0, 1.0, 0.0], &[0.0, 0.0, 1.0]]);
     (l, b)
-}
-
-fn complex_pole(z: c64) -> RationalApprox {
-    RationalApprox {
-        degree: 2,
-        c0: 0.0,
-        poles: Box::leak(vec![z].into_boxed_slice()),
-        residues: Box::leak(vec![c64::new(1.0, 0.0)].into_boxed_slice()),
-        real_pole: None,
-        max_error: 0.0,
-    }
 }
 
 fn real_pole(z: f64) -> RationalApprox {
@@ -71,18 +51,18 @@ fn pole_at_an_eigenvalue_is_a_typed_error() {
     let ldlt = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::DirectLdlt).unwrap();
     for z in [0.0, 1.0, 3.0] {
         assert_singular(
-            s.apply(&complex_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref()),
+            s.apply(&single_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref()),
             z,
             "complex LU",
         );
         assert_singular(
-            ldlt.apply(&complex_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref()),
+            ldlt.apply(&single_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref()),
             z,
             "complex-symmetric LDLᵀ",
         );
         assert_singular(s.apply(&real_pole(z), 1.0, rhs().as_ref()), z, "real Cholesky");
         assert_singular(
-            s.apply_resolvent(&complex_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref()),
+            s.apply_resolvent(&single_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref()),
             z,
             "resolvent",
         );
@@ -97,7 +77,7 @@ fn pole_at_an_eigenvalue_is_a_typed_error() {
         };
         let m = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::Minres(params)).unwrap();
         for z in [1.0, 3.0] {
-            match m.apply(&complex_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref()) {
+            match m.apply(&single_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref()) {
                 Err(SolveError::NoConvergence { residual, .. }) => {
                     // A pole on the real axis is solved by CG on the real matrix tL − zB;
                     // on this singular, indefinite matrix its residual may grow (measured
@@ -114,7 +94,7 @@ fn pole_at_an_eigenvalue_is_a_typed_error() {
     // the closed form in the eigenbasis.
     let z = 1.0 + 1e-3;
     let (x, _) = s
-        .apply_resolvent(&complex_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref())
+        .apply_resolvent(&single_pole(c64::new(z, 0.0)), 1.0, rhs().as_ref())
         .unwrap();
     let q = [([1.0, 1.0, 1.0], 0.0), ([1.0, 0.0, -1.0], 1.0), ([1.0, -2.0, 1.0], 3.0)];
     for j in 0..2 {

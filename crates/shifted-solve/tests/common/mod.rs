@@ -143,3 +143,28 @@ pub fn rel_err(a: &Mat<f64>, b: &Mat<f64>) -> f64 {
     }
     num / den
 }
+
+/// A sparse matrix from dense rows (zeros dropped).
+pub fn from_dense(rows: &[&[f64]]) -> SparseColMat<usize, f64> {
+    let mut t = Vec::new();
+    for (i, r) in rows.iter().enumerate() {
+        for (j, &v) in r.iter().enumerate() {
+            if v != 0.0 {
+                t.push(Triplet::new(i, j, v));
+            }
+        }
+    }
+    SparseColMat::try_new_from_triplets(rows.len(), rows[0].len(), &t).unwrap()
+}
+
+/// The one-term "approximation" 1/(x − z) (+ its conjugate): solves a single shifted system.
+pub fn single_pole(z: c64) -> shifted_solve::RationalApprox {
+    shifted_solve::RationalApprox {
+        degree: 2,
+        c0: 0.0,
+        poles: Box::leak(vec![z].into_boxed_slice()),
+        residues: Box::leak(vec![c64::new(1.0, 0.0)].into_boxed_slice()),
+        real_pole: None,
+        max_error: 0.0,
+    }
+}
