@@ -52,7 +52,7 @@ pub enum DistanceKind {
 pub struct DistanceParams {
     /// Degree of the rational approximation (default [`shifted_solve::DEFAULT_DEGREE`]).
     pub degree: usize,
-    /// How the shifted systems are solved (default direct complex LU).
+    /// How the shifted systems are solved (default: direct complex-symmetric LDLᵀ).
     pub backend: Backend,
     /// Number of right-hand sides per multi-RHS solve (default 64).
     pub block: usize,

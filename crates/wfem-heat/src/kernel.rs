@@ -62,8 +62,8 @@ pub enum Method {
     /// `K_t f ≈ c0 f + 2 Re Σ_j c_j g_j` (upper-half-plane poles; the paper's Eq. (13) is the
     /// same sum in the nuclear convention θ = −conj z, α = −conj c). The error is at most
     /// E_degree‖f‖_M (Eq. (14); E_16 = 2.1e−16, floored by rounding at ≈2e−14).
-    /// The backend is MINRES (the paper's choice) or a direct complex LU (default);
-    /// see [`shifted_solve::Backend`].
+    /// The backend is the direct complex-symmetric LDLᵀ (default), the pivoted complex LU or
+    /// MINRES (the paper's choice); see [`shifted_solve::Backend`].
     Rational {
         /// Degree n of r_n (see [`shifted_solve::SHIPPED_DEGREES`]); E_n ≈ 9.289⁻ⁿ.
         degree: usize,
@@ -92,7 +92,7 @@ impl Method {
 }
 
 /// The default is the paper's rational Chebyshev method with
-/// [`shifted_solve::DEFAULT_DEGREE`] (error ≈ 1e−14) and the direct complex LU backend.
+/// [`shifted_solve::DEFAULT_DEGREE`] (error ≈ 1e−14) and the direct complex-symmetric LDLᵀ backend.
 impl Default for Method {
     fn default() -> Self {
         Method::rational(shifted_solve::DEFAULT_DEGREE)
