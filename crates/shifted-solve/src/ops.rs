@@ -177,13 +177,16 @@ impl PairOperators {
 
     /// The complex shifted matrix `tL − zB` on the shared pattern (paper Eq. (12)–(13)).
     pub fn shifted(&self, t: f64, z: c64) -> SparseColMat<usize, c64> {
-        let vals = self
-            .stiffness
+        SparseColMat::new(self.symbolic.clone(), self.shifted_values(t, z))
+    }
+
+    /// The values of `tL − zB` on the shared pattern (no copy of the pattern).
+    pub fn shifted_values(&self, t: f64, z: c64) -> Vec<c64> {
+        self.stiffness
             .iter()
             .zip(&self.mass)
             .map(|(&l, &m)| c64::new(t * l - z.re * m, -z.im * m))
-            .collect();
-        SparseColMat::new(self.symbolic.clone(), vals)
+            .collect()
     }
 
     /// (L x, B x) in one pass over the pattern.

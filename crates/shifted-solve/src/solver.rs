@@ -288,15 +288,14 @@ impl ShiftedSolver {
                                 .map_err(|_| SolveError::SingularShiftedMatrix { t, pole: z })?;
                             PoleSolver::Cholesky(llt)
                         } else {
-                            let a = ops.shifted(t, z);
                             let singular = SolveError::SingularShiftedMatrix { t, pole: z };
                             match &direct {
-                                DirectSymbolic::Ldlt(sym) => {
-                                    PoleSolver::Ldlt(Box::new(LdltFactor::new(sym, a.val()).map_err(|_| singular)?))
-                                }
-                                DirectSymbolic::Lu(sym) => {
-                                    PoleSolver::Lu(Box::new(SeqLu::new(sym, a.as_ref()).map_err(|_| singular)?))
-                                }
+                                DirectSymbolic::Ldlt(sym) => PoleSolver::Ldlt(Box::new(
+                                    LdltFactor::new(sym, &ops.shifted_values(t, z)).map_err(|_| singular)?,
+                                )),
+                                DirectSymbolic::Lu(sym) => PoleSolver::Lu(Box::new(
+                                    SeqLu::new(sym, ops.shifted(t, z).as_ref()).map_err(|_| singular)?,
+                                )),
                             }
                         };
                         Ok(PoleTerm {
