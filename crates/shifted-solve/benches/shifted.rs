@@ -1,5 +1,6 @@
 //! Costs of the shifted solves on mesh-like matrices (icospheres, consistent FEM mass):
-//! LU symbolic / numeric per pole / solve, Cholesky of the preconditioner, MINRES per pole, and
+//! LU symbolic / numeric per pole / solve, Cholesky of the preconditioner, one real Cholesky
+//! solve (faer's sequential sweep and our tree-parallel one), MINRES per pole, and
 //! all 8 poles of degree 16 for one right-hand side (the K_t f of paper Eq. (13)).
 //!
 //! Per-pole factor and solve of each backend: `DirectLdlt` = `ldlt_numeric_per_pole` (factor,
@@ -17,7 +18,7 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
 use faer::sparse::SparseColMat;
 use faer::{c64, Mat, Side};
-use shifted_solve::{Backend, MinresParams, Preconditioner, PreconditionerShift, RationalApprox, ShiftedSolver};
+use shifted_solve::{Backend, CholeskyPattern, MinresParams, Preconditioner, PreconditionerShift, RationalApprox, ShiftedSolver};
 
 const T: f64 = 0.01;
 
@@ -78,6 +79,18 @@ fn bench(c: &mut Criterion) {
         g.bench_function("cholesky_numeric_P", |bch| {
             bch.iter(|| Llt::try_new_with_symbolic(lsym.clone(), p.as_ref(), Side::Lower).unwrap())
         });
+        // One real Cholesky solve: faer's sequential supernodal sweep against our tree-parallel
+        // sweep over disjoint elimination subtrees (src/trisolve.rs; the solve of the fast path
+        // and of backward Euler).
+        let llt = Llt::try_new_with_symbolic(lsym.clone(), p.as_ref(), Side::Lower).unwrap();
+        let rhs_real = f.clone();
+        g.bench_function("cholesky_solve_1rhs_faer_seq", |bch| bch.iter(|| llt.solve(&rhs_real)));
+        let spd = CholeskyPattern::new(l.symbolic())
+            .unwrap()
+            .factor(p.as_ref(), faer::Par::Seq)
+            .unwrap();
+        let fv: Vec<f64> = f.col(0).iter().copied().collect();
+        g.bench_function("cholesky_solve_1rhs_tree_parallel", |bch| bch.iter(|| spd.solve_vec(&fv)));
 
         let minres = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::Minres(MinresParams::default())).unwrap();
         let one_pole = RationalApprox {

@@ -7,14 +7,21 @@
 use std::sync::Arc;
 
 use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering,
 };
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{c64, Conj, MatMut, Par, Side};
 
+use crate::trisolve::SolvePlan;
 use crate::SolveError;
+
+/// Patterns smaller than this solve sequentially (a sweep of a few hundred microseconds gains
+/// less than the fork/join and the per-worker buffers cost).
+const PARALLEL_SOLVE_MIN_N: usize = 8192;
 
 /// Shared symbolic Cholesky analysis (AMD ordering) of the pattern of L and B.
 pub(crate) type CholeskySymbolic = Arc<SymbolicCholesky<usize>>;
@@ -44,6 +51,8 @@ pub(crate) fn lu_symbolic(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result
 #[derive(Clone, Debug)]
 pub struct CholeskyPattern {
     symbolic: CholeskySymbolic,
+    /// The tree-parallel solve plan, when the factor is supernodal and the split pays.
+    plan: Option<Arc<SolvePlan>>,
 }
 
 impl CholeskyPattern {
@@ -56,7 +65,13 @@ impl CholeskyPattern {
             what: "symbolic Cholesky",
             detail,
         })?;
-        Ok(Self { symbolic })
+        let plan = match symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(sn) if sn.nrows() >= PARALLEL_SOLVE_MIN_N => {
+                SolvePlan::new(sn, rayon::current_num_threads()).map(Arc::new)
+            }
+            _ => None,
+        };
+        Ok(Self { symbolic, plan })
     }
 
     /// Numeric factorization `A = PᵀRRᵀP` of a symmetric positive definite `a` on the analysed
@@ -66,10 +81,12 @@ impl CholeskyPattern {
     /// # Errors
     /// [`SolveError::Factorization`] when `a` is not numerically positive definite.
     pub fn factor(&self, a: SparseColMatRef<'_, usize, f64>, par: Par) -> Result<SpdFactor, SolveError> {
-        SpdFactor::with_par(&self.symbolic, a, par).map_err(|detail| SolveError::Factorization {
+        let mut factor = SpdFactor::with_par(&self.symbolic, a, par).map_err(|detail| SolveError::Factorization {
             what: "numeric Cholesky",
             detail,
-        })
+        })?;
+        factor.plan = self.plan.clone();
+        Ok(factor)
     }
 }
 
@@ -78,6 +95,9 @@ impl CholeskyPattern {
 pub struct SpdFactor {
     symbolic: CholeskySymbolic,
     values: Vec<f64>,
+    /// Tree-parallel solve plan (factors made through [`CholeskyPattern::factor`] only; the
+    /// per-pole factors inside parallel loops solve sequentially).
+    plan: Option<Arc<SolvePlan>>,
 }
 
 /// The sequential factor used inside one pole.
@@ -108,12 +128,28 @@ impl SpdFactor {
         Ok(Self {
             symbolic: symbolic.clone(),
             values,
+            plan: None,
         })
     }
 
-    /// Overwrites `rhs` (n × k) with `A⁻¹ rhs`. Triangular solves are memory bound and run
-    /// sequentially: parallelise over right-hand sides or poles instead.
-    pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+    /// Overwrites `rhs` (n × k) with `A⁻¹ rhs`. Factors from [`CholeskyPattern::factor`] on a
+    /// large enough pattern sweep disjoint subtrees of the elimination tree in parallel (see
+    /// `trisolve.rs`); the others run sequentially (parallelise over right-hand sides or poles
+    /// instead).
+    pub fn solve_in_place(&self, mut rhs: MatMut<'_, f64>) {
+        if let (Some(plan), SymbolicCholeskyRaw::Supernodal(sn), Some(perm), true) =
+            (&self.plan, self.symbolic.raw(), self.symbolic.perm(), true)
+        {
+            let (fwd, inv) = perm.arrays();
+            let mut x = faer::Mat::<f64>::from_fn(rhs.nrows(), rhs.ncols(), |i, j| rhs[(fwd[i], j)]);
+            plan.solve_in_place(SupernodalLltRef::new(sn, &self.values), x.as_mut());
+            for j in 0..rhs.ncols() {
+                for (i, &p) in inv.iter().enumerate() {
+                    rhs[(i, j)] = x[(p, j)];
+                }
+            }
+            return;
+        }
         let par = Par::Seq;
         let mut buf = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), par));
         LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut buf));

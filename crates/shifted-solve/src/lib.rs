@@ -36,6 +36,7 @@ mod ldlt;
 mod ops;
 pub mod poles;
 mod solver;
+mod trisolve;
 
 #[cfg(test)]
 mod cf;
