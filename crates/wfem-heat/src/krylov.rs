@@ -15,7 +15,7 @@
 use crate::sparse::{spmv_seq, SpdFactor};
 use crate::HeatError;
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Col, Mat, Par, Side};
+use faer::{Accum, Mat, Par, Side};
 
 /// Options of the fast path ([`crate::Method::Fast`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -89,10 +89,9 @@ pub(crate) struct KrylovOutcome {
     pub estimate: f64,
 }
 
-/// Basis storage that grows by doubling its column capacity.
+/// Lanczos basis V (columns v_i, M-orthonormal), grown by doubling its column capacity.
 struct Basis {
     v: Mat<f64>,
-    mv: Mat<f64>,
     len: usize,
 }
 
@@ -100,33 +99,26 @@ impl Basis {
     fn new(n: usize, cap: usize) -> Self {
         Self {
             v: Mat::zeros(n, cap),
-            mv: Mat::zeros(n, cap),
             len: 0,
         }
     }
-    fn push(&mut self, x: &[f64], mx: &[f64], scale: f64) {
+    fn push(&mut self, x: &[f64], scale: f64) {
         if self.len == self.v.ncols() {
             let (n, cap) = (self.v.nrows(), 2 * self.v.ncols().max(1));
             let mut v = Mat::zeros(n, cap);
-            let mut mv = Mat::zeros(n, cap);
             v.as_mut()
                 .get_mut(.., 0..self.len)
                 .copy_from(self.v.as_ref().get(.., 0..self.len));
-            mv.as_mut()
-                .get_mut(.., 0..self.len)
-                .copy_from(self.mv.as_ref().get(.., 0..self.len));
             self.v = v;
-            self.mv = mv;
         }
         let j = self.len;
-        for (i, (a, b)) in x.iter().zip(mx).enumerate() {
+        for (i, a) in x.iter().enumerate() {
             self.v[(i, j)] = a * scale;
-            self.mv[(i, j)] = b * scale;
         }
         self.len += 1;
     }
-    fn mv_col(&self, j: usize) -> Vec<f64> {
-        self.mv.col(j).iter().copied().collect()
+    fn col(&self, j: usize) -> impl Iterator<Item = &f64> {
+        self.v.col(j).iter()
     }
 }
 
@@ -151,52 +143,41 @@ pub(crate) fn rational_krylov_exp(
         ));
     }
     let mut basis = Basis::new(n, params.max_iter.min(n).min(48) + 1);
-    basis.push(f, &mf, 1.0 / beta0);
+    basis.push(f, 1.0 / beta0);
+    // M v_j of the newest basis vector.
+    let mut mv: Vec<f64> = mf.iter().map(|x| x / beta0).collect();
     let mut alpha: Vec<f64> = Vec::new();
     let mut beta: Vec<f64> = Vec::new();
     let mut y_prev: Vec<f64> = Vec::new();
     let mut hits = 0usize;
     let mut estimate = f64::INFINITY;
     for j in 0..params.max_iter.min(n) {
-        let mut w = Col::<f64>::zeros(n);
-        {
-            let x = factor.solve_vec(&basis.mv_col(j));
-            w.iter_mut().zip(&x).for_each(|(a, b)| *a = *b);
-        }
-        // Full reorthogonalisation by classical Gram–Schmidt in ⟨·,·⟩_M (the stored M v_i make
-        // each coefficient a plain dot product), repeated once when the first pass cancelled
-        // more than 1/√2 of the norm (Daniel–Gragg–Kaufman–Stewart criterion).
-        // Sequential BLAS-2: the loop is memory bound and runs inside a rayon task per
-        // right-hand side, so nested parallelism would only add overhead.
-        let mut a_j = 0.0;
-        let mut coef = Mat::<f64>::zeros(j + 1, 1);
-        for pass in 0..2 {
-            let before = w.norm_l2();
-            matmul(
-                coef.as_mut(),
-                Accum::Replace,
-                basis.mv.as_ref().get(.., 0..j + 1).transpose(),
-                w.as_mat(),
-                1.0,
-                Par::Seq,
-            );
-            a_j += coef[(j, 0)];
-            matmul(
-                w.as_mat_mut(),
-                Accum::Add,
-                basis.v.as_ref().get(.., 0..j + 1),
-                coef.as_ref(),
-                -1.0,
-                Par::Seq,
-            );
-            if pass == 0 && w.norm_l2() > std::f64::consts::FRAC_1_SQRT_2 * before {
-                break;
+        let mut w = factor.solve_vec(&mv);
+        // Lanczos three-term recurrence in ⟨·,·⟩_M, w ← S v_j − β_{j−1} v_{j−1} − α_j v_j, with
+        // the α_j projection done twice (local reorthogonalisation). No full
+        // reorthogonalisation: for f(S)b, finite-precision Lanczos converges like exact Lanczos
+        // on a slightly enlarged spectral interval (Druskin & Knizhnerman 1991, Greenbaum 1989),
+        // and lost orthogonality only duplicates converged Ritz values, which g(T_m) e₁
+        // weights consistently. Measured on the icosphere at n = 40,962 (f = e_i, t = 0.01):
+        // the same iteration counts and errors against the rational reference for
+        // tol = 1e−9…1e−12 as with full Gram–Schmidt, which cost 40 ms of the 250 ms.
+        if j > 0 {
+            let b_prev = beta[j - 1];
+            for (wi, vi) in w.iter_mut().zip(basis.col(j - 1)) {
+                *wi -= b_prev * vi;
             }
         }
+        let mut a_j = 0.0;
+        for _ in 0..2 {
+            let c = dot(&w, &mv);
+            for (wi, vi) in w.iter_mut().zip(basis.col(j)) {
+                *wi -= c * vi;
+            }
+            a_j += c;
+        }
         alpha.push(a_j);
-        let wv: Vec<f64> = w.iter().copied().collect();
-        let mw = spmv_seq(mass, &wv);
-        let b_j = dot(&wv, &mw).max(0.0).sqrt();
+        let mw = spmv_seq(mass, &w);
+        let b_j = dot(&w, &mw).max(0.0).sqrt();
         let (y, theta_max, u_last) = g_tridiag_e1(&alpha, &beta, params.gamma)?;
         // The successive-iterate estimate cannot see a contribution that has not appeared yet:
         // for an f without low modes (e.g. zero mean) and a large t, g(θ) underflows on the
@@ -246,7 +227,8 @@ pub(crate) fn rational_krylov_exp(
         }
         y_prev = y;
         beta.push(b_j);
-        basis.push(&wv, &mw, 1.0 / b_j);
+        basis.push(&w, 1.0 / b_j);
+        mv = mw.iter().map(|x| x / b_j).collect();
     }
     Err(HeatError::KrylovNoConvergence {
         column,
