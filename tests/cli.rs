@@ -219,3 +219,43 @@ fn demo_writes_ply_png_and_report() {
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| 0.25 |"), "{report}");
 }
+
+/// `--backend` selects how the rational method solves its shifted systems; every backend gives
+/// the same K_t e_i (to the accuracy of the iterative ones).
+#[test]
+fn heat_backends_agree() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = write_icosphere(dir.path(), 3);
+    let run = |backend: &str| -> Vec<f64> {
+        let out = dir.path().join(format!("k_{backend}.csv"));
+        let o = wfem(&[
+            "heat",
+            mesh.to_str().unwrap(),
+            "--t",
+            "0.05",
+            "--source",
+            "7",
+            "--backend",
+            backend,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{backend}: {}", stderr(&o));
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .lines()
+            .filter_map(|l| l.split(',').next_back()?.trim().parse::<f64>().ok())
+            .collect()
+    };
+    let reference = run("ldlt");
+    assert_eq!(reference.len(), 642);
+    let scale = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for backend in ["lu", "minres", "multishift"] {
+        let g = run(backend);
+        assert_eq!(g.len(), reference.len(), "{backend}");
+        let err = g.iter().zip(&reference).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())) / scale;
+        assert!(err < 1e-10, "{backend}: {err:e}");
+    }
+    let o = wfem(&["heat", mesh.to_str().unwrap(), "--t", "1", "--source", "0", "--backend", "cg", "-o", "x.csv"]);
+    assert!(!o.status.success());
+}

@@ -52,10 +52,45 @@ pub enum MethodArg {
     Dense,
 }
 
-/// Builds the heat-kernel parameters for a method.
-pub(crate) fn heat_params(kernel: KernelArg, method: MethodArg, degree: Option<usize>, eigs: usize) -> HeatParams {
+/// How the shifted systems of the rational method are solved.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BackendArg {
+    /// Complex-symmetric sparse LDLᵀ, one factorization per pole.
+    #[default]
+    Ldlt,
+    /// Pivoted complex sparse LU, one factorization per pole.
+    Lu,
+    /// Preconditioned MINRES per pole (the paper's choice).
+    Minres,
+    /// All poles in one shift-and-invert Lanczos space: one real Cholesky per t.
+    Multishift,
+}
+
+impl From<BackendArg> for shifted_solve::Backend {
+    fn from(b: BackendArg) -> Self {
+        match b {
+            BackendArg::Ldlt => shifted_solve::Backend::DirectLdlt,
+            BackendArg::Lu => shifted_solve::Backend::DirectLu,
+            BackendArg::Minres => shifted_solve::Backend::Minres(Default::default()),
+            BackendArg::Multishift => shifted_solve::Backend::MultiShift(Default::default()),
+        }
+    }
+}
+
+/// Builds the heat-kernel parameters for a method (`backend` only matters for the rational
+/// method).
+pub(crate) fn heat_params(
+    kernel: KernelArg,
+    method: MethodArg,
+    degree: Option<usize>,
+    eigs: usize,
+    backend: BackendArg,
+) -> HeatParams {
     let method = match method {
-        MethodArg::Rational => Method::rational(degree.unwrap_or(shifted_solve::DEFAULT_DEGREE)),
+        MethodArg::Rational => Method::Rational {
+            degree: degree.unwrap_or(shifted_solve::DEFAULT_DEGREE),
+            backend: backend.into(),
+        },
         MethodArg::Spectral => Method::spectral(eigs),
         MethodArg::Taylor => Method::Taylor,
         MethodArg::BackwardEuler => Method::BackwardEuler,
@@ -92,6 +127,9 @@ pub struct HeatArgs {
     /// Degree of the rational approximation (error ≈ 9.3^-degree).
     #[arg(long)]
     pub degree: Option<usize>,
+    /// Solver of the rational method's shifted systems.
+    #[arg(long, value_enum, default_value_t = BackendArg::Ldlt)]
+    pub backend: BackendArg,
     /// Number of eigenpairs of the spectral method.
     #[arg(long, default_value_t = 200)]
     pub eigs: usize,
@@ -123,7 +161,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         _ => return Err(CliError::Usage("give exactly one of --source I or --field FILE".into())),
     };
     let ops = assemble(&mesh, &AssemblyParams::default())?;
-    let kernel = HeatKernel::new(&ops, heat_params(args.kernel, args.method, args.degree, args.eigs))?;
+    let kernel = HeatKernel::new(&ops, heat_params(args.kernel, args.method, args.degree, args.eigs, args.backend))?;
     let mut fields = Vec::with_capacity(args.t.len());
     for &t in &args.t {
         let g = kernel.apply(&f, t)?;
@@ -225,17 +263,17 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
 
     bar.set_message("preparing the rational method");
     let start = Instant::now();
-    let rational = HeatKernel::new(&ops, heat_params(KernelArg::Wfem, MethodArg::Rational, None, 0))?;
+    let rational = HeatKernel::new(&ops, heat_params(KernelArg::Wfem, MethodArg::Rational, None, 0, BackendArg::Ldlt))?;
     clock("rational: symbolic analysis", start, &mut timings);
     bar.inc(1);
 
     bar.set_message(format!("spectral: {} eigenpairs", args.eigs));
     let start = Instant::now();
-    let spectral = HeatKernel::new(&ops, heat_params(KernelArg::Wfem, MethodArg::Spectral, None, args.eigs))?;
+    let spectral = HeatKernel::new(&ops, heat_params(KernelArg::Wfem, MethodArg::Spectral, None, args.eigs, BackendArg::Ldlt))?;
     clock(&format!("spectral: {} eigenpairs", args.eigs), start, &mut timings);
     bar.inc(1);
 
-    let fast = HeatKernel::new(&ops, heat_params(KernelArg::Wfem, MethodArg::Fast, None, 0))?;
+    let fast = HeatKernel::new(&ops, heat_params(KernelArg::Wfem, MethodArg::Fast, None, 0, BackendArg::Ldlt))?;
     bar.inc(1);
 
     let mut fields: Vec<(String, Vec<f64>)> = Vec::new();

@@ -112,6 +112,15 @@ pub enum SolveError {
         /// The pole.
         pole: c64,
     },
+    /// A shift-and-invert Lanczos iteration ([`crate::lanczos_function`],
+    /// [`crate::Backend::MultiShift`]) did not meet its tolerance.
+    #[error("Lanczos iteration stopped after {iterations} steps with error estimate {estimate:e}")]
+    KrylovNoConvergence {
+        /// Steps performed.
+        iterations: usize,
+        /// Last successive-difference estimate (relative, B-norm).
+        estimate: f64,
+    },
     /// A parameter is out of range.
     #[error("invalid parameter {name} = {value}: {reason}")]
     InvalidParameter {

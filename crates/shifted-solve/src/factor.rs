@@ -65,13 +65,18 @@ impl CholeskyPattern {
             what: "symbolic Cholesky",
             detail,
         })?;
+        Ok(Self::from_symbolic(symbolic))
+    }
+
+    /// Wraps an existing analysis (and plans its tree-parallel solve).
+    pub(crate) fn from_symbolic(symbolic: CholeskySymbolic) -> Self {
         let plan = match symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(sn) if sn.nrows() >= PARALLEL_SOLVE_MIN_N => {
                 SolvePlan::new(sn, rayon::current_num_threads()).map(Arc::new)
             }
             _ => None,
         };
-        Ok(Self { symbolic, plan })
+        Self { symbolic, plan }
     }
 
     /// Numeric factorization `A = PᵀRRᵀP` of a symmetric positive definite `a` on the analysed

@@ -3,7 +3,8 @@
 
 use std::sync::Arc;
 
-use crate::factor::{cholesky_symbolic, lu_symbolic, CholeskySymbolic, LuSymbolic, SeqLlt, SeqLu};
+use crate::factor::{cholesky_symbolic, lu_symbolic, CholeskyPattern, CholeskySymbolic, LuSymbolic, SeqLlt, SeqLu, SpdFactor};
+use crate::lanczos::{lanczos_function, tridiagonal_eigen, LanczosOutcome, LanczosParams};
 use crate::iterative::{minres, pcg, MinresParams, PrecondFactor, Preconditioner, PreconditionerShift};
 use crate::ldlt::{LdltFactor, LdltSymbolic};
 use crate::ops::PairOperators;
@@ -28,6 +29,58 @@ pub enum Backend {
     /// Preconditioned MINRES on the real 2n×2n symmetric form (the paper's choice); the real
     /// pole uses preconditioned CG on the SPD system tL + |z|B.
     Minres(MinresParams),
+    /// All poles in one Krylov space, with one *real* sparse Cholesky per t. With
+    /// A = B + γtL and S = A⁻¹B,
+    ///
+    /// `tL − zB = (1/γ) A (I − (1 + γz) S)`, so `(tL − zB)⁻¹ = γ (I − (1 + γz) S)⁻¹ A⁻¹`:
+    ///
+    /// every shifted system of Eq. (13) is a function of the one operator S (shift
+    /// invariance), and so is their weighted sum,
+    /// `r_n(tB⁻¹L) F = R(S) F` with `R(s) = r_n((1/s − 1)/γ)`. One shift-and-invert Lanczos run
+    /// per right-hand side ([`crate::lanczos_function`]) evaluates the sum in the Galerkin sense
+    /// of multi-shift FOM. Its tolerance controls the *sum* (what K_t f needs); the per-pole
+    /// Galerkin residuals are reported, and the poles nearest the spectrum of S converge more
+    /// slowly than the sum. Cost: one real Cholesky and a few tens of solves with it, instead
+    /// of one complex factorization per pole.
+    MultiShift(MultiShiftParams),
+}
+
+/// Parameters of [`Backend::MultiShift`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MultiShiftParams {
+    /// Shift γ of the real factor A = B + γtL (0.05–0.2 work well).
+    pub gamma: f64,
+    /// Relative tolerance of the Lanczos iteration on the sum (see
+    /// [`crate::LanczosParams::tol`]).
+    pub tol: f64,
+    /// Maximum Lanczos steps per right-hand side.
+    pub max_iter: usize,
+}
+
+impl Default for MultiShiftParams {
+    fn default() -> Self {
+        Self {
+            gamma: 0.1,
+            tol: 1e-11,
+            max_iter: 200,
+        }
+    }
+}
+
+impl MultiShiftParams {
+    fn validate(&self) -> Result<(), SolveError> {
+        let bad = |name, value, reason| Err(SolveError::InvalidParameter { name, value, reason });
+        if !(self.gamma.is_finite() && self.gamma > 0.0) {
+            return bad("gamma", self.gamma, "must be finite and > 0");
+        }
+        if !(self.tol.is_finite() && self.tol > 0.0 && self.tol < 1.0) {
+            return bad("tol", self.tol, "must lie in (0, 1)");
+        }
+        if self.max_iter == 0 {
+            return bad("max_iter", 0.0, "must be at least 1");
+        }
+        Ok(())
+    }
 }
 
 /// Which method solved one pole.
@@ -43,6 +96,8 @@ pub enum SolveMethod {
     Minres,
     /// Preconditioned conjugate gradients (real pole).
     ConjugateGradient,
+    /// One shift-and-invert Lanczos space for all poles ([`Backend::MultiShift`]).
+    MultiShiftLanczos,
 }
 
 /// What happened for one pole of a batch.
@@ -95,6 +150,8 @@ pub struct ShiftedSolver {
     llt_symbolic: CholeskySymbolic,
     lu_symbolic: Option<LuSymbolic>,
     ldlt_symbolic: Option<Arc<LdltSymbolic>>,
+    /// The real Cholesky pattern with its tree-parallel solve plan ([`Backend::MultiShift`]).
+    spd_pattern: Option<CholeskyPattern>,
 }
 
 pub(crate) fn check_time(t: f64) -> Result<(), SolveError> {
@@ -145,8 +202,10 @@ impl ShiftedSolver {
         mass: SparseColMatRef<'_, usize, f64>,
         backend: Backend,
     ) -> Result<Self, SolveError> {
-        if let Backend::Minres(p) = &backend {
-            p.validate()?;
+        match &backend {
+            Backend::Minres(p) => p.validate()?,
+            Backend::MultiShift(p) => p.validate()?,
+            Backend::DirectLu | Backend::DirectLdlt => {}
         }
         let ops = PairOperators::new(stiffness, mass)?;
         let symbolic_error = |detail| SolveError::Factorization {
@@ -165,13 +224,22 @@ impl ShiftedSolver {
         } else {
             (cholesky_symbolic(ops.symbolic.as_ref()).map_err(symbolic_error)?, None)
         };
-        let b = ops.real_combination(0.0, 1.0);
-        SeqLlt::new(&llt_symbolic, b.as_ref()).map_err(|detail| SolveError::MassNotPositiveDefinite { detail })?;
         let tr_l: f64 = ops.diagonal(1.0, 0.0).iter().sum();
         let tr_b: f64 = ops.diagonal(0.0, 1.0).iter().sum();
         let delta = 1e-10 * (tr_l / tr_b).max(f64::MIN_POSITIVE);
-        let reg = ops.real_combination(1.0, delta);
-        SeqLlt::new(&llt_symbolic, reg.as_ref()).map_err(|_| SolveError::StiffnessIndefinite { delta })?;
+        // The two definiteness checks are independent factorizations: run them side by side.
+        let (mass_check, stiffness_check) = rayon::join(
+            || {
+                let b = ops.real_combination(0.0, 1.0);
+                SeqLlt::new(&llt_symbolic, b.as_ref()).map_err(|detail| SolveError::MassNotPositiveDefinite { detail })
+            },
+            || {
+                let reg = ops.real_combination(1.0, delta);
+                SeqLlt::new(&llt_symbolic, reg.as_ref()).map_err(|_| SolveError::StiffnessIndefinite { delta })
+            },
+        );
+        mass_check?;
+        stiffness_check?;
         let lu_symbolic = match backend {
             Backend::DirectLu => {
                 Some(
@@ -181,7 +249,11 @@ impl ShiftedSolver {
                     })?,
                 )
             }
-            Backend::Minres(_) | Backend::DirectLdlt => None,
+            Backend::Minres(_) | Backend::DirectLdlt | Backend::MultiShift(_) => None,
+        };
+        let spd_pattern = match backend {
+            Backend::MultiShift(_) => Some(CholeskyPattern::from_symbolic(llt_symbolic.clone())),
+            _ => None,
         };
         Ok(Self {
             ops: Arc::new(ops),
@@ -189,6 +261,7 @@ impl ShiftedSolver {
             llt_symbolic,
             lu_symbolic,
             ldlt_symbolic,
+            spd_pattern,
         })
     }
 
@@ -274,6 +347,26 @@ impl ShiftedSolver {
             jobs.push((c64::new(z, 0.0), c64::new(c, 0.0), true));
         }
         let ops = &*self.ops;
+        if let (Backend::MultiShift(params), Some(pattern)) = (self.backend, &self.spd_pattern) {
+            let a = ops.real_combination(params.gamma * t, 1.0);
+            let factor = pattern
+                .factor(a.as_ref(), faer::get_global_parallelism())
+                .map_err(|_| SolveError::SingularShiftedMatrix {
+                    t,
+                    pole: c64::new(-1.0 / (params.gamma * t), 0.0),
+                })?;
+            return Ok(RationalFactors {
+                ops: self.ops.clone(),
+                t,
+                c0: approx.c0,
+                terms: Vec::new(),
+                shared: Some(SharedKrylov {
+                    factor,
+                    params,
+                    poles: jobs.iter().map(|&(z, c, _)| (z, c)).collect(),
+                }),
+            });
+        }
         let terms: Vec<PoleTerm> = match self.backend {
             Backend::DirectLu | Backend::DirectLdlt => {
                 let direct = match &self.ldlt_symbolic {
@@ -306,6 +399,7 @@ impl ShiftedSolver {
                     })
                     .collect::<Result<_, SolveError>>()?
             }
+            Backend::MultiShift(_) => unreachable!("handled above"),
             Backend::Minres(params) => {
                 let shared = match params.preconditioner {
                     Preconditioner::ShiftedCholesky(PreconditionerShift::Shared(s)) => Some(Arc::new(
@@ -340,6 +434,7 @@ impl ShiftedSolver {
             t,
             c0: approx.c0,
             terms,
+            shared: None,
         })
     }
 }
@@ -367,6 +462,15 @@ struct PoleTerm {
     solver: PoleSolver,
 }
 
+/// The one real factor of [`Backend::MultiShift`] and the poles it serves.
+#[derive(Debug)]
+struct SharedKrylov {
+    factor: SpdFactor,
+    params: MultiShiftParams,
+    /// (z_j, c_j), the real pole (if any) last.
+    poles: Vec<(c64, c64)>,
+}
+
 /// All poles of one t, factored once (paper Eq. (12)); apply to any number of right-hand sides.
 #[derive(Debug)]
 pub struct RationalFactors {
@@ -374,6 +478,7 @@ pub struct RationalFactors {
     t: f64,
     c0: f64,
     terms: Vec<PoleTerm>,
+    shared: Option<SharedKrylov>,
 }
 
 fn norm2(x: &[f64]) -> f64 {
@@ -392,6 +497,9 @@ impl RationalFactors {
     /// Size/NaN problems in `rhs`, non-finite solutions, non-convergence.
     pub fn apply(&self, rhs: MatRef<'_, f64>) -> Result<(Mat<f64>, BatchReport), SolveError> {
         check_rhs(rhs, self.ops.n)?;
+        if let Some(shared) = &self.shared {
+            return self.multi_shift(shared, rhs, true);
+        }
         let n = self.ops.n;
         let mut g = Mat::<f64>::zeros(n, rhs.ncols());
         let mut col = vec![0.0; n];
@@ -418,7 +526,114 @@ impl RationalFactors {
     /// As [`Self::apply`].
     pub fn apply_resolvent(&self, rhs: MatRef<'_, f64>) -> Result<(Mat<f64>, BatchReport), SolveError> {
         check_rhs(rhs, self.ops.n)?;
+        if let Some(shared) = &self.shared {
+            return self.multi_shift(shared, rhs, false);
+        }
         self.resolvent(rhs)
+    }
+
+    /// [`Backend::MultiShift`]: with A = B + γtL, S = A⁻¹B and c_j = 1 + γz_j,
+    /// `(tL − z_jB)⁻¹ = γ(I − c_jS)⁻¹A⁻¹`, so
+    /// - `apply`: r_n(tB⁻¹L)F = R(S)F with R(s) = c0 + s·Q(s) = r_n((1/s − 1)/γ);
+    /// - `apply_resolvent`: Σ_j w_j c_j (tL − z_jB)⁻¹G = Q(S)A⁻¹G with
+    ///   Q(s) = Σ_j w_j Re(c_j γ/(1 − c_j s)), w_j = 2 for a conjugate pair and 1 for the real pole.
+    ///
+    /// Each column is one Lanczos run; columns run in parallel. The report gives, per pole,
+    /// the Galerkin (FOM) residual of its shifted system (I − c_jS)x = φ(S)u in the B-norm,
+    /// relative to ‖φ(S)u‖_B (φ(s) = s for `apply`, 1 for the resolvent):
+    /// `|c_j| β_m |e_mᵀ(I − c_jT)⁻¹φ(T)e₁| / ‖φ(T)e₁‖`.
+    fn multi_shift(
+        &self,
+        shared: &SharedKrylov,
+        rhs: MatRef<'_, f64>,
+        with_mass: bool,
+    ) -> Result<(Mat<f64>, BatchReport), SolveError> {
+        let (n, k, gamma) = (self.ops.n, rhs.ncols(), shared.params.gamma);
+        let weight = |z: c64| if z.im == 0.0 { 1.0 } else { 2.0 };
+        let q = |s: f64| -> f64 {
+            shared
+                .poles
+                .iter()
+                .map(|&(z, c)| weight(z) * (c * gamma / (c64::new(1.0, 0.0) - (c64::new(1.0, 0.0) + z * gamma) * s)).re)
+                .sum()
+        };
+        // R(s) = c0 + s Q(s); at s ≤ 0 (rounding below the spectrum (0, 1]) x = ∞ and R = c0.
+        let r = |s: f64| if s <= 0.0 { self.c0 } else { self.c0 + s * q(s) };
+        let params = LanczosParams {
+            tol: shared.params.tol,
+            max_iter: shared.params.max_iter,
+        };
+        let solve = |b: &[f64]| shared.factor.solve_vec(b);
+        let mass = |x: &[f64]| {
+            let mut y = vec![0.0; x.len()];
+            self.ops.mass_mul(x, &mut y);
+            y
+        };
+        let cols: Vec<(Vec<f64>, LanczosOutcome)> = (0..k)
+            .into_par_iter()
+            .map(|j| {
+                // (finite: checked by the callers through `check_rhs`)
+                let col: Vec<f64> = (0..n).map(|i| rhs[(i, j)]).collect();
+                if with_mass {
+                    lanczos_function(&solve, &mass, &col, &r, &params)
+                } else {
+                    lanczos_function(&solve, &mass, &solve(&col), &q, &params)
+                }
+            })
+            .collect::<Result<_, SolveError>>()?;
+        let mut out = Mat::<f64>::zeros(n, k);
+        let mut poles: Vec<PoleReport> = shared
+            .poles
+            .iter()
+            .map(|&(z, c)| PoleReport {
+                pole: z,
+                residue: c,
+                method: SolveMethod::MultiShiftLanczos,
+                iterations: 0,
+                relative_residual: 0.0,
+                residual_history: Vec::new(),
+            })
+            .collect();
+        for (j, (x, outcome)) in cols.iter().enumerate() {
+            if x.iter().any(|v| !v.is_finite()) {
+                return Err(SolveError::SingularShiftedMatrix {
+                    t: self.t,
+                    pole: c64::new(-1.0 / (gamma * self.t), 0.0),
+                });
+            }
+            out.col_as_slice_mut(j).copy_from_slice(x);
+            if outcome.alpha.is_empty() {
+                continue;
+            }
+            let (theta, u) = tridiagonal_eigen(&outcome.alpha, &outcome.beta[..outcome.alpha.len() - 1])?;
+            let m = theta.len();
+            let beta_m = outcome.beta[m - 1];
+            let phi = |s: f64| if with_mass { s } else { 1.0 };
+            let phi_norm = (0..m)
+                .map(|i| {
+                    let v: f64 = (0..m).map(|l| u[(i, l)] * u[(0, l)] * phi(theta[l])).sum();
+                    v * v
+                })
+                .sum::<f64>()
+                .sqrt();
+            for (report, &(z, _)) in poles.iter_mut().zip(&shared.poles) {
+                let c = c64::new(1.0, 0.0) + z * gamma;
+                let last: c64 = (0..m)
+                    .map(|l| c64::new(u[(m - 1, l)] * u[(0, l)] * phi(theta[l]), 0.0) / (c64::new(1.0, 0.0) - c * theta[l]))
+                    .sum();
+                let residual = c.norm() * beta_m * last.norm() / phi_norm.max(f64::MIN_POSITIVE);
+                report.relative_residual = report.relative_residual.max(residual);
+                report.iterations = report.iterations.max(outcome.iterations);
+            }
+        }
+        Ok((
+            out,
+            BatchReport {
+                t: self.t,
+                n_rhs: k,
+                poles,
+            },
+        ))
     }
 
     fn resolvent(&self, g: MatRef<'_, f64>) -> Result<(Mat<f64>, BatchReport), SolveError> {
