@@ -85,6 +85,7 @@ fn smoke_report_end_to_end() {
             "rational r=16, LDLᵀ (default)",
             "rational r=16, LU",
             "rational r=16, MINRES",
+            bench::MULTI_SHIFT,
             "fast path (rational Krylov)",
         ] {
             let e = cell(&report, exact, j).unwrap();
