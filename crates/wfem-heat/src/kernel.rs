@@ -377,13 +377,21 @@ impl HeatKernel {
             }
             (Method::Fast(fp), _) => {
                 let factor = self.shifted_factor(fp.gamma * t, "M + γtL")?;
-                let cols: Vec<Vec<f64>> = (0..f.ncols())
-                    .into_par_iter()
-                    .map(|c| {
-                        let fc: Vec<f64> = f.col(c).iter().copied().collect();
-                        rational_krylov_exp(&factor, &self.mass, &fc, fp, c).map(|(g, _)| g)
-                    })
-                    .collect::<Result<_, _>>()?;
+                let column = |c: usize| f.col(c).iter().copied().collect::<Vec<f64>>();
+                let cols: Vec<Vec<f64>> = if f.ncols() == 1 {
+                    // One vector: its solves and products with M use every core.
+                    let solve = |b: &[f64]| factor.solve_vec(b);
+                    let (g, _) = rational_krylov_exp(&solve, &self.mass, &column(0), fp, 0, true)?;
+                    vec![g]
+                } else {
+                    (0..f.ncols())
+                        .into_par_iter()
+                        .map(|c| {
+                            let solve = |b: &[f64]| factor.solve_vec(b);
+                            rational_krylov_exp(&solve, &self.mass, &column(c), fp, c, false).map(|(g, _)| g)
+                        })
+                        .collect::<Result<_, _>>()?
+                };
                 Ok(Mat::from_fn(n, cols.len(), |i, j| cols[j][i]))
             }
             (_, Prepared::Rational(solver, approx)) => {
@@ -441,7 +449,8 @@ impl HeatKernel {
             _ => FastParams::default(),
         };
         let factor = self.shifted_factor(fp.gamma * t, "M + γtL")?;
-        let (g, out) = rational_krylov_exp(&factor, &self.mass, f, &fp, 0)?;
+        let solve = |b: &[f64]| factor.solve_vec(b);
+        let (g, out) = rational_krylov_exp(&solve, &self.mass, f, &fp, 0, true)?;
         Ok((g, out.iterations, out.estimate))
     }
 }

@@ -12,7 +12,7 @@
 //! poles are all at s = 0, the convergence does not depend on ‖tL‖ (mesh size or t), only
 //! on the accuracy wanted: a few tens of solves reach 1e−12.
 
-use crate::sparse::{spmv_seq, SpdFactor};
+use crate::sparse::{spmv_seq, spmv_sym};
 use crate::HeatError;
 use shifted_solve::{lanczos_function, LanczosParams, SolveError};
 
@@ -56,23 +56,24 @@ pub(crate) struct KrylovOutcome {
     pub estimate: f64,
 }
 
-/// `K_t f ≈ ‖f‖_M V_m g(T_m) e₁` with `factor` the Cholesky factor of M + γtL (the Lanczos
-/// run itself is [`shifted_solve::lanczos_function`]).
+/// `K_t f ≈ ‖f‖_M V_m g(T_m) e₁` with `solve` applying (M + γtL)⁻¹ (the Lanczos run itself
+/// is [`shifted_solve::lanczos_function`]). `alone`: this is the only right-hand side, so the
+/// products with M may use every core (inside a parallel loop over columns they must not).
 pub(crate) fn rational_krylov_exp(
-    factor: &SpdFactor,
+    solve: &dyn Fn(&[f64]) -> Vec<f64>,
     mass: &faer::sparse::SparseColMat<usize, f64>,
     f: &[f64],
     params: &FastParams,
     column: usize,
+    alone: bool,
 ) -> Result<(Vec<f64>, KrylovOutcome), HeatError> {
     let gamma = params.gamma;
     let lanczos = LanczosParams {
         tol: params.tol,
         max_iter: params.max_iter,
     };
-    let solve = |b: &[f64]| factor.solve_vec(b);
-    let mass_mul = |x: &[f64]| spmv_seq(mass, x);
-    match lanczos_function(&solve, &mass_mul, f, &|s| g(s, gamma), &lanczos) {
+    let mass_mul = |x: &[f64]| if alone { spmv_sym(mass, x) } else { spmv_seq(mass, x) };
+    match lanczos_function(solve, &mass_mul, f, &|s| g(s, gamma), &lanczos) {
         Ok((out, o)) => Ok((
             out,
             KrylovOutcome {
