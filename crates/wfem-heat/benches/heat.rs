@@ -5,8 +5,9 @@
 //!   step (Eq. (9));
 //! * the fast exact path (shift-and-invert rational Krylov), f = x coordinate and f = e_i, and
 //!   repeated calls at the same t (factor cached);
-//! * the paper's rational method (Eq. (13)): degree 16 with the direct LU and the MINRES
-//!   backends, and degree 7 (the paper's r) with LU (164K only with `WFEM_BENCH_LARGE=1`);
+//! * the paper's rational method (Eq. (13)): degree 16 with the multi-shift backend (one real
+//!   Cholesky, every size), with the direct LDLᵀ and the MINRES backends, and degree 7 (the
+//!   paper's r) with LDLᵀ (these three at 164K only with `WFEM_BENCH_LARGE=1`);
 //! * the spectral method (Eq. (8)) with k = 100, 200, 300 eigenpairs, eigensolve included
 //!   (`HeatKernel::new` + `apply`), and the apply alone with the eigenpairs precomputed
 //!   (41K and above only with `WFEM_BENCH_LARGE=1`: tens of seconds per iteration).
@@ -15,7 +16,7 @@
 //! measures the same quantities at every size as one-shot medians with peak memory.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
 use mesh_fem::{assemble, generate, AssemblyParams};
-use shifted_solve::{Backend, MinresParams};
+use shifted_solve::{Backend, MinresParams, MultiShiftParams};
 use std::f64::consts::PI;
 use std::hint::black_box;
 use std::time::Duration;
@@ -71,9 +72,17 @@ fn bench(c: &mut Criterion) {
         group.bench_function("fast_x", |b| b.iter(|| fast.apply(black_box(&f), next_t()).unwrap()));
         group.bench_function("fast_e_i", |b| b.iter(|| fast.apply(black_box(&e), next_t()).unwrap()));
         group.bench_function("fast_e_i_same_t", |b| b.iter(|| fast.apply(black_box(&e), t).unwrap()));
-        let rational = if levels::heavy(level) {
+        // The multi-shift rational backend costs about what the fast path costs: every level.
+        let mut rational = vec![(
+            "rational_r16_multishift",
+            Method::Rational {
+                degree: 16,
+                backend: Backend::MultiShift(MultiShiftParams::default()),
+            },
+        )];
+        rational.extend(if levels::heavy(level) {
             vec![
-                ("rational_r16_lu", Method::rational(16)),
+                ("rational_r16_ldlt", Method::rational(16)),
                 (
                     "rational_r16_minres",
                     Method::Rational {
@@ -81,11 +90,11 @@ fn bench(c: &mut Criterion) {
                         backend: Backend::Minres(MinresParams::default()),
                     },
                 ),
-                ("rational_r7_lu", Method::rational(7)),
+                ("rational_r7_ldlt", Method::rational(7)),
             ]
         } else {
             Vec::new()
-        };
+        });
         for (name, method) in rational {
             let k = kernel(&ops, method);
             group.bench_function(name, |b| b.iter(|| k.apply(black_box(&e), next_t()).unwrap()));
