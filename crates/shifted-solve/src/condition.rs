@@ -12,10 +12,11 @@
 
 use crate::factor::SeqLu;
 use crate::iterative::{PrecondFactor, Preconditioner, PreconditionerShift};
+use crate::lanczos::tridiagonal_eigen;
 use crate::solver::{check_time, ShiftedSolver};
 use crate::SolveError;
 use faer::c64;
-use faer::{Mat, Side};
+use faer::Mat;
 
 /// Condition numbers of one shifted system (paper Fig. 2c,d).
 #[derive(Debug, Clone, PartialEq)]
@@ -77,25 +78,8 @@ fn lanczos_max(
         basis.push(w.iter().map(|v| v / b).collect());
         mbasis.push(mw.iter().map(|v| v / b).collect());
     }
-    let m = alpha.len();
-    let tri = Mat::<f64>::from_fn(m, m, |i, j| {
-        if i == j {
-            alpha[i]
-        } else if i == j + 1 {
-            beta[j]
-        } else if j == i + 1 {
-            beta[i]
-        } else {
-            0.0
-        }
-    });
-    let ev = tri
-        .self_adjoint_eigenvalues(Side::Lower)
-        .map_err(|e| SolveError::Factorization {
-            what: "tridiagonal eigenvalues",
-            detail: format!("{e:?}"),
-        })?;
-    Ok(ev.into_iter().fold(f64::MIN, f64::max))
+    let (theta, _) = tridiagonal_eigen(&alpha, &beta)?;
+    Ok(theta.into_iter().fold(f64::MIN, f64::max))
 }
 
 impl ShiftedSolver {

@@ -626,14 +626,11 @@ impl RationalFactors {
                 report.iterations = report.iterations.max(outcome.iterations);
             }
         }
-        Ok((
-            out,
-            BatchReport {
-                t: self.t,
-                n_rhs: k,
-                poles,
-            },
-        ))
+        Ok((out, self.report(k, poles)))
+    }
+
+    fn report(&self, n_rhs: usize, poles: Vec<PoleReport>) -> BatchReport {
+        BatchReport { t: self.t, n_rhs, poles }
     }
 
     fn resolvent(&self, g: MatRef<'_, f64>) -> Result<(Mat<f64>, BatchReport), SolveError> {
@@ -650,14 +647,7 @@ impl RationalFactors {
             out += &m;
             poles.push(rep);
         }
-        Ok((
-            out,
-            BatchReport {
-                t: self.t,
-                n_rhs: k,
-                poles,
-            },
-        ))
+        Ok((out, self.report(k, poles)))
     }
 
     /// Contribution 2 Re(c (tL − zB)⁻¹ G) (or c (tL − zB)⁻¹ G for the real pole).

@@ -280,13 +280,9 @@ fn forward(
     let (start, pattern, l) = (node.start(), node.pattern(), node.val());
     let nc = l.ncols();
     let k = xs.ncols();
-    if k == 1 && nc <= SMALL {
-        if let Some(x) = xs.rb_mut().col_mut(0).try_as_col_major_mut() {
-            let ptr = llt.symbolic().col_ptr_for_val();
-            let vals = &llt.values()[ptr[s]..ptr[s + 1]];
-            forward_vec(vals, nc, pattern, start, x.as_slice_mut(), rows, tmp, |r, v| spill(r, 0, v));
-            return;
-        }
+    if let Some((block, x)) = one_vector(llt, s, &mut xs) {
+        forward_vec(block, x, rows, tmp, |r, v| spill(r, 0, v));
+        return;
     }
     let (l_top, l_bot) = l.split_at_row(nc);
     let (upper, mut lower) = xs.split_at_row_mut(start + nc - rows.start);
@@ -322,13 +318,9 @@ fn backward(
     let (start, pattern, l) = (node.start(), node.pattern(), node.val());
     let nc = l.ncols();
     let k = xs.ncols();
-    if k == 1 && nc <= SMALL {
-        if let Some(x) = xs.rb_mut().col_mut(0).try_as_col_major_mut() {
-            let ptr = llt.symbolic().col_ptr_for_val();
-            let vals = &llt.values()[ptr[s]..ptr[s + 1]];
-            backward_vec(vals, nc, pattern, start, x.as_slice_mut(), rows, tmp, |r| outside(r, 0));
-            return;
-        }
+    if let Some((block, x)) = one_vector(llt, s, &mut xs) {
+        backward_vec(block, x, rows, tmp, |r| outside(r, 0));
+        return;
     }
     let (l_top, l_bot) = l.split_at_row(nc);
     let (upper, lower) = xs.split_at_row_mut(start + nc - rows.start);
@@ -356,19 +348,49 @@ fn backward(
 /// dispatch cost per call that dominates for the typical 2–8 columns of a mesh factor).
 const SMALL: usize = 32;
 
-/// [`forward`] for one right-hand side held in the slice `x` (rows `rows`), with the supernode's
-/// column-major values `vals` ((nc + |pattern|) × nc).
-#[allow(clippy::too_many_arguments)]
-fn forward_vec(
-    vals: &[f64],
+/// One supernode as the one-vector kernels see it.
+struct Block<'a> {
+    /// Column-major values, (nc + |pattern|) × nc.
+    vals: &'a [f64],
+    /// Number of columns.
     nc: usize,
-    pattern: &[usize],
+    /// Off-diagonal row pattern.
+    pattern: &'a [usize],
+    /// First column.
     start: usize,
-    x: &mut [f64],
-    rows: Range<usize>,
-    tmp: &mut Vec<f64>,
-    mut spill: impl FnMut(usize, f64),
-) {
+}
+
+/// For one right-hand side and a supernode of at most [`SMALL`] columns: the supernode and x as
+/// a slice.
+fn one_vector<'a>(
+    llt: SupernodalLltRef<'a, usize, f64>,
+    s: usize,
+    xs: &'a mut MatMut<'_, f64>,
+) -> Option<(Block<'a>, &'a mut [f64])> {
+    let node = llt.supernode(s);
+    let nc = node.val().ncols();
+    if xs.ncols() != 1 || nc > SMALL {
+        return None;
+    }
+    let x = xs.rb_mut().col_mut(0).try_as_col_major_mut()?;
+    let ptr = llt.symbolic().col_ptr_for_val();
+    let block = Block {
+        vals: &llt.values()[ptr[s]..ptr[s + 1]],
+        nc,
+        pattern: node.pattern(),
+        start: node.start(),
+    };
+    Some((block, x.as_slice_mut()))
+}
+
+/// [`forward`] for one right-hand side held in the slice `x` (rows `rows`).
+fn forward_vec(b: Block<'_>, x: &mut [f64], rows: Range<usize>, tmp: &mut Vec<f64>, mut spill: impl FnMut(usize, f64)) {
+    let Block {
+        vals,
+        nc,
+        pattern,
+        start,
+    } = b;
     let nr = nc + pattern.len();
     let base = start - rows.start;
     tmp.clear();
@@ -394,17 +416,13 @@ fn forward_vec(
 }
 
 /// [`backward`] for one right-hand side held in the slice `x`.
-#[allow(clippy::too_many_arguments)]
-fn backward_vec(
-    vals: &[f64],
-    nc: usize,
-    pattern: &[usize],
-    start: usize,
-    x: &mut [f64],
-    rows: Range<usize>,
-    tmp: &mut Vec<f64>,
-    outside: impl Fn(usize) -> f64,
-) {
+fn backward_vec(b: Block<'_>, x: &mut [f64], rows: Range<usize>, tmp: &mut Vec<f64>, outside: impl Fn(usize) -> f64) {
+    let Block {
+        vals,
+        nc,
+        pattern,
+        start,
+    } = b;
     let nr = nc + pattern.len();
     let base = start - rows.start;
     tmp.clear();
