@@ -256,6 +256,17 @@ fn heat_backends_agree() {
         let err = g.iter().zip(&reference).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())) / scale;
         assert!(err < 1e-10, "{backend}: {err:e}");
     }
-    let o = wfem(&["heat", mesh.to_str().unwrap(), "--t", "1", "--source", "0", "--backend", "cg", "-o", "x.csv"]);
+    let o = wfem(&[
+        "heat",
+        mesh.to_str().unwrap(),
+        "--t",
+        "1",
+        "--source",
+        "0",
+        "--backend",
+        "cg",
+        "-o",
+        "x.csv",
+    ]);
     assert!(!o.status.success());
 }

@@ -161,7 +161,10 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         _ => return Err(CliError::Usage("give exactly one of --source I or --field FILE".into())),
     };
     let ops = assemble(&mesh, &AssemblyParams::default())?;
-    let kernel = HeatKernel::new(&ops, heat_params(args.kernel, args.method, args.degree, args.eigs, args.backend))?;
+    let kernel = HeatKernel::new(
+        &ops,
+        heat_params(args.kernel, args.method, args.degree, args.eigs, args.backend),
+    )?;
     let mut fields = Vec::with_capacity(args.t.len());
     for &t in &args.t {
         let g = kernel.apply(&f, t)?;
@@ -263,17 +266,26 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
 
     bar.set_message("preparing the rational method");
     let start = Instant::now();
-    let rational = HeatKernel::new(&ops, heat_params(KernelArg::Wfem, MethodArg::Rational, None, 0, BackendArg::Ldlt))?;
+    let rational = HeatKernel::new(
+        &ops,
+        heat_params(KernelArg::Wfem, MethodArg::Rational, None, 0, BackendArg::Ldlt),
+    )?;
     clock("rational: symbolic analysis", start, &mut timings);
     bar.inc(1);
 
     bar.set_message(format!("spectral: {} eigenpairs", args.eigs));
     let start = Instant::now();
-    let spectral = HeatKernel::new(&ops, heat_params(KernelArg::Wfem, MethodArg::Spectral, None, args.eigs, BackendArg::Ldlt))?;
+    let spectral = HeatKernel::new(
+        &ops,
+        heat_params(KernelArg::Wfem, MethodArg::Spectral, None, args.eigs, BackendArg::Ldlt),
+    )?;
     clock(&format!("spectral: {} eigenpairs", args.eigs), start, &mut timings);
     bar.inc(1);
 
-    let fast = HeatKernel::new(&ops, heat_params(KernelArg::Wfem, MethodArg::Fast, None, 0, BackendArg::Ldlt))?;
+    let fast = HeatKernel::new(
+        &ops,
+        heat_params(KernelArg::Wfem, MethodArg::Fast, None, 0, BackendArg::Ldlt),
+    )?;
     bar.inc(1);
 
     let mut fields: Vec<(String, Vec<f64>)> = Vec::new();

@@ -604,10 +604,13 @@ fn methods() -> Vec<(String, Method)> {
                 backend: Backend::Minres(MinresParams::default()),
             },
         ),
-        (MULTI_SHIFT.into(), Method::Rational {
-            degree: 16,
-            backend: Backend::MultiShift(MultiShiftParams::default()),
-        }),
+        (
+            MULTI_SHIFT.into(),
+            Method::Rational {
+                degree: 16,
+                backend: Backend::MultiShift(MultiShiftParams::default()),
+            },
+        ),
         ("rational r=7, LDLᵀ (paper's degree)".into(), Method::rational(7)),
     ]
 }
@@ -1222,7 +1225,10 @@ pub fn markdown(report: &Report) -> String {
     }
 
     // Issue #4's performance targets.
-    let _ = writeln!(s, "### Targets of issue #4: against scipy and one backward-Euler step\n");
+    let _ = writeln!(
+        s,
+        "### Targets of issue #4: against scipy and one backward-Euler step\n"
+    );
     let _ = writeln!(
         s,
         "K_t e_i at t = {} (f = e_i, the hardest case for the Krylov methods: ~34 iterations \

@@ -18,7 +18,9 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
 use faer::sparse::SparseColMat;
 use faer::{c64, Mat, Side};
-use shifted_solve::{Backend, CholeskyPattern, MinresParams, Preconditioner, PreconditionerShift, RationalApprox, ShiftedSolver};
+use shifted_solve::{
+    Backend, CholeskyPattern, MinresParams, Preconditioner, PreconditionerShift, RationalApprox, ShiftedSolver,
+};
 
 const T: f64 = 0.01;
 
@@ -90,7 +92,9 @@ fn bench(c: &mut Criterion) {
             .factor(p.as_ref(), faer::Par::Seq)
             .unwrap();
         let fv: Vec<f64> = f.col(0).iter().copied().collect();
-        g.bench_function("cholesky_solve_1rhs_tree_parallel", |bch| bch.iter(|| spd.solve_vec(&fv)));
+        g.bench_function("cholesky_solve_1rhs_tree_parallel", |bch| {
+            bch.iter(|| spd.solve_vec(&fv))
+        });
 
         let minres = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::Minres(MinresParams::default())).unwrap();
         let one_pole = RationalApprox {

@@ -3,9 +3,11 @@
 
 use std::sync::Arc;
 
-use crate::factor::{cholesky_symbolic, lu_symbolic, CholeskyPattern, CholeskySymbolic, LuSymbolic, SeqLlt, SeqLu, SpdFactor};
-use crate::lanczos::{lanczos_function, tridiagonal_eigen, LanczosOutcome, LanczosParams};
+use crate::factor::{
+    cholesky_symbolic, lu_symbolic, CholeskyPattern, CholeskySymbolic, LuSymbolic, SeqLlt, SeqLu, SpdFactor,
+};
 use crate::iterative::{minres, pcg, MinresParams, PrecondFactor, Preconditioner, PreconditionerShift};
+use crate::lanczos::{lanczos_function, tridiagonal_eigen, LanczosOutcome, LanczosParams};
 use crate::ldlt::{LdltFactor, LdltSymbolic};
 use crate::ops::PairOperators;
 use crate::{RationalApprox, SolveError};
@@ -619,7 +621,9 @@ impl RationalFactors {
             for (report, &(z, _)) in poles.iter_mut().zip(&shared.poles) {
                 let c = c64::new(1.0, 0.0) + z * gamma;
                 let last: c64 = (0..m)
-                    .map(|l| c64::new(u[(m - 1, l)] * u[(0, l)] * phi(theta[l]), 0.0) / (c64::new(1.0, 0.0) - c * theta[l]))
+                    .map(|l| {
+                        c64::new(u[(m - 1, l)] * u[(0, l)] * phi(theta[l]), 0.0) / (c64::new(1.0, 0.0) - c * theta[l])
+                    })
                     .sum();
                 let residual = c.norm() * beta_m * last.norm() / phi_norm.max(f64::MIN_POSITIVE);
                 report.relative_residual = report.relative_residual.max(residual);
@@ -630,7 +634,11 @@ impl RationalFactors {
     }
 
     fn report(&self, n_rhs: usize, poles: Vec<PoleReport>) -> BatchReport {
-        BatchReport { t: self.t, n_rhs, poles }
+        BatchReport {
+            t: self.t,
+            n_rhs,
+            poles,
+        }
     }
 
     fn resolvent(&self, g: MatRef<'_, f64>) -> Result<(Mat<f64>, BatchReport), SolveError> {

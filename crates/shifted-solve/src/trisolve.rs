@@ -31,8 +31,8 @@ use std::ops::Range;
 
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
-use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
@@ -199,7 +199,11 @@ impl SolvePlan {
     }
 
     /// Forward sweep over one worker's subtrees; returns its updates of the top rows.
-    fn forward_share(&self, llt: SupernodalLltRef<'_, usize, f64>, pieces: Vec<(&Subtree, MatMut<'_, f64>)>) -> Mat<f64> {
+    fn forward_share(
+        &self,
+        llt: SupernodalLltRef<'_, usize, f64>,
+        pieces: Vec<(&Subtree, MatMut<'_, f64>)>,
+    ) -> Mat<f64> {
         let k = pieces.first().map_or(1, |(_, xs)| xs.ncols());
         let mut delta = Mat::<f64>::zeros(self.top_rows.len(), k);
         let mut tmp = Vec::new();
@@ -230,7 +234,12 @@ impl SolvePlan {
 
     /// Between the two parallel phases: adds the workers' top-row updates, runs the top
     /// supernodes forward then backward, and returns a copy of the top rows.
-    fn top_sweeps(&self, llt: SupernodalLltRef<'_, usize, f64>, mut x: MatMut<'_, f64>, deltas: &[Mat<f64>]) -> Mat<f64> {
+    fn top_sweeps(
+        &self,
+        llt: SupernodalLltRef<'_, usize, f64>,
+        mut x: MatMut<'_, f64>,
+        deltas: &[Mat<f64>],
+    ) -> Mat<f64> {
         let (n, k) = (x.nrows(), x.ncols());
         for delta in deltas {
             for j in 0..k {
@@ -426,7 +435,11 @@ fn backward_vec(b: Block<'_>, x: &mut [f64], rows: Range<usize>, tmp: &mut Vec<f
     let nr = nc + pattern.len();
     let base = start - rows.start;
     tmp.clear();
-    tmp.extend(pattern.iter().map(|&r| if r < rows.end { x[r - rows.start] } else { outside(r) }));
+    tmp.extend(
+        pattern
+            .iter()
+            .map(|&r| if r < rows.end { x[r - rows.start] } else { outside(r) }),
+    );
     for c in (0..nc).rev() {
         let col = &vals[c * nr..(c + 1) * nr];
         let mut v = x[base + c] - dot(&col[nc..], tmp);
@@ -498,9 +511,11 @@ mod tests {
             supernodal_flop_ratio_threshold: faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        let sym = factorize_symbolic_cholesky(a.symbolic(), Side::Lower, SymmetricOrdering::Amd, params).expect("symbolic");
+        let sym =
+            factorize_symbolic_cholesky(a.symbolic(), Side::Lower, SymmetricOrdering::Amd, params).expect("symbolic");
         let mut values = vec![0.0; sym.len_val()];
-        let mut buf = faer::dyn_stack::MemBuffer::new(sym.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
+        let mut buf =
+            faer::dyn_stack::MemBuffer::new(sym.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
         sym.factorize_numeric_llt(
             &mut values,
             a.as_ref(),
@@ -555,4 +570,3 @@ mod tests {
         assert!(SolvePlan::new(sn, 1).is_none());
     }
 }
-

@@ -311,7 +311,10 @@ fn multi_shift_errors_are_typed() {
     let approx = RationalApprox::cram(16).unwrap();
     let f = random_rhs(n, 1, 3);
     let err = solver.apply(approx, 0.1, f.as_ref()).unwrap_err();
-    assert!(matches!(err, SolveError::KrylovNoConvergence { iterations: 2, .. }), "{err:?}");
+    assert!(
+        matches!(err, SolveError::KrylovNoConvergence { iterations: 2, .. }),
+        "{err:?}"
+    );
     let mut g = f.clone();
     g[(4, 0)] = f64::NAN;
     let err = solver.apply(approx, 0.1, g.as_ref()).unwrap_err();

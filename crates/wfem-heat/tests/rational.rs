@@ -113,7 +113,10 @@ fn rational_multi_shift_backend_matches_dense() {
         backend: Backend::MultiShift(MultiShiftParams::default()),
     };
     for (label, mesh) in [
-        ("multi-shift irregular_sphere(3, 5.6)", four_pi(generate::irregular_sphere(3, 5.6))),
+        (
+            "multi-shift irregular_sphere(3, 5.6)",
+            four_pi(generate::irregular_sphere(3, 5.6)),
+        ),
         ("multi-shift grid(20, 20)", four_pi(generate::grid(20, 20))),
     ] {
         let ops = assemble(&mesh, &AssemblyParams::default()).unwrap();
