@@ -481,14 +481,15 @@ mod tests {
     use faer::sparse::{SparseColMat, Triplet};
     use faer::Side;
 
-    /// SPD 5-point Laplacian plus identity on a w × h grid.
-    fn grid(w: usize, h: usize) -> SparseColMat<usize, f64> {
+    /// SPD 5-point Laplacian plus identity on a w × h grid; with `cut`, the edges between
+    /// columns w/2 − 1 and w/2 are left out (two components: the elimination tree is a forest).
+    fn grid(w: usize, h: usize, cut: bool) -> SparseColMat<usize, f64> {
         let id = |i: usize, j: usize| i * h + j;
         let mut t = Vec::new();
         for i in 0..w {
             for j in 0..h {
                 t.push(Triplet::new(id(i, j), id(i, j), 4.5));
-                if i + 1 < w {
+                if i + 1 < w && !(cut && i + 1 == w / 2) {
                     t.push(Triplet::new(id(i + 1, j), id(i, j), -1.0));
                     t.push(Triplet::new(id(i, j), id(i + 1, j), -1.0));
                 }
@@ -502,10 +503,18 @@ mod tests {
     }
 
     /// The plan's solve equals faer's sequential supernodal solve, for 1 and 3 right-hand sides
-    /// and 2, 3 and 5 workers, and every supernode is in exactly one place.
+    /// and 2, 3 and 5 workers, on a connected grid and on one cut in two (a forest), and every
+    /// supernode is in exactly one place.
     #[test]
     fn tree_parallel_solve_matches_faer() {
-        let a = grid(60, 45);
+        for cut in [false, true] {
+            let roots = check_against_faer(&grid(60, 45, cut));
+            assert_eq!(roots, if cut { 2 } else { 1 });
+        }
+    }
+
+    /// Returns the number of roots of the supernodal elimination forest.
+    fn check_against_faer(a: &SparseColMat<usize, f64>) -> usize {
         let n = a.nrows();
         let params = faer::sparse::linalg::cholesky::CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
@@ -568,5 +577,8 @@ mod tests {
         }
         // One worker never gets a plan.
         assert!(SolvePlan::new(sn, 1).is_none());
+        (0..sn.n_supernodes())
+            .filter(|&s| sn.supernode(s).pattern().is_empty())
+            .count()
     }
 }
