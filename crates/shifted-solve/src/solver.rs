@@ -349,26 +349,6 @@ impl ShiftedSolver {
             jobs.push((c64::new(z, 0.0), c64::new(c, 0.0), true));
         }
         let ops = &*self.ops;
-        if let (Backend::MultiShift(params), Some(pattern)) = (self.backend, &self.spd_pattern) {
-            let a = ops.real_combination(params.gamma * t, 1.0);
-            let factor = pattern
-                .factor(a.as_ref(), faer::get_global_parallelism())
-                .map_err(|_| SolveError::SingularShiftedMatrix {
-                    t,
-                    pole: c64::new(-1.0 / (params.gamma * t), 0.0),
-                })?;
-            return Ok(RationalFactors {
-                ops: self.ops.clone(),
-                t,
-                c0: approx.c0,
-                terms: Vec::new(),
-                shared: Some(SharedKrylov {
-                    factor,
-                    params,
-                    poles: jobs.iter().map(|&(z, c, _)| (z, c)).collect(),
-                }),
-            });
-        }
         let terms: Vec<PoleTerm> = match self.backend {
             Backend::DirectLu | Backend::DirectLdlt => {
                 let direct = match &self.ldlt_symbolic {
@@ -401,7 +381,7 @@ impl ShiftedSolver {
                     })
                     .collect::<Result<_, SolveError>>()?
             }
-            Backend::MultiShift(_) => unreachable!("handled above"),
+            Backend::MultiShift(params) => return self.factor_multi_shift(approx, t, params, &jobs),
             Backend::Minres(params) => {
                 let shared = match params.preconditioner {
                     Preconditioner::ShiftedCholesky(PreconditionerShift::Shared(s)) => Some(Arc::new(
@@ -441,6 +421,41 @@ impl ShiftedSolver {
     }
 }
 
+impl ShiftedSolver {
+    /// [`Backend::MultiShift`]: the one real factor of B + γtL; the poles are kept for the
+    /// Lanczos evaluation.
+    fn factor_multi_shift(
+        &self,
+        approx: &RationalApprox,
+        t: f64,
+        params: MultiShiftParams,
+        jobs: &[(c64, c64, bool)],
+    ) -> Result<RationalFactors, SolveError> {
+        let pattern = match &self.spd_pattern {
+            Some(p) => p.clone(),
+            None => CholeskyPattern::from_symbolic(self.llt_symbolic.clone()),
+        };
+        let a = self.ops.real_combination(params.gamma * t, 1.0);
+        let factor = pattern
+            .factor(a.as_ref(), faer::get_global_parallelism())
+            .map_err(|_| SolveError::SingularShiftedMatrix {
+                t,
+                pole: SharedKrylov::real_pole(params.gamma),
+            })?;
+        Ok(RationalFactors {
+            ops: self.ops.clone(),
+            t,
+            c0: approx.c0,
+            terms: Vec::new(),
+            shared: Some(SharedKrylov {
+                factor,
+                params,
+                poles: jobs.iter().map(|&(z, c, _)| (z, c)).collect(),
+            }),
+        })
+    }
+}
+
 enum DirectSymbolic {
     Lu(LuSymbolic),
     Ldlt(Arc<LdltSymbolic>),
@@ -471,6 +486,14 @@ struct SharedKrylov {
     params: MultiShiftParams,
     /// (z_j, c_j), the real pole (if any) last.
     poles: Vec<(c64, c64)>,
+}
+
+impl SharedKrylov {
+    /// The factored matrix as a shifted matrix: B + γtL = γ(tL − zB) with z = −1/γ (the pole
+    /// named when it is singular).
+    fn real_pole(gamma: f64) -> c64 {
+        c64::new(-1.0 / gamma, 0.0)
+    }
 }
 
 /// All poles of one t, factored once (paper Eq. (12)); apply to any number of right-hand sides.
@@ -600,7 +623,7 @@ impl RationalFactors {
             if x.iter().any(|v| !v.is_finite()) {
                 return Err(SolveError::SingularShiftedMatrix {
                     t: self.t,
-                    pole: c64::new(-1.0 / (gamma * self.t), 0.0),
+                    pole: SharedKrylov::real_pole(gamma),
                 });
             }
             out.col_as_slice_mut(j).copy_from_slice(x);
