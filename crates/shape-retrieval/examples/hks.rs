@@ -6,7 +6,7 @@
 //! first SI-HKS frequencies. Checks a person can make: the matrix-diagonal values of one time
 //! sum to the heat trace; protruding vertices have larger HKS at small t than flat ones.
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/it/common/mod.rs"]
 mod common;
 
 use shape_retrieval::{

@@ -1,0 +1,16 @@
+//! The integration tests of this package, in one test binary (one link instead of one per
+//! file; see README, "Running the tests"). Each module is one former `tests/<name>.rs`.
+
+mod minimal_reader;
+
+mod corpus;
+mod generate;
+mod io_obj_oracle;
+mod io_readers;
+mod io_writers;
+mod morse;
+mod mtx;
+mod operators;
+mod stats;
+mod transform;
+mod validate;

@@ -1,0 +1,209 @@
+//! The mesh → descriptor pipeline against independent references: the dense generalized
+//! eigendecomposition, the scale laws of Sect. 5, and `mesh_fem::morse`.
+
+use crate::common;
+
+use common::{dense_spectrum, rel_err, sig};
+use faer::Mat;
+use mesh_fem::generate::bumpy;
+use mesh_fem::{assemble, AssemblyParams, LumpedMassKind};
+use shape_retrieval::{
+    dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, RetrievalError, ShapeDescriptors,
+    SihksParams, TimeSampling,
+};
+use wfem_heat::Eigenbasis;
+
+const TIMES: [f64; 4] = [0.02, 0.1, 0.5, 2.0];
+
+fn params(k: usize) -> DescriptorParams {
+    DescriptorParams {
+        eigenpairs: k,
+        times: TimeSampling::Explicit(TIMES.to_vec()),
+        sihks: SihksParams {
+            time_unit: 1e-4,
+            tau_min: 0.0,
+            tau_max: 24.0,
+            tau_step: 0.25,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+fn flat(m: &Mat<f64>) -> Vec<f64> {
+    (0..m.nrows())
+        .flat_map(|i| (0..m.ncols()).map(move |j| m[(i, j)]))
+        .collect()
+}
+
+/// `Σ_{k<K} e^{−λ_k t} φ_k(i)²` from a dense eigendecomposition.
+fn reference_hks(values: &[f64], vectors: &Mat<f64>, k: usize, times: &[f64]) -> Vec<f64> {
+    let n = vectors.nrows();
+    let mut out = Vec::with_capacity(n * times.len());
+    for i in 0..n {
+        for &t in times {
+            out.push((0..k).map(|c| (-values[c] * t).exp() * vectors[(i, c)].powi(2)).sum());
+        }
+    }
+    out
+}
+
+#[test]
+fn dhk2_matches_dense_wfem_spectrum() {
+    // 642 vertices: the block Lanczos path (smaller meshes use a dense decomposition).
+    let mesh = bumpy(3);
+    let dense = dense_spectrum(&mesh);
+    let k = 40;
+    let got = dense_descriptor(&mesh, Descriptor::Dhk2, &params(k)).unwrap();
+    let want = reference_hks(&dense.eigenvalues, &dense.eigenvectors, k, &TIMES);
+    assert!(rel_err(&flat(&got), &want) < 1e-8, "{}", rel_err(&flat(&got), &want));
+}
+
+#[test]
+fn dhk1_matches_dense_voronoi_lumped_spectrum() {
+    let mesh = bumpy(2);
+    let ops = assemble(
+        &mesh,
+        &AssemblyParams {
+            lumped: LumpedMassKind::Voronoi,
+        },
+    )
+    .unwrap();
+    let dense = Eigenbasis::dense(&ops.stiffness, &ops.lumped_mass).unwrap();
+    let k = 40;
+    let got = dense_descriptor(&mesh, Descriptor::Dhk1, &params(k)).unwrap();
+    let want = reference_hks(&dense.values, &dense.vectors, k, &TIMES);
+    assert!(rel_err(&flat(&got), &want) < 1e-8);
+    // And it is a different kernel from DHK2.
+    let dhk2 = dense_descriptor(&mesh, Descriptor::Dhk2, &params(k)).unwrap();
+    assert!(rel_err(&flat(&dhk2), &want) > 1e-3);
+}
+
+#[test]
+fn dhk3_matches_dense_with_max_eigenvalue_normalization() {
+    let mesh = bumpy(2);
+    let dense = dense_spectrum(&mesh);
+    let k = 40;
+    let lmax = dense.eigenvalues[k - 1];
+    let got = dense_descriptor(&mesh, Descriptor::Dhk3, &params(k)).unwrap();
+    let scaled_times: Vec<f64> = TIMES.iter().map(|t| t / lmax).collect();
+    let want: Vec<f64> = reference_hks(&dense.eigenvalues, &dense.eigenvectors, k, &scaled_times)
+        .into_iter()
+        .map(|v| v / lmax)
+        .collect();
+    assert!(rel_err(&flat(&got), &want) < 1e-8);
+}
+
+#[test]
+fn scale_laws_of_section_5() {
+    let mesh = bumpy(2);
+    let alpha = 3.0;
+    let big = mesh.scaled(alpha).unwrap();
+    let p = params(40);
+    let mut a = ShapeDescriptors::new(&mesh, &p).unwrap();
+    let mut b = ShapeDescriptors::new(&big, &p).unwrap();
+    // DHK3 and SI-HKS are scale-invariant; the scale changes DHK2 a lot.
+    for d in [Descriptor::Dhk3, Descriptor::SiHks] {
+        let (x, y) = (a.dense(d).unwrap(), b.dense(d).unwrap());
+        let e = rel_err(&flat(&y), &flat(&x));
+        assert!(e < 2e-2, "{}: {e}", d.name());
+    }
+    let (x, y) = (a.dense(Descriptor::Dhk2).unwrap(), b.dense(Descriptor::Dhk2).unwrap());
+    assert!(rel_err(&flat(&y), &flat(&x)) > 0.5);
+    // DHK2 is scale-covariant: h_{αM}(t) = α⁻² h_M(α⁻² t) (paper, Sect. 5).
+    let covariant = DescriptorParams {
+        times: TimeSampling::Explicit(TIMES.iter().map(|t| t * alpha * alpha).collect()),
+        ..p.clone()
+    };
+    let y = dense_descriptor(&big, Descriptor::Dhk2, &covariant).unwrap();
+    let y: Vec<f64> = flat(&y).into_iter().map(|v| v * alpha * alpha).collect();
+    assert!(rel_err(&y, &flat(&x)) < 1e-8);
+}
+
+#[test]
+fn features_agree_with_morse_and_nest() {
+    let mesh = bumpy(2);
+    let p = DescriptorParams {
+        feature_rings: 1,
+        persistence_fraction: 0.02,
+        ..params(40)
+    };
+    let mut s = ShapeDescriptors::new(&mesh, &p).unwrap();
+    let (t, f) = s.feature_function().unwrap();
+    assert!(t > 0.0);
+    let shk1 = s.features(FeatureDetector::Shk1).unwrap();
+    assert_eq!(shk1, mesh_fem::morse::local_maxima(&mesh, &f).unwrap());
+    let shk2 = s.features(FeatureDetector::Shk2).unwrap();
+    assert!(!shk2.is_empty() && shk2.len() <= shk1.len());
+    assert!(shk2.iter().all(|v| shk1.contains(v)));
+    // A persistence threshold above the range keeps only the essential (global) maximum.
+    let all = DescriptorParams {
+        persistence_fraction: 1.0,
+        ..p
+    };
+    let one = sparse_features(&mesh, FeatureDetector::Shk2, &all).unwrap();
+    let global = (0..f.len()).max_by(|&a, &b| f[a].total_cmp(&f[b])).unwrap() as u32;
+    assert_eq!(one, vec![global]);
+}
+
+#[test]
+fn bad_parameters_are_reported() {
+    let mesh = bumpy(1);
+    let bad = DescriptorParams {
+        eigenpairs: 0,
+        ..Default::default()
+    };
+    assert!(matches!(
+        ShapeDescriptors::new(&mesh, &bad),
+        Err(RetrievalError::InvalidParameter { name: "eigenpairs", .. })
+    ));
+    let bad = DescriptorParams {
+        persistence_fraction: 2.0,
+        ..Default::default()
+    };
+    assert!(matches!(
+        ShapeDescriptors::new(&mesh, &bad),
+        Err(RetrievalError::InvalidParameter {
+            name: "persistence_fraction",
+            ..
+        })
+    ));
+    let ops = assemble(&bumpy(2), &AssemblyParams::default()).unwrap();
+    assert!(matches!(
+        ShapeDescriptors::from_operators(&mesh, ops, &DescriptorParams::default()),
+        Err(RetrievalError::DimensionMismatch { .. })
+    ));
+    let bad_times = DescriptorParams {
+        times: TimeSampling::Explicit(vec![-1.0]),
+        ..params(10)
+    };
+    let err = dense_descriptor(&mesh, Descriptor::Dhk2, &bad_times);
+    assert!(
+        matches!(err, Err(RetrievalError::InvalidParameter { name: "time", .. })),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn snapshot_descriptors_on_bumpy() {
+    let mesh = bumpy(2);
+    let p = params(60);
+    let mut s = ShapeDescriptors::new(&mesh, &p).unwrap();
+    let mut out = String::new();
+    for d in Descriptor::ALL {
+        let m = s.dense(d).unwrap();
+        out += &format!("{} ({} × {})\n", d.name(), m.nrows(), m.ncols());
+        for i in (0..m.nrows()).step_by(20) {
+            out += &format!("v{i:03}:");
+            for j in 0..m.ncols() {
+                out += &format!(" {}", sig(m[(i, j)], 6));
+            }
+            out.push('\n');
+        }
+    }
+    let (t, _) = s.feature_function().unwrap();
+    out += &format!("feature time {}\n", sig(t, 6));
+    out += &format!("SHK1 {:?}\n", s.features(FeatureDetector::Shk1).unwrap());
+    out += &format!("SHK2 {:?}\n", s.features(FeatureDetector::Shk2).unwrap());
+    insta::assert_snapshot!("descriptors_bumpy2_k60", out);
+}

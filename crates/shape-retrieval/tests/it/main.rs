@@ -1,0 +1,12 @@
+//! The integration tests of this package, in one test binary (one link instead of one per
+//! file; see README, "Running the tests"). Each module is one former `tests/<name>.rs`.
+
+mod common;
+
+mod bof;
+mod descriptor;
+mod features;
+mod hks;
+mod kmeans;
+mod retrieval;
+mod sihks;

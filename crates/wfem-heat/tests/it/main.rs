@@ -1,0 +1,18 @@
+//! The integration tests of this package, in one test binary (one link instead of one per
+//! file; see README, "Running the tests"). Each module is one former `tests/<name>.rs`.
+
+mod common;
+
+mod algebra;
+mod basis;
+mod distance;
+mod edge_cases;
+mod eigen_scale;
+mod errors;
+mod failure_paths;
+mod fast_path;
+mod first_order;
+mod properties;
+mod rational;
+mod scale;
+mod spectral;

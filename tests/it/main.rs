@@ -1,0 +1,12 @@
+//! The integration tests of this package, in one test binary (one link instead of one per
+//! file; see README, "Running the tests"). Each module is one former `tests/<name>.rs`.
+
+mod bad_input;
+mod cli;
+mod cli_approx;
+mod cli_atomic;
+mod cli_distance;
+mod cli_hks;
+mod fuzz_regressions;
+mod no_unwrap;
+mod render;
