@@ -1,9 +1,11 @@
 //! The `wfem` command-line tool. Without a subcommand it runs `wfem demo`
-//! (what `cargo run --release` does).
+//! (what `cargo run --release` does). The CLI is private to this binary (module `cli`), so a
+//! library user of the `wfem` package never compiles clap, indicatif or the renderer.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
-use wfem::cli;
+
+mod cli;
 
 #[derive(Parser)]
 #[command(

@@ -1,6 +1,6 @@
 //! `wfem approx`: the feature-driven approximation f = f_glob + f_loc (paper, Sect. 4.2).
 
-use super::{check_output, load_usable, write_fields, CliError, KernelArg, MeshArgs};
+use super::{check_output, load_usable, write_fields, CliError, KernelArg, MeshArgs, Output, OutputFormat};
 use clap::{Args, ValueEnum};
 use mesh_fem::io::read_field;
 use mesh_fem::{assemble, AssemblyParams};
@@ -57,15 +57,15 @@ pub struct ApproxArgs {
     pub kernel: KernelArg,
     /// Output file: .ply, .npy or .csv (f, then f_glob and f_loc at every scale), or .png
     /// (one figure each for f, f_glob and f_loc at the coarsest scale, anchors highlighted).
-    #[arg(short = 'o', long = "output")]
-    pub output: PathBuf,
+    #[arg(short = 'o', long = "output", value_parser = Output::parse)]
+    pub output: Output,
 }
 
 /// `wfem approx`: splits f into its global component on the persistent critical points and
 /// its local component at every scale, writes them and prints the per-scale report.
 pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    check_output(&args.input.mesh, &args.output)?;
-    check_output(&args.field, &args.output)?;
+    check_output(&args.input.mesh, &args.output.path)?;
+    check_output(&args.field, &args.output.path)?;
     let mesh = load_usable(&args.input)?;
     let n = mesh.n_vertices();
     let f = read_field(&args.field, n)?;
@@ -117,14 +117,8 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
             s.significant_critical_points
         )?;
     }
-    let ext = args
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
     let mut fields = vec![("f".to_string(), f.clone())];
-    if ext == "png" {
+    if args.output.format == OutputFormat::Png {
         if let Some(s) = approx.scales.last() {
             fields.push((format!("f_glob t={:.4e}", s.t), s.global.clone()));
             fields.push((format!("f_loc t={:.4e}", s.t), s.local.clone()));

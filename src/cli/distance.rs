@@ -1,10 +1,9 @@
 //! `wfem distance`: diffusion distances from one vertex to every vertex.
 
-use super::{check_output, load_usable, write_fields, CliError, MeshArgs};
+use super::{check_output, load_usable, write_fields, CliError, MeshArgs, Output};
 use clap::{Args, ValueEnum};
 use mesh_fem::{assemble, AssemblyParams};
 use std::io::Write;
-use std::path::PathBuf;
 use wfem_heat::{DiffusionDistance, DistanceKind, DistanceParams};
 
 /// Which diffusion distance.
@@ -45,14 +44,14 @@ pub struct DistanceArgs {
     #[arg(long)]
     pub degree: Option<usize>,
     /// Output file: .ply, .npy, .csv or .png.
-    #[arg(short = 'o', long = "output")]
-    pub output: PathBuf,
+    #[arg(short = 'o', long = "output", value_parser = Output::parse)]
+    pub output: Output,
 }
 
 /// `wfem distance`: the row d_t(i, ·) of diffusion distances by the rational method (one
 /// factorization per pole; the diagonal of the Gram matrix costs n right-hand sides).
 pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    check_output(&args.input.mesh, &args.output)?;
+    check_output(&args.input.mesh, &args.output.path)?;
     let mesh = load_usable(&args.input)?;
     let n = mesh.n_vertices();
     let i = args.from as usize;

@@ -1,16 +1,16 @@
 //! `wfem heat` and `wfem demo`.
 
-use super::{check_output, figure_params, load_usable, write_fields, CliError, MeshArgs};
-use crate::render::render_png;
+use super::{check_output, colors_of, figure_params, load_usable, write_fields, CliError, MeshArgs, Output};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use mesh_fem::io::{read_field, write_atomic};
+use mesh_fem::io::{read_field, stage_field, AtomicSet, FieldFormat};
 use mesh_fem::{assemble, AssemblyParams, FemOperators, TriMesh};
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 use wfem_heat::{HeatKernel, HeatParams, KernelKind, Method};
+use wfem_render::render_png;
 
 /// Which discrete heat kernel (paper, Table 1).
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -134,15 +134,15 @@ pub struct HeatArgs {
     #[arg(long, default_value_t = 200)]
     pub eigs: usize,
     /// Output file: .ply, .npy, .csv or .png.
-    #[arg(short = 'o', long = "output")]
-    pub output: PathBuf,
+    #[arg(short = 'o', long = "output", value_parser = Output::parse)]
+    pub output: Output,
 }
 
 /// `wfem heat`: K_t e_i or K_t f for one or several t.
 pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    check_output(&args.input.mesh, &args.output)?;
+    check_output(&args.input.mesh, &args.output.path)?;
     if let Some(field) = &args.field {
-        check_output(field, &args.output)?;
+        check_output(field, &args.output.path)?;
     }
     let mesh = load_usable(&args.input)?;
     let n = mesh.n_vertices();
@@ -318,18 +318,22 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
         fields.push((format!("spectral_t{t}"), g_spec));
     }
 
+    // Every output of the demo (PLY, PNGs, report) is staged first and lands together: a
+    // failure half-way (disk full) leaves the previous run's files as they were.
     bar.set_message("writing PLY and PNG");
     let start = Instant::now();
+    let mut set = AtomicSet::new();
     let ply = args.out.join("basis.ply");
-    write_fields(&ply, &mesh, &fields, &[anchor as u32])?;
-    let mut pngs = Vec::new();
-    for (t, (name, values)) in DEMO_TIMES.iter().zip(fields.iter().step_by(2)) {
+    let refs: Vec<(&str, &[f64])> = fields.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+    let colors = colors_of(&fields[0].1);
+    stage_field(&mut set, &ply, FieldFormat::Ply, &mesh, &refs, Some(&colors))?;
+    let mut pngs = 0;
+    for (t, (_, values)) in DEMO_TIMES.iter().zip(fields.iter().step_by(2)) {
         let path = args.out.join(format!("basis_t{t}.png"));
         let title = format!("wFEM K_t e_i, t = {t} (rational, {} vertices)", mesh.n_vertices());
-        let _ = name;
         let png = render_png(&mesh, values, &figure_params(&title, values, &[anchor as u32]))?;
-        write_atomic(&path, |w| w.write_all(&png))?;
-        pngs.push(path);
+        set.stage(&path, |w| w.write_all(&png))?;
+        pngs += 1;
     }
     clock("write PLY + PNG", start, &mut timings);
     bar.inc(1);
@@ -337,14 +341,14 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
 
     let report = demo_report(&mesh, anchor, args.eigs, &timings, &rows);
     let report_path = args.out.join("report.md");
-    write_atomic(&report_path, |w| w.write_all(report.as_bytes()))?;
+    set.stage(&report_path, |w| w.write_all(report.as_bytes()))?;
+    set.commit()?;
     writeln!(out, "{report}")?;
     writeln!(
         out,
-        "wrote {}, {} and {} PNG files",
+        "wrote {}, {} and {pngs} PNG files",
         ply.display(),
         report_path.display(),
-        pngs.len()
     )?;
     Ok(())
 }

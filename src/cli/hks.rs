@@ -1,12 +1,11 @@
 //! `wfem hks`: the heat kernel signature of a mesh (paper, Sect. 5; Eqs. (6)–(8)).
 
-use super::{check_output, load_usable, write_fields, CliError, MeshArgs};
+use super::{check_output, load_usable, write_fields, CliError, MeshArgs, Output};
 use clap::{Args, ValueEnum};
 use mesh_fem::{assemble, AssemblyParams, LumpedMassKind};
 use shape_retrieval::hks::TimeSampling;
 use shape_retrieval::{Descriptor, DescriptorParams, RetrievalError, ShapeDescriptors};
 use std::io::Write;
-use std::path::PathBuf;
 
 /// Which kernel's signature.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -37,8 +36,8 @@ pub struct HksArgs {
     #[arg(long, default_value_t = shape_retrieval::DEFAULT_EIGENPAIRS)]
     pub eigs: usize,
     /// Output: .npy (n × T array), .csv, .ply (fields `hks_t<t>`) or .png.
-    #[arg(short = 'o', long = "output", visible_alias = "out")]
-    pub output: PathBuf,
+    #[arg(short = 'o', long = "output", visible_alias = "out", value_parser = Output::parse)]
+    pub output: Output,
 }
 
 fn retrieval(e: RetrievalError) -> CliError {
@@ -52,7 +51,7 @@ fn retrieval(e: RetrievalError) -> CliError {
 /// `wfem hks`: writes the n × T heat kernel signature `h(i, t) = Σ_k e^{−λ_k t} φ_k(i)²` of
 /// the chosen kernel, from its k smallest eigenpairs.
 pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    check_output(&args.input.mesh, &args.output)?;
+    check_output(&args.input.mesh, &args.output.path)?;
     if let Some(&t) = args.times.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
         return Err(CliError::Usage(format!(
             "--times: {t} is not a positive diffusion time"

@@ -1,4 +1,4 @@
-//! The `wfem` command-line tool, as a library module so that it can be tested.
+//! The `wfem` command-line tool (private to the binary; tested through the binary in tests/it/cli*.rs).
 //!
 //! Every subcommand reads its input read-only, writes its outputs atomically (temporary file
 //! in the same directory, then rename; see [`mesh_fem::io::write_atomic`]) and refuses to write
@@ -8,19 +8,19 @@
 mod approx;
 mod distance;
 mod heat;
-pub use distance::{distance, DistanceArgs, DistanceKindArg};
+pub use distance::{distance, DistanceArgs};
 pub mod hks;
 pub mod retrieval;
 
-pub use approx::{approx, ApproxArgs, CoefficientsArg};
-pub use heat::{demo, heat, DemoArgs, HeatArgs, KernelArg, MethodArg};
+pub use approx::{approx, ApproxArgs};
+pub use heat::{demo, heat, DemoArgs, HeatArgs, KernelArg};
 
-use crate::render::{render_png, symmetric_range, Colormap, RenderError, RenderParams};
 use clap::{Args, ValueEnum};
-use mesh_fem::io::{load, write_atomic, write_field, LoadOptions};
+use mesh_fem::io::{load, stage_field, AtomicSet, FieldFormat, LoadOptions};
 use mesh_fem::{assemble, AssemblyParams, LumpedMassKind, MeshError, TriMesh};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use wfem_render::{render_png, symmetric_range, Colormap, RenderError, RenderParams};
 
 /// Failures of the CLI: printed as one line `wfem: error: …`.
 #[derive(Debug, thiserror::Error)]
@@ -81,115 +81,99 @@ pub(crate) fn check_output(input: &Path, output: &Path) -> Result<(), CliError> 
     Ok(())
 }
 
-/// Writes per-vertex fields by the extension of `path`. For `.png` every field becomes its own
-/// figure: `path` itself for one field, `stem-<name>.png` beside it for several. For `.ply` the
-/// vertex colors show the first field.
+/// The format of an output file, from its extension: a per-vertex field file or a rendered
+/// figure. Parsed once, when the arguments are parsed, so a wrong extension is refused before
+/// any work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// `.ply`, `.npy`, `.csv` ([`mesh_fem::io::write_field`]).
+    Field(FieldFormat),
+    /// `.png`: one rendered figure per field.
+    Png,
+}
+
+/// An output path given on the command line, with its format.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Output {
+    /// The path as given.
+    pub path: PathBuf,
+    /// Its format.
+    pub format: OutputFormat,
+}
+
+impl Output {
+    /// The extensions `-o` accepts, as messages list them.
+    pub const EXTENSIONS: &'static str = ".ply, .npy, .csv, .png";
+
+    /// Parses an output path (clap value parser): the extension must name a format.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let path = PathBuf::from(text);
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        let format = match FieldFormat::from_extension(&ext) {
+            Some(f) => OutputFormat::Field(f),
+            None if ext == "png" => OutputFormat::Png,
+            None => {
+                return Err(format!(
+                    "cannot write {:?}: the output format is chosen by the extension, one of {}",
+                    text,
+                    Self::EXTENSIONS
+                ))
+            }
+        };
+        Ok(Self { path, format })
+    }
+}
+
+/// Writes per-vertex fields in the format of `output`. For `.png` every field becomes its own
+/// figure: the path itself for one field, `stem-<name>.png` beside it for several. For `.ply`
+/// the vertex colors show the first field. All files are written all-or-nothing.
 pub fn write_fields(
-    path: &Path,
+    output: &Output,
     mesh: &TriMesh,
     fields: &[(String, Vec<f64>)],
     highlight: &[u32],
 ) -> Result<Vec<PathBuf>, CliError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
+    let path = &output.path;
     if fields.is_empty() {
         return Err(CliError::Usage("nothing to write".into()));
     }
-    if ext == "png" {
-        // Render every figure first, then write the set all-or-nothing (`write_set`).
-        let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::with_capacity(fields.len());
-        for (name, values) in fields {
-            let target = if fields.len() == 1 {
-                path.to_path_buf()
-            } else {
-                let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("field");
-                let safe: String = name
-                    .chars()
-                    .map(|c| {
-                        if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
-                            c
-                        } else {
-                            '_'
-                        }
-                    })
-                    .collect();
-                path.with_file_name(format!("{stem}-{safe}.png"))
-            };
-            let png = render_png(mesh, values, &figure_params(name, values, highlight))?;
-            files.push((target, png));
-        }
-        write_set(&files)?;
-        return Ok(files.into_iter().map(|(p, _)| p).collect());
-    }
-    let refs: Vec<(&str, &[f64])> = fields.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
-    let colors = if ext == "ply" {
-        Some(colors_of(&fields[0].1))
-    } else {
-        None
-    };
-    write_field(path, mesh, &refs, colors.as_deref())?;
-    Ok(vec![path.to_path_buf()])
-}
-
-/// Writes several files all-or-nothing: each is first written atomically
-/// ([`write_atomic`]) under a hidden staging name `.NAME.staged-PID` beside its target; only
-/// when all are written (and no target is a directory) are they renamed onto their targets.
-/// On failure the staged files are removed and no target has changed.
-pub(crate) fn write_set(files: &[(PathBuf, Vec<u8>)]) -> Result<(), CliError> {
-    let staged_name = |target: &Path| -> PathBuf {
-        let name = target
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        target.with_file_name(format!(".{name}.staged-{}", std::process::id()))
-    };
-    let remove = |upto: usize| {
-        for (target, _) in &files[..upto] {
-            let _ = std::fs::remove_file(staged_name(target));
-        }
-    };
-    if files.len() == 1 {
-        let (target, bytes) = &files[0];
-        return Ok(write_atomic(target, |w| w.write_all(bytes))?);
-    }
-    for (k, (target, bytes)) in files.iter().enumerate() {
-        if target.is_dir() {
-            remove(k);
-            return Err(MeshError::Io {
-                path: target.clone(),
-                source: std::io::Error::new(std::io::ErrorKind::IsADirectory, "the output path is a directory"),
+    let mut set = AtomicSet::new();
+    match output.format {
+        OutputFormat::Png => {
+            // Render every figure first, then write the set all-or-nothing.
+            for (name, values) in fields {
+                let target = if fields.len() == 1 {
+                    path.to_path_buf()
+                } else {
+                    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("field");
+                    let safe: String = name
+                        .chars()
+                        .map(|c| {
+                            if c.is_ascii_alphanumeric() || c == '.' || c == '-' {
+                                c
+                            } else {
+                                '_'
+                            }
+                        })
+                        .collect();
+                    path.with_file_name(format!("{stem}-{safe}.png"))
+                };
+                let png = render_png(mesh, values, &figure_params(name, values, highlight))?;
+                set.stage(&target, |w| w.write_all(&png))?;
             }
-            .into());
         }
-        if let Err(e) = write_atomic(&staged_name(target), |w| w.write_all(bytes)) {
-            remove(k);
-            return Err(match e {
-                // Name the file the user asked for, not the staging name.
-                MeshError::Io { source, .. } => MeshError::Io {
-                    path: target.clone(),
-                    source,
-                },
-                other => other,
-            }
-            .into());
+        OutputFormat::Field(format) => {
+            let refs: Vec<(&str, &[f64])> = fields.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+            let colors = (format == FieldFormat::Ply).then(|| colors_of(&fields[0].1));
+            stage_field(&mut set, path, format, mesh, &refs, colors.as_deref())?;
         }
     }
-    for (k, (target, _)) in files.iter().enumerate() {
-        if let Err(source) = std::fs::rename(staged_name(target), target) {
-            for (t, _) in &files[k..] {
-                let _ = std::fs::remove_file(staged_name(t));
-            }
-            return Err(MeshError::Io {
-                path: target.clone(),
-                source,
-            }
-            .into());
-        }
-    }
-    Ok(())
+    let written: Vec<PathBuf> = set.targets().map(Path::to_path_buf).collect();
+    set.commit()?;
+    Ok(written)
 }
 
 /// Render parameters for a field: Viridis for one-signed fields, Coolwarm centred on zero for
@@ -210,7 +194,7 @@ pub(crate) fn figure_params(title: &str, values: &[f64], highlight: &[u32]) -> R
 }
 
 /// Vertex colors of a field through Viridis over its range.
-fn colors_of(values: &[f64]) -> Vec<[u8; 3]> {
+pub(crate) fn colors_of(values: &[f64]) -> Vec<[u8; 3]> {
     let (lo, hi) = values
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));

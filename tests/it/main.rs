@@ -9,4 +9,4 @@ mod cli_distance;
 mod cli_hks;
 mod fuzz_regressions;
 mod no_unwrap;
-mod render;
+mod thin_library;

@@ -19,13 +19,15 @@
 //!
 //! # Writing
 //! [`write_atomic`] writes through a temporary file in the target directory and renames it
-//! into place, so a crash or an error never leaves a half-written file. [`write_field`] writes
+//! into place, so a crash or an error never leaves a half-written file; [`AtomicSet`] does the
+//! same for a set of files replaced all-or-nothing. [`write_field`] writes
 //! per-vertex fields as PLY (binary little-endian), NPY or CSV; [`read_field`] reads NPY/CSV
 //! fields back; [`write_mesh`] writes OFF, OBJ or PLY meshes.
 
 use crate::{MeshError, TriMesh};
 use std::path::Path;
 
+mod atomic;
 mod field;
 mod obj;
 mod off;
@@ -33,7 +35,8 @@ mod ply;
 mod stl;
 mod text;
 
-pub use field::{read_field, write_atomic, write_field, write_mesh};
+pub use atomic::{write_atomic, AtomicSet};
+pub use field::{read_field, stage_field, write_field, write_mesh, FieldFormat};
 
 /// A supported mesh file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -9,8 +9,8 @@
 //! pure Rust (z-buffer rasteriser, built-in 5×7 font, PNG through the `png` crate).
 //!
 //! ```no_run
-//! use wfem::render::{render_png, RenderParams};
-//! let mesh = wfem::mesh_fem::generate::bumpy(3);
+//! use wfem_render::{render_png, RenderParams};
+//! let mesh = mesh_fem::generate::bumpy(3);
 //! let field: Vec<f64> = mesh.positions().iter().map(|p| p[1]).collect();
 //! let png = render_png(&mesh, &field, &RenderParams::default())?;
 //! std::fs::write("/tmp/height.png", png)?;

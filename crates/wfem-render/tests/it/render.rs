@@ -2,9 +2,9 @@
 //! iso-lines are), the legend, the colormaps against published reference colours and CIE L*,
 //! and every error variant.
 
-use wfem::mesh_fem::generate::{bumpy, grid, icosphere, torus};
-use wfem::mesh_fem::TriMesh;
-use wfem::render::{
+use mesh_fem::generate::{bumpy, grid, icosphere, torus};
+use mesh_fem::TriMesh;
+use wfem_render::{
     layout, render_png, render_rgb, symmetric_range, Colormap, RenderError, RenderParams, RgbImage, UpAxis, View,
 };
 

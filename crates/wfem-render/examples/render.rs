@@ -1,14 +1,14 @@
 //! Renders a smooth field with iso-lines on the generated `bumpy(4)` mesh and writes a PNG.
 //!
 //! ```text
-//! cargo run --release --example render -- /tmp/wfem-render.png
+//! cargo run --release -p wfem-render --example render -- /tmp/wfem-render.png
 //! ```
 //! The field is a smooth "distance-like" bump exp(−|p − p₀|²/σ²) centred at one vertex, which
 //! is marked with a red dot, like the basis functions K_t e_i in the paper's figures.
 
+use mesh_fem::generate::bumpy;
 use std::time::Instant;
-use wfem::mesh_fem::generate::bumpy;
-use wfem::render::{render_png, RenderParams};
+use wfem_render::{render_png, RenderParams};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args()
