@@ -6,7 +6,8 @@ use mesh_fem::io::read_field;
 use mesh_fem::{assemble, AssemblyParams};
 use std::io::Write;
 use std::path::PathBuf;
-use wfem_heat::{feature_approximation, ApproxParams, Coefficients, HeatKernel, HeatParams, Method, Persistence};
+use wfem_heat::approx::{feature_approximation, ApproxParams, Coefficients, Persistence};
+use wfem_heat::{HeatKernel, HeatParams, Method};
 
 /// Coefficients of the global component.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -88,7 +89,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         coefficients: args.coefficients.into(),
         ..ApproxParams::default()
     };
-    let approx = feature_approximation(&mesh, &ops, &kernel, &f, &params)?;
+    let approx = feature_approximation(&mesh, &kernel, &f, &params)?;
     writeln!(
         out,
         "{} vertices, {} critical points of f, {} anchors (persistence {}{}), λ_{} = {:.6e}",

@@ -4,23 +4,27 @@ use super::{check_output, load_usable, write_fields, CliError, MeshArgs, Output}
 use clap::{Args, ValueEnum};
 use mesh_fem::{assemble, AssemblyParams};
 use std::io::Write;
-use wfem_heat::{DiffusionDistance, DistanceKind, DistanceParams};
+use wfem_heat::{DiffusionDistance, DistanceKind, DistanceParams, HeatKernel, HeatParams, Method};
 
 /// Which diffusion distance.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DistanceKindArg {
-    /// wFEM: ‖h_i − h_j‖_B with h_i = K_{t/2} e_i (paper, Eq. (18b)), i.e. from S_t = B K_t.
+    /// The diffusion distance (Σ_k e^{−2λ_k t}(x_k(i) − x_k(j))²)^{1/2}, from H_{2t} = K_{2t}B⁻¹
+    /// (the paper's linear FEM diffusion distance): 0 at the source, growing with distance.
     #[default]
-    Wfem,
-    /// Linear FEM / standard: (Σ_k e^{−2λ_k t}(x_k(i) − x_k(j))²)^{1/2}, from H̃_{2t} = K_{2t}B⁻¹.
-    Linear,
+    #[value(alias = "linear")]
+    Diffusion,
+    /// The paper's wFEM distance ‖h_i − h_j‖_B, h_i = K_{t/2} e_i (Eq. (18b)), from S_t = B K_t:
+    /// weighted by the vertex areas twice, it follows the mesh's areas on irregular meshes.
+    #[value(alias = "wfem")]
+    MassWeighted,
 }
 
 impl From<DistanceKindArg> for DistanceKind {
     fn from(k: DistanceKindArg) -> Self {
         match k {
-            DistanceKindArg::Wfem => DistanceKind::Wfem,
-            DistanceKindArg::Linear => DistanceKind::Linear,
+            DistanceKindArg::Diffusion => DistanceKind::Diffusion,
+            DistanceKindArg::MassWeighted => DistanceKind::MassWeighted,
         }
     }
 }
@@ -38,9 +42,10 @@ pub struct DistanceArgs {
     #[arg(long)]
     pub from: u32,
     /// Which distance.
-    #[arg(long, value_enum, default_value_t = DistanceKindArg::Wfem)]
+    #[arg(long, value_enum, default_value_t = DistanceKindArg::Diffusion)]
     pub kind: DistanceKindArg,
-    /// Degree of the rational approximation (error ≈ 9.3^-degree).
+    /// Use the paper's rational method of this degree (error ≈ 9.3^-degree) instead of the
+    /// default fast exact path.
     #[arg(long)]
     pub degree: Option<usize>,
     /// Output file: .ply, .npy, .csv or .png.
@@ -48,8 +53,8 @@ pub struct DistanceArgs {
     pub output: Output,
 }
 
-/// `wfem distance`: the row d_t(i, ·) of diffusion distances by the rational method (one
-/// factorization per pole; the diagonal of the Gram matrix costs n right-hand sides).
+/// `wfem distance`: the row d_t(i, ·) of diffusion distances (one kernel column and the
+/// diagonal of the Gram matrix).
 pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError> {
     check_output(&args.input.mesh, &args.output.path)?;
     let mesh = load_usable(&args.input)?;
@@ -61,16 +66,18 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
         )));
     }
     let ops = assemble(&mesh, &AssemblyParams::default())?;
-    let params = DistanceParams {
-        degree: args.degree.unwrap_or(shifted_solve::DEFAULT_DEGREE),
-        ..Default::default()
-    };
-    let dd = DiffusionDistance::new(&ops, args.kind.into(), args.t, &params)?;
+    let method = args.degree.map_or_else(Method::default, Method::rational);
+    let kernel = HeatKernel::new(
+        &ops,
+        HeatParams {
+            method,
+            ..Default::default()
+        },
+    )?;
+    let kind: DistanceKind = args.kind.into();
+    let dd = DiffusionDistance::new(&kernel, kind, args.t, &DistanceParams::default())?;
     let row = dd.row(i)?;
-    let name = match args.kind {
-        DistanceKindArg::Wfem => format!("wfem_distance_t={}", args.t),
-        DistanceKindArg::Linear => format!("linear_distance_t={}", args.t),
-    };
+    let name = format!("{}_distance_t={}", kind.name().replace('-', "_"), args.t);
     for path in write_fields(&args.output, &mesh, &[(name, row)], &[args.from])? {
         writeln!(out, "wrote {}", path.display())?;
     }
