@@ -155,6 +155,29 @@ pub(crate) trait PreparedMethod: Send + Sync + Debug {
         self.apply(ops, x.as_ref(), t)
     }
 
+    /// `K_t F` (or `H_t F` with `kernel_matrix`) for every t of `times`, with a per-t error
+    /// estimate where the method has one. By default one evaluation per t; methods that can
+    /// serve many times from one factorization do.
+    fn apply_times(
+        &self,
+        ops: &Operators,
+        f: MatRef<'_, f64>,
+        times: &[f64],
+        kernel_matrix: bool,
+    ) -> Result<(Vec<Mat<f64>>, Vec<Option<f64>>), HeatError> {
+        let values = times
+            .iter()
+            .map(|&t| {
+                if kernel_matrix {
+                    self.apply_kernel_matrix(ops, f, t)
+                } else {
+                    self.apply(ops, f, t)
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((values, vec![None; times.len()]))
+    }
+
     /// The eigenpairs, for the spectral methods.
     fn eigenbasis(&self) -> Option<&Eigenbasis> {
         None
