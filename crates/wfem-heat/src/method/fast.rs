@@ -14,7 +14,7 @@
 //! s = 0, the convergence does not depend on ‖tL‖ (mesh size or t), only on the accuracy
 //! wanted: a few tens of solves reach 1e−12.
 
-use super::{FactorCache, PreparedMethod};
+use super::{FactorCache, PreparedMethod, TimesResult};
 use crate::{HeatError, Operators};
 use faer::{Mat, MatMut, MatRef};
 use shifted_solve::{lanczos_function, lanczos_function_many, KrylovParams, LanczosOutcome, SolveError};
@@ -147,7 +147,7 @@ impl Fast {
         f: MatRef<'_, f64>,
         times: &[f64],
         kernel_matrix: bool,
-    ) -> Result<(Vec<Mat<f64>>, Vec<Option<f64>>), HeatError> {
+    ) -> TimesResult {
         let (t_min, t_max) = times
             .iter()
             .fold((f64::INFINITY, 0.0f64), |(a, b), &t| (a.min(t), b.max(t)));
@@ -206,7 +206,7 @@ impl PreparedMethod for Fast {
         f: MatRef<'_, f64>,
         times: &[f64],
         kernel_matrix: bool,
-    ) -> Result<(Vec<Mat<f64>>, Vec<Option<f64>>), HeatError> {
+    ) -> TimesResult {
         self.run_times(ops, f, times, kernel_matrix)
     }
 

@@ -139,6 +139,9 @@ impl Default for Method {
     }
 }
 
+/// Values at several times with an optional per-time error estimate.
+pub(crate) type TimesResult = Result<(Vec<Mat<f64>>, Vec<Option<f64>>), HeatError>;
+
 /// A method with its t-independent data, applied by [`crate::HeatKernel`].
 pub(crate) trait PreparedMethod: Send + Sync + Debug {
     /// `K_t F` for every column of F (validated; the null space of L is deflated by the
@@ -164,7 +167,7 @@ pub(crate) trait PreparedMethod: Send + Sync + Debug {
         f: MatRef<'_, f64>,
         times: &[f64],
         kernel_matrix: bool,
-    ) -> Result<(Vec<Mat<f64>>, Vec<Option<f64>>), HeatError> {
+    ) -> TimesResult {
         let values = times
             .iter()
             .map(|&t| {
