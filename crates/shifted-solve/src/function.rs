@@ -116,8 +116,14 @@ fn h_e1(theta: &[f64], u: &Mat<f64>, h: &dyn Fn(f64) -> f64) -> Vec<f64> {
     y
 }
 
-/// A column result of the lockstep iteration: its index and its value, if it converged.
-type ColumnResult = (usize, Result<Option<Vec<f64>>, SolveError>);
+/// Per function: the n × k results and the k outcomes.
+pub type FunctionsResult = Result<(Vec<Mat<f64>>, Vec<Vec<LanczosOutcome>>), SolveError>;
+
+/// Per column: its n × count results and its outcomes.
+type ColumnsResult = Result<Vec<(Mat<f64>, Vec<LanczosOutcome>)>, SolveError>;
+
+/// A column of the lockstep iteration: its index, its process and its functions.
+type ColumnSlot<'p, 'a> = (usize, &'p mut LanczosProcess<'a>, &'p mut Functions);
 
 /// Relative successive differences below this are rounding noise of the recurrence (not a
 /// convergence rate to extrapolate).
@@ -147,20 +153,6 @@ impl FunctionTracker {
                 beta: Vec::new(),
             },
         }
-    }
-
-    /// After one step of `process` (which returned β_j): the result if converged.
-    fn observe(
-        &mut self,
-        process: &LanczosProcess<'_>,
-        b_j: f64,
-        h: &dyn Fn(f64) -> f64,
-        tol: f64,
-    ) -> Result<Option<Vec<f64>>, SolveError> {
-        let (theta, evecs) = process.ritz()?;
-        Ok(self
-            .judge(process, &theta, &evecs, b_j, h, tol)
-            .map(|y| process.combine(&y, self.outcome.norm)))
     }
 
     /// The stopping rule given the Ritz decomposition (θ, U) of T_m: the coefficients
@@ -234,6 +226,90 @@ impl FunctionTracker {
     }
 }
 
+/// The stopping rules of several functions h_0 … h_{count−1} of one process: each stops on its
+/// own; function l keeps the coefficients y_l of the step at which it converged (the bases are
+/// nested, so `V_m [y_l; 0]` is its result at any later m).
+struct Functions {
+    trackers: Vec<FunctionTracker>,
+    coefficients: Vec<Option<Vec<f64>>>,
+    running: Vec<usize>,
+}
+
+impl Functions {
+    fn new(count: usize, norm: f64) -> Self {
+        Self {
+            trackers: (0..count).map(|_| FunctionTracker::new(norm)).collect(),
+            coefficients: vec![None; count],
+            running: (0..count).collect(),
+        }
+    }
+
+    /// Nothing to do (a zero start vector): every result is 0, exactly.
+    fn trivial(&mut self) {
+        self.trackers.iter_mut().for_each(|t| t.outcome.estimate = 0.0);
+        self.coefficients.iter_mut().for_each(|c| *c = Some(Vec::new()));
+        self.running.clear();
+    }
+
+    /// Judges every running function after one step (one Ritz decomposition for all);
+    /// returns true when all have converged.
+    fn advance(
+        &mut self,
+        process: &LanczosProcess<'_>,
+        b_j: f64,
+        h: &(dyn Fn(usize, f64) -> f64 + Sync),
+        tol: f64,
+    ) -> Result<bool, SolveError> {
+        let (theta, evecs) = process.ritz()?;
+        let mut still = Vec::with_capacity(self.running.len());
+        for &l in &self.running {
+            let hl = |s: f64| h(l, s);
+            match self.trackers[l].judge(process, &theta, &evecs, b_j, &hl, tol) {
+                Some(y) => self.coefficients[l] = Some(y),
+                None => still.push(l),
+            }
+        }
+        self.running = still;
+        Ok(self.running.is_empty())
+    }
+
+    /// Marks the steps done for every running function (checks skipped during a warm-up).
+    fn skip(&mut self, steps: usize) {
+        for &l in &self.running {
+            self.trackers[l].outcome.iterations = steps;
+        }
+    }
+
+    fn failure(&self) -> SolveError {
+        self.running.first().map_or(
+            SolveError::KrylovNoConvergence {
+                iterations: 0,
+                estimate: f64::NAN,
+            },
+            |&l| self.trackers[l].failure(),
+        )
+    }
+
+    /// The n × count results `‖u‖_M V Y` (one matrix product).
+    fn results(&self, process: &LanczosProcess<'_>) -> Mat<f64> {
+        let m = process.steps();
+        let y = Mat::<f64>::from_fn(m, self.coefficients.len(), |i, l| {
+            self.coefficients[l]
+                .as_ref()
+                .and_then(|c| c.get(i).copied())
+                .unwrap_or(0.0)
+        });
+        if m == 0 {
+            return Mat::zeros(process.dimension(), self.coefficients.len());
+        }
+        process.combine_block(y.as_ref(), process.norm())
+    }
+
+    fn outcomes(self) -> Vec<LanczosOutcome> {
+        self.trackers.into_iter().map(|t| t.outcome).collect()
+    }
+}
+
 /// `h(S) u ≈ ‖u‖_M V_m h(T_m) e₁` with `solve` applying A⁻¹ and `mass` applying M
 /// (S = A⁻¹M; a [`LanczosProcess`] with local reorthogonalisation).
 ///
@@ -248,140 +324,15 @@ pub fn lanczos_function(
     solve: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
     mass: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
     u: &[f64],
-    h: &dyn Fn(f64) -> f64,
+    h: &(dyn Fn(f64) -> f64 + Sync),
     params: &LanczosParams,
 ) -> Result<(Vec<f64>, LanczosOutcome), SolveError> {
-    let n = u.len();
-    // Measured on the icosphere at n = 40,962 (f = e_i, t = 0.01): local reorthogonalisation
-    // gives the same iteration counts and errors against the rational reference for
-    // tol = 1e−9…1e−12 as full Gram–Schmidt, which cost 40 ms of the 250 ms.
-    let apply = |_: &[f64], mv: &[f64]| Ok(solve(mv));
-    let mut process = LanczosProcess::new(u, &apply, mass, Reorthogonalization::Local, params.max_iter.min(24));
-    let mut tracker = FunctionTracker::new(process.norm());
-    if process.exhausted() {
-        tracker.outcome.estimate = 0.0;
-        return Ok((vec![0.0; n], tracker.outcome));
-    }
-    for _ in 0..params.max_iter.min(n) {
-        let b_j = process.step()?;
-        if let Some(x) = tracker.observe(&process, b_j, h, params.tol)? {
-            return Ok((x, tracker.outcome));
-        }
-    }
-    Err(tracker.failure())
-}
-
-/// [`lanczos_function`] for every column of `u` (n × k): up to `block` columns at a time step
-/// in lockstep and share one block solve per step (`solve_block` overwrites an n × k' block
-/// with `A⁻¹` of it), so a sparse factor is swept once per step for all columns still running —
-/// what makes the shift-and-invert Krylov methods competitive with blocked direct solves when
-/// there are many right-hand sides. Columns stop on their own; a column that fails stops the
-/// call with its error. `mass` applies M to one vector (called in parallel over columns).
-///
-/// The stopping rule needs the Ritz decomposition of T_m at every step (O(m³), which dominates
-/// once the block solve is shared). The number of steps depends little on the column (it is
-/// set by γ and the tolerance), so after the first block the checks start two steps before the
-/// fewest steps any column has needed: a column can only run longer (more accurately), never
-/// stop earlier.
-///
-/// # Errors
-/// As [`lanczos_function`] (the first failing column).
-pub fn lanczos_function_many(
-    solve_block: &(dyn Fn(MatMut<'_, f64>) + Sync),
-    mass: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
-    u: MatRef<'_, f64>,
-    h: &(dyn Fn(f64) -> f64 + Sync),
-    params: &LanczosParams,
-    block: usize,
-) -> Result<(Mat<f64>, Vec<LanczosOutcome>), SolveError> {
-    let (n, k) = (u.nrows(), u.ncols());
-    let mut out = Mat::<f64>::zeros(n, k);
-    let mut outcomes = Vec::with_capacity(k);
-    let mut warmup = 0usize;
-    for start in (0..k).step_by(block.max(1)) {
-        let end = (start + block.max(1)).min(k);
-        let (x, o) = lockstep(solve_block, mass, u.get(.., start..end), h, params, warmup)?;
-        out.as_mut().get_mut(.., start..end).copy_from(&x);
-        if let Some(fewest) = o.iter().map(|o| o.iterations).filter(|&i| i > 0).min() {
-            warmup = warmup.max(fewest.saturating_sub(2));
-        }
-        outcomes.extend(o);
-    }
-    Ok((out, outcomes))
-}
-
-/// One block of [`lanczos_function_many`]: no convergence checks before step `warmup`.
-fn lockstep(
-    solve_block: &(dyn Fn(MatMut<'_, f64>) + Sync),
-    mass: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
-    u: MatRef<'_, f64>,
-    h: &(dyn Fn(f64) -> f64 + Sync),
-    params: &LanczosParams,
-    warmup: usize,
-) -> Result<(Mat<f64>, Vec<LanczosOutcome>), SolveError> {
-    use rayon::prelude::*;
-    let (n, k) = (u.nrows(), u.ncols());
-    // The operator is applied outside the processes (block solve), never through `apply`.
-    let unused = |_: &[f64], mv: &[f64]| Ok(mv.to_vec());
-    let cols: Vec<Vec<f64>> = (0..k).map(|j| u.col(j).iter().copied().collect()).collect();
-    let mut processes: Vec<LanczosProcess<'_>> = cols
-        .par_iter()
-        .map(|c| LanczosProcess::new(c, &unused, mass, Reorthogonalization::Local, params.max_iter.min(24)))
-        .collect();
-    let mut trackers: Vec<FunctionTracker> = processes.iter().map(|p| FunctionTracker::new(p.norm())).collect();
-    let mut out = Mat::<f64>::zeros(n, k);
-    let mut active: Vec<usize> = Vec::with_capacity(k);
-    for (j, (p, t)) in processes.iter().zip(trackers.iter_mut()).enumerate() {
-        if p.exhausted() {
-            t.outcome.estimate = 0.0;
-        } else {
-            active.push(j);
-        }
-    }
-    let mut step = 0;
-    while !active.is_empty() {
-        if step >= params.max_iter.min(n) {
-            return Err(trackers[active[0]].failure());
-        }
-        step += 1;
-        let mut rhs = Mat::<f64>::from_fn(n, active.len(), |i, c| processes[active[c]].next_mass_vector()[i]);
-        solve_block(rhs.as_mut());
-        // Finish the step of every active process in parallel.
-        let mut slots: Vec<(usize, &mut LanczosProcess<'_>, &mut FunctionTracker)> = processes
-            .iter_mut()
-            .zip(trackers.iter_mut())
-            .enumerate()
-            .filter(|(j, _)| active.binary_search(j).is_ok())
-            .map(|(j, (p, t))| (j, p, t))
-            .collect();
-        let results: Vec<ColumnResult> = slots
-            .par_iter_mut()
-            .enumerate()
-            .map(|(c, (j, p, t))| {
-                let w: Vec<f64> = rhs.col(c).iter().copied().collect();
-                let b_j = p.step_with(w);
-                if step < warmup && !p.exhausted() {
-                    t.outcome.iterations = step;
-                    return (*j, Ok(None));
-                }
-                (*j, t.observe(p, b_j, h, params.tol))
-            })
-            .collect();
-        drop(slots);
-        let mut still = Vec::with_capacity(active.len());
-        for (j, result) in results {
-            match result? {
-                Some(x) => out.col_as_slice_mut(j).copy_from_slice(&x),
-                None => still.push(j),
-            }
-        }
-        active = still;
-    }
-    Ok((out, trackers.into_iter().map(|t| t.outcome).collect()))
-}
-
-fn norm(a: &[f64]) -> f64 {
-    a.iter().map(|x| x * x).sum::<f64>().sqrt()
+    let (x, mut outcomes) = lanczos_functions(solve, mass, u, &|_, s| h(s), 1, params)?;
+    let outcome = outcomes.pop().ok_or(SolveError::KrylovNoConvergence {
+        iterations: 0,
+        estimate: f64::NAN,
+    })?;
+    Ok((x.col(0).iter().copied().collect(), outcome))
 }
 
 /// Several functions of S applied to one vector from one Krylov space:
@@ -391,7 +342,8 @@ fn norm(a: &[f64]) -> f64 {
 /// grown until every function has converged, and function l uses the basis of the step at
 /// which it converged (its coefficients padded with zeros: the bases are nested), so each
 /// result is the one [`lanczos_function`] would return for it alone. The final combination is
-/// one matrix product `V Y`.
+/// one matrix product `V Y`. The solves and products with M of the one vector may use every
+/// core.
 ///
 /// Returns the n × count results and one outcome per function (its steps and estimate).
 ///
@@ -407,41 +359,168 @@ pub fn lanczos_functions(
     params: &LanczosParams,
 ) -> Result<(Mat<f64>, Vec<LanczosOutcome>), SolveError> {
     let n = u.len();
+    // Measured on the icosphere at n = 40,962 (f = e_i, t = 0.01): local reorthogonalisation
+    // gives the same iteration counts and errors against the rational reference for
+    // tol = 1e−9…1e−12 as full Gram–Schmidt, which cost 40 ms of the 250 ms.
     let apply = |_: &[f64], mv: &[f64]| Ok(solve(mv));
-    let mut process = LanczosProcess::new(u, &apply, mass, Reorthogonalization::Local, params.max_iter.min(48));
-    let norm0 = process.norm();
-    let mut trackers: Vec<FunctionTracker> = (0..count).map(|_| FunctionTracker::new(norm0)).collect();
-    let mut coefficients: Vec<Option<Vec<f64>>> = vec![None; count];
-    if process.exhausted() || count == 0 {
-        trackers.iter_mut().for_each(|t| t.outcome.estimate = 0.0);
-        return Ok((Mat::zeros(n, count), trackers.into_iter().map(|t| t.outcome).collect()));
+    let mut process = LanczosProcess::new(u, &apply, mass, Reorthogonalization::Local, params.max_iter.min(24));
+    let mut functions = Functions::new(count, process.norm());
+    if process.exhausted() {
+        functions.trivial();
     }
-    let mut running: Vec<usize> = (0..count).collect();
-    for _ in 0..params.max_iter.min(n) {
+    let mut steps = 0;
+    while !functions.running.is_empty() {
+        if steps >= params.max_iter.min(n) {
+            return Err(functions.failure());
+        }
+        steps += 1;
         let b_j = process.step()?;
-        let (theta, evecs) = process.ritz()?;
-        let mut still = Vec::with_capacity(running.len());
-        for &l in &running {
-            let hl = |s: f64| h(l, s);
-            match trackers[l].judge(&process, &theta, &evecs, b_j, &hl, params.tol) {
-                Some(y) => coefficients[l] = Some(y),
-                None => still.push(l),
+        functions.advance(&process, b_j, h, params.tol)?;
+    }
+    Ok((functions.results(&process), functions.outcomes()))
+}
+
+/// [`lanczos_function`] for every column of `u` (n × k): a shorthand for
+/// [`lanczos_functions_many`] with one function.
+///
+/// # Errors
+/// As [`lanczos_functions_many`].
+pub fn lanczos_function_many(
+    solve_block: &(dyn Fn(MatMut<'_, f64>) + Sync),
+    mass: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
+    u: MatRef<'_, f64>,
+    h: &(dyn Fn(f64) -> f64 + Sync),
+    params: &LanczosParams,
+    block: usize,
+) -> Result<(Mat<f64>, Vec<LanczosOutcome>), SolveError> {
+    let (mut values, mut outcomes) = lanczos_functions_many(solve_block, mass, u, &|_, s| h(s), 1, params, block)?;
+    Ok((values.remove(0), outcomes.remove(0)))
+}
+
+/// [`lanczos_functions`] for every column of `u` (n × k): up to `block` columns at a time step
+/// in lockstep and share one block solve per step (`solve_block` overwrites an n × k' block
+/// with `A⁻¹` of it), so a sparse factor is swept once per step for all columns still running —
+/// what makes the shift-and-invert Krylov methods competitive with blocked direct solves when
+/// there are many right-hand sides. Columns stop on their own; a column that fails stops the
+/// call with its error. `mass` applies M to one vector (called in parallel over columns).
+///
+/// The stopping rule needs the Ritz decomposition of T_m at every step (O(m³), which dominates
+/// once the block solve is shared). The number of steps depends little on the column (it is
+/// set by σ, the functions and the tolerance), so after the first block the checks start two
+/// steps before the fewest steps any column has needed: a column can only run longer (more
+/// accurately), never stop earlier.
+///
+/// Returns, per function, the n × k results and the k outcomes.
+///
+/// # Errors
+/// As [`lanczos_function`] (the first failing column).
+pub fn lanczos_functions_many(
+    solve_block: &(dyn Fn(MatMut<'_, f64>) + Sync),
+    mass: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
+    u: MatRef<'_, f64>,
+    h: &(dyn Fn(usize, f64) -> f64 + Sync),
+    count: usize,
+    params: &LanczosParams,
+    block: usize,
+) -> FunctionsResult {
+    let (n, k) = (u.nrows(), u.ncols());
+    let mut values = vec![Mat::<f64>::zeros(n, k); count];
+    let mut outcomes: Vec<Vec<LanczosOutcome>> = vec![Vec::with_capacity(k); count];
+    let mut warmup = 0usize;
+    for start in (0..k).step_by(block.max(1)) {
+        let end = (start + block.max(1)).min(k);
+        let columns = lockstep(solve_block, mass, u.get(.., start..end), h, count, params, warmup)?;
+        let mut fewest = usize::MAX;
+        for (c, (x, o)) in columns.into_iter().enumerate() {
+            for (l, outcome) in o.into_iter().enumerate() {
+                values[l].col_as_slice_mut(start + c).copy_from_slice(x.col_as_slice(l));
+                if outcome.iterations > 0 {
+                    fewest = fewest.min(outcome.iterations);
+                }
+                outcomes[l].push(outcome);
             }
         }
-        running = still;
-        if running.is_empty() {
-            break;
+        if fewest < usize::MAX {
+            warmup = warmup.max(fewest.saturating_sub(2));
         }
     }
-    if let Some(&l) = running.first() {
-        return Err(trackers[l].failure());
+    Ok((values, outcomes))
+}
+
+/// One block of [`lanczos_functions_many`]: per column, its n × count results and outcomes;
+/// no convergence checks before step `warmup`.
+fn lockstep(
+    solve_block: &(dyn Fn(MatMut<'_, f64>) + Sync),
+    mass: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
+    u: MatRef<'_, f64>,
+    h: &(dyn Fn(usize, f64) -> f64 + Sync),
+    count: usize,
+    params: &LanczosParams,
+    warmup: usize,
+) -> ColumnsResult {
+    use rayon::prelude::*;
+    let (n, k) = (u.nrows(), u.ncols());
+    // The operator is applied outside the processes (block solve), never through `apply`.
+    let unused = |_: &[f64], mv: &[f64]| Ok(mv.to_vec());
+    let cols: Vec<Vec<f64>> = (0..k).map(|j| u.col(j).iter().copied().collect()).collect();
+    let mut processes: Vec<LanczosProcess<'_>> = cols
+        .par_iter()
+        .map(|c| LanczosProcess::new(c, &unused, mass, Reorthogonalization::Local, params.max_iter.min(24)))
+        .collect();
+    let mut functions: Vec<Functions> = processes.iter().map(|p| Functions::new(count, p.norm())).collect();
+    let mut active: Vec<usize> = Vec::with_capacity(k);
+    for (j, (p, f)) in processes.iter().zip(functions.iter_mut()).enumerate() {
+        if p.exhausted() {
+            f.trivial();
+        } else {
+            active.push(j);
+        }
     }
-    let m = process.steps();
-    let y = Mat::<f64>::from_fn(m, count, |i, l| {
-        coefficients[l].as_ref().and_then(|c| c.get(i).copied()).unwrap_or(0.0)
-    });
-    Ok((
-        process.combine_block(y.as_ref(), norm0),
-        trackers.into_iter().map(|t| t.outcome).collect(),
-    ))
+    let mut step = 0;
+    while !active.is_empty() {
+        if step >= params.max_iter.min(n) {
+            return Err(functions[active[0]].failure());
+        }
+        step += 1;
+        let mut rhs = Mat::<f64>::from_fn(n, active.len(), |i, c| processes[active[c]].next_mass_vector()[i]);
+        solve_block(rhs.as_mut());
+        // Finish the step of every active process in parallel.
+        let mut slots: Vec<ColumnSlot<'_, '_>> = processes
+            .iter_mut()
+            .zip(functions.iter_mut())
+            .enumerate()
+            .filter(|(j, _)| active.binary_search(j).is_ok())
+            .map(|(j, (p, f))| (j, p, f))
+            .collect();
+        let results: Vec<(usize, Result<bool, SolveError>)> = slots
+            .par_iter_mut()
+            .enumerate()
+            .map(|(c, (j, p, f))| {
+                let w: Vec<f64> = rhs.col(c).iter().copied().collect();
+                let b_j = p.step_with(w);
+                if step < warmup && !p.exhausted() {
+                    f.skip(step);
+                    return (*j, Ok(false));
+                }
+                (*j, f.advance(p, b_j, h, params.tol))
+            })
+            .collect();
+        drop(slots);
+        let mut still = Vec::with_capacity(active.len());
+        for (j, done) in results {
+            if !done? {
+                still.push(j);
+            }
+        }
+        active = still;
+    }
+    Ok(processes
+        .iter()
+        .zip(functions)
+        .map(|(p, f)| (f.results(p), f.outcomes()))
+        .collect())
+}
+
+fn norm(a: &[f64]) -> f64 {
+    a.iter().map(|x| x * x).sum::<f64>().sqrt()
 }

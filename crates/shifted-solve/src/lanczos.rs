@@ -159,6 +159,11 @@ impl<'a> LanczosProcess<'a> {
         self.norm
     }
 
+    /// The vector length n.
+    pub fn dimension(&self) -> usize {
+        self.basis.v.nrows()
+    }
+
     /// Steps done (the size m of T_m).
     pub fn steps(&self) -> usize {
         self.alpha.len()

@@ -57,7 +57,8 @@ pub use error::SolveError;
 pub use factor::{CholeskyPattern, SpdFactor};
 pub use faer::c64;
 pub use function::{
-    lanczos_function, lanczos_function_many, lanczos_functions, KrylovParams, LanczosOutcome, LanczosParams,
+    lanczos_function, lanczos_function_many, lanczos_functions, lanczos_functions_many, FunctionsResult, KrylovParams,
+    LanczosOutcome, LanczosParams,
 };
 pub use iterative::{MinresParams, Preconditioner, PreconditionerShift};
 pub use lanczos::{largest_ritz_value, LanczosOperator, LanczosProcess, Reorthogonalization};

@@ -166,6 +166,23 @@ impl Operators {
         self.pair.mass_values().iter().sum()
     }
 
+    /// The time from which `K_t = P` (the projector onto the null space of L) to double
+    /// precision: `10¹⁴/λ̄` with `λ̄ = tr(L)/tr(M)` the mean Rayleigh quotient of the vertex
+    /// hat functions, about 1/h² on a mesh of edge length h. Since λ₂ ≥ λ̄/n² on any connected
+    /// mesh of n ≤ 10⁶ vertices (and far more in practice: λ̄/λ₂ ≈ (diameter/h)² ≈ n for a
+    /// surface), every non-constant mode has decayed by e^{−tλ₂} ≤ e^{−100} there. Methods need
+    /// not (and cannot: M + γtL overflows at t = 1e300) evaluate beyond it.
+    pub fn time_at_infinity(&self) -> f64 {
+        let diag_l: f64 = self.pair.diagonal(1.0, 0.0).iter().sum();
+        let diag_m: f64 = self.pair.diagonal(0.0, 1.0).iter().sum();
+        let mean = diag_l / diag_m;
+        if mean > 0.0 && mean.is_finite() {
+            1e14 / mean
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// The null space of L that every method deflates exactly.
     pub(crate) fn null_space(&self) -> &NullSpace {
         &self.null_space

@@ -161,13 +161,7 @@ pub(crate) trait PreparedMethod: Send + Sync + Debug {
     /// `K_t F` (or `H_t F` with `kernel_matrix`) for every t of `times`, with a per-t error
     /// estimate where the method has one. By default one evaluation per t; methods that can
     /// serve many times from one factorization do.
-    fn apply_times(
-        &self,
-        ops: &Operators,
-        f: MatRef<'_, f64>,
-        times: &[f64],
-        kernel_matrix: bool,
-    ) -> TimesResult {
+    fn apply_times(&self, ops: &Operators, f: MatRef<'_, f64>, times: &[f64], kernel_matrix: bool) -> TimesResult {
         let values = times
             .iter()
             .map(|&t| {
