@@ -14,6 +14,7 @@
 //! so no match can meet an impossible (method, data) pair.
 
 mod backward_euler;
+mod components;
 mod eigen;
 mod fast;
 mod rational;
@@ -117,8 +118,20 @@ impl Method {
         matches!(self, Method::Dense | Method::Fast(_) | Method::Rational { .. })
     }
 
-    /// Validates the parameters and runs the t-independent preparation on `ops`.
+    /// Validates the parameters and runs the t-independent preparation on `ops`: on every
+    /// connected component separately when there are several (`components.rs`; the
+    /// eigensolvers split components themselves, so that the eigenbasis stays one object).
     pub(crate) fn prepare(&self, ops: &Operators) -> Result<Box<dyn PreparedMethod>, HeatError> {
+        let parts = ops.components().len();
+        let eigen = matches!(self, Method::Dense | Method::Spectral { .. });
+        if parts > 1 && parts <= components::MAX_PARTS && !eigen {
+            return components::Components::prepare(ops, self);
+        }
+        self.prepare_connected(ops)
+    }
+
+    /// The preparation on one context, as it is.
+    pub(crate) fn prepare_connected(&self, ops: &Operators) -> Result<Box<dyn PreparedMethod>, HeatError> {
         match self {
             Method::Dense => eigen::EigenMethod::dense(ops),
             Method::Spectral { k, eigen } => eigen::EigenMethod::partial(ops, *k, eigen),
