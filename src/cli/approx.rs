@@ -12,8 +12,12 @@ use wfem_heat::{HeatKernel, HeatParams, Method};
 /// Coefficients of the global component.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum CoefficientsArg {
-    /// The paper's f_glob = Σ_{i∈A} f(p_i) K_t e_i.
+    /// The best approximation of f in span{K_t e_i : i ∈ A} (M-orthogonal projection).
     #[default]
+    LeastSquares,
+    /// The feature values averaged with heat-kernel weights: Σ f(p_i) K_t e_i / Σ K_t e_i.
+    Normalized,
+    /// The paper's literal f_glob = Σ_{i∈A} f(p_i) K_t e_i (small with sparse anchors).
     FeatureValues,
     /// Interpolate f on the anchors: Σ_{i∈A} c_i K_t e_i with f_glob(p_j) = f(p_j), j ∈ A.
     Interpolate,
@@ -22,6 +26,8 @@ pub enum CoefficientsArg {
 impl From<CoefficientsArg> for Coefficients {
     fn from(c: CoefficientsArg) -> Self {
         match c {
+            CoefficientsArg::Normalized => Coefficients::Normalized,
+            CoefficientsArg::LeastSquares => Coefficients::LeastSquares,
             CoefficientsArg::FeatureValues => Coefficients::FeatureValues,
             CoefficientsArg::Interpolate => Coefficients::Interpolate,
         }
@@ -51,7 +57,7 @@ pub struct ApproxArgs {
     #[arg(long, default_value_t = 20)]
     pub k: usize,
     /// Coefficients of the global component.
-    #[arg(long, value_enum, default_value_t = CoefficientsArg::FeatureValues)]
+    #[arg(long, value_enum, default_value_t = CoefficientsArg::LeastSquares)]
     pub coefficients: CoefficientsArg,
     /// Kernel.
     #[arg(long, value_enum, default_value_t = KernelArg::Wfem)]

@@ -400,7 +400,12 @@ pub fn inverse_cg(
             best_at = it;
         } else if it - best_at >= params.stall_window {
             return Err(refuse(
-                format!("the residual stalled for {} iterations", params.stall_window),
+                format!(
+                    "the residual stopped halving for {} iterations: f has components that K_t damps \
+                     below its own accuracy, i.e. it is not band-limited at this t (smooth it, e.g. \
+                     f = K_s h, or use a smaller t)",
+                    params.stall_window
+                ),
                 amp,
                 it,
                 res / f_norm,

@@ -434,3 +434,29 @@ fn errors_are_typed() {
     let (g, rep) = inverse_cg(&rk, &vec![0.0; n], 0.1, &InverseParams::default()).unwrap();
     assert!(g.iter().all(|&v| v == 0.0) && rep.iterations == 0);
 }
+
+/// Issue #16: `inverse_cg` with its default options inverts K_t on a smooth field with the
+/// default kernel (it refused one before: the stopping tolerance sat below what K_t is
+/// evaluated to).
+#[test]
+fn issue_16_inverse_cg_default_on_a_smooth_field() {
+    for (name, ops) in small_meshes() {
+        let n = ops.n();
+        let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+        let dense = dense(&ops);
+        // A smooth field: the first 6 eigenfunctions with decaying weights.
+        let f: Vec<f64> = (0..n)
+            .map(|i| (1..7).map(|k| dense.vectors[(i, k)] / k as f64).sum())
+            .collect();
+        for t in [1e-3, 1e-2, 0.1] {
+            let (g, report) =
+                inverse_cg(&kernel, &f, t, &InverseParams::default()).unwrap_or_else(|e| panic!("{name} t = {t}: {e}"));
+            let back = kernel.apply(&g, t).unwrap();
+            let err = wfem(&ops)
+                .mass_norm(&back.iter().zip(&f).map(|(a, b)| a - b).collect::<Vec<_>>())
+                .unwrap()
+                / wfem(&ops).mass_norm(&f).unwrap();
+            assert!(err < 1e-8, "{name} t = {t}: {err:e} ({report:?})");
+        }
+    }
+}
