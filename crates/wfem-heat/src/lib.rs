@@ -64,7 +64,17 @@ pub use error::HeatError;
 pub use kernel::{
     heat, DiagonalParams, DiagonalSeries, HeatKernel, HeatParams, KernelDiagonal, TimeSeries, MAX_ROUNDING_ERROR,
 };
+/// The mesh and FEM operator crate, re-exported so that depending on `wfem-heat` alone is
+/// enough to build the operators.
+pub use mesh_fem;
 pub use method::Method;
 pub use operators::{AsSparse, Conditioning, KernelKind, Operators};
+/// The shifted-solver crate (rational approximations, backends), re-exported.
+pub use shifted_solve;
 pub use shifted_solve::{rng, Backend, KrylovParams};
+
+/// The README's examples, compiled as doc tests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
 pub use spectral::{EigenParams, Eigenbasis, DENSE_MAX_VERTICES};
