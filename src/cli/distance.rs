@@ -1,8 +1,11 @@
 //! `wfem distance`: diffusion distances from one vertex to every vertex.
 
-use super::{check_output, load_usable, write_fields, CliError, MeshArgs, Output};
+use super::heat::check_degree;
+use super::output::{short_label, write_fields, Column, RenderArgs, Writing};
+use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
 use clap::{Args, ValueEnum};
 use mesh_fem::{assemble, AssemblyParams};
+use serde_json::json;
 use std::io::Write;
 use wfem_heat::{DiffusionDistance, DistanceKind, DistanceParams};
 
@@ -34,44 +37,69 @@ pub struct DistanceArgs {
     /// Diffusion time t > 0.
     #[arg(long = "t", allow_negative_numbers = true)]
     pub t: f64,
-    /// The vertex i whose distances d_t(i, ·) to every vertex are computed.
+    /// The vertex i (numbered as in the file) whose distances d_t(i, ·) to every vertex are
+    /// computed.
     #[arg(long)]
     pub from: u32,
     /// Which distance.
     #[arg(long, value_enum, default_value_t = DistanceKindArg::Wfem)]
     pub kind: DistanceKindArg,
-    /// Degree of the rational approximation (error ≈ 9.3^-degree).
+    /// Degree of the rational approximation (error ≈ 9.3^-degree; default 16).
     #[arg(long)]
     pub degree: Option<usize>,
-    /// Output file: .ply, .npy, .csv or .png.
+    /// Output file: .ply, .npy (+ .json sidecar), .csv or .png.
     #[arg(short = 'o', long = "output", value_parser = Output::parse)]
     pub output: Output,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub render: RenderArgs,
 }
 
 /// `wfem distance`: the row d_t(i, ·) of diffusion distances by the rational method (one
 /// factorization per pole; the diagonal of the Gram matrix costs n right-hand sides).
 pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    check_output(&args.input.mesh, &args.output.path)?;
-    let mesh = load_usable(&args.input)?;
-    let n = mesh.n_vertices();
-    let i = args.from as usize;
-    if i >= n {
-        return Err(CliError::Usage(format!(
-            "--from {i} is not a vertex (the mesh has {n} vertices)"
-        )));
-    }
-    let ops = assemble(&mesh, &AssemblyParams::default())?;
+    limits::time("--t", args.t)?;
+    check_degree(args.degree)?;
+    let label = short_label(args.t);
+    let kind = super::name_of(args.kind);
+    let suffix = format!("{kind}-distance-t{label}");
+    args.output
+        .check(Some(std::slice::from_ref(&suffix)), 1, &[&args.input.mesh])?;
+    let input = read_usable(&args.input)?;
+    let i = input.vertex("--from", args.from)?;
+    let ops = progress::run("assembling L, B, D", || {
+        assemble(&input.mesh, &AssemblyParams::default())
+    })?;
     let params = DistanceParams {
         degree: args.degree.unwrap_or(shifted_solve::DEFAULT_DEGREE),
         ..Default::default()
     };
-    let dd = DiffusionDistance::new(&ops, args.kind.into(), args.t, &params)?;
-    let row = dd.row(i)?;
-    let name = match args.kind {
-        DistanceKindArg::Wfem => format!("wfem_distance_t={}", args.t),
-        DistanceKindArg::Linear => format!("linear_distance_t={}", args.t),
+    let dd = progress::run(format!("preparing the {kind} distance (t = {label})"), || {
+        DiffusionDistance::new(&ops, args.kind.into(), args.t, &params)
+    })?;
+    let row = progress::run(format!("distances from vertex {}", args.from), || dd.row(i as usize))?;
+    let column = Column {
+        name: format!("{kind}_distance_t={label}"),
+        suffix,
+        title: format!(
+            "{}: {kind} diffusion distance from vertex {}, t = {label}",
+            input.name, args.from
+        ),
+        t: Some(args.t),
+        values: row,
     };
-    for path in write_fields(&args.output, &mesh, &[(name, row)], &[args.from])? {
+    let mut meta = serde_json::Map::new();
+    meta.insert("command".into(), json!("distance"));
+    meta.insert("input".into(), input.meta(&args.input.mesh));
+    meta.insert("kind".into(), json!(kind));
+    meta.insert("from_vertex".into(), json!(args.from));
+    meta.insert("degree".into(), json!(params.degree));
+    let how = Writing {
+        render: args.render,
+        highlight: &[i],
+        meta,
+    };
+    for path in write_fields(&args.output, &input.mesh, &[column], how)? {
         writeln!(out, "wrote {}", path.display())?;
     }
     Ok(())

@@ -140,16 +140,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             let times = default_times();
             let described = files
                 .iter()
-                .map(|f| {
-                    describe(
-                        &MeshArgs {
-                            mesh: f.clone(),
-                            triangulate: false,
-                        },
-                        *eigs,
-                        &times,
-                    )
-                })
+                .map(|f| describe(&MeshArgs::new(f.clone()), *eigs, &times))
                 .collect::<Result<Vec<_>, _>>()?;
             let rows: usize = described.iter().map(|(d, _)| d.nrows()).sum();
             let dim = times.len();
