@@ -64,8 +64,11 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // A reader that stopped early (`wfem approx … | head`) is not an error: the outputs
+        // are written before the report is printed.
+        Err(cli::CliError::Stdout(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("wfem: error: {e}");
+            cli::progress::stderr_line(&format!("wfem: error: {e}"));
             ExitCode::FAILURE
         }
     }

@@ -48,10 +48,10 @@ pub struct ApproxArgs {
     /// Number of scales t_i = (i/10) / λ_k, i = 1..N (1..=100).
     #[arg(long, default_value_t = 10)]
     pub scales: usize,
-    /// Index k of the eigenvalue λ_k setting the time scale (2..=n; at most n/10 above 1000
-    /// vertices).
-    #[arg(long, default_value_t = 20)]
-    pub k: usize,
+    /// Index k of the eigenvalue λ_k setting the time scale (default min(20, n); 2..=n, at
+    /// most n/10 above 1000 vertices).
+    #[arg(long)]
+    pub k: Option<usize>,
     /// Coefficients of the global component.
     #[arg(long, value_enum, default_value_t = CoefficientsArg::FeatureValues)]
     pub coefficients: CoefficientsArg,
@@ -104,18 +104,13 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let n = input.mesh.n_vertices();
     let f = input.field(&args.field)?;
     // λ_1 = 0 on a connected mesh, so the time scale needs k ≥ 2.
-    limits::count(
-        "--k",
-        args.k,
-        2,
-        n,
-        &format!("the index of λ_k; the mesh has {n} vertices"),
-    )?;
-    limits::eigenpairs("--k", args.k, n)?;
-    if n > limits::SMALL_MESH && args.k > n / limits::SPECTRAL_FRACTION {
+    let k = args.k.unwrap_or(20.min(n));
+    limits::count("--k", k, 2, n, &format!("the index of λ_k; the mesh has {n} vertices"))?;
+    limits::eigenpairs("--k", k, n)?;
+    if n > limits::SMALL_MESH && k > n / limits::SPECTRAL_FRACTION {
         return Err(CliError::OutOfRange {
             flag: "--k",
-            value: args.k.to_string(),
+            value: k.to_string(),
             allowed: format!("2..={} on this {n}-vertex mesh", n / limits::SPECTRAL_FRACTION),
             why: "λ_k comes from a partial eigensolve of k pairs, which slows down sharply beyond n/10".into(),
         });
@@ -136,7 +131,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     // is linear in f, and an absolute persistence scales with it) and scaled back.
     let e = far_exponent(&f);
     let params = ApproxParams {
-        k: args.k,
+        k,
         scales: args.scales,
         persistence: if args.absolute {
             Persistence::Absolute(args.persistence * 2f64.powi(-e))
@@ -146,7 +141,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         coefficients: args.coefficients.into(),
         ..ApproxParams::default()
     };
-    let mut approx = progress::run(format!("λ_{}, anchors and {} scales", args.k, args.scales), || {
+    let mut approx = progress::run(format!("λ_{k}, anchors and {} scales", args.scales), || {
         feature_approximation(&input.mesh, &ops, &kernel, &times_pow2(&f, -e), &params)
     })?;
     if e != 0 {
@@ -155,34 +150,6 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
             s.local = times_pow2(&s.local, e);
             s.linf_error *= 2f64.powi(e);
         }
-    }
-    writeln!(
-        out,
-        "{} vertices, {} critical points of f, {} anchors (persistence {}{}), λ_{} = {:.6e}",
-        n,
-        approx.input_critical_points,
-        approx.anchors.len(),
-        args.persistence,
-        if args.absolute { "" } else { " × range" },
-        args.k,
-        approx.lambda_k
-    )?;
-    writeln!(
-        out,
-        "{:>5} {:>12} {:>12} {:>10} {:>8} {:>12}",
-        "scale", "t", "Linf error", "relative", "#crit", "significant"
-    )?;
-    for (i, s) in approx.scales.iter().enumerate() {
-        writeln!(
-            out,
-            "{:>5} {:>12.6e} {:>12.6e} {:>10.4} {:>8} {:>12}",
-            i + 1,
-            s.t,
-            s.linf_error,
-            s.relative_linf_error,
-            s.critical_points,
-            s.significant_critical_points
-        )?;
     }
     let field_name = args
         .field
@@ -242,14 +209,45 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("field".into(), json!(args.field.display().to_string()));
     meta.insert("kernel".into(), json!(super::name_of(args.kernel)));
-    meta.insert("lambda_k".into(), json!({ "k": args.k, "value": approx.lambda_k }));
+    meta.insert("lambda_k".into(), json!({ "k": k, "value": approx.lambda_k }));
     meta.insert("anchors".into(), json!(approx.anchors));
     let how = Writing {
         render: args.render,
         highlight: &approx.anchors,
         meta,
     };
-    for path in write_fields(&args.output, &input.mesh, &columns, how)? {
+    // The files first, then the report: a reader that stops early (`| head`) loses
+    // nothing but the report.
+    let written = write_fields(&args.output, &input.mesh, &columns, how)?;
+    writeln!(
+        out,
+        "{} vertices, {} critical points of f, {} anchors (persistence {}{}), λ_{} = {:.6e}",
+        n,
+        approx.input_critical_points,
+        approx.anchors.len(),
+        args.persistence,
+        if args.absolute { "" } else { " × range" },
+        k,
+        approx.lambda_k
+    )?;
+    writeln!(
+        out,
+        "{:>5} {:>12} {:>12} {:>10} {:>8} {:>12}",
+        "scale", "t", "Linf error", "relative", "#crit", "significant"
+    )?;
+    for (i, s) in approx.scales.iter().enumerate() {
+        writeln!(
+            out,
+            "{:>5} {:>12.6e} {:>12.6e} {:>10.4} {:>8} {:>12}",
+            i + 1,
+            s.t,
+            s.linf_error,
+            s.relative_linf_error,
+            s.critical_points,
+            s.significant_critical_points
+        )?;
+    }
+    for path in written {
         writeln!(out, "wrote {}", path.display())?;
     }
     Ok(())

@@ -21,9 +21,10 @@ pub struct DemoArgs {
     /// Subdivision level of the generated mesh, 0..=8 (level 5: 10,242 vertices; 8: 655,362).
     #[arg(long, default_value_t = 5)]
     pub level: u32,
-    /// Number of eigenpairs of the spectral method (at most n/10 above 1000 vertices).
-    #[arg(long, default_value_t = 200)]
-    pub eigs: usize,
+    /// Number of eigenpairs of the spectral method (default min(200, n); at most n/10 above
+    /// 1000 vertices).
+    #[arg(long)]
+    pub eigs: Option<usize>,
     /// Hide the progress (same as `wfem --progress never demo`).
     #[arg(long)]
     pub quiet: bool,
@@ -34,7 +35,7 @@ impl Default for DemoArgs {
         Self {
             out: PathBuf::from("wfem-out"),
             level: 5,
-            eigs: 200,
+            eigs: None,
             quiet: false,
         }
     }
@@ -63,7 +64,7 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
         "subdivision level of the generated mesh (10·4^level + 2 vertices)",
     )?;
     let n = mesh_fem::generate::icosphere_vertex_count(args.level);
-    let eigs = limits::spectral_eigenpairs(args.eigs, n)?;
+    let eigs = limits::spectral_eigenpairs(args.eigs.unwrap_or(200.min(n)), n)?;
     let files = demo_files();
     let file_refs: Vec<&str> = files.iter().map(String::as_str).collect();
     check_out_dir(&args.out, &file_refs, &[])?;

@@ -105,6 +105,12 @@ pub(crate) fn name_of<T: ValueEnum>(value: T) -> String {
         .unwrap_or_default()
 }
 
+/// Reads a text file (a regular file only: a FIFO given as the index is refused, not waited on).
+pub(crate) fn read_text(path: &Path) -> Result<String, CliError> {
+    let bytes = mesh_fem::io::read_regular_file(path)?;
+    String::from_utf8(bytes).map_err(|_| CliError::Usage(format!("{} is not UTF-8 text", path.display())))
+}
+
 /// Checks one output file before any work (its folder exists and is writable, it is not a
 /// directory or special file, and it is not `input`).
 pub(crate) fn check_output(input: &Path, output: &Path) -> Result<(), CliError> {

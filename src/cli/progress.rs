@@ -67,12 +67,19 @@ fn seconds(d: Duration) -> String {
     }
 }
 
+/// Writes one line on standard error. Unlike `eprintln!`, a closed standard error (e.g.
+/// `wfem … 2>&- `, or a pipe whose reader quit) is ignored instead of panicking.
+pub fn stderr_line(line: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr().lock(), "{line}");
+}
+
 /// Prints a line on standard error (`wfem: …`), above any bar being drawn.
 pub fn note(text: &str) {
     let line = format!("wfem: {text}");
     match sink() {
-        Sink::Bars(multi) => multi.suspend(|| eprintln!("{line}")),
-        Sink::Lines | Sink::Hidden => eprintln!("{line}"),
+        Sink::Bars(multi) => multi.suspend(|| stderr_line(&line)),
+        Sink::Lines | Sink::Hidden => stderr_line(&line),
     }
 }
 
@@ -154,7 +161,11 @@ impl Step {
             Some(bar) => bar.inc(1),
             None => {
                 if matches!(sink(), Sink::Lines) {
-                    eprintln!("wfem: {}: {detail} [{}]", self.label, seconds(self.start.elapsed()));
+                    stderr_line(&format!(
+                        "wfem: {}: {detail} [{}]",
+                        self.label,
+                        seconds(self.start.elapsed())
+                    ));
                 }
             }
         }
@@ -180,7 +191,7 @@ impl Step {
                     let _ = multi.println(format!("  {} ({})", self.label, seconds(elapsed)));
                 }
             }
-            (_, Sink::Lines) => eprintln!("wfem: {} … done ({})", self.label, seconds(elapsed)),
+            (_, Sink::Lines) => stderr_line(&format!("wfem: {} … done ({})", self.label, seconds(elapsed))),
             _ => {}
         }
     }
