@@ -36,11 +36,11 @@ pub struct ApproxArgs {
     #[allow(missing_docs)]
     pub input: MeshArgs,
     /// The per-vertex field f (.npy or .csv, one value per vertex).
-    #[arg(long)]
+    #[arg(long, value_parser = super::input::field_path)]
     pub field: PathBuf,
     /// Persistence threshold of the anchors, as a fraction of max f − min f (e.g. 0.1), or in
     /// units of f with --absolute.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub persistence: f64,
     /// Read --persistence in units of f instead of as a fraction of the range.
     #[arg(long)]

@@ -147,7 +147,7 @@ pub struct HeatArgs {
     #[arg(long, conflicts_with = "field")]
     pub source: Option<u32>,
     /// Diffuse this per-vertex field (.npy or .csv, one value per vertex).
-    #[arg(long)]
+    #[arg(long, value_parser = super::input::field_path)]
     pub field: Option<PathBuf>,
     /// Kernel.
     #[arg(long, value_enum, default_value_t = KernelArg::Wfem)]

@@ -93,6 +93,23 @@ pub fn repair_flags(args: &MeshArgs) -> String {
     format!("--repair {}", names.join(","))
 }
 
+/// Parses a `--field` path (clap value parser): its extension must be `.npy` or `.csv`, so a
+/// wrong file is refused before any work.
+pub fn field_path(text: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(text);
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if ext == "npy" || ext == "csv" {
+        Ok(path)
+    } else {
+        Err(format!(
+            "cannot read {text:?} as a field: the format is chosen by the extension, .npy or .csv (one value per vertex)"
+        ))
+    }
+}
+
 /// A mesh read for a subcommand, after the repairs.
 pub struct Input {
     /// The mesh used (repaired if `--repair` changed it).

@@ -8,5 +8,6 @@ mod cli_atomic;
 mod cli_distance;
 mod cli_hks;
 mod fuzz_regressions;
+mod hostile;
 mod no_unwrap;
 mod thin_library;
