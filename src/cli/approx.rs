@@ -163,21 +163,25 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         t,
         values: values.to_vec(),
     };
-    let mut columns = vec![column("f".into(), "f", format!("f = {field_name}"), None, &f)];
+    let mut columns = vec![column("f".into(), "f", format!("f = {field_name} (anchors: persistent critical points)"), None, &f)];
     if args.output.format == OutputFormat::Png {
         if let Some(s) = approx.scales.last() {
             let label = short_label(s.t);
             columns.push(column(
                 format!("f_glob_t{label}"),
                 "glob",
-                format!("f_glob, t = {label}"),
+                format!(
+                    "f_glob of {field_name}, t = {label} ({} anchors, {} kernel)",
+                    approx.anchors.len(),
+                    super::name_of(args.kernel)
+                ),
                 Some(s.t),
                 &s.global,
             ));
             columns.push(column(
                 format!("f_loc_t{label}"),
                 "loc",
-                format!("f_loc, t = {label}"),
+                format!("f_loc = f - f_glob of {field_name}, t = {label}"),
                 Some(s.t),
                 &s.local,
             ));

@@ -273,8 +273,9 @@ pub fn short_label(value: f64) -> String {
 /// Which way is up in the figures.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum UpArg {
-    /// From the principal axes of the mesh: up is the long or middle axis on whose lower end
-    /// the shape stands (its feet, its base), snapped to a coordinate axis when close.
+    /// From the extents of the mesh (its second moments along x, y, z): +z for a shape thin
+    /// along y (a person in a TOSCA-style z-up file) or thin along x and longer in y than in z
+    /// (a standing quadruped), +y otherwise; printed on stderr.
     #[default]
     Auto,
     /// +x.
