@@ -8,7 +8,8 @@ use mesh_fem::{assemble, AssemblyParams};
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
-use wfem_heat::{feature_approximation, ApproxParams, Coefficients, HeatParams, Method, Persistence};
+use wfem_heat::approx::{feature_approximation, ApproxParams, Coefficients, Persistence};
+use wfem_heat::{HeatParams, Method};
 
 /// Coefficients of the global component.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -142,7 +143,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         ..ApproxParams::default()
     };
     let mut approx = progress::run(format!("λ_{k}, anchors and {} scales", args.scales), || {
-        feature_approximation(&input.mesh, &ops, &kernel, &times_pow2(&f, -e), &params)
+        feature_approximation(&input.mesh, &kernel, &times_pow2(&f, -e), &params)
     })?;
     if e != 0 {
         for s in &mut approx.scales {
@@ -163,7 +164,13 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         t,
         values: values.to_vec(),
     };
-    let mut columns = vec![column("f".into(), "f", format!("f = {field_name} (anchors: persistent critical points)"), None, &f)];
+    let mut columns = vec![column(
+        "f".into(),
+        "f",
+        format!("f = {field_name} (anchors: persistent critical points)"),
+        None,
+        &f,
+    )];
     if args.output.format == OutputFormat::Png {
         if let Some(s) = approx.scales.last() {
             let label = short_label(s.t);

@@ -19,8 +19,8 @@
 //! 1e−10·max L_ii of the component), so operators that are not Neumann Laplacians (e.g. with
 //! Dirichlet rows) are left alone.
 
-use faer::sparse::SparseColMat;
 use faer::Mat;
+use shifted_solve::OperatorPair;
 
 /// Relative tolerance on the row sums of L for a component to count as a null vector.
 const ROW_SUM_TOL: f64 = 1e-10;
@@ -37,11 +37,12 @@ pub(crate) struct NullSpace {
 }
 
 impl NullSpace {
-    /// Components of the shared sparsity pattern of `stiffness` and `mass`, kept where
-    /// `L·1_c ≈ 0` and `1_cᵀM1_c` is positive and finite. O(nnz).
-    pub(crate) fn new(stiffness: &SparseColMat<usize, f64>, mass: &SparseColMat<usize, f64>) -> Self {
-        let n = stiffness.nrows();
-        let s = stiffness.symbolic();
+    /// Components of the shared sparsity pattern of the pair, kept where `L·1_c ≈ 0` and
+    /// `1_cᵀM1_c` is positive and finite. O(nnz).
+    pub(crate) fn new(pair: &OperatorPair) -> Self {
+        let n = pair.n();
+        let s = pair.pattern();
+        let stiffness = pair.stiffness_values();
         let mut label: Vec<Option<u32>> = vec![None; n];
         let mut count = 0u32;
         let mut stack = Vec::new();
@@ -68,7 +69,7 @@ impl NullSpace {
         for j in 0..n {
             let mut sum = 0.0;
             for p in s.col_range(j) {
-                let v = stiffness.val()[p];
+                let v = stiffness[p];
                 sum += v;
                 if s.row_idx()[p] == j {
                     max_diag[comp(&label, j)] = max_diag[comp(&label, j)].max(v.abs());
@@ -77,11 +78,7 @@ impl NullSpace {
             let c = comp(&label, j);
             worst_sum[c] = worst_sum[c].max(if sum.is_finite() { sum.abs() } else { f64::INFINITY });
         }
-        let ms = mass.symbolic();
-        let mut weights = vec![0.0; n];
-        for (j, w) in weights.iter_mut().enumerate() {
-            *w = mass.val()[ms.col_range(j)].iter().sum();
-        }
+        let weights = pair.mass_row_sums();
         let mut masses = vec![0.0; k];
         for (j, w) in weights.iter().enumerate() {
             masses[comp(&label, j)] += w;
@@ -122,6 +119,34 @@ impl NullSpace {
             for (i, l) in self.label.iter().enumerate() {
                 if let Some(c) = l {
                     out[(i, j)] -= a[*c as usize];
+                }
+            }
+            coefs.push(a);
+        }
+        (out, coefs)
+    }
+
+    /// For the kernel matrix `H_t = K_t M⁻¹`: since `(I − P)M⁻¹ = M⁻¹(I − Pᵀ)` with
+    /// `Pᵀg = Σ_c (1_cᵀ g / 1_cᵀM1_c) M1_c`,
+    /// `H_t g = Σ_c (1_cᵀ g / 1_cᵀM1_c) 1_c + (I − P) H_t (I − Pᵀ) g`.
+    /// Returns `((I − Pᵀ) g, coefficients 1_cᵀ g / 1_cᵀM1_c)` for every column; finish with
+    /// [`Self::restore`].
+    pub(crate) fn split_dual(&self, g: faer::MatRef<'_, f64>) -> (Mat<f64>, Vec<Vec<f64>>) {
+        let mut out = g.to_owned();
+        let mut coefs = Vec::with_capacity(g.ncols());
+        for j in 0..g.ncols() {
+            let mut a = vec![0.0; self.masses.len()];
+            for (i, l) in self.label.iter().enumerate() {
+                if let Some(c) = l {
+                    a[*c as usize] += g[(i, j)];
+                }
+            }
+            for (ac, m) in a.iter_mut().zip(&self.masses) {
+                *ac /= m;
+            }
+            for (i, l) in self.label.iter().enumerate() {
+                if let Some(c) = l {
+                    out[(i, j)] -= a[*c as usize] * self.weights[i];
                 }
             }
             coefs.push(a);

@@ -15,7 +15,7 @@ use common::{dot, matvec, unit};
 use faer::sparse::SparseColMat;
 use mesh_fem::{assemble, generate, AssemblyParams, FemOperators, TriMesh};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
-use wfem_heat::{EigenParams, Eigenbasis, FastParams, HeatKernel, HeatParams, KernelKind, Method};
+use wfem_heat::{EigenParams, Eigenbasis, HeatKernel, HeatParams, KernelKind, KrylovParams, Method};
 
 const REL_TOL: f64 = 1e-10;
 const ABS_FLOOR: f64 = 1e-12;
@@ -182,8 +182,8 @@ fn ops(mesh: &TriMesh) -> FemOperators {
 /// generalized eigendecomposition (the crate's own reference) against nalgebra's.
 fn methods(n: usize) -> Vec<(&'static str, Method)> {
     vec![
-        ("rational16", Method::default()),
-        ("fast", Method::Fast(FastParams::default())),
+        ("rational16", Method::rational(shifted_solve::DEFAULT_DEGREE)),
+        ("fast", Method::Fast(KrylovParams::default())),
         ("spectral", Method::spectral(n.min(60))),
         ("dense", Method::Dense),
     ]
@@ -273,7 +273,10 @@ fn extreme_scales_match_reference_and_are_covariant() {
         let worst = check_against_reference(&format!("α={alpha:e}"), &scaled_ops, &times, &KINDS);
         eprintln!("scale α = {alpha:e}: worst error/bound {worst:.2e}");
         for kind in KINDS {
-            for method in [Method::default(), Method::Fast(FastParams::default())] {
+            for method in [
+                Method::rational(shifted_solve::DEFAULT_DEGREE),
+                Method::Fast(KrylovParams::default()),
+            ] {
                 let params = HeatParams {
                     kernel: kind,
                     method: method.clone(),
@@ -433,7 +436,10 @@ fn several_connected_components_stay_block_diagonal() {
 
     let f = test_function(n);
     for kind in KINDS {
-        for method in [Method::default(), Method::Fast(FastParams::default())] {
+        for method in [
+            Method::rational(shifted_solve::DEFAULT_DEGREE),
+            Method::Fast(KrylovParams::default()),
+        ] {
             let params = HeatParams {
                 kernel: kind,
                 method: method.clone(),
@@ -494,7 +500,10 @@ fn open_boundaries_conserve_mass() {
         eprintln!("{label}: worst error/bound {worst:.2e}");
         for kind in KINDS {
             let mass = mass_of(&ops, kind);
-            for method in [Method::default(), Method::Fast(FastParams::default())] {
+            for method in [
+                Method::rational(shifted_solve::DEFAULT_DEGREE),
+                Method::Fast(KrylovParams::default()),
+            ] {
                 let kernel = HeatKernel::new(
                     &ops,
                     HeatParams {

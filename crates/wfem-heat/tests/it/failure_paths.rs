@@ -6,7 +6,7 @@ use crate::common;
 use common::*;
 use mesh_fem::{generate, FemOperators};
 use shifted_solve::{Backend, MinresParams, Preconditioner, SolveError};
-use wfem_heat::{EigenParams, Eigenbasis, FastParams, HeatError, HeatKernel, HeatParams, KernelKind, Method};
+use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KernelKind, KrylovParams, Method};
 
 fn small() -> FemOperators {
     ops_of(&generate::icosphere(2)).1
@@ -14,12 +14,12 @@ fn small() -> FemOperators {
 
 fn all_methods() -> Vec<Method> {
     vec![
-        Method::default(),
+        Method::rational(shifted_solve::DEFAULT_DEGREE),
         Method::Rational {
             degree: 16,
             backend: Backend::Minres(MinresParams::default()),
         },
-        Method::Fast(FastParams::default()),
+        Method::Fast(KrylovParams::default()),
         Method::Dense,
         Method::spectral(10),
         Method::Taylor,

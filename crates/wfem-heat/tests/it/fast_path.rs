@@ -29,7 +29,7 @@ fn fast_path_matches_dense_reference() {
                 &ops,
                 HeatParams {
                     kernel,
-                    method: Method::default(),
+                    method: Method::rational(shifted_solve::DEFAULT_DEGREE),
                 },
             )
             .unwrap();

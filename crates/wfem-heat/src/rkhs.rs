@@ -1,7 +1,9 @@
-//! The operator algebra of the wFEM heat kernel (paper, Sect. 3 and the start of Sect. 4):
-//! the scalar products `⟨·,·⟩_B` and `⟨·,·⟩_t` (Eq. (4), (16)), the inverse `K_{−t} = K_t⁻¹`,
-//! the reproducing kernel `H_t = X D_{−t} Xᵀ` (Prop. 3.1 B, Eq. (15)) and the embeddings
-//! `h_i = K_{t/2} e_i`, `g_i = H_{t/2} e_i` (Eq. (18), (20)).
+//! The reproducing-kernel algebra of the wFEM heat kernel (paper, Sect. 3 and the start of
+//! Sect. 4): the time-dependent scalar product `⟨·,·⟩_t` (Eq. (16); the mass product
+//! `⟨·,·⟩_B` of Eq. (4) is [`Operators::mass_inner_product`]), the inverse `K_{−t} = K_t⁻¹`,
+//! the reproducing kernel `H_t = X D_{−t} Xᵀ` (Prop. 3.1 B, Eq. (15)) and the two embeddings of
+//! a vertex: the diffusion embedding `h_i = K_{t/2} e_i` (Eq. (18b)) and the reproducing
+//! embedding `g_i = H_{t/2} e_i` (Eq. (18a), (20)).
 //!
 //! Notation: `K_t = X D_t Xᵀ B` (Eq. (6)) with `D_t = diag(e^{−λ_i t})` and B-orthonormal
 //! eigenvectors `XᵀBX = I` (Eq. (4)); `S_t = B K_t = B X D_t Xᵀ B` induces `⟨·,·⟩_t`.
@@ -22,46 +24,22 @@
 //!   Eq. (16), `⟨x_i, x_j⟩_t = e^{−λ_i t} δ_ij`, so `‖x_i − x_j‖_t² = e^{−λ_i t} + e^{−λ_j t}`
 //!   (the paper's own proof computes `e^{−λ_i t} δ_ij`). The tests check the corrected form.
 
-use crate::eigen::Eigenbasis;
-use crate::kernel::{check_time, check_vector, HeatKernel};
-use crate::sparse::{spmv_sym, CholeskyPattern};
-use crate::HeatError;
-use faer::sparse::SparseColMat;
+use crate::check::{self, unit_columns};
+use crate::operators::dot;
+use crate::{Eigenbasis, HeatError, HeatKernel, Operators};
 use faer::Mat;
 
-fn check_mass(mass: &SparseColMat<usize, f64>, n: usize) -> Result<(), HeatError> {
-    if mass.nrows() != n || mass.ncols() != n {
+fn check_basis_size(basis: &Eigenbasis, ops: &Operators) -> Result<(), HeatError> {
+    if basis.vectors.nrows() != ops.n() {
         return Err(HeatError::InconsistentOperators {
-            reason: format!("mass is {}×{}, expected {n}×{n}", mass.nrows(), mass.ncols()),
+            reason: format!(
+                "the eigenbasis has {} rows, the operators {} vertices",
+                basis.vectors.nrows(),
+                ops.n()
+            ),
         });
     }
     Ok(())
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// The mass scalar product `⟨f, g⟩_B = fᵀ B g` (paper, Eq. (4)), for any SPD mass matrix
-/// (B, the lumped D or I).
-///
-/// # Errors
-/// [`HeatError::LengthMismatch`], [`HeatError::NonFiniteInput`],
-/// [`HeatError::InconsistentOperators`] if `mass` is not n × n.
-pub fn inner_b(mass: &SparseColMat<usize, f64>, f: &[f64], g: &[f64]) -> Result<f64, HeatError> {
-    let n = mass.nrows();
-    check_mass(mass, n)?;
-    check_vector(f, n)?;
-    check_vector(g, n)?;
-    Ok(dot(f, &spmv_sym(mass, g)))
-}
-
-/// The mass norm `‖f‖_B = √(fᵀ B f)` (paper, Eq. (4)).
-///
-/// # Errors
-/// As [`inner_b`].
-pub fn norm_b(mass: &SparseColMat<usize, f64>, f: &[f64]) -> Result<f64, HeatError> {
-    Ok(inner_b(mass, f, f)?.max(0.0).sqrt())
 }
 
 /// The time-dependent scalar product `⟨f, g⟩_t = ⟨K_t f, g⟩_B = ⟨f, K_t g⟩_B = fᵀ S_t g`,
@@ -73,10 +51,10 @@ pub fn norm_b(mass: &SparseColMat<usize, f64>, f: &[f64]) -> Result<f64, HeatErr
 ///
 /// # Errors
 /// As [`HeatKernel::apply`].
-pub fn inner_t(kernel: &HeatKernel, f: &[f64], g: &[f64], t: f64) -> Result<f64, HeatError> {
-    check_vector(f, kernel.n())?;
+pub fn heat_inner_product(kernel: &HeatKernel, f: &[f64], g: &[f64], t: f64) -> Result<f64, HeatError> {
+    check::vector(f, kernel.n())?;
     let kg = kernel.apply(g, t)?;
-    Ok(dot(f, &spmv_sym(kernel.mass(), &kg)))
+    Ok(dot(f, &kernel.operators().mass_mul(&kg)))
 }
 
 /// What a spectrally truncated evaluation of an amplifying operator (`K_{−t}`, `H_t`) kept and
@@ -108,19 +86,13 @@ impl TruncationReport {
 }
 
 /// `X_k e^{+tΛ_k} X_kᵀ w` and the report, for w = B y given together with y.
-fn amplify(
-    basis: &Eigenbasis,
-    mass: &SparseColMat<usize, f64>,
-    y: &[f64],
-    w: &[f64],
-    t: f64,
-) -> (Vec<f64>, TruncationReport) {
+fn amplify(basis: &Eigenbasis, ops: &Operators, y: &[f64], w: &[f64], t: f64) -> (Vec<f64>, TruncationReport) {
     let x = &basis.vectors;
     let k = x.ncols();
     let c = x.transpose() * faer::ColRef::from_slice(w);
     let proj = x * &c;
     let rest: Vec<f64> = (0..y.len()).map(|i| y[i] - proj[i]).collect();
-    let dropped_norm = dot(&rest, &spmv_sym(mass, &rest)).max(0.0).sqrt();
+    let dropped_norm = dot(&rest, &ops.mass_mul(&rest)).max(0.0).sqrt();
     let input_norm = dot(y, w).max(0.0).sqrt();
     let mut ca = c.to_owned();
     for (i, ci) in ca.iter_mut().enumerate() {
@@ -140,10 +112,10 @@ fn amplify(
     )
 }
 
-fn check_basis(basis: &Eigenbasis, mass: &SparseColMat<usize, f64>, t: f64) -> Result<usize, HeatError> {
-    check_time(t)?;
+fn check_basis(basis: &Eigenbasis, ops: &Operators, t: f64) -> Result<usize, HeatError> {
+    check::time(t)?;
     let n = basis.vectors.nrows();
-    check_mass(mass, n)?;
+    check_basis_size(basis, ops)?;
     if basis.values.len() != basis.vectors.ncols() || basis.values.is_empty() {
         return Err(HeatError::InvalidParameter {
             name: "basis",
@@ -185,14 +157,14 @@ fn check_basis(basis: &Eigenbasis, mass: &SparseColMat<usize, f64>, t: f64) -> R
 /// [`HeatError::IllConditionedInverse`] if e^{tλ_k} overflows.
 pub fn inverse_spectral(
     basis: &Eigenbasis,
-    mass: &SparseColMat<usize, f64>,
+    ops: &Operators,
     f: &[f64],
     t: f64,
 ) -> Result<(Vec<f64>, TruncationReport), HeatError> {
-    let n = check_basis(basis, mass, t)?;
-    check_vector(f, n)?;
-    let bf = spmv_sym(mass, f);
-    Ok(amplify(basis, mass, f, &bf, t))
+    let n = check_basis(basis, ops, t)?;
+    check::vector(f, n)?;
+    let bf = ops.mass_mul(f);
+    Ok(amplify(basis, ops, f, &bf, t))
 }
 
 /// The reproducing kernel of `(F(M), ⟨·,·⟩_t)` applied to a vector,
@@ -208,29 +180,27 @@ pub fn inverse_spectral(
 ///
 /// # Errors
 /// As [`inverse_spectral`]; [`HeatError::NotPositiveDefinite`] if B cannot be factored.
-pub fn rkhs_apply(
+pub fn reproducing_kernel_apply(
     basis: &Eigenbasis,
-    mass: &SparseColMat<usize, f64>,
+    ops: &Operators,
     v: &[f64],
     t: f64,
 ) -> Result<(Vec<f64>, TruncationReport), HeatError> {
-    let n = check_basis(basis, mass, t)?;
-    check_vector(v, n)?;
-    let pattern = CholeskyPattern::new(mass)?;
-    let factor = pattern.factor(mass, || "mass matrix B".into())?;
-    let y = factor.solve_vec(v);
-    Ok(amplify(basis, mass, &y, v, t))
+    let n = check_basis(basis, ops, t)?;
+    check::vector(v, n)?;
+    let y = ops.mass_factor()?.solve_vec(v);
+    Ok(amplify(basis, ops, &y, v, t))
 }
 
 /// The wFEM diffusion-map embedding of vertex i, `h_i^t = K_{t/2} e_i` (paper, Eq. (18b)),
-/// by the kernel's method (rational Chebyshev by default), so that
-/// `⟨h_i, h_j⟩_B = S_t(i, j)` and `‖h_i − h_j‖_B² = S_t(i,i) − 2S_t(i,j) + S_t(j,j)`.
-/// Several vertices at once: [`embeddings_h`].
+/// by the kernel's method, so that `⟨h_i, h_j⟩_B = S_t(i, j)` and
+/// `‖h_i − h_j‖_B² = S_t(i,i) − 2S_t(i,j) + S_t(j,j)`. Several vertices at once:
+/// [`diffusion_embeddings`].
 ///
 /// # Errors
 /// [`HeatError::VertexOutOfRange`]; as [`HeatKernel::apply`].
-pub fn embedding_h(kernel: &HeatKernel, i: usize, t: f64) -> Result<Vec<f64>, HeatError> {
-    let m = embeddings_h(kernel, &[i], t)?;
+pub fn diffusion_embedding(kernel: &HeatKernel, i: usize, t: f64) -> Result<Vec<f64>, HeatError> {
+    let m = diffusion_embeddings(kernel, &[i], t)?;
     Ok(m.col(0).iter().copied().collect())
 }
 
@@ -238,43 +208,32 @@ pub fn embedding_h(kernel: &HeatKernel, i: usize, t: f64) -> Result<Vec<f64>, He
 /// columns of an n × m matrix; one factorization serves all columns.
 ///
 /// # Errors
-/// As [`embedding_h`].
-pub fn embeddings_h(kernel: &HeatKernel, vertices: &[usize], t: f64) -> Result<Mat<f64>, HeatError> {
-    check_time(t)?;
-    let n = kernel.n();
-    let e = unit_columns(n, vertices)?;
+/// As [`diffusion_embedding`].
+pub fn diffusion_embeddings(kernel: &HeatKernel, vertices: &[usize], t: f64) -> Result<Mat<f64>, HeatError> {
+    check::time(t)?;
+    let e = unit_columns(kernel.n(), vertices)?;
     kernel.apply_many(e.as_ref(), 0.5 * t)
 }
 
-pub(crate) fn unit_columns(n: usize, vertices: &[usize]) -> Result<Mat<f64>, HeatError> {
-    if let Some(&index) = vertices.iter().find(|&&i| i >= n) {
-        return Err(HeatError::VertexOutOfRange { index, n_vertices: n });
-    }
-    let mut e = Mat::<f64>::zeros(n, vertices.len());
-    for (c, &i) in vertices.iter().enumerate() {
-        e[(i, c)] = 1.0;
-    }
-    Ok(e)
-}
-
-/// The RKHS embedding of vertex i, `g_i^t = H_{t/2} e_i = X D_{−t/2} Xᵀ e_i` (paper, Eq. (18a),
-/// (20)), truncated to the eigenpairs of `basis` (see [`rkhs_apply`] for why), so that
+/// The reproducing (RKHS) embedding of vertex i, `g_i^t = H_{t/2} e_i = X D_{−t/2} Xᵀ e_i`
+/// (paper, Eq. (18a), (20)), truncated to the eigenpairs of `basis` (see
+/// [`reproducing_kernel_apply`] for why), so that
 /// `⟨g_i, g_j⟩_B = H_t(i, j)` for the truncated H_t, hence
 /// `‖g_i − g_j‖_B² = H_t(i,i) − 2H_t(i,j) + H_t(j,j)` (the display after Eq. (20) prints
 /// `H_{t/2}` entries: with `g_i = H_{t/2} e_i` the Gram matrix is H_t, by Eq. (19)).
 ///
 /// # Errors
-/// [`HeatError::VertexOutOfRange`]; as [`rkhs_apply`].
-pub fn embedding_g(
+/// [`HeatError::VertexOutOfRange`]; as [`reproducing_kernel_apply`].
+pub fn reproducing_embedding(
     basis: &Eigenbasis,
-    mass: &SparseColMat<usize, f64>,
+    ops: &Operators,
     i: usize,
     t: f64,
 ) -> Result<(Vec<f64>, TruncationReport), HeatError> {
     let n = basis.vectors.nrows();
     let e = unit_columns(n, &[i])?;
     let e: Vec<f64> = e.col(0).iter().copied().collect();
-    rkhs_apply(basis, mass, &e, 0.5 * t)
+    reproducing_kernel_apply(basis, ops, &e, 0.5 * t)
 }
 
 /// Options of [`inverse_cg`].
@@ -342,9 +301,9 @@ pub fn inverse_cg(
     t: f64,
     params: &InverseParams,
 ) -> Result<(Vec<f64>, InverseReport), HeatError> {
-    check_time(t)?;
+    check::time(t)?;
     let n = kernel.n();
-    check_vector(f, n)?;
+    check::vector(f, n)?;
     if params.max_amplification.is_nan() || params.max_amplification < 1.0 {
         return Err(HeatError::InvalidParameter {
             name: "max_amplification",
@@ -363,8 +322,8 @@ pub fn inverse_cg(
             reason: "max_iter and stall_window must be positive".into(),
         });
     }
-    let mass = kernel.mass();
-    let bdot = |a: &[f64], b: &[f64]| dot(a, &spmv_sym(mass, b));
+    let ops = kernel.operators();
+    let bdot = |a: &[f64], b: &[f64]| dot(a, &ops.mass_mul(b));
     let f_norm = bdot(f, f).max(0.0).sqrt();
     if f_norm == 0.0 {
         return Ok((

@@ -1,15 +1,17 @@
-//! Generalized eigenpairs `L x = λ M x` (paper, Eq. (4)–(6) and (8)): the dense reference
-//! and a shift-invert block Lanczos for the k smallest pairs.
+//! The spectral side of the kernel: generalized eigenpairs `L x = λ M x` (paper, Eq. (4)–(6)
+//! and (8)) — the dense reference and a shift-invert block Lanczos for the k smallest pairs —
+//! and the (truncated) spectral kernel `X e^{−tΛ} Xᵀ`.
 //!
 //! L (stiffness) is symmetric positive **semi**definite with a positive diagonal (wfem sign
 //! convention; the paper prints L with the opposite sign), M is the mass matrix of the
 //! kernel (B, D or I), symmetric positive definite.
 
-use crate::sparse::{spmm_sym, spmv_sym, CholeskyPattern};
-use crate::HeatError;
+use crate::operators::AsSparse;
+use crate::{HeatError, Operators};
 use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
-use faer::sparse::SparseColMat;
-use faer::{Mat, Par, Side};
+use faer::sparse::SparseColMatRef;
+use faer::{Mat, MatRef, Par, Side};
+use shifted_solve::rng::SplitMix64;
 
 /// The largest mesh (number of vertices) for which [`Eigenbasis::dense`] runs: O(n³) time
 /// and 3 dense n × n matrices (≈ 600 MB at the limit).
@@ -56,20 +58,7 @@ impl Default for EigenParams {
     }
 }
 
-/// SplitMix64: a tiny deterministic generator for start blocks (no `rand` dependency).
-pub(crate) struct SplitMix(pub u64);
-impl SplitMix {
-    pub(crate) fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    }
-}
-
-fn to_dense(a: &SparseColMat<usize, f64>) -> Mat<f64> {
+fn to_dense(a: SparseColMatRef<'_, usize, f64>) -> Mat<f64> {
     let n = a.nrows();
     let mut d = Mat::<f64>::zeros(n, a.ncols());
     let sym = a.symbolic();
@@ -81,22 +70,6 @@ fn to_dense(a: &SparseColMat<usize, f64>) -> Mat<f64> {
     d
 }
 
-fn check_square(stiffness: &SparseColMat<usize, f64>, mass: &SparseColMat<usize, f64>) -> Result<usize, HeatError> {
-    let n = stiffness.nrows();
-    if stiffness.ncols() != n || mass.nrows() != n || mass.ncols() != n {
-        return Err(HeatError::InconsistentOperators {
-            reason: format!(
-                "stiffness is {}×{}, mass is {}×{}",
-                stiffness.nrows(),
-                stiffness.ncols(),
-                mass.nrows(),
-                mass.ncols()
-            ),
-        });
-    }
-    Ok(n)
-}
-
 impl Eigenbasis {
     /// All n eigenpairs by a dense generalized symmetric eigendecomposition: M = RRᵀ
     /// (Cholesky), C = R⁻¹LR⁻ᵀ, C = YΛYᵀ, X = R⁻ᵀY, so that `XᵀMX = I` (paper, Eq. (4)–(6)).
@@ -106,17 +79,24 @@ impl Eigenbasis {
     /// [`HeatError::TooLargeForDense`] above [`DENSE_MAX_VERTICES`];
     /// [`HeatError::InvalidOperatorEntry`] for a NaN/∞ entry or a non-positive diagonal of M;
     /// [`HeatError::NotPositiveDefinite`] if M is not SPD; [`HeatError::DenseEigen`].
-    pub fn dense(stiffness: &SparseColMat<usize, f64>, mass: &SparseColMat<usize, f64>) -> Result<Self, HeatError> {
-        let n = check_square(stiffness, mass)?;
-        crate::kernel::check_operators(stiffness, mass)?;
+    pub fn dense(stiffness: impl AsSparse, mass: impl AsSparse) -> Result<Self, HeatError> {
+        Self::dense_of(&Operators::from_matrices(stiffness.as_sparse(), mass.as_sparse())?)
+    }
+
+    /// [`Self::dense`] on a validated context.
+    ///
+    /// # Errors
+    /// As [`Self::dense`].
+    pub fn dense_of(ops: &Operators) -> Result<Self, HeatError> {
+        let n = ops.n();
         if n > DENSE_MAX_VERTICES {
             return Err(HeatError::TooLargeForDense {
                 n_vertices: n,
                 limit: DENSE_MAX_VERTICES,
             });
         }
-        let l = to_dense(stiffness);
-        let m = to_dense(mass);
+        let l = to_dense(ops.stiffness());
+        let m = to_dense(ops.mass());
         let llt = m.llt(Side::Lower).map_err(|_| HeatError::NotPositiveDefinite {
             matrix: "mass matrix M (dense)".into(),
         })?;
@@ -164,13 +144,24 @@ impl Eigenbasis {
     /// [`HeatError::EigenNoConvergence`] (carrying the converged pairs) if the Krylov
     /// dimension limit is hit first.
     pub fn partial(
-        stiffness: &SparseColMat<usize, f64>,
-        mass: &SparseColMat<usize, f64>,
+        stiffness: impl AsSparse,
+        mass: impl AsSparse,
         k: usize,
         params: &EigenParams,
     ) -> Result<Self, HeatError> {
-        let n = check_square(stiffness, mass)?;
-        crate::kernel::check_operators(stiffness, mass)?;
+        Self::partial_of(
+            &Operators::from_matrices(stiffness.as_sparse(), mass.as_sparse())?,
+            k,
+            params,
+        )
+    }
+
+    /// [`Self::partial`] on a validated context.
+    ///
+    /// # Errors
+    /// As [`Self::partial`].
+    pub fn partial_of(ops: &Operators, k: usize, params: &EigenParams) -> Result<Self, HeatError> {
+        let n = ops.n();
         if k == 0 || k > n {
             return Err(HeatError::InvalidParameter {
                 name: "k",
@@ -200,18 +191,11 @@ impl Eigenbasis {
             None => {
                 // Weyl's law λ_k ≈ 4πk/A (A = 1ᵀM1): a shift 1% of the first nonzero
                 // eigenvalue's scale below zero keeps the wanted θ = 1/(λ − σ) well separated.
-                let area: f64 = spmv_sym(mass, &vec![1.0; n]).iter().sum();
-                -1e-2 * 4.0 * std::f64::consts::PI / area
+                -1e-2 * 4.0 * std::f64::consts::PI / ops.total_mass()
             }
         };
-        if !crate::sparse::same_pattern(stiffness, mass) {
-            return Err(HeatError::InconsistentOperators {
-                reason: "stiffness and mass patterns differ".into(),
-            });
-        }
-        let pattern = CholeskyPattern::new(stiffness)?;
-        let shifted = crate::sparse::combine(1.0, stiffness, -sigma, mass);
-        let factor = pattern.factor(&shifted, || format!("L − σM with σ = {sigma:e}"))?;
+        let factor = ops.factor_combination(1.0, -sigma, || format!("L − σM with σ = {sigma:e}"))?;
+        let mass = ops;
 
         let b = params.block_size.min(n);
         let max_dim = params
@@ -225,11 +209,11 @@ impl Eigenbasis {
         let mut v = Mat::<f64>::zeros(n, cap + b);
         let mut mv = Mat::<f64>::zeros(n, cap + b);
         let mut h = Mat::<f64>::zeros(cap + b, cap + b);
-        let mut rng = SplitMix(params.seed);
-        let start = Mat::<f64>::from_fn(n, b, |_, _| rng.next_f64());
+        let mut rng = SplitMix64::new(params.seed);
+        let start = Mat::<f64>::from_fn(n, b, |_, _| rng.next_centered());
         let mut dim = 0usize; // number of basis columns so far
         let (q0, _) = m_orthonormalize(start, mass, &v, &mv, 0, &mut rng);
-        let mq0 = spmm_sym(mass, q0.as_ref());
+        let mq0 = mass.mass_mul_block(q0.as_ref());
         v.as_mut().get_mut(.., 0..b).copy_from(&q0);
         mv.as_mut().get_mut(.., 0..b).copy_from(&mq0);
         dim += b;
@@ -283,7 +267,7 @@ impl Eigenbasis {
                     let qi = evd.U().col(i).subrows(j0, bc);
                     let x = &w * qi;
                     let xs: Vec<f64> = x.iter().copied().collect();
-                    let mx = spmv_sym(mass, &xs);
+                    let mx = mass.mass_mul(&xs);
                     xs.iter().zip(&mx).map(|(a, c)| a * c).sum::<f64>().max(0.0).sqrt()
                 } else {
                     let qi = evd.U().col(i).subrows(j0, bc);
@@ -311,7 +295,7 @@ impl Eigenbasis {
                 });
             }
             // Extend the basis with the next block.
-            let mq = spmm_sym(mass, qn.as_ref());
+            let mq = mass.mass_mul_block(qn.as_ref());
             v.as_mut().get_mut(.., dim..dim + bn).copy_from(&qn);
             mv.as_mut().get_mut(.., dim..dim + bn).copy_from(&mq);
             h.as_mut().get_mut(dim..dim + bn, j0..dim).copy_from(&bj);
@@ -321,38 +305,35 @@ impl Eigenbasis {
     }
 
     /// Applies the (truncated) spectral heat kernel
-    /// `F_k = X_k e^{−tΛ_k} X_kᵀ M f` (paper, Eq. (8); Eq. (6) when k = n).
+    /// `F_k = X_k e^{−tΛ_k} X_kᵀ M f` (paper, Eq. (8); Eq. (6) when k = n), M the mass the
+    /// eigenpairs were computed with.
     ///
     /// # Errors
     /// [`HeatError::InvalidTime`], [`HeatError::LengthMismatch`], [`HeatError::NonFiniteInput`].
-    pub fn apply_heat(&self, mass: &SparseColMat<usize, f64>, f: &[f64], t: f64) -> Result<Vec<f64>, HeatError> {
-        crate::kernel::check_time(t)?;
-        crate::kernel::check_vector(f, self.vectors.nrows())?;
+    pub fn apply_heat(&self, mass: impl AsSparse, f: &[f64], t: f64) -> Result<Vec<f64>, HeatError> {
+        crate::check::time(t)?;
+        crate::check::vector(f, self.vectors.nrows())?;
+        let mass = mass.as_sparse();
         if mass.nrows() != f.len() {
             return Err(HeatError::LengthMismatch {
                 expected: mass.nrows(),
                 found: f.len(),
             });
         }
-        let mf = spmv_sym(mass, f);
-        let mfm = faer::ColRef::from_slice(&mf);
-        let mut c = self.vectors.transpose() * mfm;
-        for (i, ci) in c.iter_mut().enumerate() {
-            *ci *= (-t * self.values[i]).exp();
-        }
-        let g = &self.vectors * &c;
-        Ok(g.iter().copied().collect())
+        let mf: Vec<f64> = (0..f.len())
+            .map(|j| {
+                let rows = mass.symbolic().row_idx_of_col_raw(j);
+                rows.iter().zip(mass.val_of_col(j)).map(|(&i, v)| v * f[i]).sum()
+            })
+            .collect();
+        let g = self.heat_scaled(MatRef::from_column_major_slice(&mf, mf.len(), 1), t);
+        Ok(g.col(0).iter().copied().collect())
     }
 
-    /// Applies the truncated kernel to many columns at once (n × m).
-    pub(crate) fn apply_heat_many(
-        &self,
-        mass: &SparseColMat<usize, f64>,
-        f: faer::MatRef<'_, f64>,
-        t: f64,
-    ) -> Mat<f64> {
-        let mf = spmm_sym(mass, f);
-        let mut c = self.vectors.transpose() * &mf;
+    /// The spectral kernel matrix applied to a block, `X e^{−tΛ} Xᵀ G` (= `H_t G` with all
+    /// pairs; truncated to the pairs held otherwise).
+    pub(crate) fn heat_scaled(&self, g: MatRef<'_, f64>, t: f64) -> Mat<f64> {
+        let mut c = self.vectors.transpose() * g;
         for i in 0..c.nrows() {
             let d = (-t * self.values[i]).exp();
             for j in 0..c.ncols() {
@@ -416,20 +397,20 @@ fn ritz(
 fn complement_block(
     w: faer::MatRef<'_, f64>,
     r: usize,
-    mass: &SparseColMat<usize, f64>,
+    mass: &Operators,
     v: &Mat<f64>,
     mv: &Mat<f64>,
     dim: usize,
-    rng: &mut SplitMix,
+    rng: &mut SplitMix64,
 ) -> (Mat<f64>, Mat<f64>) {
     let n = w.nrows();
-    let mut z = Mat::<f64>::from_fn(n, r, |_, _| rng.next_f64());
+    let mut z = Mat::<f64>::from_fn(n, r, |_, _| rng.next_centered());
     for _ in 0..2 {
         let coef = mv.as_ref().get(.., 0..dim).transpose() * &z;
         z -= v.as_ref().get(.., 0..dim) * &coef;
     }
     let (q, _) = m_orthonormalize(z, mass, v, mv, dim, rng);
-    let mq = spmm_sym(mass, q.as_ref());
+    let mq = mass.mass_mul_block(q.as_ref());
     let bj = mq.transpose() * w;
     (q, bj)
 }
@@ -440,11 +421,11 @@ fn complement_block(
 /// replaced by random vectors orthogonal to everything, with a zero row in R.
 fn m_orthonormalize(
     mut w: Mat<f64>,
-    mass: &SparseColMat<usize, f64>,
+    mass: &Operators,
     v: &Mat<f64>,
     mv: &Mat<f64>,
     dim: usize,
-    rng: &mut SplitMix,
+    rng: &mut SplitMix64,
 ) -> (Mat<f64>, Mat<f64>) {
     let n = w.nrows();
     let b = w.ncols();
@@ -455,7 +436,7 @@ fn m_orthonormalize(
             let coef = mv.as_ref().get(.., 0..dim).transpose() * &w;
             w -= v.as_ref().get(.., 0..dim) * &coef;
         }
-        let mw = spmm_sym(mass, w.as_ref());
+        let mw = mass.mass_mul_block(w.as_ref());
         let g = w.transpose() * &mw;
         let (down, up) = pow2_scale(g.as_ref());
         let g = Mat::<f64>::from_fn(b, b, |i, j| (0.5 * down) * (g[(i, j)] + g[(j, i)]));
@@ -481,7 +462,7 @@ fn m_orthonormalize(
                 }
             } else {
                 for i in 0..n {
-                    q[(i, c)] = rng.next_f64();
+                    q[(i, c)] = rng.next_centered();
                 }
                 replaced = true;
             }
