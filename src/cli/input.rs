@@ -97,10 +97,7 @@ pub fn repair_flags(args: &MeshArgs) -> String {
 /// wrong file is refused before any work.
 pub fn field_path(text: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(text);
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
+    let ext = super::output::extension(&path);
     if ext == "npy" || ext == "csv" {
         Ok(path)
     } else {

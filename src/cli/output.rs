@@ -37,10 +37,7 @@ impl Output {
     /// Parses an output path (clap value parser): the extension must name a format.
     pub fn parse(text: &str) -> Result<Self, String> {
         let path = PathBuf::from(text);
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase())
-            .unwrap_or_default();
+        let ext = extension(&path);
         let format = match FieldFormat::from_extension(&ext) {
             Some(f) => OutputFormat::Field(f),
             None if ext == "png" => OutputFormat::Png,
@@ -106,6 +103,13 @@ impl Output {
         check_folder(&self.path)?;
         check_targets(&targets, inputs)
     }
+}
+
+/// The extension of a path, lower case ("" if none).
+pub(crate) fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
 }
 
 /// Why an output path cannot be used.

@@ -99,39 +99,29 @@ pub struct Step {
 
 /// Starts a spinner for an opaque step, e.g. `step("factorizing (B + γtL)")`.
 pub fn step(label: impl Into<String>) -> Step {
-    let label = label.into();
-    let bar = match sink() {
-        Sink::Bars(multi) => {
-            let bar = multi.add(ProgressBar::new_spinner());
-            bar.set_style(
-                ProgressStyle::with_template("{spinner} {msg} [{elapsed_precise}]")
-                    .unwrap_or_else(|_| ProgressStyle::default_spinner()),
-            );
-            bar.set_message(label.clone());
-            bar.enable_steady_tick(Duration::from_millis(120));
-            Some(bar)
-        }
-        Sink::Lines | Sink::Hidden => None,
-    };
-    Step {
-        bar,
-        label,
-        start: Instant::now(),
-        finished: false,
-    }
+    start(
+        label.into(),
+        ProgressBar::new_spinner,
+        "{spinner} {msg} [{elapsed_precise}]",
+    )
 }
 
 /// Starts a bar over `len` units, e.g. `bar(3, "K_t f")` for three diffusion times.
 pub fn bar(len: usize, label: impl Into<String>) -> Step {
-    let label = label.into();
+    start(
+        label.into(),
+        || ProgressBar::new(len as u64),
+        "{msg} [{bar:30}] {pos}/{len} [{elapsed_precise}, eta {eta}]",
+    )
+}
+
+/// A step drawn (on a terminal) by the indicatif bar `new` with `template`.
+fn start(label: String, new: impl FnOnce() -> ProgressBar, template: &str) -> Step {
     let bar = match sink() {
         Sink::Bars(multi) => {
-            let bar = multi.add(ProgressBar::new(len as u64));
-            bar.set_style(
-                ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} [{elapsed_precise}, eta {eta}]")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar())
-                    .progress_chars("=> "),
-            );
+            let bar = multi.add(new());
+            let style = ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar());
+            bar.set_style(style.progress_chars("=> "));
             bar.set_message(label.clone());
             bar.enable_steady_tick(Duration::from_millis(120));
             Some(bar)

@@ -2,19 +2,9 @@
 //! inaccurate methods, figure orientation and the metadata of outputs. (The hostile values of
 //! every argument are in hostile.rs.)
 
+use super::common::{read_npy, stderr, wfem};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn wfem(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_wfem"))
-        .args(args)
-        .output()
-        .expect("the wfem binary runs")
-}
-
-fn stderr(o: &std::process::Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -279,7 +269,7 @@ fn issue_16_approximate_methods_report_their_error_and_need_allow_inaccurate() {
             serde_json::from_slice(&std::fs::read(dir.path().join("k.json")).unwrap()).unwrap();
         let estimate = meta["estimated_relative_error"][0].as_f64().unwrap();
         assert!(estimate > 1e-2, "{method}: {estimate}");
-        let approx = read_npy(&out);
+        let approx = read_npy(&out).unwrap().1;
         let exact_path = dir.path().join("exact.npy");
         let o = wfem(&[
             "heat",
@@ -294,7 +284,7 @@ fn issue_16_approximate_methods_report_their_error_and_need_allow_inaccurate() {
             s(&exact_path),
         ]);
         assert!(o.status.success());
-        let exact = read_npy(&exact_path);
+        let exact = read_npy(&exact_path).unwrap().1;
         let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let err = approx.iter().zip(&exact).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())) / scale;
         assert!(
@@ -306,15 +296,6 @@ fn issue_16_approximate_methods_report_their_error_and_need_allow_inaccurate() {
     let o = run("taylor", "1e-9", false);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("estimated relative error"), "{}", stderr(&o));
-}
-
-fn read_npy(path: &Path) -> Vec<f64> {
-    let bytes = std::fs::read(path).unwrap();
-    let len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
-    bytes[10 + len..]
-        .chunks_exact(8)
-        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-        .collect()
 }
 
 #[test]

@@ -8,6 +8,7 @@
 //! Rows that fail because of the numerics of wfem-heat (not the CLI) are kept out of the
 //! table and sit in their own `#[ignore]`d tests at the end, marked `// lead:`.
 
+use super::common::{read_csv, read_npy};
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -121,48 +122,6 @@ fn expand(args: &str, d: &Path, o: &Path) -> Vec<String> {
                 .replace("{U64}", "18446744073709551615")
         })
         .collect()
-}
-
-fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut lines = text.lines();
-    let header: Vec<String> = lines.next().ok_or("empty CSV")?.split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| {
-            l.split(',')
-                .map(|x| x.parse::<f64>().map_err(|e| format!("{x:?}: {e}")))
-                .collect::<Result<Vec<f64>, String>>()
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    Ok((header, rows))
-}
-
-fn read_npy(path: &Path) -> Result<(Vec<usize>, Vec<f64>), String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    if !bytes.starts_with(b"\x93NUMPY\x01\x00") {
-        return Err("not NPY 1.0".into());
-    }
-    let len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
-    let header = std::str::from_utf8(&bytes[10..10 + len]).map_err(|e| e.to_string())?;
-    if !header.contains("'descr': '<f8'") {
-        return Err(format!("dtype: {header}"));
-    }
-    let shape_text = header
-        .split("'shape': (")
-        .nth(1)
-        .and_then(|s| s.split(')').next())
-        .ok_or("no shape")?;
-    let shape: Vec<usize> = shape_text
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .map(|s| s.parse().map_err(|_| format!("shape {shape_text}")))
-        .collect::<Result<_, String>>()?;
-    let data: Vec<f64> = bytes[10 + len..]
-        .chunks_exact(8)
-        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-        .collect();
-    Ok((shape, data))
 }
 
 fn check(c: &Check, o: &Path, out: &Outcome) -> Result<(), String> {

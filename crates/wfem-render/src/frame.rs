@@ -3,31 +3,11 @@
 
 use mesh_fem::TriMesh;
 
-type V3 = [f64; 3];
+use crate::vec3::{cross, dot, V3};
 
-fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn scale(a: V3, s: f64) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-
-fn normalized(a: V3) -> V3 {
-    let n = dot(a, a).sqrt();
-    if n > 0.0 && n.is_finite() {
-        scale(a, 1.0 / n)
-    } else {
-        a
-    }
+/// `a / |a|`, or `a` itself when it cannot be normalised.
+fn unit(a: V3) -> V3 {
+    crate::vec3::normalized(a).unwrap_or(a)
 }
 
 /// Which coordinate axis points up in the mesh's own frame.
@@ -65,8 +45,8 @@ impl Frame {
     /// The frame with `up` and `front` (made orthonormal; `front` must not be parallel to
     /// `up`).
     pub fn new(up: [f64; 3], front: [f64; 3]) -> Self {
-        let up = normalized(up);
-        let front = normalized(sub_projection(front, up));
+        let up = unit(up);
+        let front = unit(sub_projection(front, up));
         Self {
             right: cross(up, front),
             up,

@@ -22,6 +22,7 @@ mod font;
 mod frame;
 mod legend;
 mod raster;
+mod vec3;
 
 pub use colormap::Colormap;
 pub use frame::{Frame, UpAxis};
