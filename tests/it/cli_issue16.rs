@@ -373,21 +373,22 @@ fn issue_16_figures_of_the_tosca_cat_are_upright() {
     };
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("cat.png");
-    let o = wfem(&["distance", s(&cat), "--t", "50", "--from", "0", "-o", s(&png)]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("up is +z"), "{}", stderr(&o));
-    let o = wfem(&[
-        "distance",
+    let args = [
+        "heat",
         s(&cat),
         "--t",
         "50",
-        "--from",
+        "--source",
         "0",
-        "--up",
-        "y",
+        "--method",
+        "fast",
         "-o",
         s(&png),
-    ]);
+    ];
+    let o = wfem(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("up is +z"), "{}", stderr(&o));
+    let o = wfem(&[&args[..], &["--up", "y"]].concat());
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("up is"), "{}", stderr(&o));
     for (rel, up) in [
