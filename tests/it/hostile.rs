@@ -5,8 +5,10 @@
 //! `wfem: error: …`, or clap's exit 2) or in a correct result (exit 0, outputs of the right
 //! shape without NaN). No panic, no hang, no library names in messages, inputs never modified.
 //!
-//! Rows that fail because of the numerics of wfem-heat (not the CLI) are kept out of the
-//! table and sit in their own `#[ignore]`d tests at the end, marked `// lead:`.
+//! Huge diffusion times (up to the largest double) were wrong in wfem-heat when this table was
+//! written (the rational method refused t = f64::MAX, dense gave NaN and the fast path failed at
+//! 1e300, the HKS at 1e300 was 0); the lead fixed them in wfem-heat, and the tests at the end
+//! check the t → ∞ limits exactly.
 
 use super::common::{read_csv, read_npy};
 use std::collections::BTreeMap;
@@ -477,6 +479,22 @@ fn heat_rows() -> Vec<Row> {
             ok(&[Csv("k.csv", N, 1)]),
         ),
         heat("--t 1e6 --source 3 -o {o}/k.csv", ok(&[Csv("k.csv", N, 1)])),
+        heat(
+            "--t {MAX} --source 3 --kernel lumped -o {o}/k.npy",
+            ok(&[Npy("k.npy", N, 1)]),
+        ),
+        heat(
+            "--t {MAX} --source 3 --kernel linear -o {o}/k.npy",
+            ok(&[Npy("k.npy", N, 1)]),
+        ),
+        heat(
+            "--t {MAX} --source 3 --method spectral -o {o}/k.npy",
+            ok(&[Npy("k.npy", N, 1)]),
+        ),
+        heat(
+            "--t 1e-300 {MAX} --source 3 -o {o}/k.png",
+            ok(&[File("k-t1e-300.png"), File("k-t1.7976931348623157e308.png")]),
+        ),
         heat("--t 0 --source 3 -o {o}/k.csv", Typed(&["--t 0", "finite t > 0"])),
         heat("--t -1 --source 3 -o {o}/k.csv", Typed(&["--t -1"])),
         heat("--t -0 --source 3 -o {o}/k.csv", Typed(&["--t"])),
@@ -767,6 +785,7 @@ fn distance_rows() -> Vec<Row> {
         dist("--t 0.1 --from 3 -o {o}/d.npy", ok(&[Npy("d.npy", N, 1)])),
         dist("--t 0.1 --from 3 --kind linear -o {o}/d.csv", ok(&[Csv("d.csv", N, 1)])),
         dist("--t 0.1 --from 3 -o {o}/d.png", ok(&[File("d.png")])),
+        dist("--t 1e300 --from 3 -o {o}/d.npy", ok(&[Npy("d.npy", N, 1)])),
         dist("--t 0 --from 3 -o {o}/d.npy", Typed(&["--t 0"])),
         dist("--t -1 --from 3 -o {o}/d.npy", Typed(&["--t -1"])),
         dist("--t nan --from 3 -o {o}/d.npy", Typed(&["--t NaN"])),
@@ -926,6 +945,7 @@ fn hks_rows() -> Vec<Row> {
         hks("--scales {U64} -o {o}/h.npy", Typed(&["--scales 18446744073709551615"])),
         hks("--scales -1 -o {o}/h.npy", Clap),
         hks("--scales 65 -o {o}/h.png", Typed(&["-o 65", "1..=64"])),
+        hks("--times 1e-300 {MAX} -o {o}/h.npy", ok(&[Npy("h.npy", N, 2)])),
         hks("--times 0 -o {o}/h.npy", Typed(&["--times 0"])),
         hks("--times -1 -o {o}/h.npy", Typed(&["--times -1"])),
         hks("--times nan -o {o}/h.npy", Typed(&["--times NaN"])),
@@ -1182,8 +1202,7 @@ fn hostile_demo_and_retrieval() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Rows that need a fix in wfem-heat / shifted-solve (the lead's part of issue #16). Each is a
-// valid input whose correct result is known; they run with `cargo test -- --ignored`.
+// Huge times: K_t f and the HKS at their t → ∞ limits.
 
 /// K_t f at t → ∞ is the B-weighted mean of f on each component: for e_i on the sphere,
 /// (1ᵀB e_i / area)·1.
@@ -1197,7 +1216,7 @@ fn limit_of_source(i: usize) -> f64 {
 }
 
 /// Runs `heat … --source 3 -o k.csv` with `args` and checks that K_t e_3 is its t → ∞ limit.
-fn lead_heat_limit(args: &str) {
+fn heat_limit(args: &str) {
     let fixture = fixture();
     let o = tempfile::tempdir().unwrap();
     let full = format!("heat {{d}}/sphere.off --source 3 -o {{o}}/k.csv {args}");
@@ -1210,35 +1229,28 @@ fn lead_heat_limit(args: &str) {
     }
 }
 
-/// lead: the rational method (LDLᵀ backend) refuses t = f64::MAX with "shifted matrix
-/// tL − zB is numerically singular" (tL overflows); the answer is the mean.
+/// Every method and kernel reaches the mean at t = f64::MAX, and the exact methods at 1e300
+/// (before the fix: "shifted matrix tL − zB is numerically singular", NaN from dense, a failed
+/// Cholesky in the fast path).
 #[test]
-#[ignore = "lead: wfem-heat/shifted-solve must handle t = f64::MAX (K_t f → mean)"]
-fn lead_heat_rational_at_the_largest_double() {
-    lead_heat_limit("--t {MAX}");
+fn issue_16_heat_at_huge_times_is_the_mean() {
+    for args in [
+        "--t {MAX}",
+        "--t {MAX} --method fast",
+        "--t {MAX} --method dense",
+        "--t {MAX} --backend lu",
+        "--t {MAX} --backend minres",
+        "--t {MAX} --backend multishift",
+        "--t 1e300 --method dense",
+        "--t 1e300 --method fast",
+    ] {
+        heat_limit(args);
+    }
 }
 
-/// lead: the dense method returns NaN at t = 1e300 (0·∞ in X e^{−tΛ} XᵀBf); the CLI refuses
-/// the NaN with a typed error, but the correct answer is the mean.
+/// The HKS at t = 1e300 is its limit 1/area (the constant eigenfunction squared; it was 0).
 #[test]
-#[ignore = "lead: Method::Dense returns NaN at t = 1e300"]
-fn lead_heat_dense_at_huge_t() {
-    lead_heat_limit("--t 1e300 --method dense");
-}
-
-/// lead: the fast path fails ("Cholesky factorization of M + γtL with shift 1e299 failed")
-/// at t = 1e300 instead of returning the mean.
-#[test]
-#[ignore = "lead: Method::Fast fails at t = 1e300"]
-fn lead_heat_fast_at_huge_t() {
-    lead_heat_limit("--t 1e300 --method fast");
-}
-
-/// lead: the HKS at t = 1e300 is all zeros; its limit is 1/area (the constant eigenfunction
-/// squared).
-#[test]
-#[ignore = "lead: HKS at t = 1e300 gives zeros instead of 1/area"]
-fn lead_hks_at_huge_t() {
+fn issue_16_hks_at_a_huge_time_is_one_over_the_area() {
     let fixture = fixture();
     let o = tempfile::tempdir().unwrap();
     let out = run(
