@@ -11,6 +11,10 @@ use faer::{Mat, MatRef};
 use mesh_fem::FemOperators;
 use std::sync::Arc;
 
+/// Kernels whose operators alone make K_t uncertain by more than this (relative) are refused
+/// ([`crate::Conditioning`], [`HeatError::IllConditionedMesh`]).
+pub const MAX_ROUNDING_ERROR: f64 = 1e-3;
+
 /// Options of [`HeatKernel::new`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct HeatParams {
@@ -52,6 +56,15 @@ impl HeatKernel {
     /// [`HeatError::NotPositiveDefinite`]; [`HeatError::Solve`] (e.g. L not positive
     /// semidefinite for the rational method).
     pub fn with_operators(ops: &Operators, method: Method) -> Result<Self, HeatError> {
+        let conditioning = ops.conditioning();
+        let estimated_error = conditioning.rounding_error();
+        if estimated_error > MAX_ROUNDING_ERROR {
+            return Err(HeatError::IllConditionedMesh {
+                vertex: conditioning.vertex,
+                ratio: conditioning.ratio,
+                estimated_error,
+            });
+        }
         let prepared = method.prepare(ops)?;
         Ok(Self {
             ops: ops.clone(),
@@ -78,6 +91,13 @@ impl HeatKernel {
     /// The mass matrix M of the kernel (B, D, I or a custom one).
     pub fn mass(&self) -> SparseColMatRef<'_, usize, f64> {
         self.ops.mass()
+    }
+
+    /// The relative error that rounding in the operators alone can cause in K_t
+    /// ([`crate::Conditioning::rounding_error`]): about 1e−15 on a well-shaped mesh; a CLI
+    /// should warn above 1e−8. Kernels above [`MAX_ROUNDING_ERROR`] are refused.
+    pub fn rounding_error(&self) -> f64 {
+        self.ops.conditioning().rounding_error()
     }
 
     /// The eigenpairs, for the `Dense` and `Spectral` methods.
@@ -122,7 +142,21 @@ impl HeatKernel {
             self.prepared.apply(&self.ops, deflated.as_ref(), t)?
         };
         null_space.restore(&mut g, &coefs);
-        Ok(g)
+        self.finite(g)
+    }
+
+    /// Refuses a result with NaN or ∞ (never returned).
+    fn finite(&self, m: Mat<f64>) -> Result<Mat<f64>, HeatError> {
+        for j in 0..m.ncols() {
+            if let Some(row) = m.col(j).iter().position(|v| !v.is_finite()) {
+                return Err(HeatError::NonFiniteResult {
+                    method: self.method.name(),
+                    row,
+                    column: j,
+                });
+            }
+        }
+        Ok(m)
     }
 
     /// The heat-kernel matrix applied to a block, `H_t G = K_t M⁻¹ G = X D_t Xᵀ G`
@@ -145,7 +179,7 @@ impl HeatKernel {
             self.prepared.apply_kernel_matrix(&self.ops, deflated.as_ref(), t)?
         };
         null_space.restore(&mut h, &coefs);
-        Ok(h)
+        self.finite(h)
     }
 }
 
@@ -270,9 +304,14 @@ impl HeatKernel {
                 error_estimates.push(None);
             }
         }
+        let mut values = values;
         for v in &mut values {
             null_space.restore(v, &coefs);
         }
+        let values = values
+            .into_iter()
+            .map(|v| self.finite(v))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(TimeSeries {
             times: times.to_vec(),
             values,

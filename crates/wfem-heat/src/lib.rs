@@ -61,8 +61,10 @@ pub mod spectral;
 
 pub use distance::{DiffusionDistance, DistanceKind, DistanceParams};
 pub use error::HeatError;
-pub use kernel::{heat, DiagonalParams, DiagonalSeries, HeatKernel, HeatParams, KernelDiagonal, TimeSeries};
+pub use kernel::{
+    heat, DiagonalParams, DiagonalSeries, HeatKernel, HeatParams, KernelDiagonal, TimeSeries, MAX_ROUNDING_ERROR,
+};
 pub use method::Method;
-pub use operators::{AsSparse, KernelKind, Operators};
+pub use operators::{AsSparse, Conditioning, KernelKind, Operators};
 pub use shifted_solve::{rng, Backend, KrylovParams};
 pub use spectral::{EigenParams, Eigenbasis, DENSE_MAX_VERTICES};
