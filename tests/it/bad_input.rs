@@ -374,6 +374,8 @@ const CASES: &[Case] = &[
             notes: &[],
             problems: &[
                 "NonManifoldEdge { edge: [0, 1], n_faces: 3 }",
+                // A warning since eefd8cb (issue #16): the needle's |cot| is 3.5e8.
+                "NeedleFace { face: 4, vertices: [0, 1, 4], cotangent: 353553390.59327376 }",
                 "Boundary { loops: 1, edges: 2 }",
             ],
             validation: Verdict::Ok,
