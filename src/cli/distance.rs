@@ -1,10 +1,13 @@
 //! `wfem distance`: diffusion distances from one vertex to every vertex.
 
-use super::{check_output, load_usable, write_fields, CliError, MeshArgs, Output};
+use super::heat::{check_degree, prepare_kernel};
+use super::output::{short_label, write_fields, Column, RenderArgs, Writing};
+use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
 use clap::{Args, ValueEnum};
 use mesh_fem::{assemble, AssemblyParams};
+use serde_json::json;
 use std::io::Write;
-use wfem_heat::{DiffusionDistance, DistanceKind, DistanceParams, HeatKernel, HeatParams, Method};
+use wfem_heat::{DiffusionDistance, DistanceKind, DistanceParams, HeatParams, Method};
 
 /// Which diffusion distance.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -38,7 +41,8 @@ pub struct DistanceArgs {
     /// Diffusion time t > 0.
     #[arg(long = "t", allow_negative_numbers = true)]
     pub t: f64,
-    /// The vertex i whose distances d_t(i, ·) to every vertex are computed.
+    /// The vertex i (numbered as in the file) whose distances d_t(i, ·) to every vertex are
+    /// computed.
     #[arg(long)]
     pub from: u32,
     /// Which distance.
@@ -48,37 +52,75 @@ pub struct DistanceArgs {
     /// default fast exact path.
     #[arg(long)]
     pub degree: Option<usize>,
-    /// Output file: .ply, .npy, .csv or .png.
+    /// Output file: .ply, .npy (+ .json sidecar), .csv or .png.
     #[arg(short = 'o', long = "output", value_parser = Output::parse)]
     pub output: Output,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub render: RenderArgs,
 }
 
 /// `wfem distance`: the row d_t(i, ·) of diffusion distances (one kernel column and the
 /// diagonal of the Gram matrix).
 pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    check_output(&args.input.mesh, &args.output.path)?;
-    let mesh = load_usable(&args.input)?;
-    let n = mesh.n_vertices();
-    let i = args.from as usize;
-    if i >= n {
-        return Err(CliError::Usage(format!(
-            "--from {i} is not a vertex (the mesh has {n} vertices)"
-        )));
-    }
-    let ops = assemble(&mesh, &AssemblyParams::default())?;
+    limits::time("--t", args.t)?;
+    check_degree(args.degree)?;
+    let label = short_label(args.t);
+    let kind: DistanceKind = args.kind.into();
+    let name = kind.name().replace('-', "_");
+    let suffix = format!("{}-distance-t{label}", kind.name());
+    args.output
+        .check(Some(std::slice::from_ref(&suffix)), 1, &[&args.input.mesh])?;
+    let input = read_usable(&args.input)?;
+    let i = input.vertex("--from", args.from)?;
+    let ops = progress::run("assembling L, B, D", || {
+        assemble(&input.mesh, &AssemblyParams::default())
+    })?;
     let method = args.degree.map_or_else(Method::default, Method::rational);
-    let kernel = HeatKernel::new(
+    let kernel = prepare_kernel(
         &ops,
         HeatParams {
             method,
             ..Default::default()
         },
+        input.mesh.n_vertices(),
     )?;
-    let kind: DistanceKind = args.kind.into();
-    let dd = DiffusionDistance::new(&kernel, kind, args.t, &DistanceParams::default())?;
-    let row = dd.row(i)?;
-    let name = format!("{}_distance_t={}", kind.name().replace('-', "_"), args.t);
-    for path in write_fields(&args.output, &mesh, &[(name, row)], &[args.from])? {
+    let dd = progress::run(format!("preparing the {} distance (t = {label})", kind.name()), || {
+        DiffusionDistance::new(&kernel, kind, args.t, &DistanceParams::default())
+    })?;
+    let row = progress::run(format!("distances from vertex {}", args.from), || dd.row(i as usize))?;
+    let column = Column {
+        name: format!("{name}_distance_t={label}"),
+        suffix,
+        title: format!(
+            "{}: {} distance from vertex {}, t = {label} ({})",
+            input.name,
+            kind.name(),
+            args.from,
+            args.degree
+                .map_or("fast".to_string(), |d| format!("rational, degree {d}"))
+        ),
+        t: Some(args.t),
+        values: row,
+    };
+    let mut meta = serde_json::Map::new();
+    meta.insert("command".into(), json!("distance"));
+    meta.insert("input".into(), input.meta(&args.input.mesh));
+    meta.insert("kind".into(), json!(kind.name()));
+    meta.insert("from_vertex".into(), json!(args.from));
+    meta.insert(
+        "method".into(),
+        args.degree.map_or(
+            json!({ "name": "fast" }),
+            |d| json!({ "name": "rational", "degree": d }),
+        ),
+    );
+    let how = Writing {
+        render: args.render,
+        highlight: &[i],
+        meta,
+    };
+    for path in write_fields(&args.output, &input.mesh, &[column], how)? {
         writeln!(out, "wrote {}", path.display())?;
     }
     Ok(())

@@ -134,23 +134,18 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             for f in files {
                 check_output(f, index_path)?;
             }
-            if *eigs == 0 || *words == 0 {
-                return Err(CliError::Usage("--eigs and --words must be at least 1".into()));
-            }
+            super::limits::retrieval_sizes(*eigs, *words)?;
             let times = default_times();
+            let bar = super::progress::bar(files.len(), "describing shapes");
             let described = files
                 .iter()
                 .map(|f| {
-                    describe(
-                        &MeshArgs {
-                            mesh: f.clone(),
-                            triangulate: false,
-                        },
-                        *eigs,
-                        &times,
-                    )
+                    let d = describe(&MeshArgs::new(f.clone()), *eigs, &times);
+                    bar.inc(&f.display().to_string());
+                    d
                 })
                 .collect::<Result<Vec<_>, _>>()?;
+            bar.done();
             let rows: usize = described.iter().map(|(d, _)| d.nrows()).sum();
             let dim = times.len();
             let mut pooled = Mat::<f64>::zeros(rows, dim);
@@ -205,12 +200,11 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             )?;
         }
         RetrievalAction::Query { index, input, top } => {
-            let text = std::fs::read_to_string(index).map_err(|source| mesh_fem::MeshError::Io {
-                path: index.clone(),
-                source,
-            })?;
+            let text = super::read_text(index)?;
             let index: RetrievalIndex = serde_json::from_str(&text)
                 .map_err(|e| CliError::Usage(format!("{} is not a wfem retrieval index: {e}", index.display())))?;
+            let bags: Vec<&[f64]> = index.entries.iter().map(|e| e.bag.as_slice()).collect();
+            super::limits::retrieval_index(index.eigenpairs, &index.times, &index.words, index.sigma, &bags)?;
             let dim = index.times.len();
             if index.words.iter().any(|w| w.len() != dim) {
                 return Err(CliError::Usage("index words do not match its times".into()));

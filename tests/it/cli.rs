@@ -200,7 +200,7 @@ fn heat_with_several_times_and_a_field_file() {
         out.to_str().unwrap(),
     ]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("t = -1"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--t -1 is out of range"), "{}", stderr(&o));
     let o = wfem(&[
         "heat",
         mesh.to_str().unwrap(),

@@ -19,10 +19,13 @@
 
 mod colormap;
 mod font;
+mod frame;
 mod legend;
 mod raster;
+mod vec3;
 
 pub use colormap::Colormap;
+pub use frame::{Frame, UpAxis};
 
 use mesh_fem::TriMesh;
 use rayon::prelude::*;
@@ -96,16 +99,6 @@ pub struct View {
     pub up: [f64; 3],
 }
 
-/// Which coordinate axis points up in the mesh's own frame.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum UpAxis {
-    /// y up (the usual convention of OBJ/PLY datasets: bunny, armadillo, spot, SHREC).
-    #[default]
-    Y,
-    /// z up (CAD and many generated meshes).
-    Z,
-}
-
 impl View {
     /// A view from `direction` with screen-up `up`.
     pub fn new(direction: [f64; 3], up: [f64; 3]) -> Self {
@@ -113,22 +106,24 @@ impl View {
     }
 
     /// The four standard views — front, side (from +x), top and an oblique
-    /// front-right-above view — for a mesh whose up axis is `up`.
+    /// front-right-above view — for a mesh whose up axis is `up` ([`Frame::from_up`]).
     pub fn standard(up: UpAxis) -> Vec<View> {
-        // Defined for y-up; a z-up mesh gets the same views rotated by +90° about x,
-        // (x, y, z) ↦ (x, −z, y), which maps +y to +z and the front (+z) to −y.
+        Self::standard_in(&Frame::from_up(up))
+    }
+
+    /// The four standard views in a frame: front (from `frame.front`), side (from
+    /// `frame.right`), top (from `frame.up`) and an oblique front-right-above view, with
+    /// `frame.up` up (the top view has the back at the top).
+    pub fn standard_in(frame: &Frame) -> Vec<View> {
+        // Defined in the y-up frame (x right, y up, z front) and mapped into `frame`.
         let y_up = [
             View::new([0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
             View::new([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
             View::new([0.0, 1.0, 0.0], [0.0, 0.0, -1.0]),
             View::new([0.8, 0.6, 1.0], [0.0, 1.0, 0.0]),
         ];
-        let rot = |v: [f64; 3]| [v[0], -v[2], v[1]];
         y_up.iter()
-            .map(|v| match up {
-                UpAxis::Y => *v,
-                UpAxis::Z => View::new(rot(v.direction), rot(v.up)),
-            })
+            .map(|v| View::new(frame.map(v.direction), frame.map(v.up)))
             .collect()
     }
 }

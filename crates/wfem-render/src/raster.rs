@@ -4,24 +4,7 @@ use super::{RenderParams, RgbImage, View};
 use mesh_fem::TriMesh;
 use rayon::prelude::*;
 
-type V3 = [f64; 3];
-
-fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn normalized(a: V3) -> Option<V3> {
-    let n = dot(a, a).sqrt();
-    (n.is_finite() && n > 1e-300).then(|| [a[0] / n, a[1] / n, a[2] / n])
-}
+use super::vec3::{cross, dot, normalized, V3};
 
 /// Orthonormal camera frame: `right`, `up` span the screen, `dir` points towards the viewer.
 #[derive(Clone, Copy, Debug)]

@@ -1,8 +1,8 @@
 //! Atomic writing of per-vertex fields (PLY/NPY/CSV) and meshes (OFF/OBJ/PLY), and reading
 //! fields back (NPY/CSV).
 
+use super::parse_error;
 use super::text::{parse_f64, show, Lines};
-use super::{io_error, parse_error};
 use super::{write_atomic, AtomicSet};
 use crate::{MeshError, TriMesh};
 use std::io::Write;
@@ -271,7 +271,10 @@ fn write_npy(w: &mut dyn Write, n: usize, fields: &[(&str, &[f64])]) -> std::io:
 ///
 /// * `.npy`: float64 or float32 (either byte order), shape `(n,)` or `(n, 1)`.
 /// * `.csv`: one value per line; a first line that is not a number is taken as a header;
-///   blank lines are skipped.
+///   blank lines are skipped; a leading UTF-8 byte order mark (written by Excel and many
+///   Windows tools) is ignored.
+///
+/// Only regular files are read ([`super::read_regular_file`]): a FIFO is refused, not waited on.
 ///
 /// # Errors
 /// [`MeshError::FieldLength`] if the field does not have `n_vertices` values,
@@ -282,7 +285,7 @@ pub fn read_field(path: &Path, n_vertices: usize) -> Result<Vec<f64>, MeshError>
         Ok(f @ (FieldFormat::Npy | FieldFormat::Csv)) => f,
         _ => return Err(unsupported(path, ".npy, .csv")),
     };
-    let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
+    let bytes = super::read_regular_file(path)?;
     let values = match format {
         FieldFormat::Npy => parse_npy(&bytes, path)?,
         _ => parse_csv(&bytes, path)?,
@@ -388,6 +391,9 @@ fn parse_npy(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {
 }
 
 fn parse_csv(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {
+    // Without this, "\u{feff}1.5" on the first line read as a non-numeric header and the field
+    // lost its first value (issue #16).
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let mut values = Vec::with_capacity(bytes.len() / 8);
     let mut first = true;
     for (line_no, line) in Lines::new(bytes) {
