@@ -38,6 +38,7 @@ pub mod backend;
 mod condition;
 mod error;
 mod factor;
+mod function;
 mod iterative;
 mod lanczos;
 mod ldlt;
@@ -55,11 +56,12 @@ pub use condition::ConditionReport;
 pub use error::SolveError;
 pub use factor::{CholeskyPattern, SpdFactor};
 pub use faer::c64;
-pub use iterative::{MinresParams, Preconditioner, PreconditionerShift};
-pub use lanczos::{
-    lanczos_function, lanczos_function_many, largest_ritz_value, KrylovParams, LanczosOutcome, LanczosParams,
-    LanczosProcess, Reorthogonalization,
+pub use function::{
+    lanczos_function, lanczos_function_many, lanczos_functions, lanczos_functions_many, FunctionsResult, KrylovParams,
+    LanczosOutcome, LanczosParams,
 };
+pub use iterative::{MinresParams, Preconditioner, PreconditionerShift};
+pub use lanczos::{largest_ritz_value, LanczosOperator, LanczosProcess, Reorthogonalization};
 pub use operators::OperatorPair;
 pub use poles::{RationalApprox, DEFAULT_DEGREE, PAPER_DEGREE, SHIPPED_DEGREES};
 pub use solver::{RationalFactors, ShiftedSolver};

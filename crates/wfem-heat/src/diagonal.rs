@@ -17,6 +17,9 @@ use faer::Mat;
 /// A block product `E ↦ A E`.
 pub(crate) type BlockOperator<'a> = dyn Fn(&Mat<f64>) -> Result<Mat<f64>, HeatError> + 'a;
 
+/// A block product for several operators at once: `P ↦ [A_0 P, A_1 P, …]`.
+pub(crate) type BlockOperators<'a> = dyn FnMut(&Mat<f64>) -> Result<Vec<Mat<f64>>, HeatError> + 'a;
+
 /// How a diagonal is computed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum DiagonalMethod {
@@ -65,6 +68,83 @@ pub struct DiagonalInfo {
     pub relative_tail: f64,
 }
 
+/// The probe vectors of a diagonal: the colour of every vertex (one probe column per colour).
+#[derive(Clone, Debug)]
+pub(crate) struct Probes {
+    colour: Vec<usize>,
+    n_colours: usize,
+    pub(crate) info: DiagonalInfo,
+}
+
+impl Probes {
+    /// The probes of `method` for an operator whose column at vertex i is `col = A e_i` (the
+    /// sample that sets the colouring distance), on the mesh graph `pattern`.
+    pub(crate) fn new(
+        pattern: SymbolicSparseColMatRef<'_, usize>,
+        method: DiagonalMethod,
+        i: usize,
+        col: &[f64],
+    ) -> Self {
+        let n = pattern.nrows();
+        let probed = match method {
+            DiagonalMethod::Exact => None,
+            DiagonalMethod::Probing { tol } => colouring(pattern, i, col, tol),
+        };
+        match probed {
+            Some((colour, n_colours, hops, relative_tail)) => Self {
+                colour,
+                n_colours,
+                info: DiagonalInfo {
+                    columns: n_colours,
+                    hops: Some(hops),
+                    relative_tail,
+                },
+            },
+            None => Self {
+                colour: (0..n).collect(),
+                n_colours: n,
+                info: DiagonalInfo {
+                    columns: n,
+                    hops: None,
+                    relative_tail: 0.0,
+                },
+            },
+        }
+    }
+
+    /// The diagonals of several operators sharing the probes: `apply(P)` returns one block
+    /// `A_l P` per operator for a block P of probe columns (at most `block` columns).
+    pub(crate) fn diagonals(
+        &self,
+        block: usize,
+        outputs: usize,
+        apply: &mut BlockOperators<'_>,
+    ) -> Result<Vec<Vec<f64>>, HeatError> {
+        let n = self.colour.len();
+        let mut d = vec![vec![0.0; n]; outputs];
+        let mut start = 0;
+        while start < self.n_colours {
+            let end = (start + block.max(1)).min(self.n_colours);
+            let mut p = Mat::<f64>::zeros(n, end - start);
+            for (v, &c) in self.colour.iter().enumerate() {
+                if (start..end).contains(&c) {
+                    p[(v, c - start)] = 1.0;
+                }
+            }
+            let ys = apply(&p)?;
+            for (dl, y) in d.iter_mut().zip(&ys) {
+                for (v, &c) in self.colour.iter().enumerate() {
+                    if (start..end).contains(&c) {
+                        dl[v] = y[(v, c - start)];
+                    }
+                }
+            }
+            start = end;
+        }
+        Ok(d)
+    }
+}
+
 /// `diag(A)` from block products `apply(E) = A E` (blocks of at most `block` columns), given
 /// the sample column `col = A e_i` of vertex i and the mesh graph `pattern`.
 pub(crate) fn diagonal(
@@ -75,50 +155,9 @@ pub(crate) fn diagonal(
     col: &[f64],
     apply: &BlockOperator<'_>,
 ) -> Result<(Vec<f64>, DiagonalInfo), HeatError> {
-    let n = pattern.nrows();
-    let probed = match method {
-        DiagonalMethod::Exact => None,
-        DiagonalMethod::Probing { tol } => colouring(pattern, i, col, tol),
-    };
-    let (colour, n_colours, info) = match probed {
-        Some((colour, n_colours, hops, relative_tail)) => (
-            colour,
-            n_colours,
-            DiagonalInfo {
-                columns: n_colours,
-                hops: Some(hops),
-                relative_tail,
-            },
-        ),
-        None => (
-            (0..n).collect(),
-            n,
-            DiagonalInfo {
-                columns: n,
-                hops: None,
-                relative_tail: 0.0,
-            },
-        ),
-    };
-    let mut d = vec![0.0; n];
-    let mut start = 0;
-    while start < n_colours {
-        let end = (start + block).min(n_colours);
-        let mut p = Mat::<f64>::zeros(n, end - start);
-        for (v, &c) in colour.iter().enumerate() {
-            if (start..end).contains(&c) {
-                p[(v, c - start)] = 1.0;
-            }
-        }
-        let y = apply(&p)?;
-        for (v, &c) in colour.iter().enumerate() {
-            if (start..end).contains(&c) {
-                d[v] = y[(v, c - start)];
-            }
-        }
-        start = end;
-    }
-    Ok((d, info))
+    let probes = Probes::new(pattern, method, i, col);
+    let mut d = probes.diagonals(block, 1, &mut |p| Ok(vec![apply(p)?]))?;
+    Ok((d.remove(0), probes.info))
 }
 
 /// Chooses p from the tail of `col = A e_i` and colours the graph at distance p.

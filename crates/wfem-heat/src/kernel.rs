@@ -2,6 +2,7 @@
 //! ([`Operators`]) with a prepared [`Method`], applied to any number of functions and times.
 
 use crate::check;
+use crate::diagonal::{DiagonalInfo, DiagonalMethod, Probes};
 use crate::method::{Method, PreparedMethod};
 use crate::spectral::Eigenbasis;
 use crate::{HeatError, KernelKind, Operators};
@@ -90,7 +91,9 @@ impl HeatKernel {
     /// The null space of L (the constants on every connected component) is deflated exactly,
     /// `K_t f = Pf + (I − P) K_t (I − P) f` with P the M-orthogonal projector onto it, so every
     /// method conserves each component's mass `1_cᵀM K_t f = 1_cᵀM f` to rounding for any t
-    /// (without it the drift grew like ε·t·λ_max: 1.6e−5 at t = 1e8·h̄²).
+    /// (without it the drift grew like ε·t·λ_max: 1.6e−5 at t = 1e8·h̄²). From
+    /// [`Operators::time_at_infinity`] on, `K_t f = P f` exactly (every other mode has
+    /// decayed below the smallest double), whatever the method.
     ///
     /// # Errors
     /// [`HeatError::InvalidTime`] unless t is finite and positive;
@@ -113,7 +116,11 @@ impl HeatKernel {
         // constants of each component (exact: K_t P = P); see `null_space.rs`.
         let null_space = self.ops.null_space();
         let (deflated, coefs) = null_space.split(f);
-        let mut g = self.prepared.apply(&self.ops, deflated.as_ref(), t)?;
+        let mut g = if t >= self.ops.time_at_infinity() {
+            Mat::zeros(f.nrows(), f.ncols())
+        } else {
+            self.prepared.apply(&self.ops, deflated.as_ref(), t)?
+        };
         null_space.restore(&mut g, &coefs);
         Ok(g)
     }
@@ -132,13 +139,225 @@ impl HeatKernel {
         check::block(g, self.n())?;
         let null_space = self.ops.null_space();
         let (deflated, coefs) = null_space.split_dual(g);
-        let mut h = self.prepared.apply_kernel_matrix(&self.ops, deflated.as_ref(), t)?;
+        let mut h = if t >= self.ops.time_at_infinity() {
+            Mat::zeros(g.nrows(), g.ncols())
+        } else {
+            self.prepared.apply_kernel_matrix(&self.ops, deflated.as_ref(), t)?
+        };
         null_space.restore(&mut h, &coefs);
         Ok(h)
     }
 }
 
+/// The heat kernel at a list of times ([`HeatKernel::apply_times`]).
+#[derive(Clone, Debug)]
+pub struct TimeSeries {
+    /// The times t, as given.
+    pub times: Vec<f64>,
+    /// `K_t F` (or `H_t F`) for each t, n × k each.
+    pub values: Vec<Mat<f64>>,
+    /// Per t, the largest relative error estimate over the columns (the fast path's
+    /// successive-iterate estimate in the M-norm); `None` for methods exact to their own
+    /// stated accuracy (dense, rational) or without an estimate (spectral, first order).
+    pub error_estimates: Vec<Option<f64>>,
+}
+
+/// Which diagonal of the heat kernel ([`HeatKernel::diagonal`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum KernelDiagonal {
+    /// `H_t(i, i) = (K_t M⁻¹)_ii = Σ_k e^{−λ_k t} x_k(i)²`: the heat kernel's value
+    /// `K_t(x_i, x_i)` (units 1/area) — the heat kernel signature of Sun, Ovsjanikov & Guibas.
+    #[default]
+    KernelValue,
+    /// `K_t(i, i) = Σ_k e^{−λ_k t} x_k(i)(M x_k)(i)`: the diagonal of the kernel matrix of the
+    /// paper's Eq. (6) (dimensionless; its sum is the heat trace).
+    MatrixDiagonal,
+}
+
+/// Options of [`HeatKernel::diagonal`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiagonalParams {
+    /// Probing or exact columns (default probing with a relative tail of 1e−10).
+    pub method: DiagonalMethod,
+    /// Refuse (rather than run for hours) when more probe columns than this would be needed
+    /// (default 4096): at large t the kernel is not local, and the spectral diagonal of a few
+    /// hundred eigenpairs is the accurate one there.
+    pub max_columns: usize,
+    /// Probe columns per block (default 64).
+    pub block: usize,
+}
+
+impl Default for DiagonalParams {
+    fn default() -> Self {
+        Self {
+            method: DiagonalMethod::default(),
+            max_columns: 4096,
+            block: 64,
+        }
+    }
+}
+
+/// The diagonal of the heat kernel at a list of times ([`HeatKernel::diagonal`]).
+#[derive(Clone, Debug)]
+pub struct DiagonalSeries {
+    /// The times t, as given.
+    pub times: Vec<f64>,
+    /// n × T: column l is the diagonal at `times[l]`.
+    pub values: Mat<f64>,
+    /// How the probes were chosen; `relative_tail` bounds the probing error of each entry
+    /// relative to the entry (at the largest t; smaller t decay faster).
+    pub info: DiagonalInfo,
+    /// The kernel evaluations' own error estimates per t (see [`TimeSeries`]).
+    pub error_estimates: Vec<Option<f64>>,
+}
+
 impl HeatKernel {
+    /// `K_t F` for every t of `times` (paper Eq. (6)); with the fast path (the default), one
+    /// real sparse Cholesky of `M + σL` (σ chosen for the whole window) and one Krylov space
+    /// per column serve every t, instead of one factorization per t — the way to evaluate a
+    /// scale space, a multi-scale descriptor or a time window.
+    ///
+    /// # Errors
+    /// As [`Self::apply_many`]; [`HeatError::InvalidParameter`] for an empty list of times.
+    pub fn apply_times(&self, f: MatRef<'_, f64>, times: &[f64]) -> Result<TimeSeries, HeatError> {
+        self.times(f, times, false)
+    }
+
+    /// The heat-kernel matrix `H_t G = K_t M⁻¹ G` for every t of `times` (see
+    /// [`Self::apply_kernel_matrix`] and [`Self::apply_times`]).
+    ///
+    /// # Errors
+    /// As [`Self::apply_times`].
+    pub fn apply_kernel_matrix_times(&self, g: MatRef<'_, f64>, times: &[f64]) -> Result<TimeSeries, HeatError> {
+        self.times(g, times, true)
+    }
+
+    fn times(&self, f: MatRef<'_, f64>, times: &[f64], kernel_matrix: bool) -> Result<TimeSeries, HeatError> {
+        if times.is_empty() {
+            return Err(HeatError::InvalidParameter {
+                name: "times",
+                reason: "the list of times is empty".into(),
+            });
+        }
+        for &t in times {
+            check::time(t)?;
+        }
+        check::block(f, self.n())?;
+        let null_space = self.ops.null_space();
+        let (deflated, coefs) = if kernel_matrix {
+            null_space.split_dual(f)
+        } else {
+            null_space.split(f)
+        };
+        // Times at which only the null space survives are exact without the method.
+        let t_inf = self.ops.time_at_infinity();
+        let finite: Vec<f64> = times.iter().copied().filter(|&t| t < t_inf).collect();
+        let (computed, computed_estimates) = if finite.is_empty() {
+            (Vec::new(), Vec::new())
+        } else {
+            self.prepared
+                .apply_times(&self.ops, deflated.as_ref(), &finite, kernel_matrix)?
+        };
+        let mut values = Vec::with_capacity(times.len());
+        let mut error_estimates = Vec::with_capacity(times.len());
+        let (mut it_v, mut it_e) = (computed.into_iter(), computed_estimates.into_iter());
+        for &t in times {
+            if t < t_inf {
+                values.push(it_v.next().unwrap_or_else(|| Mat::zeros(f.nrows(), f.ncols())));
+                error_estimates.push(it_e.next().flatten());
+            } else {
+                values.push(Mat::zeros(f.nrows(), f.ncols()));
+                error_estimates.push(None);
+            }
+        }
+        for v in &mut values {
+            null_space.restore(v, &coefs);
+        }
+        Ok(TimeSeries {
+            times: times.to_vec(),
+            values,
+            error_estimates,
+        })
+    }
+
+    /// The diagonal of the heat kernel at every t of `times`, without eigenpairs (issue #17):
+    /// probing (Tang & Saad; [`crate::diagonal`]) with a distance-p colouring of the mesh
+    /// chosen so that a sample column at the largest t has a relative tail below
+    /// `params.method`'s tolerance beyond p edges (the sample is the vertex of smallest area,
+    /// where the kernel spans the most edges), and one block evaluation of all times per block
+    /// of probe columns ([`Self::apply_kernel_matrix_times`]: one factorization for all t with
+    /// the fast path). Exact where spectral truncation fails — at small t, where even 300
+    /// eigenpairs miss most of the diagonal — and cheap there, since the kernel is local.
+    ///
+    /// # Errors
+    /// [`HeatError::InvalidParameter`] for an empty list of times or when the colouring needs
+    /// more than `params.max_columns` probes (large t: use the spectral diagonal); as
+    /// [`Self::apply_times`].
+    pub fn diagonal(
+        &self,
+        times: &[f64],
+        which: KernelDiagonal,
+        params: &DiagonalParams,
+    ) -> Result<DiagonalSeries, HeatError> {
+        if times.is_empty() {
+            return Err(HeatError::InvalidParameter {
+                name: "times",
+                reason: "the list of times is empty".into(),
+            });
+        }
+        for &t in times {
+            check::time(t)?;
+        }
+        params.method.validate()?;
+        if params.block == 0 {
+            return Err(HeatError::InvalidParameter {
+                name: "block",
+                reason: "must be positive".into(),
+            });
+        }
+        let n = self.n();
+        let t_max = times.iter().copied().fold(0.0f64, f64::max);
+        let apply = |p: MatRef<'_, f64>, ts: &[f64]| -> Result<TimeSeries, HeatError> {
+            match which {
+                KernelDiagonal::KernelValue => self.apply_kernel_matrix_times(p, ts),
+                KernelDiagonal::MatrixDiagonal => self.apply_times(p, ts),
+            }
+        };
+        // The sample: the vertex of smallest area, at the largest t.
+        let areas = self.ops.vertex_areas();
+        let i = (0..n).min_by(|&a, &b| areas[a].total_cmp(&areas[b])).unwrap_or(0);
+        let sample = apply(check::unit_columns(n, &[i])?.as_ref(), &[t_max])?;
+        let col: Vec<f64> = sample.values[0].col(0).iter().copied().collect();
+        let probes = Probes::new(self.ops.pair().pattern(), params.method, i, &col);
+        if probes.info.columns > params.max_columns {
+            return Err(HeatError::InvalidParameter {
+                name: "max_columns",
+                reason: format!(
+                    "probing the diagonal at t = {t_max:e} needs {} columns (limit {}): the kernel is not \
+                     local at this time; use the spectral diagonal (a few hundred eigenpairs are accurate there)",
+                    probes.info.columns, params.max_columns
+                ),
+            });
+        }
+        let mut estimates: Vec<Option<f64>> = vec![None; times.len()];
+        let diagonals = probes.diagonals(params.block, times.len(), &mut |p| {
+            let series = apply(p.as_ref(), times)?;
+            for (e, s) in estimates.iter_mut().zip(&series.error_estimates) {
+                *e = match (*e, *s) {
+                    (Some(a), Some(b)) => Some(a.max(b)),
+                    (a, b) => a.or(b),
+                };
+            }
+            Ok(series.values)
+        })?;
+        Ok(DiagonalSeries {
+            times: times.to_vec(),
+            values: Mat::from_fn(n, times.len(), |r, l| diagonals[l][r]),
+            info: probes.info,
+            error_estimates: estimates,
+        })
+    }
+
     /// Fast path with its iteration count and final estimate (for benchmarks and
     /// diagnostics): the kernel's own fast method, or the default one.
     #[doc(hidden)]

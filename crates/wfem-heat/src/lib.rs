@@ -61,7 +61,7 @@ pub mod spectral;
 
 pub use distance::{DiffusionDistance, DistanceKind, DistanceParams};
 pub use error::HeatError;
-pub use kernel::{heat, HeatKernel, HeatParams};
+pub use kernel::{heat, DiagonalParams, DiagonalSeries, HeatKernel, HeatParams, KernelDiagonal, TimeSeries};
 pub use method::Method;
 pub use operators::{AsSparse, KernelKind, Operators};
 pub use shifted_solve::{rng, Backend, KrylovParams};

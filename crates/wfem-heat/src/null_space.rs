@@ -34,6 +34,9 @@ pub(crate) struct NullSpace {
     weights: Vec<f64>,
     /// `1_cᵀM1_c` per component.
     masses: Vec<f64>,
+    /// The vertices of every connected component of the pattern (deflated or not), in
+    /// increasing order; components ordered by their smallest vertex.
+    components: Vec<Vec<usize>>,
 }
 
 impl NullSpace {
@@ -62,8 +65,13 @@ impl NullSpace {
             }
             count += 1;
         }
-        // L is symmetric, so the column sums are the row sums.
         let k = count as usize;
+        let mut components: Vec<Vec<usize>> = vec![Vec::new(); k];
+        for (v, l) in label.iter().enumerate() {
+            components[comp(&label, v)].push(v);
+            debug_assert!(l.is_some());
+        }
+        // L is symmetric, so the column sums are the row sums.
         let mut worst_sum = vec![0.0f64; k];
         let mut max_diag = vec![0.0f64; k];
         for j in 0..n {
@@ -93,7 +101,22 @@ impl NullSpace {
                 }
             }
         }
-        Self { label, weights, masses }
+        Self {
+            label,
+            weights,
+            masses,
+            components,
+        }
+    }
+
+    /// Whether every vertex belongs to a deflated component.
+    pub(crate) fn all_deflated(&self) -> bool {
+        self.label.iter().all(Option::is_some)
+    }
+
+    /// The connected components of the pattern (vertex lists).
+    pub(crate) fn components(&self) -> &[Vec<usize>] {
+        &self.components
     }
 
     /// Component coefficients `a_c = 1_cᵀM f / 1_cᵀM1_c` of column `col`.

@@ -166,6 +166,77 @@ impl Operators {
         self.pair.mass_values().iter().sum()
     }
 
+    /// The time from which `K_t = P` (the projector onto the null space of L) to double
+    /// precision: `10¹⁴/λ̄` with `λ̄ = tr(L)/tr(M)` the mean Rayleigh quotient of the vertex
+    /// hat functions, about 1/h² on a mesh of edge length h. Since λ₂ ≥ λ̄/n² on any connected
+    /// mesh of n ≤ 10⁶ vertices (and far more in practice: λ̄/λ₂ ≈ (diameter/h)² ≈ n for a
+    /// surface), every non-constant mode has decayed by e^{−tλ₂} ≤ e^{−100} there. Methods need
+    /// not (and cannot: M + γtL overflows at t = 1e300) evaluate beyond it.
+    pub fn time_at_infinity(&self) -> f64 {
+        let mean = self.mean_rayleigh_quotient();
+        if mean > 0.0 && mean.is_finite() {
+            1e14 / mean
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The connected components of the operators' pattern (vertex lists, increasing).
+    pub fn components(&self) -> &[Vec<usize>] {
+        self.null_space.components()
+    }
+
+    /// The context restricted to a set of vertices (sorted, distinct — e.g. a connected
+    /// component): the principal submatrices of L and M.
+    ///
+    /// # Errors
+    /// As [`Self::from_matrices`] (e.g. an empty set).
+    pub fn restrict(&self, vertices: &[usize]) -> Result<Self, HeatError> {
+        let n = self.n();
+        let mut local = vec![usize::MAX; n];
+        for (k, &v) in vertices.iter().enumerate() {
+            if v < n {
+                local[v] = k;
+            }
+        }
+        let pattern = self.pair.pattern();
+        let (l, m) = (self.pair.stiffness_values(), self.pair.mass_values());
+        let mut lt = Vec::new();
+        let mut mt = Vec::new();
+        for &j in vertices {
+            for p in pattern.col_range(j) {
+                let i = pattern.row_idx()[p];
+                if local[i] != usize::MAX {
+                    lt.push(faer::sparse::Triplet::new(local[i], local[j], l[p]));
+                    mt.push(faer::sparse::Triplet::new(local[i], local[j], m[p]));
+                }
+            }
+        }
+        let k = vertices.len();
+        let build = |t: &[faer::sparse::Triplet<usize, usize, f64>]| {
+            SparseColMat::try_new_from_triplets(k, k, t).map_err(|e| HeatError::InconsistentOperators {
+                reason: format!("restriction to {k} vertices: {e:?}"),
+            })
+        };
+        let mut ops = Self::from_matrices(build(&lt)?.as_ref(), build(&mt)?.as_ref())?;
+        ops.kind = self.kind;
+        Ok(ops)
+    }
+
+    /// `λ̄ = tr(L)/tr(M)`: the mean Rayleigh quotient of the vertex hat functions, the scale of
+    /// the spectrum (about 1/h² on a mesh of edge length h).
+    pub fn mean_rayleigh_quotient(&self) -> f64 {
+        let diag_l: f64 = self.pair.diagonal(1.0, 0.0).iter().sum();
+        let diag_m: f64 = self.pair.diagonal(0.0, 1.0).iter().sum();
+        diag_l / diag_m
+    }
+
+    /// Whether every vertex lies in a component whose constants are in the null space of L
+    /// (true for FEM stiffness matrices; false e.g. with Dirichlet rows).
+    pub(crate) fn null_space_is_deflated(&self) -> bool {
+        self.null_space.all_deflated()
+    }
+
     /// The null space of L that every method deflates exactly.
     pub(crate) fn null_space(&self) -> &NullSpace {
         &self.null_space

@@ -17,7 +17,8 @@
 //! more slowly than the sum.
 
 use super::{Pole, PoleReport, PreparedBackend, ShiftedSolve, SolveMethod};
-use crate::lanczos::{lanczos_function_many, tridiagonal_eigen, LanczosOutcome};
+use crate::function::{lanczos_function_many, LanczosOutcome};
+use crate::lanczos::tridiagonal_eigen;
 use crate::{KrylovParams, OperatorPair, SolveError, SpdFactor};
 use faer::c64;
 use faer::{Mat, MatRef};

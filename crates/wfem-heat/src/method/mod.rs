@@ -14,6 +14,7 @@
 //! so no match can meet an impossible (method, data) pair.
 
 mod backward_euler;
+mod components;
 mod eigen;
 mod fast;
 mod rational;
@@ -117,8 +118,20 @@ impl Method {
         matches!(self, Method::Dense | Method::Fast(_) | Method::Rational { .. })
     }
 
-    /// Validates the parameters and runs the t-independent preparation on `ops`.
+    /// Validates the parameters and runs the t-independent preparation on `ops`: on every
+    /// connected component separately when there are several (`components.rs`; the
+    /// eigensolvers split components themselves, so that the eigenbasis stays one object).
     pub(crate) fn prepare(&self, ops: &Operators) -> Result<Box<dyn PreparedMethod>, HeatError> {
+        let parts = ops.components().len();
+        let eigen = matches!(self, Method::Dense | Method::Spectral { .. });
+        if parts > 1 && parts <= components::MAX_PARTS && !eigen {
+            return components::Components::prepare(ops, self);
+        }
+        self.prepare_connected(ops)
+    }
+
+    /// The preparation on one context, as it is.
+    pub(crate) fn prepare_connected(&self, ops: &Operators) -> Result<Box<dyn PreparedMethod>, HeatError> {
         match self {
             Method::Dense => eigen::EigenMethod::dense(ops),
             Method::Spectral { k, eigen } => eigen::EigenMethod::partial(ops, *k, eigen),
@@ -139,6 +152,9 @@ impl Default for Method {
     }
 }
 
+/// Values at several times with an optional per-time error estimate.
+pub(crate) type TimesResult = Result<(Vec<Mat<f64>>, Vec<Option<f64>>), HeatError>;
+
 /// A method with its t-independent data, applied by [`crate::HeatKernel`].
 pub(crate) trait PreparedMethod: Send + Sync + Debug {
     /// `K_t F` for every column of F (validated; the null space of L is deflated by the
@@ -153,6 +169,23 @@ pub(crate) trait PreparedMethod: Send + Sync + Debug {
         let mut x = g.to_owned();
         ops.mass_factor()?.solve_in_place(x.as_mut());
         self.apply(ops, x.as_ref(), t)
+    }
+
+    /// `K_t F` (or `H_t F` with `kernel_matrix`) for every t of `times`, with a per-t error
+    /// estimate where the method has one. By default one evaluation per t; methods that can
+    /// serve many times from one factorization do.
+    fn apply_times(&self, ops: &Operators, f: MatRef<'_, f64>, times: &[f64], kernel_matrix: bool) -> TimesResult {
+        let values = times
+            .iter()
+            .map(|&t| {
+                if kernel_matrix {
+                    self.apply_kernel_matrix(ops, f, t)
+                } else {
+                    self.apply(ops, f, t)
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((values, vec![None; times.len()]))
     }
 
     /// The eigenpairs, for the spectral methods.
