@@ -206,15 +206,68 @@ impl PyHeatKernel {
         let f = mat_in(&f);
         let (n, k) = (f.nrows(), f.ncols());
         let kernel = self.kernel.clone();
-        let out = run(py, move |cancel| {
-            let mut out = Vec::with_capacity(times.len());
-            for t in times {
-                cancel.check()?;
-                out.push(kernel.apply_many(f.as_ref(), t)?);
-            }
-            Ok(out)
+        let out = run(py, move |_| {
+            Ok(if let [t] = times[..] {
+                vec![kernel.apply_many(f.as_ref(), t)?]
+            } else {
+                // One factorization (fast path) serves every t.
+                kernel.apply_times(f.as_ref(), &times)?.values
+            })
         })?;
         Ok(mats_out(py, &out, n, k))
+    }
+
+    /// K_t F for every t with the per-t error estimates: ((T, n, k), [estimate or None]).
+    fn apply_times<'py>(
+        &self,
+        py: Python<'py>,
+        f: PyReadonlyArray2<'py, f64>,
+        times: Vec<f64>,
+    ) -> PyResult<(Bound<'py, PyArray3<f64>>, Vec<Option<f64>>)> {
+        check_times(py, &times)?;
+        let f = mat_in(&f);
+        let (n, k) = (f.nrows(), f.ncols());
+        let kernel = self.kernel.clone();
+        let series = run(py, move |_| Ok(kernel.apply_times(f.as_ref(), &times)?))?;
+        Ok((mats_out(py, &series.values, n, k), series.error_estimates))
+    }
+
+    /// The exact diagonal of the heat kernel at every t (n, T), by probing, without eigenpairs.
+    #[pyo3(signature = (times, convention="kernel_value", tol=1e-10, exact=false, max_columns=4096, block=64))]
+    #[allow(clippy::too_many_arguments)]
+    fn diagonal<'py>(
+        &self,
+        py: Python<'py>,
+        times: Vec<f64>,
+        convention: &str,
+        tol: f64,
+        exact: bool,
+        max_columns: usize,
+        block: usize,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
+        use wfem_heat::{DiagonalParams, KernelDiagonal};
+        check_times(py, &times)?;
+        let which = match crate::spectral::convention(py, convention)? {
+            shape_retrieval::HksConvention::KernelValue => KernelDiagonal::KernelValue,
+            shape_retrieval::HksConvention::MatrixDiagonal => KernelDiagonal::MatrixDiagonal,
+        };
+        let params = DiagonalParams {
+            method: if exact {
+                wfem_heat::diagonal::DiagonalMethod::Exact
+            } else {
+                wfem_heat::diagonal::DiagonalMethod::Probing { tol }
+            },
+            max_columns,
+            block,
+        };
+        let kernel = self.kernel.clone();
+        let series = run(py, move |_| Ok(kernel.diagonal(&times, which, &params)?))?;
+        let info = PyDict::new(py);
+        info.set_item("columns", series.info.columns)?;
+        info.set_item("hops", series.info.hops)?;
+        info.set_item("relative_tail", series.info.relative_tail)?;
+        info.set_item("error_estimates", series.error_estimates)?;
+        Ok((mat_out(py, series.values.as_ref()), info))
     }
 
     /// H_t G = K_t M⁻¹ G (n, k).

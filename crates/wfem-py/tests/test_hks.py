@@ -109,3 +109,30 @@ def test_sparse_features():
     shk2 = wfem.sparse_features(V, F, "shk2", k=40)
     assert t > 0 and len(shk1) >= len(shk2) >= 1
     assert set(shk2.tolist()) <= set(shk1.tolist())
+
+
+@pytest.mark.parametrize("convention", wfem.HKS_CONVENTIONS)
+def test_exact_hks_without_eigenpairs_equals_dense_truth(convention):
+    V, F = wfem.generate.irregular_sphere(3, 2.0)  # 642 vertices
+    L, B, _ = wfem.operators(V, F)
+    lam, X = dense_eigh(L, B)
+    times = [1e-4, 1e-3, 1e-2]
+    h = wfem.hks(V, F, times, exact=True, convention=convention)
+    ref = hks_ref(lam, X, B, times, convention)
+    assert np.max(np.abs(h - ref) / np.abs(ref)) <= 1e-8
+    values, info = wfem.HeatKernel(V, F).diagonal(times, convention, return_info=True)
+    np.testing.assert_array_equal(values, h)
+    assert info["columns"] <= len(V)
+    with pytest.raises(wfem.InvalidInputError):
+        wfem.hks(V, F, exact=True)  # needs times
+
+
+def test_apply_times_matches_apply():
+    V, F = wfem.generate.bumpy(2)
+    K = wfem.HeatKernel(V, F)
+    f = V[:, 0]
+    ts = [1e-3, 1e-2, 1e-1]
+    values, estimates = K.apply_times(f, ts)
+    assert values.shape == (3, len(V)) and len(estimates) == 3
+    for j, t in enumerate(ts):
+        assert np.max(np.abs(values[j] - K.apply(f, t))) <= 1e-10 * np.max(np.abs(f))

@@ -140,8 +140,8 @@ class HeatKernel:
 
         Args:
             f: (n,) or (n, k): one function per column; all columns share one factorization.
-            t: a positive time, or a 1-D array of times (each t reuses its factorization for
-                every column).
+            t: a positive time, or a 1-D array of times (with the fast method, one
+                factorization serves every t and every column).
 
         Returns:
             Shape of ``f`` for a scalar t; ``(T,) + f.shape`` for T times (``out[j] = K_{t_j} f``).
@@ -160,6 +160,42 @@ class HeatKernel:
         out = self._k.apply(m, times)  # (T, n, k)
         out = out.reshape((len(times),) + a.shape)
         return out[0] if scalar else out
+
+    def apply_times(self, f: Any, times: Any) -> tuple[np.ndarray, list[float | None]]:
+        """``K_t f`` for every t of ``times`` with the per-t error estimate of the method
+        (the fast method's relative estimate in the M-norm; None for methods exact to their
+        stated accuracy). Returns ``((T,) + f.shape, estimates)``. With the fast method one
+        factorization serves every t (issue #17)."""
+        a = as_float_array(f, "f", (1, 2))
+        ts, _ = as_times(np.atleast_1d(times))
+        values, estimates = self._k.apply_times(a.reshape(a.shape[0], -1), ts)
+        return values.reshape((len(ts),) + a.shape), list(estimates)
+
+    def diagonal(
+        self,
+        times: Any,
+        convention: str = "kernel_value",
+        *,
+        tol: float = 1e-10,
+        exact: bool = False,
+        max_columns: int = 4096,
+        block: int = 64,
+        return_info: bool = False,
+    ) -> Any:
+        """The diagonal of the heat kernel at every t, **without eigenpairs**: the exact heat
+        kernel signature (n, T), accurate at small t where any truncated spectrum fails.
+
+        * ``convention="kernel_value"``: ``H_t(i, i) = (K_t M⁻¹)_ii = Σ_k e^{−λ_k t} x_k(i)²``;
+        * ``convention="matrix_diagonal"``: ``K_t(i, i)``, the diagonal of Eq. (6).
+
+        Probing (Tang & Saad): a distance-p colouring of the mesh chosen so that the kernel's
+        tail beyond p edges is below ``tol`` relative; one block evaluation of all times per
+        block of probes. ``exact=True`` uses n unit columns. Large t (a non-local kernel)
+        needs too many probes and is refused (``max_columns``): use :func:`hks` there.
+        """
+        ts, _ = as_times(np.atleast_1d(times))
+        values, info = self._k.diagonal(ts, convention, tol, exact, max_columns, block)
+        return (np.asarray(values), dict(info)) if return_info else np.asarray(values)
 
     def apply_kernel_matrix(self, G: Any, t: float) -> np.ndarray:
         """``H_t G = K_t M⁻¹ G = X D_t Xᵀ G``: column i of H_t is the heat kernel H_t(·, p_i)

@@ -160,6 +160,7 @@ def hks(
     normalization: str | None = None,
     kernel: str = "wfem",
     basis: Eigenbasis | None = None,
+    exact: bool = False,
     return_times: bool = False,
 ) -> Any:
     """The heat kernel signature h(i, t) at every vertex and time, shape (n, T).
@@ -181,11 +182,26 @@ def hks(
         normalization: ``None``, ``"max_eigenvalue"`` (λ/λ_max, DHK3) or ``"area"`` (λ·A).
         kernel: ``"wfem"`` (B), ``"lumped"`` (D) or ``"linear"`` (I).
         basis: a precomputed :class:`Eigenbasis` to reuse.
+        exact: no eigenpairs at all: the diagonal of the kernel itself by probing
+            (:meth:`HeatKernel.diagonal`), exact at small t where truncation fails (needs
+            explicit ``times``; ``scaled``/``normalization`` do not apply).
         return_times: also return the times used.
 
     Returns:
         (n, T) array, or ``(values, times)`` with ``return_times=True``.
     """
+    if exact:
+        from ._errors import InvalidInputError
+        from ._heat import HeatKernel
+
+        if times is None or scaled or normalization is not None or basis is not None:
+            raise InvalidInputError(
+                "exact=True needs explicit times and takes no scaled/normalization/basis", "InvalidParameter",
+                name="exact",
+            )
+        ts = np.atleast_1d(np.asarray(times, dtype=np.float64))
+        values = HeatKernel(V, F, kernel=kernel).diagonal(ts, convention)
+        return (values, ts) if return_times else values
     if basis is None:
         basis = eigenbasis(V, F, k, kernel=kernel)
     values, used = basis.hks(
