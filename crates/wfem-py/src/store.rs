@@ -63,7 +63,7 @@ impl PyIndexStore {
 #[pymethods]
 impl PyIndexStore {
     #[staticmethod]
-    #[pyo3(signature = (path, dimension, chunk_rows=retrieval_store::DEFAULT_CHUNK_ROWS, overwrite=false))]
+    #[pyo3(signature = (path, dimension, chunk_rows=4096, overwrite=false))]
     fn create(py: Python<'_>, path: PathBuf, dimension: usize, chunk_rows: usize, overwrite: bool) -> PyResult<Self> {
         let params = StoreParams { dimension, chunk_rows };
         run(py, move |_| Ok(Self::wrap(Store::create(&path, &params, overwrite)?)))

@@ -189,9 +189,9 @@ def _run(
         from ._errors import InvalidInputError
 
         raise InvalidInputError("shard_size must be at least 1", "InvalidParameter", name="shard_size")
-    paths = [os.fspath(p) for p in paths]
+    names: list[str] = [os.fspath(p) for p in paths]
     own = executor is None
-    ex = default_executor() if own else executor
+    ex: cf.Executor = default_executor() if executor is None else executor
     out = None if out_dir is None else os.fspath(out_dir)
     if out is not None:
         os.makedirs(out, exist_ok=True)
@@ -201,9 +201,9 @@ def _run(
     shards: list[str] = []
     rows: list[dict[str, Any]] = []
     try:
-        futures = [ex.submit(task, p, *extra) for p in paths]
+        futures = [ex.submit(task, p, *extra) for p in names]
         pending: list[dict[str, Any]] = []
-        for path, fut in zip(paths, futures):
+        for path, fut in zip(names, futures):
             try:
                 row = fut.result()
             except Exception as e:  # noqa: BLE001 - a lost worker is an error row too
