@@ -53,7 +53,7 @@ class HeatKernel:
 
         K = wfem.HeatKernel(V, F)              # wFEM kernel, fast exact method
         g = K.apply(f, 0.01)                   # K_t f, shape of f
-        G = K.apply(f, [0.01, 0.1, 1.0])       # (3, n): one factorization per t
+        G = K.apply(f, [0.01, 0.1, 1.0])       # (3, n): one factorization per t, all columns
     """
 
     _k: Any
@@ -140,8 +140,9 @@ class HeatKernel:
 
         Args:
             f: (n,) or (n, k): one function per column; all columns share one factorization.
-            t: a positive time, or a 1-D array of times (with the fast method, one
-                factorization serves every t and every column).
+            t: a positive time, or a 1-D array of times (each t is factored once for all
+                columns, at the method's full accuracy; :meth:`apply_times` shares one
+                factorization between the times).
 
         Returns:
             Shape of ``f`` for a scalar t; ``(T,) + f.shape`` for T times (``out[j] = K_{t_j} f``).
@@ -162,10 +163,11 @@ class HeatKernel:
         return out[0] if scalar else out
 
     def apply_times(self, f: Any, times: Any) -> tuple[np.ndarray, list[float | None]]:
-        """``K_t f`` for every t of ``times`` with the per-t error estimate of the method
-        (the fast method's relative estimate in the M-norm; None for methods exact to their
-        stated accuracy). Returns ``((T,) + f.shape, estimates)``. With the fast method one
-        factorization serves every t (issue #17)."""
+        """``K_t f`` for every t of ``times`` from **one** factorization and Krylov space for the
+        whole window (fast method), with the per-t error estimate (relative, M-norm; None for
+        methods exact to their stated accuracy). Returns ``((T,) + f.shape, estimates)``.
+        Cheaper than :meth:`apply` for many times; measured on the 5K TOSCA cat its max-norm
+        error at the smallest times is ≈1e−10 relative (per-t :meth:`apply`: ≈1e−12)."""
         a = as_float_array(f, "f", (1, 2))
         ts, _ = as_times(np.atleast_1d(times))
         values, estimates = self._k.apply_times(a.reshape(a.shape[0], -1), ts)
