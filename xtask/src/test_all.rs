@@ -222,14 +222,18 @@ pub fn run(opts: &TestAllOptions) -> Result<(), StepError> {
         install_wfem(&python, &venv, &root, &target)?;
         times.push(("wfem extension (maturin, dev profile)", t.elapsed()));
         let t = Instant::now();
-        run_step(
-            "Python suite",
-            Command::new(&python)
-                .args(["-m", "pytest", "-q"])
-                .arg(root.join("crates/wfem-py/tests"))
-                .args(&opts.pytest_args)
-                .current_dir(&root),
-        )?;
+        let mut pytest = Command::new(&python);
+        pytest
+            .args(["-m", "pytest", "-q"])
+            .arg(root.join("crates/wfem-py/tests"))
+            .args(&opts.pytest_args)
+            .current_dir(&root);
+        // The CLI the Rust suite built, for the tests comparing its numbers with the package's.
+        let cli = target.join("debug").join(if cfg!(windows) { "wfem.exe" } else { "wfem" });
+        if cli.is_file() && std::env::var_os("WFEM_CLI").is_none() {
+            pytest.env("WFEM_CLI", &cli);
+        }
+        run_step("Python suite", &mut pytest)?;
         times.push(("Python suite (pytest)", t.elapsed()));
     }
     eprintln!("==> all suites passed");
