@@ -131,19 +131,7 @@ fn ensure_requirements(python: &Path, venv: &Path, requirements: &Path) -> Resul
         eprintln!("==> pinned Python packages already installed");
         return Ok(());
     }
-    run_step(
-        "pip install",
-        Command::new(python)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--disable-pip-version-check",
-                "--no-input",
-                "-r",
-            ])
-            .arg(requirements),
-    )?;
+    run_step("pip install", pip_install(python).arg("-r").arg(requirements))?;
     std::fs::write(&stamp, &wanted).map_err(|e| StepError(format!("{}: {e}", stamp.display())))
 }
 
@@ -179,18 +167,14 @@ fn install_wfem(python: &Path, venv: &Path, root: &Path, target: &Path) -> Resul
     };
     run_step(
         "pip install wfem",
-        Command::new(python)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--disable-pip-version-check",
-                "--no-input",
-                "--no-deps",
-                "--force-reinstall",
-            ])
-            .arg(&wheel),
+        pip_install(python).args(["--no-deps", "--force-reinstall"]).arg(&wheel),
     )
+}
+
+fn pip_install(python: &Path) -> Command {
+    let mut cmd = Command::new(python);
+    cmd.args(["-m", "pip", "install", "--disable-pip-version-check", "--no-input"]);
+    cmd
 }
 
 /// Runs the suites; prints the time of each phase.
@@ -229,7 +213,9 @@ pub fn run(opts: &TestAllOptions) -> Result<(), StepError> {
             .args(&opts.pytest_args)
             .current_dir(&root);
         // The CLI the Rust suite built, for the tests comparing its numbers with the package's.
-        let cli = target.join("debug").join(if cfg!(windows) { "wfem.exe" } else { "wfem" });
+        let cli = target
+            .join("debug")
+            .join(if cfg!(windows) { "wfem.exe" } else { "wfem" });
         if cli.is_file() && std::env::var_os("WFEM_CLI").is_none() {
             pytest.env("WFEM_CLI", &cli);
         }

@@ -87,6 +87,19 @@ pub fn mesh_out<'py>(py: Python<'py>, mesh: &TriMesh) -> (Bound<'py, PyArray2<f6
     (v, f)
 }
 
+/// A sparse matrix argument: CSC arrays (indptr, indices, data) and its shape.
+pub type SparseIn<'py> = (
+    PyReadonlyArray1<'py, i64>,
+    PyReadonlyArray1<'py, i64>,
+    PyReadonlyArray1<'py, f64>,
+    (usize, usize),
+);
+
+/// [`sparse_in`] of an argument, raising `InvalidInputError` naming it.
+pub fn sparse_arg(py: Python<'_>, name: &str, a: &SparseIn<'_>) -> PyResult<SparseColMat<usize, f64>> {
+    sparse_in(name, &a.0, &a.1, &a.2, a.3).map_err(|e| e.into_py(py))
+}
+
 /// A sparse matrix given as CSC arrays (indptr, indices, data) and a shape, as a faer matrix.
 /// Duplicates are summed; every index is checked.
 pub fn sparse_in(

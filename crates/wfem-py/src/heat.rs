@@ -1,6 +1,8 @@
 //! The heat kernel K_t = exp(−t M⁻¹L) (paper, Eq. (6)), its algebra and diffusion distances.
 
-use crate::convert::{mat_in, mat_out, mats_out, mesh_in, sparse_in, sparse_out, vec_in, vec_out, SparseOut};
+use crate::convert::{
+    mat_in, mat_out, mats_out, mesh_in, sparse_arg, sparse_out, vec_in, vec_out, SparseIn, SparseOut,
+};
 use crate::errors::{invalid, invalid_param};
 use crate::mesh::lumped_kind;
 use crate::run::run;
@@ -89,6 +91,9 @@ fn check_times(py: Python<'_>, times: &[f64]) -> PyResult<()> {
     Ok(())
 }
 
+/// (K_t F for each t (T, n, k), per-t error estimates).
+type Series<'py> = (Bound<'py, PyArray3<f64>>, Vec<Option<f64>>);
+
 /// Rust side of `wfem.HeatKernel`.
 #[pyclass(name = "HeatKernel", module = "wfem._wfem", frozen)]
 pub struct PyHeatKernel {
@@ -131,25 +136,15 @@ impl PyHeatKernel {
     #[allow(clippy::too_many_arguments)]
     fn from_operators(
         py: Python<'_>,
-        l: (
-            PyReadonlyArray1<'_, i64>,
-            PyReadonlyArray1<'_, i64>,
-            PyReadonlyArray1<'_, f64>,
-            (usize, usize),
-        ),
-        m: (
-            PyReadonlyArray1<'_, i64>,
-            PyReadonlyArray1<'_, i64>,
-            PyReadonlyArray1<'_, f64>,
-            (usize, usize),
-        ),
+        l: SparseIn<'_>,
+        m: SparseIn<'_>,
         method_name: &str,
         degree: Option<usize>,
         k: Option<usize>,
         backend: Option<&str>,
     ) -> PyResult<Self> {
-        let l = sparse_in("L", &l.0, &l.1, &l.2, l.3).map_err(|e| e.into_py(py))?;
-        let m = sparse_in("M", &m.0, &m.1, &m.2, m.3).map_err(|e| e.into_py(py))?;
+        let l = sparse_arg(py, "L", &l)?;
+        let m = sparse_arg(py, "M", &m)?;
         let method = method(py, method_name, degree, k, backend)?;
         run(py, move |_| {
             let ops = Operators::from_matrices(l.as_ref(), m.as_ref())?;
@@ -225,7 +220,7 @@ impl PyHeatKernel {
         py: Python<'py>,
         f: PyReadonlyArray2<'py, f64>,
         times: Vec<f64>,
-    ) -> PyResult<(Bound<'py, PyArray3<f64>>, Vec<Option<f64>>)> {
+    ) -> PyResult<Series<'py>> {
         check_times(py, &times)?;
         let f = mat_in(&f);
         let (n, k) = (f.nrows(), f.ncols());

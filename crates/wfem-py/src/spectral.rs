@@ -1,7 +1,7 @@
 //! Eigenpairs L x = λ M x (paper, Eq. (4)) and the spectral descriptors built on them: HKS in
 //! both conventions, SI-HKS, the truncated kernel (Eq. (8)) and the RKHS operators.
 
-use crate::convert::{mat_in, mat_out, mesh_in, sparse_in, vec_in, vec_out};
+use crate::convert::{mat_in, mat_out, mesh_in, sparse_arg, vec_in, vec_out, SparseIn};
 use crate::errors::{invalid_param, Error};
 use crate::heat::kernel_kind;
 use crate::mesh::lumped_kind;
@@ -125,18 +125,8 @@ impl PyEigenbasis {
     #[allow(clippy::too_many_arguments)]
     fn from_operators(
         py: Python<'_>,
-        l: (
-            PyReadonlyArray1<'_, i64>,
-            PyReadonlyArray1<'_, i64>,
-            PyReadonlyArray1<'_, f64>,
-            (usize, usize),
-        ),
-        m: (
-            PyReadonlyArray1<'_, i64>,
-            PyReadonlyArray1<'_, i64>,
-            PyReadonlyArray1<'_, f64>,
-            (usize, usize),
-        ),
+        l: SparseIn<'_>,
+        m: SparseIn<'_>,
         k: Option<usize>,
         tol: f64,
         block_size: usize,
@@ -144,8 +134,8 @@ impl PyEigenbasis {
         seed: u64,
         shift: Option<f64>,
     ) -> PyResult<Self> {
-        let l = sparse_in("L", &l.0, &l.1, &l.2, l.3).map_err(|e| e.into_py(py))?;
-        let m = sparse_in("M", &m.0, &m.1, &m.2, m.3).map_err(|e| e.into_py(py))?;
+        let l = sparse_arg(py, "L", &l)?;
+        let m = sparse_arg(py, "M", &m)?;
         let params = eigen_params(py, tol, block_size, max_dim, seed, shift)?;
         run(py, move |_| {
             let ops = Operators::from_matrices(l.as_ref(), m.as_ref())?;
@@ -235,10 +225,7 @@ impl PyEigenbasis {
         f: PyReadonlyArray1<'py, f64>,
         t: f64,
     ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyDict>)> {
-        let f = vec_in(&f);
-        let (basis, ops) = (self.basis.clone(), self.ops.clone());
-        let (g, r) = run(py, move |_| Ok(inverse_spectral(&basis, &ops, &f, t)?))?;
-        Ok((vec_out(py, g), truncation(py, &r)?))
+        self.truncated(py, &f, t, inverse_spectral)
     }
 
     /// Truncated reproducing kernel H_t v = X e^{+tΛ} Xᵀ v (Prop. 3.1 B): (g, report).
@@ -248,10 +235,7 @@ impl PyEigenbasis {
         v: PyReadonlyArray1<'py, f64>,
         t: f64,
     ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyDict>)> {
-        let v = vec_in(&v);
-        let (basis, ops) = (self.basis.clone(), self.ops.clone());
-        let (g, r) = run(py, move |_| Ok(reproducing_kernel_apply(&basis, &ops, &v, t)?))?;
-        Ok((vec_out(py, g), truncation(py, &r)?))
+        self.truncated(py, &v, t, reproducing_kernel_apply)
     }
 
     /// The heat kernel signature (n, T) and its times.
@@ -335,6 +319,24 @@ impl PyEigenbasis {
             Ok(scale_invariant_hks(&spectrum, &params)?)
         })?;
         Ok(mat_out(py, out.as_ref()))
+    }
+}
+
+/// A spectrally truncated amplifying operator (K_{−t}, H_t) of the rkhs module.
+type Truncated = fn(&Eigenbasis, &Operators, &[f64], f64) -> Result<(Vec<f64>, TruncationReport), wfem_heat::HeatError>;
+
+impl PyEigenbasis {
+    fn truncated<'py>(
+        &self,
+        py: Python<'py>,
+        v: &PyReadonlyArray1<'py, f64>,
+        t: f64,
+        op: Truncated,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyDict>)> {
+        let v = vec_in(v);
+        let (basis, ops) = (self.basis.clone(), self.ops.clone());
+        let (g, r) = run(py, move |_| Ok(op(&basis, &ops, &v, t)?))?;
+        Ok((vec_out(py, g), truncation(py, &r)?))
     }
 }
 
