@@ -6,3 +6,4 @@
 pub mod bench;
 pub mod eval;
 pub mod shrec;
+pub mod test_all;

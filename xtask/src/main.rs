@@ -62,6 +62,20 @@ enum Cmd {
         #[arg(long, default_value = "docs")]
         out: PathBuf,
     },
+    /// The whole test suite, Rust and Python (`cargo test-all`, README's test command):
+    /// `cargo test --workspace --locked`, then the `wfem` Python package built into a venv
+    /// under the target directory and its pytest suite.
+    TestAll {
+        /// Only the Python suite.
+        #[arg(long, conflicts_with = "rust_only")]
+        python_only: bool,
+        /// Only the Rust suite.
+        #[arg(long)]
+        rust_only: bool,
+        /// Extra pytest arguments (after `--`).
+        #[arg(last = true)]
+        pytest_args: Vec<String>,
+    },
 }
 
 fn parse_strengths(text: &str) -> Result<Vec<u8>, String> {
@@ -159,6 +173,15 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             }
             println!("benchmark report finished in {:.0} s", report.total_seconds);
         }
+        Cmd::TestAll {
+            python_only,
+            rust_only,
+            pytest_args,
+        } => xtask::test_all::run(&xtask::test_all::TestAllOptions {
+            python_only,
+            rust_only,
+            pytest_args,
+        })?,
     }
     Ok(())
 }
