@@ -92,14 +92,16 @@ impl BlockLanczosOutcome {
     }
 }
 
-/// Applies S to an n × b block.
-pub type BlockOperator<'a> = dyn Fn(MatRef<'_, f64>) -> Result<Mat<f64>, SolveError> + Sync + 'a;
+/// Applies S to an n × b block X, given X and M X (for a shift-and-invert S = A⁻¹M the
+/// right-hand side of the block solve: the eigensolver has M X at hand for every basis block).
+pub type BlockOperator<'a> = dyn Fn(MatRef<'_, f64>, MatRef<'_, f64>) -> Result<Mat<f64>, SolveError> + Sync + 'a;
 /// Applies M to an n × b block.
 pub type BlockMass<'a> = dyn Fn(MatRef<'_, f64>) -> Mat<f64> + Sync + 'a;
 
 /// The k largest eigenpairs of S (self-adjoint, positive semidefinite in ⟨·,·⟩_M), by thick-restart
-/// block Lanczos with locking (see the module documentation). `apply` computes S X and `mass`
-/// computes M X for n × b blocks; for the generalized problem `L x = λ M x`, S = (L − σM)⁻¹M.
+/// block Lanczos with locking (see the module documentation). `apply(X, MX)` computes S X and
+/// `mass` computes M X for n × b blocks; for the generalized problem `L x = λ M x`,
+/// S = (L − σM)⁻¹M and `apply` is one block solve with MX.
 ///
 /// Returns the converged pairs; fewer than k (with [`BlockLanczosOutcome::converged`] false) when
 /// `max_restarts` restarts did not suffice.
@@ -143,6 +145,7 @@ pub fn largest_eigenpairs(
         locked_residual: 0.0,
         dim: 0,
         j0: 0,
+        mq: Mat::zeros(0, 0),
         local: 0,
         rng: SplitMix64::new(params.seed),
         restarts: 0,
@@ -172,6 +175,8 @@ struct Lanczos<'a, 'p> {
     dim: usize,
     /// Start of the newest block (`j0..dim`).
     j0: usize,
+    /// M times the newest block.
+    mq: Mat<f64>,
     /// Start of the part of the basis that S V_j couples to (`local..dim`): the previous and
     /// the newest block in the block-tridiagonal phase, everything after a restart.
     local: usize,
@@ -192,23 +197,28 @@ impl Lanczos<'_, '_> {
     fn run(mut self) -> Result<BlockLanczosOutcome, SolveError> {
         let (n, b) = (self.n, self.b);
         let start = Mat::<f64>::from_fn(n, b, |_, _| self.rng.next_centered());
-        let (q0, _) = m_orthonormalize(start, self.mass, self.v.as_ref().get(.., 0..0), &mut self.rng, 0.0);
+        let (q0, _, mq0) = m_orthonormalize(start, self.mass, self.v.as_ref().get(.., 0..0), &mut self.rng, 0.0);
         self.v.as_mut().get_mut(.., 0..b).copy_from(&q0);
+        self.mq = mq0;
         self.dim = b;
         self.basis_peak = b;
         // Rayleigh–Ritz checks between restarts: a few per cycle (each is O(m³) dense work).
         let mut next_check = self.check_stride();
         loop {
             let (j0, dim) = (self.j0, self.dim);
-            let mut w = (self.apply)(self.v.as_ref().get(.., j0..dim))?;
+            let mut w = (self.apply)(self.v.as_ref().get(.., j0..dim), self.mq.as_ref())?;
             self.applications += dim - j0;
             let before = self.orthogonalize(w.as_mut());
             let nlock = self.locked.len();
             let exhausted = dim >= n;
             // Size of the next block: b, or the n − dim columns that complete Rⁿ.
             let bn = b.min(n - dim);
-            let (q, bnext) = if exhausted {
-                (Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(0, dim - j0))
+            let (q, bnext, mq) = if exhausted {
+                (
+                    Mat::<f64>::zeros(n, 0),
+                    Mat::<f64>::zeros(0, dim - j0),
+                    Mat::<f64>::zeros(n, 0),
+                )
             } else if bn < dim - j0 {
                 complement_block(
                     w.as_ref(),
@@ -234,6 +244,7 @@ impl Lanczos<'_, '_> {
                         return Ok(self.finish(&ritz, converged));
                     }
                     self.restart(&ritz, converged, q.as_ref(), bnext.as_ref());
+                    self.mq = mq;
                     next_check = self.dim + self.check_stride();
                     continue;
                 }
@@ -241,6 +252,7 @@ impl Lanczos<'_, '_> {
             }
             // Extend the basis with the next block.
             self.v.as_mut().get_mut(.., dim..dim + bn).copy_from(&q);
+            self.mq = mq;
             self.h.as_mut().get_mut(dim..dim + bn, j0..dim).copy_from(&bnext);
             self.local = j0;
             self.j0 = dim;
@@ -503,21 +515,20 @@ fn row_blocks(n: usize) -> Vec<(usize, usize)> {
 }
 
 /// `A X` for a symmetric sparse A (both triangles stored, CSC) and an n × b block, in
-/// parallel over rows: row j of AX is column j of A (symmetry) dotted with each column of X.
+/// parallel over rows: row j of AX is column j of A (symmetry) times X. X is copied to row-major
+/// order first, so each stored entry a_ij costs one contiguous b-wide multiply-add
+/// (`(AX)_j += a_ij X_i`) instead of b scattered reads.
 pub fn symmetric_block_mul(a: SparseColMatRef<'_, usize, f64>, x: MatRef<'_, f64>) -> Mat<f64> {
     let (n, b) = (x.nrows(), x.ncols());
-    // Contiguous columns (a copy only for a strided view).
-    let owned;
-    let x = if x.row_stride() == 1 {
-        x
-    } else {
-        owned = x.to_owned();
-        owned.as_ref()
-    };
-    let mut out = Mat::<f64>::zeros(n, b);
+    if b == 0 {
+        return Mat::zeros(n, 0);
+    }
     let sym = a.symbolic();
     let (ptr, idx, val) = (sym.col_ptr(), sym.row_idx(), a.val());
     let rows = row_blocks(n);
+    // Row-major copy of X: x_rows[i·b + c] = X[i, c].
+    let x_rows: Vec<f64> = (0..n * b).into_par_iter().map(|k| x[(k / b, k % b)]).collect();
+    let mut out = Mat::<f64>::zeros(n, b);
     let mut chunks = Vec::with_capacity(rows.len());
     let mut rest = out.as_mut();
     let mut done = 0;
@@ -528,26 +539,26 @@ pub fn symmetric_block_mul(a: SparseColMatRef<'_, usize, f64>, x: MatRef<'_, f64
         done = r1;
     }
     chunks.into_par_iter().for_each(|(r0, mut chunk)| {
-        for c in 0..b {
-            let Some(xc) = x.col(c).try_as_col_major() else {
-                continue;
-            };
-            let xc = xc.as_slice();
-            let Some(oc) = chunk.as_mut().col_mut(c).try_as_col_major_mut() else {
-                continue;
-            };
-            for (jj, o) in oc.as_slice_mut().iter_mut().enumerate() {
-                let j = r0 + jj;
-                let (p0, p1) = (ptr[j], ptr[j + 1]);
-                *o = idx[p0..p1].iter().zip(&val[p0..p1]).map(|(&i, &v)| v * xc[i]).sum();
+        let mut acc = vec![0.0f64; b];
+        for jj in 0..chunk.nrows() {
+            let j = r0 + jj;
+            acc.iter_mut().for_each(|a| *a = 0.0);
+            for p in ptr[j]..ptr[j + 1] {
+                let (i, v) = (idx[p], val[p]);
+                for (a, xv) in acc.iter_mut().zip(&x_rows[i * b..(i + 1) * b]) {
+                    *a += v * xv;
+                }
+            }
+            for (c, a) in acc.iter().enumerate() {
+                chunk[(jj, c)] = *a;
             }
         }
     });
     out
 }
 
-/// The next block from W (already M-orthogonal to V by two passes): (Q, B) with W = QB and
-/// QᵀMQ = I, by [`m_orthonormalize`] with the squared M-norms of the columns before the
+/// The next block from W (already M-orthogonal to V by two passes): (Q, B, MQ) with W = QB
+/// and QᵀMQ = I, by [`m_orthonormalize`] with the squared M-norms of the columns before the
 /// projection as the reference for lost norm.
 fn orthonormal_block(
     w: Mat<f64>,
@@ -555,7 +566,7 @@ fn orthonormal_block(
     mass: &BlockMass<'_>,
     v: MatRef<'_, f64>,
     rng: &mut SplitMix64,
-) -> (Mat<f64>, Mat<f64>) {
+) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
     let reference = before.iter().copied().fold(0.0, f64::max);
     m_orthonormalize(w, mass, v, rng, reference)
 }
@@ -563,24 +574,23 @@ fn orthonormal_block(
 /// The last, partial block when only `r` < b directions remain outside span(V) (r = n − dim):
 /// an M-orthonormal basis Q (n × r) of the M-orthogonal complement of V, from a random block
 /// projected twice against V and M-orthonormalised, and B = QᵀM·W (r × b), so that W = QB for
-/// W ⟂_M V.
+/// W ⟂_M V (and MQ).
 fn complement_block(
     w: MatRef<'_, f64>,
     r: usize,
     mass: &BlockMass<'_>,
     v: MatRef<'_, f64>,
     rng: &mut SplitMix64,
-) -> (Mat<f64>, Mat<f64>) {
+) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
     let n = w.nrows();
     let mut z = Mat::<f64>::from_fn(n, r, |_, _| rng.next_centered());
     for _ in 0..2 {
         let mz = mass(z.as_ref());
         project_out(v, z.as_mut(), mz.as_ref());
     }
-    let (q, _) = m_orthonormalize(z, mass, v, rng, 0.0);
-    let mq = mass(q.as_ref());
+    let (q, _, mq) = m_orthonormalize(z, mass, v, rng, 0.0);
     let bj = mq.transpose() * w;
-    (q, bj)
+    (q, bj, mq)
 }
 
 /// M-orthonormalizes the columns of `w` (already M-orthogonal to V): returns (Q, R) with
@@ -600,10 +610,11 @@ pub(crate) fn m_orthonormalize(
     v: MatRef<'_, f64>,
     rng: &mut SplitMix64,
     reference: f64,
-) -> (Mat<f64>, Mat<f64>) {
+) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
     let (n, b) = (w.nrows(), w.ncols());
     let mut r_total = Mat::<f64>::identity(b, b);
     let mut project = false;
+    let mut mq = None;
     for pass in 0..3 {
         if project && v.ncols() > 0 {
             let mw = mass(w.as_ref());
@@ -614,6 +625,8 @@ pub(crate) fn m_orthonormalize(
         let Ok((s, u)) = symmetric_eigen(g.as_ref()) else {
             break;
         };
+        // MQ = MW·UΣ^{−1/2} for the kept directions (replaced ones are recomputed).
+        let mut scale = Mat::<f64>::zeros(b, b);
         let smax = s[b - 1].max(0.0);
         let wu = &w * &u;
         let mut q = Mat::<f64>::zeros(n, b);
@@ -626,6 +639,9 @@ pub(crate) fn m_orthonormalize(
                     q[(i, c)] = wu[(i, c)] / sq;
                 }
                 for j in 0..b {
+                    scale[(j, c)] = u[(j, c)] / sq;
+                }
+                for j in 0..b {
                     r[(c, j)] = sq * u[(j, c)];
                 }
             } else {
@@ -635,6 +651,7 @@ pub(crate) fn m_orthonormalize(
                 replaced = true;
             }
         }
+        mq = (!replaced).then(|| &mw * &scale);
         w = q;
         r_total = &r * &r_total;
         // SVQB leaves QᵀMQ − I of order ε·κ(G): one more pass (cheap, b × b) when κ(G) > 10⁴;
@@ -645,5 +662,6 @@ pub(crate) fn m_orthonormalize(
             break;
         }
     }
-    (w, r_total)
+    let mq = mq.unwrap_or_else(|| mass(w.as_ref()));
+    (w, r_total, mq)
 }

@@ -12,7 +12,7 @@ use crate::{HeatError, Operators};
 use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
 use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef, Par, Side};
-use shifted_solve::{largest_eigenpairs, BlockLanczosParams};
+use shifted_solve::{largest_eigenpairs, symmetric_block_mul, BlockLanczosParams};
 
 /// The largest mesh (number of vertices) for which [`Eigenbasis::dense`] runs: O(n³) time
 /// and 3 dense n × n matrices (≈ 600 MB at the limit).
@@ -215,13 +215,14 @@ impl Eigenbasis {
             }
         };
         let factor = ops.factor_combination(1.0, -sigma, || format!("L − σM with σ = {sigma:e}"))?;
-        // S X = (L − σM)⁻¹ (M X): one sparse product and one block solve (n × b).
-        let apply = |x: MatRef<'_, f64>| -> Result<Mat<f64>, shifted_solve::SolveError> {
-            let mut w = ops.mass_mul_block(x);
+        // S X = (L − σM)⁻¹ (M X): one block solve (n × b); the eigensolver supplies M X. M is
+        // symmetric on the shared pattern, so its block products run over rows in parallel.
+        let apply = |_: MatRef<'_, f64>, mx: MatRef<'_, f64>| -> Result<Mat<f64>, shifted_solve::SolveError> {
+            let mut w = mx.to_owned();
             factor.solve_in_place(w.as_mut());
             Ok(w)
         };
-        let mass = |x: MatRef<'_, f64>| ops.mass_mul_block(x);
+        let mass = |x: MatRef<'_, f64>| symmetric_block_mul(ops.mass(), x);
         let lanczos = BlockLanczosParams {
             block_size: params.block_size,
             tol: params.tol,

@@ -77,14 +77,18 @@ fn smallest(
     )
     .unwrap();
     let factor = CholeskyPattern::new(shifted.symbolic())?.factor(shifted.as_ref(), Par::Seq)?;
-    let apply = |x: MatRef<'_, f64>| {
-        let mut w = symmetric_block_mul(m.as_ref(), x);
+    let apply = |_: MatRef<'_, f64>, mx: MatRef<'_, f64>| {
+        let mut w = mx.to_owned();
         factor.solve_in_place(w.as_mut());
         Ok(w)
     };
     let mass = |x: MatRef<'_, f64>| symmetric_block_mul(m.as_ref(), x);
     let out = largest_eigenpairs(n, k, &apply, &mass, params)?;
-    let sx = apply(out.vectors.as_ref())?;
+    let sx = {
+        let mut w = symmetric_block_mul(m.as_ref(), out.vectors.as_ref());
+        factor.solve_in_place(w.as_mut());
+        w
+    };
     let worst = (0..out.values.len())
         .map(|c| {
             let theta = out.values[c];
