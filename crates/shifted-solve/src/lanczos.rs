@@ -3,25 +3,17 @@
 //! shift-and-invert operator are in `crate::function`.
 
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par, Side};
+use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 
 use crate::SolveError;
 
 /// Eigendecomposition of the symmetric tridiagonal T (diagonal `a`, off-diagonal `b`,
-/// `b.len() ≥ a.len() − 1`): eigenvalues ascending and eigenvectors (columns).
-///
-/// T is first multiplied by a power of two 2⁻ᵉ ≈ 1/max|Tᵢⱼ| (exact): faer's self-adjoint
-/// eigensolver stops its secular-equation iteration on an absolute bound, so it needs entries
-/// of order one (see `pow2_scale`).
+/// `b.len() ≥ a.len() − 1`): eigenvalues ascending and eigenvectors (columns), by
+/// [`symmetric_eigen`].
 pub(crate) fn tridiagonal_eigen(a: &[f64], b: &[f64]) -> Result<(Vec<f64>, Mat<f64>), SolveError> {
     let m = a.len();
-    let big = a
-        .iter()
-        .chain(&b[..m.saturating_sub(1)])
-        .fold(0.0f64, |x, v| x.max(v.abs()));
-    let (down, up) = pow2_scale(big);
     let t = Mat::<f64>::from_fn(m, m, |i, j| {
-        down * if i == j {
+        if i == j {
             a[i]
         } else if i == j + 1 {
             b[j]
@@ -31,10 +23,36 @@ pub(crate) fn tridiagonal_eigen(a: &[f64], b: &[f64]) -> Result<(Vec<f64>, Mat<f
             0.0
         }
     });
-    let evd = t
+    symmetric_eigen(t.as_ref())
+}
+
+/// Eigendecomposition of the symmetric part ½(A + Aᵀ) of a dense square matrix: eigenvalues
+/// ascending and orthonormal eigenvectors (columns). The one dense symmetric eigensolver of the
+/// workspace's Lanczos methods and of wfem-heat's dense reference.
+///
+/// A is first multiplied by a power of two 2⁻ᵉ ≈ 1/max|aᵢⱼ| (exact, so the eigenvectors are
+/// unchanged and λ = 2ᵉ·μ). faer 0.24's self-adjoint solver is not scale invariant: unlike
+/// LAPACK's dstedc it does not normalise the tridiagonal matrix, and its secular-equation root
+/// finder (svd/bidiag_svd.rs, `secular_eq_root_finder`) stops the secant iteration when
+/// |f_cur − f_prev| ≤ ε, an *absolute* bound on a function of units 1/λ: for a matrix scaled by
+/// 2⁻¹⁰ it stopped early (λ off by ≈ 2e−6 relative). With max|aᵢⱼ| ≈ 1 the bound is relative.
+///
+/// # Errors
+/// [`SolveError::Factorization`] if faer's eigendecomposition fails.
+pub fn symmetric_eigen(a: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), SolveError> {
+    let m = a.nrows();
+    let mut big = 0.0f64;
+    for j in 0..a.ncols() {
+        for i in 0..m {
+            big = big.max(a[(i, j)].abs());
+        }
+    }
+    let (down, up) = pow2_scale(big);
+    let sym = Mat::<f64>::from_fn(m, m, |i, j| (0.5 * down) * (a[(i, j)] + a[(j, i)]));
+    let evd = sym
         .self_adjoint_eigen(Side::Lower)
         .map_err(|e| SolveError::Factorization {
-            what: "tridiagonal eigendecomposition",
+            what: "dense symmetric eigendecomposition",
             detail: format!("{e:?}"),
         })?;
     Ok((
@@ -116,8 +134,8 @@ pub struct LanczosProcess<'a> {
     mass: &'a (dyn Fn(&[f64]) -> Vec<f64> + Sync),
     reorth: Reorthogonalization,
     basis: Basis,
-    /// `M v_i` of every basis vector (full reorthogonalisation), or of the newest only.
-    mbasis: Vec<Vec<f64>>,
+    /// `M v_j` of the newest basis vector (the next right-hand side of a shift-and-invert S).
+    mv_last: Vec<f64>,
     norm: f64,
     alpha: Vec<f64>,
     beta: Vec<f64>,
@@ -137,17 +155,17 @@ impl<'a> LanczosProcess<'a> {
         let mu = mass(u);
         let norm = dot(u, &mu).max(0.0).sqrt();
         let mut basis = Basis::new(n, capacity.min(n).max(1) + 1);
-        let mut mbasis = Vec::new();
+        let mut mv_last = Vec::new();
         if norm > 0.0 && norm.is_finite() {
             basis.push(u, 1.0 / norm);
-            mbasis.push(mu.iter().map(|x| x / norm).collect());
+            mv_last = mu.iter().map(|x| x / norm).collect();
         }
         Self {
             apply,
             mass,
             reorth,
             basis,
-            mbasis,
+            mv_last,
             norm,
             alpha: Vec::new(),
             beta: Vec::new(),
@@ -193,15 +211,14 @@ impl<'a> LanczosProcess<'a> {
     /// Whatever `apply` returns.
     pub fn step(&mut self) -> Result<f64, SolveError> {
         let j = self.alpha.len();
-        let mv_j = self.mbasis.last().map(Vec::as_slice).unwrap_or(&[]);
-        let w = (self.apply)(self.basis.col(j), mv_j)?;
+        let w = (self.apply)(self.basis.col(j), &self.mv_last)?;
         Ok(self.step_with(w))
     }
 
     /// `M v_j` of the newest basis vector: the input of the operator's next application
     /// (for a shift-and-invert S = A⁻¹M, the right-hand side of the next solve).
     pub fn next_mass_vector(&self) -> &[f64] {
-        self.mbasis.last().map(Vec::as_slice).unwrap_or(&[])
+        &self.mv_last
     }
 
     /// One step given `w = S v_j` computed outside (e.g. many processes sharing one block
@@ -209,7 +226,7 @@ impl<'a> LanczosProcess<'a> {
     pub fn step_with(&mut self, mut w: Vec<f64>) -> f64 {
         let j = self.alpha.len();
         let n = self.basis.v.nrows();
-        let mv_j = self.mbasis.last().map(Vec::as_slice).unwrap_or(&[]);
+        let mv_j = &self.mv_last;
         let mut a_j = 0.0;
         match self.reorth {
             Reorthogonalization::Local => {
@@ -228,16 +245,16 @@ impl<'a> LanczosProcess<'a> {
                 }
             }
             Reorthogonalization::Full => {
+                // The block Gram–Schmidt of the eigensolver with one column: M w is recomputed
+                // per pass instead of keeping M v_i for every basis vector (n·m doubles).
                 for _ in 0..2 {
-                    for i in 0..=j {
-                        let c = dot(&w, &self.mbasis[i]);
-                        for (wi, vi) in w.iter_mut().zip(self.basis.col(i)) {
-                            *wi -= c * vi;
-                        }
-                        if i == j {
-                            a_j += c;
-                        }
-                    }
+                    let mw = (self.mass)(&w);
+                    let coef = crate::eigen::project_out(
+                        self.basis.v.as_ref().get(.., 0..j + 1),
+                        MatMut::from_column_major_slice_mut(&mut w, n, 1),
+                        MatRef::from_column_major_slice(&mw, n, 1),
+                    );
+                    a_j += coef[(j, 0)];
                 }
             }
         }
@@ -249,11 +266,7 @@ impl<'a> LanczosProcess<'a> {
         let invariant = b_j.is_nan() || b_j <= 1e-14 * a_j.abs().max(f64::MIN_POSITIVE) || j + 1 >= n;
         if !invariant {
             self.basis.push(&w, 1.0 / b_j);
-            let mv: Vec<f64> = mw.iter().map(|x| x / b_j).collect();
-            match self.reorth {
-                Reorthogonalization::Full => self.mbasis.push(mv),
-                Reorthogonalization::Local => self.mbasis = vec![mv],
-            }
+            self.mv_last = mw.iter().map(|x| x / b_j).collect();
         }
         b_j
     }

@@ -25,6 +25,11 @@
 //! * [`RationalFactors`]: all poles of one t factored once, reused for many right-hand sides.
 //! * [`lanczos_function`] with [`KrylovParams`]: h(S)u for S = (M + γtL)⁻¹M, the engine of
 //!   wfem-heat's fast exact path and of the multi-shift backend.
+//! * [`largest_eigenpairs`] with [`BlockLanczosParams`]: thick-restart block Lanczos with
+//!   locking for the largest eigenpairs of an M-self-adjoint operator — with S = (L − σM)⁻¹M the
+//!   smallest pairs of `L x = λ M x`, the engine of wfem-heat's spectral path.
+//! * [`symmetric_eigen`]: the one scale-robust dense symmetric eigensolver of the Lanczos
+//!   methods and of wfem-heat's dense reference.
 //! * [`rng`]: the workspace's one seeded generator.
 //! * [`ConditionReport`]: 2-norm condition numbers of tL − zB and of the preconditioned
 //!   operator (paper Fig. 2c,d).
@@ -36,6 +41,7 @@
 
 pub mod backend;
 mod condition;
+mod eigen;
 mod error;
 mod factor;
 mod function;
@@ -53,6 +59,9 @@ mod cf;
 
 pub use backend::{Backend, BatchReport, PoleReport, SolveMethod};
 pub use condition::ConditionReport;
+pub use eigen::{
+    largest_eigenpairs, symmetric_block_mul, BlockLanczosOutcome, BlockLanczosParams, BlockMass, BlockOperator,
+};
 pub use error::SolveError;
 pub use factor::{CholeskyPattern, SpdFactor};
 pub use faer::c64;
@@ -61,7 +70,7 @@ pub use function::{
     LanczosOutcome, LanczosParams,
 };
 pub use iterative::{MinresParams, Preconditioner, PreconditionerShift};
-pub use lanczos::{largest_ritz_value, LanczosOperator, LanczosProcess, Reorthogonalization};
+pub use lanczos::{largest_ritz_value, symmetric_eigen, LanczosOperator, LanczosProcess, Reorthogonalization};
 pub use operators::OperatorPair;
 pub use poles::{RationalApprox, DEFAULT_DEGREE, PAPER_DEGREE, SHIPPED_DEGREES};
 pub use solver::{RationalFactors, ShiftedSolver};

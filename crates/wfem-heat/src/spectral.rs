@@ -1,5 +1,6 @@
 //! The spectral side of the kernel: generalized eigenpairs `L x = λ M x` (paper, Eq. (4)–(6)
-//! and (8)) — the dense reference and a shift-invert block Lanczos for the k smallest pairs —
+//! and (8)) — the dense reference and a thick-restart shift-invert block Lanczos for the k
+//! smallest pairs (the engine is shifted-solve's [`shifted_solve::largest_eigenpairs`]) —
 //! and the (truncated) spectral kernel `X e^{−tΛ} Xᵀ`.
 //!
 //! L (stiffness) is symmetric positive **semi**definite with a positive diagonal (wfem sign
@@ -11,7 +12,7 @@ use crate::{HeatError, Operators};
 use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
 use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef, Par, Side};
-use shifted_solve::rng::SplitMix64;
+use shifted_solve::{largest_eigenpairs, symmetric_block_mul, BlockLanczosParams};
 
 /// The largest mesh (number of vertices) for which [`Eigenbasis::dense`] runs: O(n³) time
 /// and 3 dense n × n matrices (≈ 600 MB at the limit).
@@ -27,7 +28,8 @@ pub struct Eigenbasis {
     pub vectors: Mat<f64>,
 }
 
-/// Options of [`Eigenbasis::partial`] (shift-invert block Lanczos).
+/// Options of [`Eigenbasis::partial`] (thick-restart block Lanczos on the shift-inverted
+/// operator, [`shifted_solve::largest_eigenpairs`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EigenParams {
     /// Shift σ < 0 of the factored matrix `L − σM` (SPD because L is PSD). `None` picks
@@ -39,9 +41,13 @@ pub struct EigenParams {
     /// Relative residual tolerance ‖Sx − θx‖_M / θ on the shift-inverted operator
     /// S = (L − σM)⁻¹M. The eigenvalue error is about the square of it.
     pub tol: f64,
-    /// Maximum Krylov dimension (the basis is not restarted, so memory is 2·n·max_dim
-    /// doubles); `None` = min(n, max(6k, k + 200)).
+    /// The most basis vectors held at any time (the restart length, ARPACK's `ncv`): memory is
+    /// n·max_dim doubles plus the factor. `None` = max(2k, k + 4b) + b, like ARPACK's
+    /// ncv = 2k + 1 (scipy's `eigsh` default). Raised to k + 2b at least, and to n when within
+    /// b of n (then the basis can span Rⁿ and the pairs are exact).
     pub max_dim: Option<usize>,
+    /// Restarts allowed before [`HeatError::EigenNoConvergence`].
+    pub max_restarts: usize,
     /// Seed of the random start block.
     pub seed: u64,
 }
@@ -53,7 +59,24 @@ impl Default for EigenParams {
             block_size: 8,
             tol: 1e-10,
             max_dim: None,
+            max_restarts: 100,
             seed: 0x5eed_2010,
+        }
+    }
+}
+
+impl EigenParams {
+    /// The basis bound used for k pairs on n vertices (see [`Self::max_dim`]).
+    pub fn basis_bound(&self, k: usize, n: usize) -> usize {
+        let b = self.block_size.clamp(1, n.max(1));
+        let bound = self
+            .max_dim
+            .unwrap_or_else(|| (2 * k).max(k + 4 * b) + b)
+            .max(k + 2 * b);
+        if bound + b >= n {
+            n
+        } else {
+            bound
         }
     }
 }
@@ -111,43 +134,40 @@ impl Eigenbasis {
         solve_lower_triangular_in_place(r, y.as_mut(), Par::rayon(0));
         let mut c = y.transpose().to_owned();
         solve_lower_triangular_in_place(r, c.as_mut(), Par::rayon(0));
-        // Symmetrize to remove rounding asymmetry before the symmetric solver, and scale C
-        // by a power of two 2⁻ᵉ ≈ 1/max|cᵢⱼ| (exact, so the eigenvectors are unchanged and
-        // λ = 2ᵉ·μ). faer 0.24's self-adjoint solver is not scale invariant: unlike LAPACK's
-        // dstedc it does not normalise the tridiagonal matrix, and its secular-equation root
-        // finder (svd/bidiag_svd.rs, `secular_eq_root_finder`) stops the secant iteration
-        // when |f_cur − f_prev| ≤ ε, an ABSOLUTE bound on a function of units 1/λ. Mesh
-        // scaling by α multiplies C by α⁻², so for α ≲ 1/32 the roots stopped early
-        // (α = 2⁻¹⁰: λ₁ = 0 came out ≈ 5e−3, λ off by ≈ 2e−6 relative). With max|cᵢⱼ| ≈ 1
-        // the solver always works at the scale where that bound is relative.
-        let (down, up) = pow2_scale(c.as_ref());
-        let c = Mat::<f64>::from_fn(n, n, |i, j| (0.5 * down) * (c[(i, j)] + c[(j, i)]));
-        let evd = c.self_adjoint_eigen(Side::Lower).map_err(|_| HeatError::DenseEigen)?;
-        let values: Vec<f64> = (0..n).map(|i| up * evd.S()[i]).collect();
-        let mut x = evd.U().to_owned();
+        // The symmetric part of C, power-of-two scaled for faer's eigensolver, which is not
+        // scale invariant (mesh scaling by α multiplies C by α⁻²; see
+        // `shifted_solve::symmetric_eigen`, tested here by `eigen_scale.rs`).
+        let (values, u) = shifted_solve::symmetric_eigen(c.as_ref()).map_err(|_| HeatError::DenseEigen)?;
+        drop(c);
+        let mut x = u;
         solve_upper_triangular_in_place(r.transpose(), x.as_mut(), Par::rayon(0));
         Ok(Self { values, vectors: x })
     }
 
-    /// The `k` smallest eigenpairs by shift-invert block Lanczos with full
-    /// reorthogonalisation in the M-inner product (NUMERICS §5).
+    /// The `k` smallest eigenpairs by thick-restart block Lanczos with locking, in the
+    /// M-inner product, on the shift-inverted operator (NUMERICS §5;
+    /// [`shifted_solve::largest_eigenpairs`]).
     ///
-    /// The operator S = (L − σM)⁻¹M (σ < 0, one sparse Cholesky of the SPD matrix L − σM)
-    /// is self-adjoint in ⟨u, v⟩_M = uᵀMv and has eigenvalues θ = 1/(λ − σ), so the
-    /// smallest λ are the largest θ and converge first. Ritz pairs are accepted when
-    /// ‖Sx − θx‖_M ≤ tol·θ; then λ = σ + 1/θ and the Ritz vectors are M-orthonormal.
+    /// The operator S = (L − σM)⁻¹M (σ < 0, one sparse Cholesky of the SPD matrix L − σM) is
+    /// self-adjoint in ⟨u, v⟩_M = uᵀMv and has eigenvalues θ = 1/(λ − σ), so the smallest λ
+    /// are the largest θ and converge first. Ritz pairs are accepted when
+    /// ‖Sx − θx‖_M ≤ tol·θ; then λ = σ + 1/θ and the Ritz vectors are M-orthonormal. The basis
+    /// holds at most [`EigenParams::basis_bound`] vectors (about 2k, like ARPACK's `eigsh`):
+    /// when it is full the iteration restarts from the best Ritz vectors, and converged pairs
+    /// are locked.
     ///
-    /// Small problems are handled exactly: when fewer than b directions remain, the last
-    /// block is the (n − dim)-dimensional M-orthogonal complement of the basis, so the Krylov
-    /// basis reaches Rⁿ and the Rayleigh–Ritz pairs are exact (any k ≤ n, any block size).
-    /// An invariant block (rank-deficient remainder) is deflated by continuing with random
-    /// directions M-orthogonal to the basis.
+    /// Small problems are handled exactly: when the bound reaches n the basis can span Rⁿ
+    /// (the last block is the (n − dim)-dimensional M-orthogonal complement of the basis), so
+    /// the Rayleigh–Ritz pairs are exact (any k ≤ n, any block size). An invariant block
+    /// (rank-deficient remainder) is deflated by continuing with random directions
+    /// M-orthogonal to the basis.
     ///
     /// # Errors
-    /// [`HeatError::InvalidParameter`] for k = 0, k > n, a shift ≥ 0 or block size 0;
-    /// [`HeatError::InvalidOperatorEntry`] for a NaN/∞ entry or a non-positive diagonal of M;
-    /// [`HeatError::EigenNoConvergence`] (carrying the converged pairs) if the Krylov
-    /// dimension limit is hit first.
+    /// [`HeatError::InvalidParameter`] for k = 0, k > n, a shift ≥ 0, block size 0 or a tol
+    /// outside (0, 1); [`HeatError::InvalidOperatorEntry`] for a NaN/∞ entry or a non-positive
+    /// diagonal of M; [`HeatError::NotPositiveDefinite`] if L − σM cannot be factored;
+    /// [`HeatError::EigenNoConvergence`] (carrying the converged pairs) if `max_restarts`
+    /// restarts do not suffice.
     pub fn partial(
         stiffness: impl AsSparse,
         mass: impl AsSparse,
@@ -223,113 +243,38 @@ impl Eigenbasis {
             }
         };
         let factor = ops.factor_combination(1.0, -sigma, || format!("L − σM with σ = {sigma:e}"))?;
-        let mass = ops;
-
-        let b = params.block_size.min(n);
-        let max_dim = params
-            .max_dim
-            .unwrap_or_else(|| (6 * k).max(k + 200))
-            .clamp(k.max(b), n);
-        let max_blocks = max_dim.div_ceil(b);
-        let cap = max_blocks * b;
-
-        // Basis V (n × cap), MV = M V, projected matrix H = VᵀMSV.
-        let mut v = Mat::<f64>::zeros(n, cap + b);
-        let mut mv = Mat::<f64>::zeros(n, cap + b);
-        let mut h = Mat::<f64>::zeros(cap + b, cap + b);
-        let mut rng = SplitMix64::new(params.seed);
-        let start = Mat::<f64>::from_fn(n, b, |_, _| rng.next_centered());
-        let mut dim = 0usize; // number of basis columns so far
-        let (q0, _) = m_orthonormalize(start, mass, &v, &mv, 0, &mut rng);
-        let mq0 = mass.mass_mul_block(q0.as_ref());
-        v.as_mut().get_mut(.., 0..b).copy_from(&q0);
-        mv.as_mut().get_mut(.., 0..b).copy_from(&mq0);
-        dim += b;
-        // Size of the newest block: b, except a last partial block that completes Rⁿ.
-        let mut bc = b;
-
-        loop {
-            let j0 = dim - bc;
-            // W = S V_j = (L − σM)⁻¹ M V_j.
-            let mut w = mv.as_ref().get(.., j0..dim).to_owned();
+        // S X = (L − σM)⁻¹ (M X): one block solve (n × b); the eigensolver supplies M X. M is
+        // symmetric on the shared pattern, so its block products run over rows in parallel.
+        let apply = |_: MatRef<'_, f64>, mx: MatRef<'_, f64>| -> Result<Mat<f64>, shifted_solve::SolveError> {
+            let mut w = mx.to_owned();
             factor.solve_in_place(w.as_mut());
-            // Two passes of block classical Gram–Schmidt in the M-inner product.
-            for _ in 0..2 {
-                let coef = mv.as_ref().get(.., 0..dim).transpose() * &w;
-                w -= v.as_ref().get(.., 0..dim) * &coef;
-                let mut hb = h.as_mut().get_mut(0..dim, j0..dim);
-                hb += &coef;
-            }
-            // The basis spans Rⁿ: the Rayleigh–Ritz pairs are the exact eigenpairs.
-            let exhausted = dim >= n;
-            let at_full = exhausted || dim >= cap;
-            // Size of the next block: b, or the n − dim columns that complete the basis.
-            let bn = b.min(n.saturating_sub(dim));
-            // Ritz step: eigenpairs of the symmetrized projection.
-            // θ = up·(eigenvalue of the power-of-two-normalised projection), see `pow2_scale`.
-            let (down, up) = pow2_scale(h.as_ref().get(0..dim, 0..dim));
-            let hm = Mat::<f64>::from_fn(dim, dim, |i, jj| (0.5 * down) * (h[(i, jj)] + h[(jj, i)]));
-            let evd = hm.self_adjoint_eigen(Side::Lower).map_err(|_| HeatError::DenseEigen)?;
-            // Residual of Ritz pair i: ‖W_rest · Q[last block, i]‖_M where W = V_{j+1} B_j.
-            let (qn, bj) = if at_full {
-                (Mat::<f64>::zeros(n, 0), Mat::<f64>::zeros(0, bc))
-            } else if bn < bc {
-                // Fewer than b directions remain: W (already M-orthogonal to V) lies in the
-                // (n − dim)-dimensional M-orthogonal complement of V; take an M-orthonormal
-                // basis Q of that complement (random block, projected) and B = QᵀMW.
-                complement_block(w.as_ref(), bn, mass, &v, &mv, dim, &mut rng)
-            } else {
-                m_orthonormalize(w.clone(), mass, &v, &mv, dim, &mut rng)
-            };
-            let nk = k.min(dim);
-            let mut converged = 0usize;
-            let mut worst = 0.0f64;
-            let mut order = Vec::with_capacity(nk);
-            for r in 0..nk {
-                let i = dim - 1 - r; // largest θ first
-                let theta = up * evd.S()[i];
-                let res = if exhausted {
-                    0.0
-                } else if at_full {
-                    // Residual from the unnormalized remainder W.
-                    let qi = evd.U().col(i).subrows(j0, bc);
-                    let x = &w * qi;
-                    let xs: Vec<f64> = x.iter().copied().collect();
-                    let mx = mass.mass_mul(&xs);
-                    xs.iter().zip(&mx).map(|(a, c)| a * c).sum::<f64>().max(0.0).sqrt()
-                } else {
-                    let qi = evd.U().col(i).subrows(j0, bc);
-                    (&bj * qi).norm_l2()
-                };
-                let rel = res / theta.abs().max(f64::MIN_POSITIVE);
-                worst = worst.max(rel);
-                if rel <= params.tol && theta > 0.0 && converged == r {
-                    converged += 1;
-                }
-                order.push(i);
-            }
-            if converged >= k || at_full {
-                let take = if converged >= k { k } else { converged };
-                let basis = ritz(&evd, up, &v, dim, &order[..take], sigma);
-                if converged >= k {
-                    return Ok(basis);
-                }
-                return Err(HeatError::EigenNoConvergence {
-                    requested: k,
-                    converged,
-                    dimension: dim,
-                    max_residual: worst,
-                    found: Box::new(basis),
-                });
-            }
-            // Extend the basis with the next block.
-            let mq = mass.mass_mul_block(qn.as_ref());
-            v.as_mut().get_mut(.., dim..dim + bn).copy_from(&qn);
-            mv.as_mut().get_mut(.., dim..dim + bn).copy_from(&mq);
-            h.as_mut().get_mut(dim..dim + bn, j0..dim).copy_from(&bj);
-            dim += bn;
-            bc = bn;
+            Ok(w)
+        };
+        let mass = |x: MatRef<'_, f64>| symmetric_block_mul(ops.mass(), x);
+        let lanczos = BlockLanczosParams {
+            block_size: params.block_size,
+            tol: params.tol,
+            max_basis: params.basis_bound(k, n),
+            max_restarts: params.max_restarts,
+            seed: params.seed,
+        };
+        let outcome = largest_eigenpairs(n, k, &apply, &mass, &lanczos)?;
+        let converged = outcome.values.len();
+        // θ descending is λ = σ + 1/θ ascending.
+        let basis = Self {
+            values: outcome.values.iter().map(|&theta| sigma + 1.0 / theta).collect(),
+            vectors: outcome.vectors,
+        };
+        if converged >= k {
+            return Ok(basis);
         }
+        Err(HeatError::EigenNoConvergence {
+            requested: k,
+            converged,
+            dimension: outcome.basis_bound,
+            max_residual: outcome.max_residual,
+            found: Box::new(basis),
+        })
     }
 
     /// Applies the (truncated) spectral heat kernel
@@ -432,137 +377,4 @@ fn per_component(
         values: pairs.iter().map(|p| p.0).collect(),
         vectors,
     })
-}
-
-/// (2⁻ᵉ, 2ᵉ) with 2ᵉ ≈ max|aᵢⱼ| (1 for a zero or non-finite matrix): multiplying by a power
-/// of two is exact, so a matrix scaled by 2⁻ᵉ has the same eigenvectors and eigenvalues
-/// exactly 2⁻ᵉ times the original. faer's self-adjoint eigensolver needs this (see
-/// [`Eigenbasis::dense`]).
-fn pow2_scale(a: faer::MatRef<'_, f64>) -> (f64, f64) {
-    let mut amax = 0.0f64;
-    for j in 0..a.ncols() {
-        for i in 0..a.nrows() {
-            amax = amax.max(a[(i, j)].abs());
-        }
-    }
-    if amax > 0.0 && amax.is_finite() {
-        let e = amax.log2().round().clamp(-1000.0, 1000.0) as i32;
-        (2f64.powi(-e), 2f64.powi(e))
-    } else {
-        (1.0, 1.0)
-    }
-}
-
-/// Ritz vectors of the chosen (largest-θ first) indices, converted to λ = σ + 1/θ and
-/// sorted by increasing λ.
-fn ritz(
-    evd: &faer::linalg::solvers::SelfAdjointEigen<f64>,
-    up: f64,
-    v: &Mat<f64>,
-    dim: usize,
-    idx: &[usize],
-    sigma: f64,
-) -> Eigenbasis {
-    let n = v.nrows();
-    let mut q = Mat::<f64>::zeros(dim, idx.len());
-    for (c, &i) in idx.iter().enumerate() {
-        q.as_mut().col_mut(c).copy_from(evd.U().col(i));
-    }
-    let x = v.as_ref().get(.., 0..dim) * &q;
-    let values: Vec<f64> = idx.iter().map(|&i| sigma + 1.0 / (up * evd.S()[i])).collect();
-    // θ descending means λ ascending already; keep an explicit sort for safety.
-    let mut perm: Vec<usize> = (0..idx.len()).collect();
-    perm.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
-    let vectors = Mat::<f64>::from_fn(n, idx.len(), |i, c| x[(i, perm[c])]);
-    Eigenbasis {
-        values: perm.iter().map(|&p| values[p]).collect(),
-        vectors,
-    }
-}
-
-/// The last, partial Lanczos block when only `r` < b directions remain outside span(V)
-/// (V = first `dim` columns of `v`, r = n − dim): an M-orthonormal basis Q (n × r) of the
-/// M-orthogonal complement of V, from a random block projected twice against V and then
-/// M-orthonormalized, and B = QᵀM·W (r × b), so that W = QB for W ⟂_M V.
-fn complement_block(
-    w: faer::MatRef<'_, f64>,
-    r: usize,
-    mass: &Operators,
-    v: &Mat<f64>,
-    mv: &Mat<f64>,
-    dim: usize,
-    rng: &mut SplitMix64,
-) -> (Mat<f64>, Mat<f64>) {
-    let n = w.nrows();
-    let mut z = Mat::<f64>::from_fn(n, r, |_, _| rng.next_centered());
-    for _ in 0..2 {
-        let coef = mv.as_ref().get(.., 0..dim).transpose() * &z;
-        z -= v.as_ref().get(.., 0..dim) * &coef;
-    }
-    let (q, _) = m_orthonormalize(z, mass, v, mv, dim, rng);
-    let mq = mass.mass_mul_block(q.as_ref());
-    let bj = mq.transpose() * w;
-    (q, bj)
-}
-
-/// M-orthonormalizes the columns of `w` against the first `dim` columns of `v` (already
-/// done by the caller, repeated here once for safety) and among themselves: returns (Q, R)
-/// with W = Q R, QᵀMQ = I. Directions lost to rank deficiency (an invariant subspace) are
-/// replaced by random vectors orthogonal to everything, with a zero row in R.
-fn m_orthonormalize(
-    mut w: Mat<f64>,
-    mass: &Operators,
-    v: &Mat<f64>,
-    mv: &Mat<f64>,
-    dim: usize,
-    rng: &mut SplitMix64,
-) -> (Mat<f64>, Mat<f64>) {
-    let n = w.nrows();
-    let b = w.ncols();
-    let mut r_total = Mat::<f64>::identity(b, b);
-    let mut first = true;
-    for pass in 0..3 {
-        if dim > 0 && pass > 0 {
-            let coef = mv.as_ref().get(.., 0..dim).transpose() * &w;
-            w -= v.as_ref().get(.., 0..dim) * &coef;
-        }
-        let mw = mass.mass_mul_block(w.as_ref());
-        let g = w.transpose() * &mw;
-        let (down, up) = pow2_scale(g.as_ref());
-        let g = Mat::<f64>::from_fn(b, b, |i, j| (0.5 * down) * (g[(i, j)] + g[(j, i)]));
-        let evd = match g.self_adjoint_eigen(Side::Lower) {
-            Ok(e) => e,
-            Err(_) => break,
-        };
-        let smax = (up * evd.S()[b - 1]).max(0.0);
-        // W = (W U S^{-1/2}) (S^{1/2} Uᵀ).
-        let mut q = Mat::<f64>::zeros(n, b);
-        let mut r = Mat::<f64>::zeros(b, b);
-        let wu = &w * evd.U();
-        let mut replaced = false;
-        for c in 0..b {
-            let s = up * evd.S()[c];
-            if s > 1e-24 * smax.max(f64::MIN_POSITIVE) && s > 0.0 {
-                let sq = s.sqrt();
-                for i in 0..n {
-                    q[(i, c)] = wu[(i, c)] / sq;
-                }
-                for j in 0..b {
-                    r[(c, j)] = sq * evd.U()[(j, c)];
-                }
-            } else {
-                for i in 0..n {
-                    q[(i, c)] = rng.next_centered();
-                }
-                replaced = true;
-            }
-        }
-        w = q;
-        r_total = if first { r } else { &r * &r_total };
-        first = false;
-        if !replaced && pass >= 1 {
-            break;
-        }
-    }
-    (w, r_total)
 }
