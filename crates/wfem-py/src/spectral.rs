@@ -56,6 +56,7 @@ fn eigen_params(
     max_dim: Option<usize>,
     seed: u64,
     shift: Option<f64>,
+    max_restarts: usize,
 ) -> PyResult<EigenParams> {
     if !(tol > 0.0 && tol < 1.0) {
         return Err(invalid_param(py, "tol", format!("{tol} is not in (0, 1)")));
@@ -65,6 +66,7 @@ fn eigen_params(
         block_size,
         tol,
         max_dim,
+        max_restarts,
         seed,
     })
 }
@@ -90,7 +92,7 @@ fn truncation<'py>(py: Python<'py>, r: &TruncationReport) -> PyResult<Bound<'py,
 #[pymethods]
 impl PyEigenbasis {
     #[staticmethod]
-    #[pyo3(signature = (v, f, k=None, kernel="wfem", lumped="barycentric", tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None))]
+    #[pyo3(signature = (v, f, k=None, kernel="wfem", lumped="barycentric", tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None, max_restarts=100))]
     #[allow(clippy::too_many_arguments)]
     fn from_mesh(
         py: Python<'_>,
@@ -104,11 +106,12 @@ impl PyEigenbasis {
         max_dim: Option<usize>,
         seed: u64,
         shift: Option<f64>,
+        max_restarts: usize,
     ) -> PyResult<Self> {
         let mesh = mesh_in(py, &v, &f)?;
         let kind = kernel_kind(py, kernel)?;
         let lumped = lumped_kind(py, lumped)?;
-        let params = eigen_params(py, tol, block_size, max_dim, seed, shift)?;
+        let params = eigen_params(py, tol, block_size, max_dim, seed, shift, max_restarts)?;
         run(py, move |_| {
             let fem = assemble(&mesh, &AssemblyParams { lumped })?;
             let ops = Operators::new(&fem, kind)?;
@@ -121,7 +124,7 @@ impl PyEigenbasis {
     }
 
     #[staticmethod]
-    #[pyo3(signature = (l, m, k=None, tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None))]
+    #[pyo3(signature = (l, m, k=None, tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None, max_restarts=100))]
     #[allow(clippy::too_many_arguments)]
     fn from_operators(
         py: Python<'_>,
@@ -133,10 +136,11 @@ impl PyEigenbasis {
         max_dim: Option<usize>,
         seed: u64,
         shift: Option<f64>,
+        max_restarts: usize,
     ) -> PyResult<Self> {
         let l = sparse_arg(py, "L", &l)?;
         let m = sparse_arg(py, "M", &m)?;
-        let params = eigen_params(py, tol, block_size, max_dim, seed, shift)?;
+        let params = eigen_params(py, tol, block_size, max_dim, seed, shift, max_restarts)?;
         run(py, move |_| {
             let ops = Operators::from_matrices(l.as_ref(), m.as_ref())?;
             let basis = compute(&ops, k, &params)?;

@@ -41,12 +41,13 @@ class Eigenbasis:
         max_dim: int | None = None,
         seed: int = 0x5EED2010,
         shift: float | None = None,
+        max_restarts: int = 100,
     ) -> "Eigenbasis":
         """The k smallest eigenpairs of any (L PSD = −igl.cotmatrix, M SPD) by shift-invert
         block Lanczos, or all of them (``k=None``, dense, n ≤ 5000)."""
         return cls(
             _wfem.Eigenbasis.from_operators(
-                as_sparse(L, "L"), as_sparse(M, "M"), k, tol, block_size, max_dim, seed, shift
+                as_sparse(L, "L"), as_sparse(M, "M"), k, tol, block_size, max_dim, seed, shift, max_restarts
             )
         )
 
@@ -138,13 +139,16 @@ def eigenbasis(
     max_dim: int | None = None,
     seed: int = 0x5EED2010,
     shift: float | None = None,
+    max_restarts: int = 100,
 ) -> Eigenbasis:
     """The k smallest eigenpairs of ``L x = λ M x`` on a mesh (paper, Eq. (4)), M = B for the
     wFEM kernel (D for ``"lumped"``, I for ``"linear"``); ``k=None`` gives all n (dense,
-    n ≤ 5000). Shift-invert block Lanczos with one sparse Cholesky of ``L − σM``."""
+    n ≤ 5000). Shift-invert thick-restart block Lanczos with one sparse Cholesky of ``L − σM``:
+    a basis of at most ``max_dim`` vectors (default max(2k, k + 4b) + b), restarted at most
+    ``max_restarts`` times (then ``ConvergenceError`` carrying the converged pairs)."""
     v, f = as_mesh(V, F)
     return Eigenbasis(
-        _wfem.Eigenbasis.from_mesh(v, f, k, kernel, lumped, tol, block_size, max_dim, seed, shift)
+        _wfem.Eigenbasis.from_mesh(v, f, k, kernel, lumped, tol, block_size, max_dim, seed, shift, max_restarts)
     )
 
 

@@ -146,6 +146,7 @@ class Eigenbasis:
         max_dim: int | None = None,
         seed: int = ...,
         shift: float | None = None,
+        max_restarts: int = 100,
     ) -> Eigenbasis: ...
     @staticmethod
     def from_operators(
@@ -157,6 +158,7 @@ class Eigenbasis:
         max_dim: int | None = None,
         seed: int = ...,
         shift: float | None = None,
+        max_restarts: int = 100,
     ) -> Eigenbasis: ...
     @property
     def values(self) -> _F64: ...
