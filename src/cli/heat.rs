@@ -15,7 +15,7 @@ pub enum KernelArg {
     /// wFEM: consistent mass B (Eq. (6)).
     #[default]
     Wfem,
-    /// Lumped / Voronoi-cot: diagonal mass D (Eq. (7)).
+    /// Lumped: the diagonal mass D (Eq. (7)) chosen by --lumped (barycentric by default).
     Lumped,
     /// Linear FEM: B = I.
     Linear,
@@ -34,8 +34,12 @@ impl From<KernelArg> for KernelKind {
 /// How K_t f is evaluated.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MethodArg {
-    /// Rational Chebyshev approximation, r shifted sparse solves (Eq. (11)–(13)).
+    /// Shift-and-invert rational Krylov with one real factorization (beyond the paper; exact
+    /// to ≈1e−12 and the quickest: the default).
     #[default]
+    Fast,
+    /// Rational Chebyshev approximation, r shifted sparse solves (Eq. (11)–(13)): the paper's
+    /// method, for comparisons.
     Rational,
     /// Truncated spectral expansion with the smallest --eigs eigenpairs (Eq. (8)); inaccurate
     /// for small t (checked, see --allow-inaccurate).
@@ -46,9 +50,6 @@ pub enum MethodArg {
     /// One backward-Euler step (B + tL) g = B f; inaccurate except for tiny t (checked, see
     /// --allow-inaccurate).
     BackwardEuler,
-    /// Shift-and-invert rational Krylov with one real factorization (beyond the paper; exact
-    /// to ≈1e−12 and the quickest for one K_t f on a large mesh).
-    Fast,
     /// Dense generalized eigendecomposition (n ≤ 5000 only; the exact reference).
     Dense,
 }
@@ -152,11 +153,15 @@ pub struct HeatArgs {
     /// Kernel.
     #[arg(long, value_enum, default_value_t = KernelArg::Wfem)]
     pub kernel: KernelArg,
+    /// Which lumped mass D, --kernel lumped only (default barycentric, the paper's Eq. (7)).
+    #[arg(long, value_enum)]
+    pub lumped: Option<super::LumpedArg>,
     /// Method. Approximate methods (spectral, taylor, backward-euler) are checked against the
     /// exact fast path: an error above 0.1 % of max|K_t f| is refused unless
     /// --allow-inaccurate.
-    #[arg(long, value_enum, default_value_t = MethodArg::Rational)]
-    pub method: MethodArg,
+    /// [default: fast; rational when --degree or --backend is given]
+    #[arg(long = "method", value_enum)]
+    pub method_arg: Option<MethodArg>,
     /// Degree of the rational approximation, --method rational only (error ≈ 9.3^-degree;
     /// default 16).
     #[arg(long)]
@@ -181,15 +186,33 @@ pub struct HeatArgs {
     pub render: RenderArgs,
 }
 
+impl HeatArgs {
+    /// The method: as given, else rational when a rational-only option (--degree, --backend)
+    /// is, else the fast exact path.
+    pub fn method(&self) -> MethodArg {
+        match self.method_arg {
+            Some(m) => m,
+            None if self.degree.is_some() || self.backend.is_some() => MethodArg::Rational,
+            None => MethodArg::Fast,
+        }
+    }
+}
+
 /// Options that do not apply to the method are refused rather than silently ignored.
 fn check_method_options(args: &HeatArgs) -> Result<(), CliError> {
-    let method = args.method;
+    let method = args.method();
     let misplaced = |flag: &str, applies: &str| {
         Err(CliError::Usage(format!(
             "{flag} applies to {applies} only, not to --method {}",
             method.name()
         )))
     };
+    if args.lumped.is_some() && args.kernel != KernelArg::Lumped {
+        return Err(CliError::Usage(format!(
+            "--lumped applies to --kernel lumped only, not to --kernel {}",
+            super::name_of(args.kernel)
+        )));
+    }
     if args.degree.is_some() && method != MethodArg::Rational {
         return misplaced("--degree", "--method rational");
     }
@@ -290,17 +313,18 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         }
         (None, None) => return Err(CliError::Usage("give exactly one of --source I or --field FILE".into())),
     };
-    let eigs = match args.method {
+    let eigs = match args.method() {
         MethodArg::Spectral => limits::spectral_eigenpairs(args.eigs.unwrap_or(200.min(n)), n)?,
         _ => 0,
     };
+    let lumped = args.lumped.unwrap_or_default().kind();
     let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams::default())
+        assemble(&input.mesh, &AssemblyParams { lumped })
     })?;
     let backend = args.backend.unwrap_or_default();
     let kernel = prepare_kernel(
         &ops,
-        heat_params(args.kernel, args.method, args.degree, eigs, backend),
+        heat_params(args.kernel, args.method(), args.degree, eigs, backend),
         n,
     )?;
     // The exact reference of an approximate method, built on first use.
@@ -313,12 +337,12 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         let g = apply_scaled(&kernel, &f, t)?;
         if let Some((vertex, &value)) = g.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(CliError::NonFinite {
-                what: format!("K_t (--method {}, t = {label})", args.method.name()),
+                what: format!("K_t (--method {}, t = {label})", args.method().name()),
                 vertex,
                 value,
             });
         }
-        if args.method.approximate() {
+        if args.method().approximate() {
             if reference.is_none() {
                 let params = heat_params(args.kernel, MethodArg::Fast, None, 0, backend);
                 reference = Some(prepare_kernel(&ops, params, n)?);
@@ -336,7 +360,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 "{}: {what}, t = {label} ({} kernel, {})",
                 input.name,
                 super::name_of(args.kernel),
-                args.method.name()
+                args.method().name()
             ),
             t: Some(t),
             values: g,
@@ -349,6 +373,9 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
     meta.insert("command".into(), json!("heat"));
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("kernel".into(), json!(super::name_of(args.kernel)));
+    if args.kernel == KernelArg::Lumped {
+        meta.insert("lumped".into(), json!(super::name_of(args.lumped.unwrap_or_default())));
+    }
     meta.insert("method".into(), method_meta(args, eigs));
     match (&args.source, &args.field) {
         (Some(i), _) => meta.insert("source_vertex".into(), json!(i)),
@@ -378,7 +405,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
 fn check_accuracy(args: &HeatArgs, t: f64, label: &str, error: f64) -> Result<(), CliError> {
     let text = format!(
         "--method {} at t = {label}: estimated relative error {error:.1e} (max|g − g_exact| / max|g_exact| against --method fast)",
-        args.method.name()
+        args.method().name()
     );
     if error <= INACCURATE_ABOVE {
         progress::note(&text);
@@ -388,7 +415,7 @@ fn check_accuracy(args: &HeatArgs, t: f64, label: &str, error: f64) -> Result<()
         Ok(())
     } else {
         Err(CliError::Inaccurate {
-            method: args.method.name(),
+            method: args.method().name(),
             t,
             error,
         })
@@ -396,7 +423,7 @@ fn check_accuracy(args: &HeatArgs, t: f64, label: &str, error: f64) -> Result<()
 }
 
 fn method_meta(args: &HeatArgs, eigs: usize) -> serde_json::Value {
-    match args.method {
+    match args.method() {
         MethodArg::Rational => json!({
             "name": "rational",
             "degree": args.degree.unwrap_or(shifted_solve::DEFAULT_DEGREE),

@@ -3,11 +3,12 @@
 use super::output::{short_labels, write_fields, Column, OutputFormat, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
 use clap::{Args, ValueEnum};
-use mesh_fem::{assemble, AssemblyParams, LumpedMassKind};
+use mesh_fem::{assemble, AssemblyParams};
 use serde_json::json;
-use shape_retrieval::hks::TimeSampling;
-use shape_retrieval::{Descriptor, DescriptorParams, RetrievalError, ShapeDescriptors};
+use shape_retrieval::hks::{HksConvention, TimeSampling};
+use shape_retrieval::{Descriptor, DescriptorParams, HksMethod, HksSource, RetrievalError, ShapeDescriptors};
 use std::io::Write;
+use wfem_heat::{DiagonalParams, HeatKernel, HeatParams, KernelKind, Method};
 
 /// Which kernel's signature.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -15,8 +16,43 @@ pub enum HksKernel {
     /// wFEM kernel, spectrum of (L, B) (Eq. (6)): DHK2.
     #[default]
     Wfem,
-    /// Lumped Voronoi-cot kernel, spectrum of (L, D) with mixed Voronoi areas (Eq. (7)): DHK1.
+    /// Lumped kernel, spectrum of (L, D) (Eq. (7)) with D chosen by --lumped; with
+    /// `--lumped voronoi` this is the paper's DHK1 (Voronoi-cot).
     Lumped,
+}
+
+impl From<HksKernel> for KernelKind {
+    fn from(k: HksKernel) -> Self {
+        match k {
+            HksKernel::Wfem => KernelKind::Wfem,
+            HksKernel::Lumped => KernelKind::Lumped,
+        }
+    }
+}
+
+/// How the signature is evaluated.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum HksMethodArg {
+    /// Per time: the truncated spectral sum where its truncation bound is below 1e−6, the
+    /// exact diagonal of the heat kernel (probing) at the smaller times where it is not.
+    #[default]
+    Auto,
+    /// The exact diagonal of K_t at every time, without eigenpairs (probing; refused at times
+    /// where the kernel spans the mesh).
+    Exact,
+    /// The truncated spectral sum of the --eigs smallest eigenpairs at every time (Eq. (8);
+    /// what pyFM and scipy-based code compute; wrong at small t).
+    Spectral,
+}
+
+impl From<HksMethodArg> for HksMethod {
+    fn from(m: HksMethodArg) -> Self {
+        match m {
+            HksMethodArg::Auto => HksMethod::default(),
+            HksMethodArg::Exact => HksMethod::Exact,
+            HksMethodArg::Spectral => HksMethod::Spectral,
+        }
+    }
 }
 
 /// Default number of automatic times.
@@ -38,8 +74,15 @@ pub struct HksArgs {
     /// Which heat kernel.
     #[arg(long, value_enum, default_value = "wfem")]
     pub kernel: HksKernel,
+    /// Which lumped mass D, --kernel lumped only (default barycentric, Eq. (7); voronoi: the
+    /// mixed Voronoi areas of the paper's DHK1).
+    #[arg(long, value_enum)]
+    pub lumped: Option<super::LumpedArg>,
+    /// How the signature is evaluated.
+    #[arg(long, value_enum, default_value_t = HksMethodArg::Auto)]
+    pub method: HksMethodArg,
     /// Number k of eigenpairs of the truncated spectral sum (Eq. (8)); default min(100, n),
-    /// at most n/10 above 5000 vertices.
+    /// at most n/10 above 5000 vertices. Not used by --method exact with --times.
     #[arg(long)]
     pub eigs: Option<usize>,
     /// Output: .npy (n × T array, + .json sidecar with the times), .csv, .ply (fields
@@ -80,6 +123,20 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         .map(|l| l.iter().map(|l| format!("t{l}")).collect::<Vec<_>>());
     args.output.check(suffixes.as_deref(), count, &[&args.input.mesh])?;
 
+    if args.lumped.is_some() && args.kernel != HksKernel::Lumped {
+        return Err(CliError::Usage(
+            "--lumped applies to --kernel lumped only, not to --kernel wfem".into(),
+        ));
+    }
+    // The eigenpairs serve the spectral sum and the automatic times; exact values at given
+    // times need none.
+    let spectrum_needed = args.method != HksMethodArg::Exact || args.times.is_empty();
+    if args.eigs.is_some() && !spectrum_needed {
+        return Err(CliError::Usage(
+            "--eigs applies to --method auto|spectral or automatic times, not to --method exact with --times".into(),
+        ));
+    }
+
     let input = read_usable(&args.input)?;
     let n = input.mesh.n_vertices();
     let k = limits::descriptor_eigenpairs(args.eigs.unwrap_or(shape_retrieval::DEFAULT_EIGENPAIRS.min(n)), n)?;
@@ -94,13 +151,9 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         times: times.clone(),
         ..Default::default()
     };
+    let lumped_mass = args.lumped.unwrap_or_default().kind();
     let ops = progress::run("assembling L, B, D", || {
-        assemble(
-            &input.mesh,
-            &AssemblyParams {
-                lumped: LumpedMassKind::Voronoi,
-            },
-        )
+        assemble(&input.mesh, &AssemblyParams { lumped: lumped_mass })
     })?;
     let mut shape = ShapeDescriptors::from_operators(&input.mesh, ops, &params).map_err(retrieval)?;
     let descriptor = match args.kernel {
@@ -108,14 +161,80 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         HksKernel::Lumped => Descriptor::Dhk1,
     };
     let lumped = descriptor == Descriptor::Dhk1;
-    progress::run(format!("{k} eigenpairs"), || shape.eigenbasis(lumped).map(|_| ())).map_err(retrieval)?;
-    let values = progress::run("signature", || shape.dense(descriptor)).map_err(retrieval)?;
-    // The times actually used (automatic ones come from the same spectrum).
-    let used: Vec<f64> = match times {
-        TimeSampling::Explicit(t) => t,
-        TimeSampling::Auto { num_times } => {
-            let basis = shape.eigenbasis(lumped).map_err(retrieval)?;
-            shape_retrieval::hks::auto_times(&basis.values, num_times).map_err(retrieval)?
+    // (values, times used, eigenvalues) of the truncated sum.
+    let spectral = if spectrum_needed {
+        progress::run(format!("{k} eigenpairs"), || shape.eigenbasis(lumped).map(|_| ())).map_err(retrieval)?;
+        let values = progress::run("signature", || shape.dense(descriptor)).map_err(retrieval)?;
+        let basis = shape.eigenbasis(lumped).map_err(retrieval)?;
+        // The times actually used (automatic ones come from the same spectrum).
+        let used: Vec<f64> = match &times {
+            TimeSampling::Explicit(t) => t.clone(),
+            TimeSampling::Auto { num_times } => {
+                shape_retrieval::hks::auto_times(&basis.values, *num_times).map_err(retrieval)?
+            }
+        };
+        Some((values, used, basis.values.clone()))
+    } else {
+        None
+    };
+    let method = HksMethod::from(args.method);
+    let kernel_of = |shape: &ShapeDescriptors| {
+        progress::run("symbolic analysis", || {
+            HeatKernel::new(
+                shape.operators(),
+                HeatParams {
+                    kernel: args.kernel.into(),
+                    method: Method::default(),
+                },
+            )
+        })
+    };
+    let diagonal = DiagonalParams::default();
+    let (values, used, sources) = match spectral {
+        Some((values, used, eigenvalues)) => {
+            let kernel = if method == HksMethod::Spectral {
+                None
+            } else {
+                Some(kernel_of(&shape)?)
+            };
+            let (values, sources) = match &kernel {
+                Some(kernel) => progress::run("exact diagonal where the spectral sum is not accurate", || {
+                    shape_retrieval::signature_by_method(
+                        kernel,
+                        &eigenvalues,
+                        values,
+                        &used,
+                        HksConvention::KernelValue,
+                        method,
+                        &diagonal,
+                    )
+                })
+                .map_err(retrieval)?,
+                None => {
+                    let sources = used
+                        .iter()
+                        .map(|&t| HksSource::Spectral {
+                            bound: shape_retrieval::truncation_bound(&eigenvalues, n, t),
+                        })
+                        .collect();
+                    (values, sources)
+                }
+            };
+            (values, used, sources)
+        }
+        None => {
+            let kernel = kernel_of(&shape)?;
+            let series = progress::run("exact diagonal (probing)", || {
+                shape_retrieval::exact_signature(&kernel, &args.times, HksConvention::KernelValue, &diagonal)
+            })
+            .map_err(retrieval)?;
+            let sources = vec![
+                HksSource::Exact {
+                    relative_tail: series.info.relative_tail
+                };
+                args.times.len()
+            ];
+            (series.values, args.times.clone(), sources)
         }
     };
     let labels = short_labels(&used);
@@ -126,7 +245,14 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         .map(|(j, label)| Column {
             name: format!("hks_t{label}"),
             suffix: format!("t{label}"),
-            title: format!("{}: HKS, t = {label} ({kernel} kernel, k = {k})", input.name),
+            title: format!(
+                "{}: HKS, t = {label} ({kernel} kernel, {})",
+                input.name,
+                match sources[j] {
+                    HksSource::Exact { .. } => "exact".to_string(),
+                    HksSource::Spectral { .. } => format!("k = {k}"),
+                }
+            ),
             t: used.get(j).copied(),
             values: values.col(j).iter().copied().collect(),
         })
@@ -141,7 +267,25 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("kernel".into(), json!(kernel));
     meta.insert("descriptor".into(), json!(descriptor.name()));
-    meta.insert("eigenpairs".into(), json!(k));
+    if args.kernel == HksKernel::Lumped {
+        meta.insert("lumped".into(), json!(super::name_of(args.lumped.unwrap_or_default())));
+    }
+    meta.insert("method".into(), json!(super::name_of(args.method)));
+    if spectrum_needed {
+        meta.insert("eigenpairs".into(), json!(k));
+    }
+    meta.insert(
+        "sources".into(),
+        json!(sources
+            .iter()
+            .zip(&used)
+            .map(|(s, t)| match s {
+                HksSource::Exact { relative_tail } =>
+                    json!({"t": t, "method": "exact", "probing_relative_tail": relative_tail}),
+                HksSource::Spectral { bound } => json!({"t": t, "method": "spectral", "truncation_bound": bound}),
+            })
+            .collect::<Vec<_>>()),
+    );
     let how = Writing {
         render: args.render,
         highlight: &[],
@@ -150,12 +294,19 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     for path in write_fields(&args.output, &input.mesh, &columns, how)? {
         writeln!(out, "wrote {}", path.display())?;
     }
+    let exact = sources.iter().filter(|s| matches!(s, HksSource::Exact { .. })).count();
+    let worst_bound = sources.iter().fold(0.0f64, |m, s| match s {
+        HksSource::Spectral { bound } => m.max(*bound),
+        HksSource::Exact { .. } => m,
+    });
     writeln!(
         out,
-        "HKS ({kernel} kernel, k = {k}) at {} times from {:e} to {:e} on {n} vertices",
+        "HKS ({kernel} kernel) at {} times from {:e} to {:e} on {n} vertices: {exact} exact (probing), {} spectral (k = {k}{})",
         used.len(),
         used.first().copied().unwrap_or(0.0),
         used.last().copied().unwrap_or(0.0),
+        used.len() - exact,
+        if exact < used.len() { format!(", truncation bound ≤ {worst_bound:.1e}") } else { String::new() },
     )?;
     Ok(())
 }

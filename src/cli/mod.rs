@@ -208,13 +208,23 @@ pub fn info(args: &InfoArgs, out: &mut dyn Write) -> Result<(), CliError> {
 // wfem operators
 
 /// Which lumped mass to write.
-#[derive(ValueEnum, Clone, Copy, Debug, Default)]
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LumpedArg {
     /// One third of the incident triangle areas (paper, Eq. (7)).
     #[default]
     Barycentric,
     /// Mixed Voronoi areas (Meyer et al. 2003).
     Voronoi,
+}
+
+impl LumpedArg {
+    /// The mass it names.
+    pub fn kind(self) -> LumpedMassKind {
+        match self {
+            LumpedArg::Barycentric => LumpedMassKind::Barycentric,
+            LumpedArg::Voronoi => LumpedMassKind::Voronoi,
+        }
+    }
 }
 
 /// Arguments of `wfem operators`.
@@ -237,10 +247,7 @@ pub fn operators(args: &OperatorsArgs, out: &mut dyn Write) -> Result<(), CliErr
     const FILES: [&str; 3] = ["stiffness.mtx", "mass.mtx", "lumped_mass.mtx"];
     output::check_out_dir(&args.out, &FILES, &[&args.input.mesh])?;
     let input = read_usable(&args.input)?;
-    let lumped = match args.lumped {
-        LumpedArg::Barycentric => LumpedMassKind::Barycentric,
-        LumpedArg::Voronoi => LumpedMassKind::Voronoi,
-    };
+    let lumped = args.lumped.kind();
     let ops = progress::run("assembling L, B, D", || {
         assemble(&input.mesh, &AssemblyParams { lumped })
     })?;

@@ -10,6 +10,8 @@
 //!
 //! * [`hks`]: heat kernel signature in the kernel-value and matrix-diagonal conventions,
 //!   scaled and scale-normalized variants;
+//! * [`exact`]: the HKS without eigen truncation (the kernel's diagonal by probing) and the
+//!   per-time choice between it and the truncated sum ([`HksMethod`], default auto);
 //! * [`sihks`]: the scale-invariant HKS of Bronstein & Kokkinos;
 //! * [`kmeans`](mod@kmeans), [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;
 //! * [`retrieval`]: ranking, average precision, mAP, precision/recall;
@@ -26,6 +28,7 @@ pub mod bof;
 mod check;
 pub mod descriptor;
 mod error;
+pub mod exact;
 pub mod features;
 pub mod hks;
 pub mod kmeans;
@@ -38,6 +41,7 @@ pub use descriptor::{
     DEFAULT_EIGENPAIRS,
 };
 pub use error::RetrievalError;
+pub use exact::{exact_signature, signature_by_method, truncation_bound, HksMethod, HksSource, DEFAULT_TRUNCATION_TOL};
 pub use features::{descriptor_distance, local_maxima, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
 pub use hks::{
     heat_kernel_signature, heat_trace, HeatKernelSignature, HksConvention, HksParams, Spectrum, SpectrumNormalization,

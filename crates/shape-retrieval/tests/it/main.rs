@@ -5,6 +5,7 @@ mod common;
 
 mod bof;
 mod descriptor;
+mod exact;
 mod features;
 mod hks;
 mod kmeans;
