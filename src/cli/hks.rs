@@ -34,7 +34,9 @@ impl From<HksKernel> for KernelKind {
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum HksMethodArg {
     /// Per time: the truncated spectral sum where its truncation bound is below 1e−6, the
-    /// exact diagonal of the heat kernel (probing) at the smaller times where it is not.
+    /// exact diagonal of the heat kernel (probing) at the smaller times where it is not and
+    /// where it is cheap (probe columns × vertices ≤ 4e6, probing tail 1e−6: every time on small
+    /// meshes, rarely on large ones — there --method exact takes minutes).
     #[default]
     Auto,
     /// The exact diagonal of K_t at every time, without eigenpairs (probing; refused at times
@@ -54,6 +56,10 @@ impl From<HksMethodArg> for HksMethod {
         }
     }
 }
+
+/// Work --method auto spends on the exact diagonal at most: probe columns × vertices (each
+/// column is one kernel application): every column on a mesh of 1K vertices, ≈140 on 28K.
+const AUTO_WORK: usize = 4_000_000;
 
 /// Default number of automatic times.
 const DEFAULT_SCALES: usize = 16;
@@ -177,6 +183,9 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     } else {
         None
     };
+    let lambda_max = spectral
+        .as_ref()
+        .map(|(_, _, values)| values.iter().copied().fold(0.0f64, f64::max));
     let method = HksMethod::from(args.method);
     let kernel_of = |shape: &ShapeDescriptors| {
         progress::run("symbolic analysis", || {
@@ -189,7 +198,19 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
             )
         })
     };
-    let diagonal = DiagonalParams::default();
+    // Auto takes the exact diagonal only where it is cheap (at most AUTO_WORK / n probe
+    // columns, a few times the cost of the eigenpairs); --method exact goes up to the library's
+    // limit (4096 columns: minutes on a large mesh).
+    let diagonal = match args.method {
+        HksMethodArg::Auto => DiagonalParams {
+            method: wfem_heat::diagonal::DiagonalMethod::Probing {
+                tol: shape_retrieval::DEFAULT_TRUNCATION_TOL,
+            },
+            max_columns: (AUTO_WORK / n.max(1)).clamp(64, DiagonalParams::default().max_columns),
+            ..Default::default()
+        },
+        _ => DiagonalParams::default(),
+    };
     let (values, used, sources) = match spectral {
         Some((values, used, eigenvalues)) => {
             let kernel = if method == HksMethod::Spectral {
@@ -295,6 +316,25 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         writeln!(out, "wrote {}", path.display())?;
     }
     let exact = sources.iter().filter(|s| matches!(s, HksSource::Exact { .. })).count();
+    // The bound above is rigorous but pessimistic; e^{−λ_k t} is the continuum (Weyl) estimate
+    // of the relative truncation error of a spectral column: warn where it is above 1 %.
+    if let Some(lambda_k) = lambda_max {
+        let truncated: Vec<f64> = sources
+            .iter()
+            .zip(&used)
+            .filter(|(s, &t)| matches!(s, HksSource::Spectral { .. }) && (-lambda_k * t).exp() > 1e-2)
+            .map(|(_, &t)| t)
+            .collect();
+        if let Some(t) = truncated.iter().copied().reduce(f64::max) {
+            eprintln!(
+                "wfem: warning: {} of the times (up to t = {t:e}) are below 4.6/λ_k = {:e}, where the truncated sum \
+                 of {k} eigenpairs misses more than ~1 % of the HKS; --method exact computes it exactly (probing, slow \
+                 on large meshes) or raise --eigs",
+                truncated.len(),
+                4.6 / lambda_k
+            );
+        }
+    }
     let worst_bound = sources.iter().fold(0.0f64, |m, s| match s {
         HksSource::Spectral { bound } => m.max(*bound),
         HksSource::Exact { .. } => m,

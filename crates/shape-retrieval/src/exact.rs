@@ -155,27 +155,53 @@ pub fn signature_by_method(
     };
     let mut values = spectral;
     // Smallest times first: the exact diagonal costs more the larger t is (a wider kernel,
-    // more probe colours). In auto mode, times past the reach of probing keep the spectral sum.
+    // more probe colours), so the times within reach of probing are a prefix. In auto mode,
+    // find it by bisection with the cheap test (one kernel column and a colouring each; one
+    // test when even the smallest time is out of reach), and keep the spectral sum past it.
     let mut wanted = wanted;
     wanted.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
-    while !wanted.is_empty() {
-        let ts: Vec<f64> = wanted.iter().map(|&j| times[j]).collect();
-        match exact_signature(kernel, &ts, convention, params) {
-            Ok(series) => {
-                for (l, &j) in wanted.iter().enumerate() {
-                    values.col_mut(j).copy_from(series.values.col(l));
-                    sources[j] = HksSource::Exact {
-                        relative_tail: series.info.relative_tail,
-                    };
+    if matches!(method, HksMethod::Auto { .. }) && !wanted.is_empty() {
+        let which = match convention {
+            HksConvention::KernelValue => KernelDiagonal::KernelValue,
+            HksConvention::MatrixDiagonal => KernelDiagonal::MatrixDiagonal,
+        };
+        let reachable = |m: usize| -> Result<bool, RetrievalError> {
+            match kernel.diagonal_probes(times[wanted[m - 1]], which, params) {
+                Ok(_) => Ok(true),
+                Err(wfem_heat::HeatError::InvalidParameter {
+                    name: "max_columns", ..
+                }) => Ok(false),
+                Err(e) => Err(e.into()),
+            }
+        };
+        // Largest m with wanted[..m] reachable: lo reachable (0 trivially), hi not.
+        let (mut lo, mut hi) = (0, wanted.len() + 1);
+        if reachable(1)? {
+            lo = 1;
+            if reachable(wanted.len())? {
+                lo = wanted.len();
+            } else {
+                hi = wanted.len();
+            }
+            while hi - lo > 1 {
+                let mid = (lo + hi) / 2;
+                if reachable(mid)? {
+                    lo = mid;
+                } else {
+                    hi = mid;
                 }
-                break;
             }
-            Err(RetrievalError::Heat(wfem_heat::HeatError::InvalidParameter {
-                name: "max_columns", ..
-            })) if matches!(method, HksMethod::Auto { .. }) => {
-                wanted.pop();
-            }
-            Err(e) => return Err(e),
+        }
+        wanted.truncate(lo);
+    }
+    if !wanted.is_empty() {
+        let ts: Vec<f64> = wanted.iter().map(|&j| times[j]).collect();
+        let series = exact_signature(kernel, &ts, convention, params)?;
+        for (l, &j) in wanted.iter().enumerate() {
+            values.col_mut(j).copy_from(series.values.col(l));
+            sources[j] = HksSource::Exact {
+                relative_tail: series.info.relative_tail,
+            };
         }
     }
     Ok((values, sources))

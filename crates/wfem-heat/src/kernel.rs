@@ -354,7 +354,6 @@ impl HeatKernel {
                 reason: "must be positive".into(),
             });
         }
-        let n = self.n();
         let t_max = times.iter().copied().fold(0.0f64, f64::max);
         let apply = |p: MatRef<'_, f64>, ts: &[f64]| -> Result<TimeSeries, HeatError> {
             match which {
@@ -362,22 +361,8 @@ impl HeatKernel {
                 KernelDiagonal::MatrixDiagonal => self.apply_times(p, ts),
             }
         };
-        // The sample: the vertex of smallest area, at the largest t.
-        let areas = self.ops.vertex_areas();
-        let i = (0..n).min_by(|&a, &b| areas[a].total_cmp(&areas[b])).unwrap_or(0);
-        let sample = apply(check::unit_columns(n, &[i])?.as_ref(), &[t_max])?;
-        let col: Vec<f64> = sample.values[0].col(0).iter().copied().collect();
-        let probes = Probes::new(self.ops.pair().pattern(), params.method, i, &col);
-        if probes.info.columns > params.max_columns {
-            return Err(HeatError::InvalidParameter {
-                name: "max_columns",
-                reason: format!(
-                    "probing the diagonal at t = {t_max:e} needs {} columns (limit {}): the kernel is not \
-                     local at this time; use the spectral diagonal (a few hundred eigenpairs are accurate there)",
-                    probes.info.columns, params.max_columns
-                ),
-            });
-        }
+        let n = self.n();
+        let probes = self.probes(t_max, which, params)?;
         let mut estimates: Vec<Option<f64>> = vec![None; times.len()];
         let diagonals = probes.diagonals(params.block, times.len(), &mut |p| {
             let series = apply(p.as_ref(), times)?;
@@ -395,6 +380,50 @@ impl HeatKernel {
             info: probes.info,
             error_estimates: estimates,
         })
+    }
+
+    /// How [`Self::diagonal`] would probe at times up to `t` — the number of probe columns and
+    /// the colouring distance — at the cost of one kernel column and the colouring, without
+    /// computing the diagonal: the cheap test of whether the exact diagonal is within reach.
+    ///
+    /// # Errors
+    /// As [`Self::diagonal`]: [`HeatError::InvalidParameter`] (`max_columns`) when probing
+    /// would need more than `params.max_columns` columns.
+    pub fn diagonal_probes(
+        &self,
+        t: f64,
+        which: KernelDiagonal,
+        params: &DiagonalParams,
+    ) -> Result<DiagonalInfo, HeatError> {
+        check::time(t)?;
+        params.method.validate()?;
+        Ok(self.probes(t, which, params)?.info)
+    }
+
+    /// The probes for times up to `t_max`: a sample column at the vertex of smallest area
+    /// (where the kernel spans the most edges) at `t_max`, and its colouring.
+    fn probes(&self, t_max: f64, which: KernelDiagonal, params: &DiagonalParams) -> Result<Probes, HeatError> {
+        let n = self.n();
+        let areas = self.ops.vertex_areas();
+        let i = (0..n).min_by(|&a, &b| areas[a].total_cmp(&areas[b])).unwrap_or(0);
+        let unit = check::unit_columns(n, &[i])?;
+        let sample = match which {
+            KernelDiagonal::KernelValue => self.apply_kernel_matrix_times(unit.as_ref(), &[t_max]),
+            KernelDiagonal::MatrixDiagonal => self.apply_times(unit.as_ref(), &[t_max]),
+        }?;
+        let col: Vec<f64> = sample.values[0].col(0).iter().copied().collect();
+        let probes = Probes::new(self.ops.pair().pattern(), params.method, i, &col);
+        if probes.info.columns > params.max_columns {
+            return Err(HeatError::InvalidParameter {
+                name: "max_columns",
+                reason: format!(
+                    "probing the diagonal at t = {t_max:e} needs {} columns (limit {}): the kernel is not \
+                     local at this time; use the spectral diagonal (a few hundred eigenpairs are accurate there)",
+                    probes.info.columns, params.max_columns
+                ),
+            });
+        }
+        Ok(probes)
     }
 
     /// Fast path with its iteration count and final estimate (for benchmarks and
