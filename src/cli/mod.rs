@@ -32,6 +32,9 @@ pub enum CliError {
     /// Heat kernel evaluation.
     #[error(transparent)]
     Heat(#[from] wfem_heat::HeatError),
+    /// Descriptors, vocabularies, indexes and their files.
+    #[error(transparent)]
+    Retrieval(#[from] shape_retrieval::RetrievalError),
     /// Rendering a PNG.
     #[error(transparent)]
     Render(#[from] RenderError),

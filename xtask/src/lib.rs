@@ -4,5 +4,4 @@
 #![warn(missing_docs)]
 
 pub mod bench;
-pub mod eval;
-pub mod shrec;
+pub mod lab;

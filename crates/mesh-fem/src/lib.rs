@@ -9,6 +9,7 @@
 //! * [`mtx`]: Matrix Market reading and writing (atomic, 17 digits) and `nalgebra-sparse`
 //!   conversions.
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
+//! * [`rng`]: SplitMix64, the one seeded random generator of wfem.
 //! * [`operators`]: the cotangent stiffness L, the consistent mass B and the lumped mass D of
 //!   the paper's Eq. (3) and Eq. (7), assembled in parallel into faer sparse matrices.
 //!
@@ -32,8 +33,8 @@ pub mod io;
 pub mod morse;
 pub mod mtx;
 pub mod operators;
+pub mod rng;
 pub mod stats;
-pub mod transform;
 pub mod validate;
 
 pub use error::MeshError;

@@ -1,36 +1,14 @@
 //! Seeded k-means: k-means++ initialisation (Arthur & Vassilvitskii 2007) and Lloyd iterations.
 //!
 //! Minimises the inertia `Σ_x min_c ‖p(x) − m_c‖²` over k centres. Points are the rows of an
-//! n × d matrix. Fully deterministic for a given seed (own SplitMix64 generator; the parallel
+//! n × d matrix. Fully deterministic for a given seed ([`mesh_fem::rng::SplitMix64`]; the parallel
 //! assignment step does not change the result).
 
 use crate::check;
 use crate::RetrievalError;
+use mesh_fem::rng::SplitMix64;
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
-
-/// SplitMix64 (Steele, Lea, Flood 2014): tiny, fast, good enough for seeding.
-#[derive(Clone, Debug)]
-pub(crate) struct SplitMix64(u64);
-
-impl SplitMix64 {
-    pub(crate) fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    pub(crate) fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1) with 53 random bits.
-    pub(crate) fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
 
 /// Options of [`kmeans`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -177,7 +155,7 @@ fn plus_plus_seeds(data: &[f64], n: usize, d: usize, k: usize, seed: u64) -> Vec
     let mut rng = SplitMix64::new(seed);
     let row = |i: usize| &data[i * d..(i + 1) * d];
     let mut centers = Vec::with_capacity(k * d);
-    let first = ((rng.next_f64() * n as f64) as usize).min(n - 1);
+    let first = ((rng.uniform() * n as f64) as usize).min(n - 1);
     centers.extend_from_slice(row(first));
     let mut d2: Vec<f64> = (0..n)
         .into_par_iter()
@@ -186,7 +164,7 @@ fn plus_plus_seeds(data: &[f64], n: usize, d: usize, k: usize, seed: u64) -> Vec
     for _ in 1..k {
         let total: f64 = d2.iter().sum();
         let next = if total > 0.0 {
-            let target = rng.next_f64() * total;
+            let target = rng.uniform() * total;
             let mut acc = 0.0;
             let mut pick = n - 1;
             for (i, v) in d2.iter().enumerate() {
@@ -203,7 +181,7 @@ fn plus_plus_seeds(data: &[f64], n: usize, d: usize, k: usize, seed: u64) -> Vec
             pick
         } else {
             // All points coincide with chosen centres (fewer distinct points than k).
-            ((rng.next_f64() * n as f64) as usize).min(n - 1)
+            ((rng.uniform() * n as f64) as usize).min(n - 1)
         };
         centers.extend_from_slice(row(next));
         let c = row(next);

@@ -25,14 +25,26 @@
 pub mod bof;
 mod check;
 pub mod descriptor;
+pub mod distance;
 mod error;
 pub mod features;
 pub mod hks;
 pub mod kmeans;
+pub mod model;
 pub mod retrieval;
 pub mod sihks;
+pub mod standardize;
+pub mod store;
 
-pub use bof::{l1_distance, pairwise_l1, vertex_areas, Vocabulary, VocabularyParams};
+pub use bof::{vertex_areas, Assignment, Vocabulary, VocabularyParams};
+pub use distance::{chi_squared_distance, l1_distance, pairwise_distances, pairwise_l1, BagDistance};
+pub use model::{
+    BagSettings, DescriptorSettings, DescriptorSpec, GlobalSignature, IndexEntry, Ranked, RetrievalIndex,
+    RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams, VertexWeights,
+    VocabularyModel,
+};
+pub use standardize::Standardizer;
+pub use store::{IndexStore, JsonFile, VocabularyStore};
 pub use descriptor::{
     dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, ShapeDescriptors,
     DEFAULT_EIGENPAIRS,
@@ -45,4 +57,4 @@ pub use hks::{
 };
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
 pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
-pub use sihks::{scale_invariant_hks, SihksParams};
+pub use sihks::{scale_invariant_hks, SihksParams, TimeUnit};

@@ -11,6 +11,6 @@ mod io_writers;
 mod morse;
 mod mtx;
 mod operators;
+mod rng;
 mod stats;
-mod transform;
 mod validate;

@@ -5,8 +5,12 @@ mod common;
 
 mod bof;
 mod descriptor;
+mod distance;
 mod features;
 mod hks;
 mod kmeans;
+mod model;
 mod retrieval;
 mod sihks;
+mod standardize;
+mod store;
