@@ -20,7 +20,8 @@ use shape_retrieval::{heat_kernel_signature, HksParams, Spectrum};
 use std::f64::consts::PI;
 use std::hint::black_box;
 use std::time::Duration;
-use wfem_heat::{canonical_basis, DiffusionDistance, DistanceKind, DistanceParams, EigenParams, Eigenbasis};
+use wfem_heat::basis::canonical_basis;
+use wfem_heat::{DiffusionDistance, DistanceKind, DistanceParams, EigenParams, Eigenbasis};
 use wfem_heat::{HeatKernel, HeatParams};
 
 #[path = "common/levels.rs"]
@@ -65,13 +66,15 @@ fn bench(c: &mut Criterion) {
         let source = n / 3;
         group.bench_function("diffusion_distance_row_cold", |b| {
             b.iter(|| {
-                DiffusionDistance::new(&ops, DistanceKind::Wfem, t, &DistanceParams::default())
+                let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+                DiffusionDistance::new(&kernel, DistanceKind::Diffusion, t, &DistanceParams::default())
                     .unwrap()
                     .row(black_box(source))
                     .unwrap()
             })
         });
-        let dd = DiffusionDistance::new(&ops, DistanceKind::Wfem, t, &DistanceParams::default()).unwrap();
+        let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+        let dd = DiffusionDistance::new(&kernel, DistanceKind::Diffusion, t, &DistanceParams::default()).unwrap();
         dd.row(source).unwrap();
         group.bench_function("diffusion_distance_row_warm", |b| {
             b.iter(|| dd.row(black_box(source + 1)).unwrap())

@@ -1,9 +1,11 @@
 //! The `wfem` command-line tool. Without a subcommand it runs `wfem demo`
-//! (what `cargo run --release` does).
+//! (what `cargo run --release` does). The CLI is private to this binary (module `cli`), so a
+//! library user of the `wfem` package never compiles clap, indicatif or the renderer.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
-use wfem::cli;
+
+mod cli;
 
 #[derive(Parser)]
 #[command(
@@ -14,6 +16,10 @@ use wfem::cli;
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// Progress bars on standard error: auto (on a terminal only), always (one line per
+    /// finished step when not on a terminal) or never.
+    #[arg(long, value_enum, global = true, default_value_t = cli::progress::ProgressMode::Auto)]
+    progress: cli::progress::ProgressMode,
 }
 
 #[derive(Subcommand)]
@@ -38,8 +44,15 @@ enum Command {
 
 fn main() -> ExitCode {
     let parsed = Cli::parse();
+    let command = parsed.command.unwrap_or(Command::Demo(cli::DemoArgs::default()));
+    let quiet = matches!(&command, Command::Demo(a) if a.quiet);
+    cli::progress::set_mode(if quiet {
+        cli::progress::ProgressMode::Never
+    } else {
+        parsed.progress
+    });
     let mut stdout = std::io::stdout().lock();
-    let result = match parsed.command.unwrap_or(Command::Demo(cli::DemoArgs::default())) {
+    let result = match command {
         Command::Info(a) => cli::info(&a, &mut stdout),
         Command::Operators(a) => cli::operators(&a, &mut stdout),
         Command::Heat(a) => cli::heat(&a, &mut stdout),
@@ -51,8 +64,11 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // A reader that stopped early (`wfem approx … | head`) is not an error: the outputs
+        // are written before the report is printed.
+        Err(cli::CliError::Stdout(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("wfem: error: {e}");
+            cli::progress::stderr_line(&format!("wfem: error: {e}"));
             ExitCode::FAILURE
         }
     }

@@ -1,18 +1,25 @@
 //! `wfem approx`: the feature-driven approximation f = f_glob + f_loc (paper, Sect. 4.2).
 
-use super::{check_output, load_usable, write_fields, CliError, KernelArg, MeshArgs};
+use super::heat::{far_exponent, prepare_kernel, times_pow2};
+use super::output::{short_label, short_labels, write_fields, Column, RenderArgs, Writing};
+use super::{limits, progress, read_usable, CliError, KernelArg, MeshArgs, Output, OutputFormat};
 use clap::{Args, ValueEnum};
-use mesh_fem::io::read_field;
 use mesh_fem::{assemble, AssemblyParams};
+use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
-use wfem_heat::{feature_approximation, ApproxParams, Coefficients, HeatKernel, HeatParams, Method, Persistence};
+use wfem_heat::approx::{feature_approximation, ApproxParams, Coefficients, Persistence};
+use wfem_heat::{HeatParams, Method};
 
 /// Coefficients of the global component.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum CoefficientsArg {
-    /// The paper's f_glob = Σ_{i∈A} f(p_i) K_t e_i.
+    /// The best approximation of f in span{K_t e_i : i ∈ A} (M-orthogonal projection).
     #[default]
+    LeastSquares,
+    /// The feature values averaged with heat-kernel weights: Σ f(p_i) K_t e_i / Σ K_t e_i.
+    Normalized,
+    /// The paper's literal f_glob = Σ_{i∈A} f(p_i) K_t e_i (small with sparse anchors).
     FeatureValues,
     /// Interpolate f on the anchors: Σ_{i∈A} c_i K_t e_i with f_glob(p_j) = f(p_j), j ∈ A.
     Interpolate,
@@ -21,6 +28,8 @@ pub enum CoefficientsArg {
 impl From<CoefficientsArg> for Coefficients {
     fn from(c: CoefficientsArg) -> Self {
         match c {
+            CoefficientsArg::Normalized => Coefficients::Normalized,
+            CoefficientsArg::LeastSquares => Coefficients::LeastSquares,
             CoefficientsArg::FeatureValues => Coefficients::FeatureValues,
             CoefficientsArg::Interpolate => Coefficients::Interpolate,
         }
@@ -34,61 +43,199 @@ pub struct ApproxArgs {
     #[allow(missing_docs)]
     pub input: MeshArgs,
     /// The per-vertex field f (.npy or .csv, one value per vertex).
-    #[arg(long)]
+    #[arg(long, value_parser = super::input::field_path)]
     pub field: PathBuf,
     /// Persistence threshold of the anchors, as a fraction of max f − min f (e.g. 0.1), or in
     /// units of f with --absolute.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub persistence: f64,
     /// Read --persistence in units of f instead of as a fraction of the range.
     #[arg(long)]
     pub absolute: bool,
-    /// Number of scales t_i = (i/10) / λ_k, i = 1..N.
+    /// Number of scales t_i = (i/10) / λ_k, i = 1..N (1..=100).
     #[arg(long, default_value_t = 10)]
     pub scales: usize,
-    /// Index k of the eigenvalue λ_k setting the time scale.
-    #[arg(long, default_value_t = 20)]
-    pub k: usize,
+    /// Index k of the eigenvalue λ_k setting the time scale (default min(20, n); 2..=n, at
+    /// most n/10 above 1000 vertices).
+    #[arg(long)]
+    pub k: Option<usize>,
     /// Coefficients of the global component.
-    #[arg(long, value_enum, default_value_t = CoefficientsArg::FeatureValues)]
+    #[arg(long, value_enum, default_value_t = CoefficientsArg::LeastSquares)]
     pub coefficients: CoefficientsArg,
     /// Kernel.
     #[arg(long, value_enum, default_value_t = KernelArg::Wfem)]
     pub kernel: KernelArg,
-    /// Output file: .ply, .npy or .csv (f, then f_glob and f_loc at every scale), or .png
-    /// (one figure each for f, f_glob and f_loc at the coarsest scale, anchors highlighted).
-    #[arg(short = 'o', long = "output")]
-    pub output: PathBuf,
+    /// Output file: .ply, .npy (+ .json sidecar with the times) or .csv (f, then f_glob and
+    /// f_loc at every scale, named with their t), or .png (one figure each for f, f_glob and
+    /// f_loc at the coarsest scale, anchors highlighted).
+    #[arg(short = 'o', long = "output", value_parser = Output::parse)]
+    pub output: Output,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub render: RenderArgs,
 }
+
+/// Figure names of a PNG output (f, f_glob, f_loc).
+const PNG_FIGURES: [&str; 3] = ["f", "glob", "loc"];
 
 /// `wfem approx`: splits f into its global component on the persistent critical points and
 /// its local component at every scale, writes them and prints the per-scale report.
 pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    check_output(&args.input.mesh, &args.output)?;
-    check_output(&args.field, &args.output)?;
-    let mesh = load_usable(&args.input)?;
-    let n = mesh.n_vertices();
-    let f = read_field(&args.field, n)?;
-    let ops = assemble(&mesh, &AssemblyParams::default())?;
-    let kernel = HeatKernel::new(
+    limits::count(
+        "--scales",
+        args.scales,
+        1,
+        limits::MAX_APPROX_SCALES,
+        "number of scales t_i = (i/10)/λ_k (paper: 5 to 10)",
+    )?;
+    if !(args.persistence.is_finite() && args.persistence >= 0.0) {
+        return Err(CliError::OutOfRange {
+            flag: "--persistence",
+            value: args.persistence.to_string(),
+            allowed: "a finite number ≥ 0".into(),
+            why: if args.absolute {
+                "a persistence in units of f".into()
+            } else {
+                "a fraction of max f − min f, e.g. 0.1".into()
+            },
+        });
+    }
+    let inputs = [args.input.mesh.as_path(), args.field.as_path()];
+    let png_names: Vec<String> = PNG_FIGURES.iter().map(|s| s.to_string()).collect();
+    if args.output.format == OutputFormat::Png {
+        args.output.check(Some(&png_names), PNG_FIGURES.len(), &inputs)?;
+    } else {
+        args.output.check(Some(&[]), 1 + 2 * args.scales, &inputs)?;
+    }
+    let input = read_usable(&args.input)?;
+    let n = input.mesh.n_vertices();
+    let f = input.field(&args.field)?;
+    // λ_1 = 0 on a connected mesh, so the time scale needs k ≥ 2.
+    let k = args.k.unwrap_or(20.min(n));
+    limits::count("--k", k, 2, n, &format!("the index of λ_k; the mesh has {n} vertices"))?;
+    limits::eigenpairs("--k", k, n)?;
+    if n > limits::SMALL_MESH && k > n / limits::SPECTRAL_FRACTION {
+        return Err(CliError::OutOfRange {
+            flag: "--k",
+            value: k.to_string(),
+            allowed: format!("2..={} on this {n}-vertex mesh", n / limits::SPECTRAL_FRACTION),
+            why: "λ_k comes from a partial eigensolve of k pairs, which slows down sharply beyond n/10".into(),
+        });
+    }
+    limits::columns("--scales", 1 + 2 * args.scales, n)?;
+    let ops = progress::run("assembling L, B, D", || {
+        assemble(&input.mesh, &AssemblyParams::default())
+    })?;
+    let kernel = prepare_kernel(
         &ops,
         HeatParams {
             kernel: args.kernel.into(),
             method: Method::default(),
         },
+        n,
     )?;
+    // A field far from 1 (e.g. 1e308) is decomposed at a scale 2^−e (exact; the decomposition
+    // is linear in f, and an absolute persistence scales with it) and scaled back.
+    let e = far_exponent(&f);
     let params = ApproxParams {
-        k: args.k,
+        k,
         scales: args.scales,
         persistence: if args.absolute {
-            Persistence::Absolute(args.persistence)
+            Persistence::Absolute(args.persistence * 2f64.powi(-e))
         } else {
             Persistence::Relative(args.persistence)
         },
         coefficients: args.coefficients.into(),
         ..ApproxParams::default()
     };
-    let approx = feature_approximation(&mesh, &ops, &kernel, &f, &params)?;
+    let mut approx = progress::run(format!("λ_{k}, anchors and {} scales", args.scales), || {
+        feature_approximation(&input.mesh, &kernel, &times_pow2(&f, -e), &params)
+    })?;
+    if e != 0 {
+        for s in &mut approx.scales {
+            s.global = times_pow2(&s.global, e);
+            s.local = times_pow2(&s.local, e);
+            s.linf_error *= 2f64.powi(e);
+        }
+    }
+    let field_name = args
+        .field
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let column = |name: String, suffix: &str, title: String, t: Option<f64>, values: &[f64]| Column {
+        name,
+        suffix: suffix.to_string(),
+        title: format!("{}: {title}", input.name),
+        t,
+        values: values.to_vec(),
+    };
+    let mut columns = vec![column(
+        "f".into(),
+        "f",
+        format!("f = {field_name} (anchors: persistent critical points)"),
+        None,
+        &f,
+    )];
+    if args.output.format == OutputFormat::Png {
+        if let Some(s) = approx.scales.last() {
+            let label = short_label(s.t);
+            columns.push(column(
+                format!("f_glob_t{label}"),
+                "glob",
+                format!(
+                    "f_glob of {field_name}, t = {label} ({} anchors, {} kernel)",
+                    approx.anchors.len(),
+                    super::name_of(args.kernel)
+                ),
+                Some(s.t),
+                &s.global,
+            ));
+            columns.push(column(
+                format!("f_loc_t{label}"),
+                "loc",
+                format!("f_loc = f - f_glob of {field_name}, t = {label}"),
+                Some(s.t),
+                &s.local,
+            ));
+        }
+    } else {
+        let times: Vec<f64> = approx.scales.iter().map(|s| s.t).collect();
+        let labels = short_labels(&times);
+        for (s, label) in approx.scales.iter().zip(&labels) {
+            columns.push(column(
+                format!("f_glob_t{label}"),
+                "",
+                String::new(),
+                Some(s.t),
+                &s.global,
+            ));
+        }
+        for (s, label) in approx.scales.iter().zip(&labels) {
+            columns.push(column(
+                format!("f_loc_t{label}"),
+                "",
+                String::new(),
+                Some(s.t),
+                &s.local,
+            ));
+        }
+    }
+    let mut meta = serde_json::Map::new();
+    meta.insert("command".into(), json!("approx"));
+    meta.insert("input".into(), input.meta(&args.input.mesh));
+    meta.insert("field".into(), json!(args.field.display().to_string()));
+    meta.insert("kernel".into(), json!(super::name_of(args.kernel)));
+    meta.insert("lambda_k".into(), json!({ "k": k, "value": approx.lambda_k }));
+    meta.insert("anchors".into(), json!(approx.anchors));
+    let how = Writing {
+        render: args.render,
+        highlight: &approx.anchors,
+        meta,
+    };
+    // The files first, then the report: a reader that stops early (`| head`) loses
+    // nothing but the report.
+    let written = write_fields(&args.output, &input.mesh, &columns, how)?;
     writeln!(
         out,
         "{} vertices, {} critical points of f, {} anchors (persistence {}{}), λ_{} = {:.6e}",
@@ -97,7 +244,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         approx.anchors.len(),
         args.persistence,
         if args.absolute { "" } else { " × range" },
-        args.k,
+        k,
         approx.lambda_k
     )?;
     writeln!(
@@ -117,27 +264,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
             s.significant_critical_points
         )?;
     }
-    let ext = args
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    let mut fields = vec![("f".to_string(), f.clone())];
-    if ext == "png" {
-        if let Some(s) = approx.scales.last() {
-            fields.push((format!("f_glob t={:.4e}", s.t), s.global.clone()));
-            fields.push((format!("f_loc t={:.4e}", s.t), s.local.clone()));
-        }
-    } else {
-        for (i, s) in approx.scales.iter().enumerate() {
-            fields.push((format!("glob_{}", i + 1), s.global.clone()));
-        }
-        for (i, s) in approx.scales.iter().enumerate() {
-            fields.push((format!("loc_{}", i + 1), s.local.clone()));
-        }
-    }
-    for path in write_fields(&args.output, &mesh, &fields, &approx.anchors)? {
+    for path in written {
         writeln!(out, "wrote {}", path.display())?;
     }
     Ok(())

@@ -1,15 +1,12 @@
-//! `wfem heat` and `wfem demo`.
+//! `wfem heat`: K_t e_i or K_t f for one or several diffusion times.
 
-use super::{check_output, figure_params, load_usable, write_fields, CliError, MeshArgs};
-use crate::render::render_png;
+use super::output::{short_labels, Column, RenderArgs, Writing};
+use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressStyle};
-use mesh_fem::io::{read_field, write_atomic};
-use mesh_fem::{assemble, AssemblyParams, FemOperators, TriMesh};
-use std::fmt::Write as _;
+use mesh_fem::{assemble, AssemblyParams, FemOperators};
+use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
-use std::time::Instant;
 use wfem_heat::{HeatKernel, HeatParams, KernelKind, Method};
 
 /// Which discrete heat kernel (paper, Table 1).
@@ -40,16 +37,32 @@ pub enum MethodArg {
     /// Rational Chebyshev approximation, r shifted sparse solves (Eq. (11)–(13)).
     #[default]
     Rational,
-    /// Truncated spectral expansion with the smallest `--eigs` eigenpairs (Eq. (8)).
+    /// Truncated spectral expansion with the smallest --eigs eigenpairs (Eq. (8)); inaccurate
+    /// for small t (checked, see --allow-inaccurate).
     Spectral,
-    /// First-order Taylor step B g = (B − tL) f (Eq. (9)); inaccurate except for tiny t.
+    /// First-order Taylor step B g = (B − tL) f (Eq. (9)); inaccurate except for tiny t
+    /// (checked, see --allow-inaccurate).
     Taylor,
-    /// One backward-Euler step (B + tL) g = B f; inaccurate except for tiny t.
+    /// One backward-Euler step (B + tL) g = B f; inaccurate except for tiny t (checked, see
+    /// --allow-inaccurate).
     BackwardEuler,
-    /// Shift-and-invert rational Krylov with one real factorization (beyond the paper).
+    /// Shift-and-invert rational Krylov with one real factorization (beyond the paper; exact
+    /// to ≈1e−12 and the quickest for one K_t f on a large mesh).
     Fast,
-    /// Dense generalized eigendecomposition (small meshes only; the exact reference).
+    /// Dense generalized eigendecomposition (n ≤ 5000 only; the exact reference).
     Dense,
+}
+
+impl MethodArg {
+    /// The name on the command line.
+    pub fn name(self) -> String {
+        super::name_of(self)
+    }
+
+    /// Whether the method approximates K_t f only roughly (its error is then estimated).
+    fn approximate(self) -> bool {
+        matches!(self, Self::Spectral | Self::Taylor | Self::BackwardEuler)
+    }
 }
 
 /// How the shifted systems of the rational method are solved.
@@ -77,8 +90,8 @@ impl From<BackendArg> for shifted_solve::Backend {
     }
 }
 
-/// Builds the heat-kernel parameters for a method (`backend` only matters for the rational
-/// method).
+/// Builds the heat-kernel parameters for a method (`degree` and `backend` matter for the
+/// rational method only, `eigs` for the spectral one).
 pub(crate) fn heat_params(
     kernel: KernelArg,
     method: MethodArg,
@@ -103,6 +116,23 @@ pub(crate) fn heat_params(
     }
 }
 
+/// `--degree`: one of the shipped rational approximations.
+pub(crate) fn check_degree(degree: Option<usize>) -> Result<(), CliError> {
+    match degree {
+        Some(d) if !shifted_solve::SHIPPED_DEGREES.contains(&d) => Err(CliError::OutOfRange {
+            flag: "--degree",
+            value: d.to_string(),
+            allowed: format!("one of {:?}", shifted_solve::SHIPPED_DEGREES),
+            why: "the degrees of the shipped rational approximations of e^-x (error ≈ 9.3^-degree)".into(),
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// Relative max error above which an approximate method is refused unless
+/// `--allow-inaccurate`: 0.1 % of max|K_t f|.
+pub const INACCURATE_ABOVE: f64 = 1e-3;
+
 /// Arguments of `wfem heat`.
 #[derive(Args, Clone, Debug)]
 pub struct HeatArgs {
@@ -112,104 +142,103 @@ pub struct HeatArgs {
     /// Diffusion time(s) t > 0; several values give one output field each.
     #[arg(long = "t", required = true, num_args = 1.., allow_negative_numbers = true)]
     pub t: Vec<f64>,
-    /// Diffuse the unit impulse e_i at this vertex (the canonical basis function K_t e_i).
+    /// Diffuse the unit impulse e_i at this vertex (numbered as in the file; the canonical
+    /// basis function K_t e_i).
     #[arg(long, conflicts_with = "field")]
     pub source: Option<u32>,
     /// Diffuse this per-vertex field (.npy or .csv, one value per vertex).
-    #[arg(long)]
+    #[arg(long, value_parser = super::input::field_path)]
     pub field: Option<PathBuf>,
     /// Kernel.
     #[arg(long, value_enum, default_value_t = KernelArg::Wfem)]
     pub kernel: KernelArg,
-    /// Method.
+    /// Method. Approximate methods (spectral, taylor, backward-euler) are checked against the
+    /// exact fast path: an error above 0.1 % of max|K_t f| is refused unless
+    /// --allow-inaccurate.
     #[arg(long, value_enum, default_value_t = MethodArg::Rational)]
     pub method: MethodArg,
-    /// Degree of the rational approximation (error ≈ 9.3^-degree).
+    /// Degree of the rational approximation, --method rational only (error ≈ 9.3^-degree;
+    /// default 16).
     #[arg(long)]
     pub degree: Option<usize>,
-    /// Solver of the rational method's shifted systems.
-    #[arg(long, value_enum, default_value_t = BackendArg::Ldlt)]
-    pub backend: BackendArg,
-    /// Number of eigenpairs of the spectral method.
-    #[arg(long, default_value_t = 200)]
-    pub eigs: usize,
-    /// Output file: .ply, .npy, .csv or .png.
-    #[arg(short = 'o', long = "output")]
-    pub output: PathBuf,
-}
-
-/// `wfem heat`: K_t e_i or K_t f for one or several t.
-pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    check_output(&args.input.mesh, &args.output)?;
-    if let Some(field) = &args.field {
-        check_output(field, &args.output)?;
-    }
-    let mesh = load_usable(&args.input)?;
-    let n = mesh.n_vertices();
-    let f = match (&args.source, &args.field) {
-        (Some(i), None) => {
-            if *i as usize >= n {
-                return Err(CliError::Usage(format!(
-                    "--source {i} is not a vertex (the mesh has {n} vertices)"
-                )));
-            }
-            let mut e = vec![0.0; n];
-            e[*i as usize] = 1.0;
-            e
-        }
-        (None, Some(path)) => read_field(path, n)?,
-        _ => return Err(CliError::Usage("give exactly one of --source I or --field FILE".into())),
-    };
-    let ops = assemble(&mesh, &AssemblyParams::default())?;
-    let kernel = HeatKernel::new(
-        &ops,
-        heat_params(args.kernel, args.method, args.degree, args.eigs, args.backend),
-    )?;
-    let mut fields = Vec::with_capacity(args.t.len());
-    for &t in &args.t {
-        let g = kernel.apply(&f, t)?;
-        fields.push((format!("t={t}"), g));
-    }
-    let highlight: Vec<u32> = args.source.into_iter().collect();
-    for path in write_fields(&args.output, &mesh, &fields, &highlight)? {
-        writeln!(out, "wrote {}", path.display())?;
-    }
-    Ok(())
-}
-
-/// Arguments of `wfem demo`.
-#[derive(Args, Clone, Debug)]
-pub struct DemoArgs {
-    /// Output directory.
-    #[arg(long, default_value = "wfem-out")]
-    pub out: PathBuf,
-    /// Subdivision level of the generated mesh (level 5: 10,242 vertices).
-    #[arg(long, default_value_t = 5)]
-    pub level: u32,
-    /// Number of eigenpairs of the spectral method.
-    #[arg(long, default_value_t = 200)]
-    pub eigs: usize,
-    /// Hide the progress bar.
+    /// Solver of the shifted systems, --method rational only (default ldlt).
+    #[arg(long, value_enum)]
+    pub backend: Option<BackendArg>,
+    /// Number of eigenpairs, --method spectral only (default min(200, n); at most n/10 on
+    /// meshes above 1000 vertices, where more cost more than --method dense or fast).
     #[arg(long)]
-    pub quiet: bool,
+    pub eigs: Option<usize>,
+    /// Write the result of an approximate method even when its estimated error is above
+    /// 0.1 % (the estimate is printed and recorded in the .npy sidecar).
+    #[arg(long)]
+    pub allow_inaccurate: bool,
+    /// Output file: .ply, .npy (+ .json sidecar), .csv or .png (several t: one figure each,
+    /// named x-t<t>.png).
+    #[arg(short = 'o', long = "output", value_parser = Output::parse)]
+    pub output: Output,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub render: RenderArgs,
 }
 
-impl Default for DemoArgs {
-    fn default() -> Self {
-        Self {
-            out: PathBuf::from("wfem-out"),
-            level: 5,
-            eigs: 200,
-            quiet: false,
-        }
+/// Options that do not apply to the method are refused rather than silently ignored.
+fn check_method_options(args: &HeatArgs) -> Result<(), CliError> {
+    let method = args.method;
+    let misplaced = |flag: &str, applies: &str| {
+        Err(CliError::Usage(format!(
+            "{flag} applies to {applies} only, not to --method {}",
+            method.name()
+        )))
+    };
+    if args.degree.is_some() && method != MethodArg::Rational {
+        return misplaced("--degree", "--method rational");
+    }
+    if args.backend.is_some() && method != MethodArg::Rational {
+        return misplaced("--backend", "--method rational");
+    }
+    if args.eigs.is_some() && method != MethodArg::Spectral {
+        return misplaced("--eigs", "--method spectral");
+    }
+    if args.allow_inaccurate && !method.approximate() {
+        return misplaced("--allow-inaccurate", "--method spectral, taylor and backward-euler");
+    }
+    check_degree(args.degree)
+}
+
+/// The power of two e with max|f|·2^−e ∈ [1, 2) when max|f| is far from 1 (beyond 2^±200),
+/// else 0. Scaling by 2^−e is exact, and K_t (like the feature approximation) is linear, so
+/// a field of 1e308 is computed without overflowing inside the solvers (B f and the shifted
+/// right-hand sides overflowed to −∞ before) and a field of 1e−300 keeps its digits.
+pub(crate) fn far_exponent(f: &[f64]) -> i32 {
+    let max = f.iter().fold(0.0f64, |m, &x| m.max(x.abs()));
+    if max == 0.0 || !max.is_finite() {
+        return 0;
+    }
+    let e = max.log2().floor() as i32;
+    if e.abs() > 200 {
+        e.clamp(-1000, 1000)
+    } else {
+        0
     }
 }
 
-/// The diffusion times of the demo, for a surface of area 4π (a unit-sphere-sized shape).
-pub const DEMO_TIMES: [f64; 4] = [0.002, 0.01, 0.05, 0.25];
+/// x·2^e for every x.
+pub(crate) fn times_pow2(f: &[f64], e: i32) -> Vec<f64> {
+    let s = 2f64.powi(e);
+    f.iter().map(|x| x * s).collect()
+}
 
-fn relative_max_diff(a: &[f64], b: &[f64]) -> f64 {
-    let scale = a.iter().fold(0.0f64, |m, &x| m.max(x.abs()));
+/// `K_t f`, with f scaled into [1, 2) first when it is far from 1 ([`far_exponent`]).
+pub(crate) fn apply_scaled(kernel: &HeatKernel, f: &[f64], t: f64) -> Result<Vec<f64>, CliError> {
+    match far_exponent(f) {
+        0 => Ok(kernel.apply(f, t)?),
+        e => Ok(times_pow2(&kernel.apply(&times_pow2(f, -e), t)?, e)),
+    }
+}
+
+/// max|a − b| / max|b| (or the absolute difference when b = 0).
+pub(crate) fn relative_error(a: &[f64], b: &[f64]) -> f64 {
+    let scale = b.iter().fold(0.0f64, |m, &x| m.max(x.abs()));
     let diff = a.iter().zip(b).fold(0.0f64, |m, (&x, &y)| m.max((x - y).abs()));
     if scale > 0.0 {
         diff / scale
@@ -218,171 +247,162 @@ fn relative_max_diff(a: &[f64], b: &[f64]) -> f64 {
     }
 }
 
-/// `wfem demo`: the canonical basis function K_t e_i (paper, Sect. 4.1, Fig. 1) on the
-/// generated bumpy, irregularly sampled default mesh at four scales, with the rational and the
-/// spectral method (and the fast path), written as PLY and PNG files plus `report.md` with
-/// timings and the measured differences between methods.
-pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    std::fs::create_dir_all(&args.out).map_err(|source| mesh_fem::MeshError::Io {
-        path: args.out.clone(),
-        source,
+/// The kernel of a method, built with a spinner that says what is being prepared.
+pub(crate) fn prepare_kernel(ops: &FemOperators, params: HeatParams, n: usize) -> Result<HeatKernel, CliError> {
+    let label = match &params.method {
+        Method::Dense => format!("dense eigendecomposition ({n} × {n})"),
+        Method::Spectral { k, .. } => format!("{k} eigenpairs"),
+        Method::Taylor => "factorizing the mass matrix".to_string(),
+        Method::Rational { degree, .. } => format!("symbolic analysis (rational, degree {degree})"),
+        _ => "symbolic analysis".to_string(),
+    };
+    Ok(progress::run(label, || HeatKernel::new(ops, params))?)
+}
+
+/// `wfem heat`: K_t e_i or K_t f for one or several t.
+pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    limits::times("--t", &args.t)?;
+    check_method_options(args)?;
+    let labels = short_labels(&args.t);
+    let suffixes: Vec<String> = labels.iter().map(|l| format!("t{l}")).collect();
+    let mut inputs = vec![args.input.mesh.as_path()];
+    inputs.extend(args.field.as_deref());
+    args.output.check(Some(&suffixes), args.t.len(), &inputs)?;
+    if args.source.is_none() && args.field.is_none() {
+        return Err(CliError::Usage("give exactly one of --source I or --field FILE".into()));
+    }
+
+    let input = read_usable(&args.input)?;
+    let n = input.mesh.n_vertices();
+    let (f, what, source) = match (&args.source, &args.field) {
+        (Some(i), _) => {
+            let v = input.vertex("--source", *i)?;
+            let mut e = vec![0.0; n];
+            e[v as usize] = 1.0;
+            (e, format!("K_t e_{i}"), Some(v))
+        }
+        (None, Some(path)) => {
+            let name = path
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            (input.field(path)?, format!("K_t f, f = {name}"), None)
+        }
+        (None, None) => return Err(CliError::Usage("give exactly one of --source I or --field FILE".into())),
+    };
+    let eigs = match args.method {
+        MethodArg::Spectral => limits::spectral_eigenpairs(args.eigs.unwrap_or(200.min(n)), n)?,
+        _ => 0,
+    };
+    let ops = progress::run("assembling L, B, D", || {
+        assemble(&input.mesh, &AssemblyParams::default())
     })?;
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(6 + 3 * DEMO_TIMES.len() as u64)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar.enable_steady_tick(std::time::Duration::from_millis(120));
-    let mut timings: Vec<(String, f64)> = Vec::new();
-    let clock = |label: &str, start: Instant, timings: &mut Vec<(String, f64)>| {
-        timings.push((label.to_string(), start.elapsed().as_secs_f64()));
-    };
-
-    bar.set_message("generating the mesh");
-    let start = Instant::now();
-    let mesh: TriMesh = mesh_fem::generate::bumpy(args.level).with_area(4.0 * std::f64::consts::PI)?;
-    clock("generate mesh", start, &mut timings);
-    bar.inc(1);
-
-    bar.set_message("assembling L, B, D");
-    let start = Instant::now();
-    let ops: FemOperators = assemble(&mesh, &AssemblyParams::default())?;
-    clock("assemble L, B, D", start, &mut timings);
-    bar.inc(1);
-
-    // The anchor: the vertex of largest x + y + z, on a bump of the shape.
-    let anchor = (0..mesh.n_vertices())
-        .max_by(|&a, &b| {
-            let s = |i: usize| mesh.positions()[i].iter().sum::<f64>();
-            s(a).total_cmp(&s(b))
-        })
-        .unwrap_or(0);
-    let mut e = vec![0.0; mesh.n_vertices()];
-    e[anchor] = 1.0;
-
-    bar.set_message("preparing the rational method");
-    let start = Instant::now();
-    let rational = HeatKernel::new(
+    let backend = args.backend.unwrap_or_default();
+    let kernel = prepare_kernel(
         &ops,
-        heat_params(KernelArg::Wfem, MethodArg::Rational, None, 0, BackendArg::Ldlt),
+        heat_params(args.kernel, args.method, args.degree, eigs, backend),
+        n,
     )?;
-    clock("rational: symbolic analysis", start, &mut timings);
-    bar.inc(1);
-
-    bar.set_message(format!("spectral: {} eigenpairs", args.eigs));
-    let start = Instant::now();
-    let spectral = HeatKernel::new(
-        &ops,
-        heat_params(KernelArg::Wfem, MethodArg::Spectral, None, args.eigs, BackendArg::Ldlt),
-    )?;
-    clock(&format!("spectral: {} eigenpairs", args.eigs), start, &mut timings);
-    bar.inc(1);
-
-    let fast = HeatKernel::new(
-        &ops,
-        heat_params(KernelArg::Wfem, MethodArg::Fast, None, 0, BackendArg::Ldlt),
-    )?;
-    bar.inc(1);
-
-    let mut fields: Vec<(String, Vec<f64>)> = Vec::new();
-    let mut rows = Vec::new();
-    for &t in &DEMO_TIMES {
-        bar.set_message(format!("K_t e_i, t = {t}: rational"));
-        let start = Instant::now();
-        let g_rat = rational.apply(&e, t)?;
-        let t_rat = start.elapsed().as_secs_f64();
-        bar.inc(1);
-        bar.set_message(format!("K_t e_i, t = {t}: spectral"));
-        let start = Instant::now();
-        let g_spec = spectral.apply(&e, t)?;
-        let t_spec = start.elapsed().as_secs_f64();
-        bar.inc(1);
-        bar.set_message(format!("K_t e_i, t = {t}: fast path"));
-        let start = Instant::now();
-        let g_fast = fast.apply(&e, t)?;
-        let t_fast = start.elapsed().as_secs_f64();
-        bar.inc(1);
-        rows.push((
-            t,
-            t_rat,
-            t_spec,
-            t_fast,
-            relative_max_diff(&g_rat, &g_spec),
-            relative_max_diff(&g_rat, &g_fast),
-        ));
-        fields.push((format!("rational_t{t}"), g_rat));
-        fields.push((format!("spectral_t{t}"), g_spec));
+    // The exact reference of an approximate method, built on first use.
+    let mut reference: Option<HeatKernel> = None;
+    let mut errors = Vec::new();
+    let mut columns = Vec::with_capacity(args.t.len());
+    let bar = progress::bar(args.t.len(), "K_t");
+    for ((&t, label), suffix) in args.t.iter().zip(&labels).zip(&suffixes) {
+        bar.set_detail(&format!("t = {label}"));
+        let g = apply_scaled(&kernel, &f, t)?;
+        if let Some((vertex, &value)) = g.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(CliError::NonFinite {
+                what: format!("K_t (--method {}, t = {label})", args.method.name()),
+                vertex,
+                value,
+            });
+        }
+        if args.method.approximate() {
+            if reference.is_none() {
+                let params = heat_params(args.kernel, MethodArg::Fast, None, 0, backend);
+                reference = Some(prepare_kernel(&ops, params, n)?);
+            }
+            if let Some(exact) = &reference {
+                let error = relative_error(&g, &apply_scaled(exact, &f, t)?);
+                check_accuracy(args, t, label, error)?;
+                errors.push(error);
+            }
+        }
+        columns.push(Column {
+            name: format!("t={label}"),
+            suffix: suffix.clone(),
+            title: format!(
+                "{}: {what}, t = {label} ({} kernel, {})",
+                input.name,
+                super::name_of(args.kernel),
+                args.method.name()
+            ),
+            t: Some(t),
+            values: g,
+        });
+        bar.inc(&format!("t = {label}"));
     }
+    bar.done();
 
-    bar.set_message("writing PLY and PNG");
-    let start = Instant::now();
-    let ply = args.out.join("basis.ply");
-    write_fields(&ply, &mesh, &fields, &[anchor as u32])?;
-    let mut pngs = Vec::new();
-    for (t, (name, values)) in DEMO_TIMES.iter().zip(fields.iter().step_by(2)) {
-        let path = args.out.join(format!("basis_t{t}.png"));
-        let title = format!("wFEM K_t e_i, t = {t} (rational, {} vertices)", mesh.n_vertices());
-        let _ = name;
-        let png = render_png(&mesh, values, &figure_params(&title, values, &[anchor as u32]))?;
-        write_atomic(&path, |w| w.write_all(&png))?;
-        pngs.push(path);
+    let mut meta = serde_json::Map::new();
+    meta.insert("command".into(), json!("heat"));
+    meta.insert("input".into(), input.meta(&args.input.mesh));
+    meta.insert("kernel".into(), json!(super::name_of(args.kernel)));
+    meta.insert("method".into(), method_meta(args, eigs));
+    match (&args.source, &args.field) {
+        (Some(i), _) => meta.insert("source_vertex".into(), json!(i)),
+        (_, f) => meta.insert("field".into(), json!(f.as_ref().map(|p| p.display().to_string()))),
+    };
+    if !errors.is_empty() {
+        meta.insert("estimated_relative_error".into(), json!(errors));
     }
-    clock("write PLY + PNG", start, &mut timings);
-    bar.inc(1);
-    bar.finish_and_clear();
-
-    let report = demo_report(&mesh, anchor, args.eigs, &timings, &rows);
-    let report_path = args.out.join("report.md");
-    write_atomic(&report_path, |w| w.write_all(report.as_bytes()))?;
-    writeln!(out, "{report}")?;
-    writeln!(
-        out,
-        "wrote {}, {} and {} PNG files",
-        ply.display(),
-        report_path.display(),
-        pngs.len()
-    )?;
+    let highlight: Vec<u32> = source.into_iter().collect();
+    let how = Writing {
+        render: args.render,
+        highlight: &highlight,
+        meta,
+    };
+    let written = super::output::write_fields(&args.output, &input.mesh, &columns, how)?;
+    for path in written {
+        writeln!(out, "wrote {}", path.display())?;
+    }
+    if input.renumbered() {
+        writeln!(out, "(per-vertex values of the repaired mesh: {n} vertices)")?;
+    }
     Ok(())
 }
 
-fn demo_report(
-    mesh: &TriMesh,
-    anchor: usize,
-    eigs: usize,
-    timings: &[(String, f64)],
-    rows: &[(f64, f64, f64, f64, f64, f64)],
-) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "# wfem demo\n");
-    let _ = writeln!(
-        s,
-        "Canonical basis function K_t e_i of the wFEM heat kernel (paper, Sect. 4.1) on the generated bumpy, \
-         irregularly sampled mesh ({} vertices, {} faces, area 4π), anchor vertex {anchor}.\n",
-        mesh.n_vertices(),
-        mesh.n_faces()
+/// Prints the estimated error of an approximate method and refuses it above
+/// [`INACCURATE_ABOVE`] unless `--allow-inaccurate`.
+fn check_accuracy(args: &HeatArgs, t: f64, label: &str, error: f64) -> Result<(), CliError> {
+    let text = format!(
+        "--method {} at t = {label}: estimated relative error {error:.1e} (max|g − g_exact| / max|g_exact| against --method fast)",
+        args.method.name()
     );
-    let _ = writeln!(s, "| step | time (s) |\n|---|---:|");
-    for (label, secs) in timings {
-        let _ = writeln!(s, "| {label} | {secs:.3} |");
+    if error <= INACCURATE_ABOVE {
+        progress::note(&text);
+        Ok(())
+    } else if args.allow_inaccurate {
+        progress::warn(&format!("{text}; written anyway (--allow-inaccurate)"));
+        Ok(())
+    } else {
+        Err(CliError::Inaccurate {
+            method: args.method.name(),
+            t,
+            error,
+        })
     }
-    let _ = writeln!(
-        s,
-        "\n| t | rational (s) | spectral, k = {eigs} (s) | fast path (s) | max\\|rational − spectral\\| / max\\|rational\\| | max\\|rational − fast\\| / max\\|rational\\| |"
-    );
-    let _ = writeln!(s, "|---:|---:|---:|---:|---:|---:|");
-    for (t, tr, ts, tf, ds, df) in rows {
-        let _ = writeln!(s, "| {t} | {tr:.3} | {ts:.4} | {tf:.3} | {ds:.2e} | {df:.2e} |");
+}
+
+fn method_meta(args: &HeatArgs, eigs: usize) -> serde_json::Value {
+    match args.method {
+        MethodArg::Rational => json!({
+            "name": "rational",
+            "degree": args.degree.unwrap_or(shifted_solve::DEFAULT_DEGREE),
+            "backend": super::name_of(args.backend.unwrap_or_default()),
+        }),
+        MethodArg::Spectral => json!({ "name": "spectral", "eigenpairs": eigs }),
+        m => json!({ "name": m.name() }),
     }
-    let worst_fast = rows.iter().fold(0.0f64, |m, r| m.max(r.5));
-    let _ = writeln!(
-        s,
-        "\nThe spectral representation (Eq. 8) truncated to k eigenpairs misses the fine scales: its error is \
-         large for small t and vanishes for large t (paper, Fig. 3). The rational method and the fast path \
-         differ by at most {worst_fast:.1e} (relative to max|rational|) over these scales."
-    );
-    s
 }

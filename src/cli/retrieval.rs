@@ -178,7 +178,10 @@ impl DescriptorArgs {
         settings.descriptor.descriptor = match self.descriptor {
             DescriptorArg::SiHks => {
                 if self.times.is_some() {
-                    return Err(CliError::Usage("--times is for DHK1/DHK2/DHK3; SI-HKS takes --tau-min/--tau-max/--tau-step/--frequencies".into()));
+                    return Err(CliError::Usage(
+                        "--times is for DHK1/DHK2/DHK3; SI-HKS takes --tau-min/--tau-max/--tau-step/--frequencies"
+                            .into(),
+                    ));
                 }
                 let DescriptorSpec::SiHks {
                     alpha,
@@ -204,9 +207,9 @@ impl DescriptorArgs {
                 }
                 let times = self.times.clone();
                 match self.descriptor {
-                    DescriptorArg::Dhk3 => times.map_or_else(DescriptorSpec::dhk3_default, |times| DescriptorSpec::Dhk3 {
-                        times,
-                    }),
+                    DescriptorArg::Dhk3 => {
+                        times.map_or_else(DescriptorSpec::dhk3_default, |times| DescriptorSpec::Dhk3 { times })
+                    }
                     DescriptorArg::Dhk1 => DescriptorSpec::Dhk1 {
                         times: times.ok_or_else(missing_times)?,
                     },
@@ -250,19 +253,23 @@ impl BagArgs {
     }
 }
 
-/// Loads and validates every file (in order), refusing an output path among them.
+/// Loads and validates every file (in order, with a progress bar), refusing an output path
+/// among them.
 fn load_all(files: &[PathBuf], out: &std::path::Path) -> Result<Vec<(String, mesh_fem::TriMesh)>, CliError> {
-    files
+    for f in files {
+        check_output(f, out)?;
+    }
+    let bar = super::progress::bar(files.len(), "reading shapes");
+    let meshes = files
         .iter()
         .map(|f| {
-            check_output(f, out)?;
-            let mesh = load_usable(&MeshArgs {
-                mesh: f.clone(),
-                triangulate: false,
-            })?;
-            Ok((f.display().to_string(), mesh))
+            let mesh = load_usable(&MeshArgs::new(f.clone()));
+            bar.inc(&f.display().to_string());
+            Ok((f.display().to_string(), mesh?))
         })
-        .collect()
+        .collect::<Result<Vec<_>, CliError>>()?;
+    bar.done();
+    Ok(meshes)
 }
 
 /// `wfem retrieval vocab|build|query`.
@@ -275,6 +282,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             training,
         } => {
             let mut settings = RetrievalSettings::default();
+            super::limits::retrieval_sizes(descriptor.eigs, training.words)?;
             descriptor.apply(&mut settings)?;
             training.apply(&mut settings);
             let meshes = load_all(files, path)?;
@@ -307,6 +315,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                     Some(JsonFile::new(v).load_vocabulary()?)
                 }
                 None => {
+                    super::limits::retrieval_sizes(descriptor.eigs, training.words)?;
                     descriptor.apply(&mut settings)?;
                     training.apply(&mut settings);
                     None

@@ -374,6 +374,8 @@ const CASES: &[Case] = &[
             notes: &[],
             problems: &[
                 "NonManifoldEdge { edge: [0, 1], n_faces: 3 }",
+                // Issue #16: the needle itself is now reported (a warning naming the face).
+                "NeedleFace { face: 4, vertices: [0, 1, 4], cotangent: 353553390.59327376 }",
                 "Boundary { loops: 1, edges: 2 }",
             ],
             validation: Verdict::Ok,

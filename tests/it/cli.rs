@@ -124,7 +124,8 @@ fn heat_writes_every_format_and_never_touches_the_input() {
     );
     assert_eq!(std::fs::read(&mesh).unwrap(), before, "the input mesh was modified");
 
-    // Writing over the input is refused.
+    // Writing over the input is refused (an .off input is not even an output format; a .ply
+    // input is, and is still refused).
     let o = wfem(&[
         "heat",
         mesh.to_str().unwrap(),
@@ -136,8 +137,28 @@ fn heat_writes_every_format_and_never_touches_the_input() {
         mesh.to_str().unwrap(),
     ]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("never writes over its input"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("output format is chosen by the extension"),
+        "{}",
+        stderr(&o)
+    );
     assert_eq!(std::fs::read(&mesh).unwrap(), before);
+    let ply = dir.path().join("sphere.ply");
+    mesh_fem::io::write_mesh(&ply, &mesh_fem::generate::icosphere(2)).unwrap();
+    let ply_before = std::fs::read(&ply).unwrap();
+    let o = wfem(&[
+        "heat",
+        ply.to_str().unwrap(),
+        "--t",
+        "0.1",
+        "--source",
+        "0",
+        "-o",
+        ply.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("never writes over its input"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&ply).unwrap(), ply_before);
 }
 
 #[test]
@@ -179,7 +200,7 @@ fn heat_with_several_times_and_a_field_file() {
         out.to_str().unwrap(),
     ]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("t = -1"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--t -1 is out of range"), "{}", stderr(&o));
     let o = wfem(&[
         "heat",
         mesh.to_str().unwrap(),

@@ -75,10 +75,23 @@ fn approx_writes_components_and_prints_the_report() {
         .map(|l| l.split_whitespace().map(String::from).collect())
         .collect();
     assert_eq!(rows.len(), 4, "{text}");
-    // The CSV has one column per field: f, glob_1..4, loc_1..4.
+    // The CSV has one column per field: f, f_glob_t<t> (4 scales), f_loc_t<t> (4 scales), each
+    // named with its t.
     let csv = std::fs::read_to_string(&out).unwrap();
     let lines: Vec<&str> = csv.lines().filter(|l| !l.starts_with('#')).collect();
-    assert!(lines[0].starts_with("f,glob_1,"), "header {}", lines[0]);
+    let header: Vec<&str> = lines[0].split(',').collect();
+    assert_eq!(header.len(), 9, "header {}", lines[0]);
+    assert!(
+        header[1].starts_with("f_glob_t") && header[5].starts_with("f_loc_t"),
+        "header {}",
+        lines[0]
+    );
+    for (s, row) in rows.iter().enumerate() {
+        // The t in the name is the t of the report's row (4 significant digits).
+        let named: f64 = header[1 + s]["f_glob_t".len()..].parse().unwrap();
+        let printed: f64 = row[1].parse().unwrap();
+        assert!((named - printed).abs() <= 1e-3 * printed, "{named} vs {printed}");
+    }
     let header_skip = 1;
     let data: Vec<Vec<f64>> = lines[header_skip..]
         .iter()

@@ -37,7 +37,11 @@ pub fn run_variant(
     let tosca = shrec_bench::eval::tosca_eval(meshes_dir, settings, cache, seeds)?;
     for (label, r) in [("76", &tosca.inside), ("outside", &tosca.outside)] {
         let per: Vec<String> = r.per_family.iter().map(|(f, v)| format!("{f} {v:.3}")).collect();
-        println!("[{name}] TOSCA-76 vocab {label:>7}: mAP {:.4} | {}", r.map, per.join(", "));
+        println!(
+            "[{name}] TOSCA-76 vocab {label:>7}: mAP {:.4} | {}",
+            r.map,
+            per.join(", ")
+        );
     }
     if seeds > 0 {
         let stat = |v: Vec<f64>| {
@@ -76,8 +80,14 @@ pub fn run_variant(
             let r = shrec_protocol(&db, &files, Some((&cl, &families)))?;
             let all = |_: &protocol::QueryResult| true;
             println!("[{name}] SHREC ({label:>7} vocab) cum ≤s: {}", f3(r.cumulative(all)));
-            println!("[{name}] SHREC ({label:>7} vocab) full db: {}", f3(r.cumulative_full(all)));
-            println!("[{name}] SHREC ({label:>7} vocab) clean:   {}", f3(r.cumulative_clean(all)));
+            println!(
+                "[{name}] SHREC ({label:>7} vocab) full db: {}",
+                f3(r.cumulative_full(all))
+            );
+            println!(
+                "[{name}] SHREC ({label:>7} vocab) clean:   {}",
+                f3(r.cumulative_clean(all))
+            );
             if label == "nulls" {
                 for t in r.transforms() {
                     println!(

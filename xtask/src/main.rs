@@ -1,7 +1,7 @@
 //! Project chores: `cargo xtask <command>`.
 use clap::Parser;
-use std::path::PathBuf;
 use shrec_bench::synth::{generate, Class, GenerateOptions, DEFAULT_SHAPES};
+use std::path::PathBuf;
 
 #[derive(Parser)]
 #[command(name = "xtask", about = "wfem project chores")]
@@ -101,6 +101,20 @@ enum Cmd {
         /// Output folder (BENCHMARKS.md and bench/*.svg).
         #[arg(long, default_value = "docs")]
         out: PathBuf,
+    },
+    /// The whole test suite, Rust and Python (`cargo test-all`, README's test command):
+    /// `cargo test --workspace --locked`, then the `wfem` Python package built into a venv
+    /// under the target directory and its pytest suite.
+    TestAll {
+        /// Only the Python suite.
+        #[arg(long, conflicts_with = "rust_only")]
+        python_only: bool,
+        /// Only the Rust suite.
+        #[arg(long)]
+        rust_only: bool,
+        /// Extra pytest arguments (after `--`).
+        #[arg(last = true)]
+        pytest_args: Vec<String>,
     },
 }
 
@@ -248,6 +262,15 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             }
             println!("benchmark report finished in {:.0} s", report.total_seconds);
         }
+        Cmd::TestAll {
+            python_only,
+            rust_only,
+            pytest_args,
+        } => xtask::test_all::run(&xtask::test_all::TestAllOptions {
+            python_only,
+            rust_only,
+            pytest_args,
+        })?,
     }
     Ok(())
 }

@@ -42,4 +42,4 @@ pub use mesh::TriMesh;
 pub use mtx::{read_matrix_market, write_matrix_market, write_operators};
 pub use operators::{assemble, AssemblyParams, FemOperators, LumpedMassKind};
 pub use stats::{stats, MeshStats};
-pub use validate::{repair, validate, Problem, RepairOptions, RepairReport, Severity, ValidationReport};
+pub use validate::{repair, validate, Problem, RepairOptions, RepairReport, Severity, ValidationReport, NEEDLE_ANGLE};

@@ -22,11 +22,10 @@
 //! # Ok::<(), mesh_fem::MeshError>(())
 //! ```
 
+use crate::io::AtomicSet;
 use crate::{FemOperators, MeshError};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
-use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::path::Path;
 
 fn io_err(path: &Path, source: std::io::Error) -> MeshError {
     MeshError::Io {
@@ -40,81 +39,6 @@ fn mm_err(path: &Path, message: impl Into<String>) -> MeshError {
         path: path.to_path_buf(),
         message: message.into(),
     }
-}
-
-/// Writes a staged copy of `path`: a new temporary file `.NAME.tmp-PID-N` in the same folder,
-/// filled by `fill`, flushed and fsynced. On any failure the temporary file is removed and
-/// the error names `path` (the file the user asked for, not the temporary one).
-fn stage(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<PathBuf, MeshError> {
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let dir = parent_dir(path);
-    let name = path
-        .file_name()
-        .ok_or_else(|| mm_err(path, "the path names no file"))?
-        .to_string_lossy()
-        .into_owned();
-    let tmp = dir.join(format!(
-        ".{name}.tmp-{}-{}",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let file = std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .map_err(|e| io_err(path, e))?;
-    let result = (|| -> std::io::Result<()> {
-        let mut w = std::io::BufWriter::new(file);
-        fill(&mut w)?;
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()
-    })();
-    match result {
-        Ok(()) => Ok(tmp),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(io_err(path, e))
-        }
-    }
-}
-
-fn parent_dir(path: &Path) -> PathBuf {
-    match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    }
-}
-
-/// Renames every staged file onto its target, after checking that no target is a directory
-/// (the only common reason for a rename to fail once the data is written), so that a set of
-/// files is replaced as a whole or not at all; the staged files are removed on failure.
-fn commit(staged: &[(PathBuf, PathBuf)]) -> Result<(), MeshError> {
-    let cleanup = || {
-        for (tmp, _) in staged {
-            let _ = std::fs::remove_file(tmp);
-        }
-    };
-    if let Some((_, target)) = staged.iter().find(|(_, target)| target.is_dir()) {
-        cleanup();
-        return Err(io_err(
-            target,
-            std::io::Error::new(std::io::ErrorKind::IsADirectory, "the output path is a directory"),
-        ));
-    }
-    for (tmp, target) in staged {
-        if let Err(e) = std::fs::rename(tmp, target) {
-            cleanup();
-            return Err(io_err(target, e));
-        }
-    }
-    // Make the renames durable where the platform allows syncing a directory.
-    #[cfg(unix)]
-    for (_, target) in staged {
-        if let Ok(d) = std::fs::File::open(parent_dir(target)) {
-            let _ = d.sync_all();
-        }
-    }
-    Ok(())
 }
 
 /// Writes `matrix` to `path` in Matrix Market coordinate format.
@@ -133,13 +57,19 @@ pub fn write_matrix_market(
     matrix: &SparseColMat<usize, f64>,
     symmetric: bool,
 ) -> Result<(), MeshError> {
-    let path = path.as_ref();
-    let tmp = stage_matrix_market(path, matrix, symmetric)?;
-    commit(&[(tmp, path.to_path_buf())])
+    let mut set = AtomicSet::new();
+    stage_matrix_market(&mut set, path.as_ref(), matrix, symmetric)?;
+    set.commit()
 }
 
-/// The checks and the staged file of [`write_matrix_market`] (not yet renamed onto `path`).
-fn stage_matrix_market(path: &Path, matrix: &SparseColMat<usize, f64>, symmetric: bool) -> Result<PathBuf, MeshError> {
+/// The checks of [`write_matrix_market`], and its file staged in `set` (not yet renamed onto
+/// `path`).
+fn stage_matrix_market(
+    set: &mut AtomicSet,
+    path: &Path,
+    matrix: &SparseColMat<usize, f64>,
+    symmetric: bool,
+) -> Result<(), MeshError> {
     let entries = sorted_entries(matrix);
     if let Some(&(i, j, v)) = entries.iter().find(|e| !e.2.is_finite()) {
         return Err(mm_err(
@@ -151,7 +81,7 @@ fn stage_matrix_market(path: &Path, matrix: &SparseColMat<usize, f64>, symmetric
         check_symmetric(path, matrix.nrows(), matrix.ncols(), &entries)?;
     }
     let kept: Vec<&(usize, usize, f64)> = entries.iter().filter(|&&(i, j, _)| !symmetric || i >= j).collect();
-    stage(path, |w| {
+    set.stage(path, |w| {
         writeln!(
             w,
             "%%MatrixMarket matrix coordinate real {}",
@@ -429,24 +359,15 @@ pub fn write_operators(dir: impl AsRef<Path>, ops: &FemOperators) -> Result<(), 
         .map_err(|e| mm_err(dir, format!("cannot build the lumped mass: {e:?}")))?;
     // All three files are staged first and renamed together, so a failure (disk full, a
     // target that is a directory, …) leaves the folder as it was: no partial set of files.
-    let mut staged: Vec<(PathBuf, PathBuf)> = Vec::with_capacity(3);
+    let mut set = AtomicSet::new();
     for (name, matrix) in [
         ("stiffness.mtx", &ops.stiffness),
         ("mass.mtx", &ops.mass),
         ("lumped_mass.mtx", &d),
     ] {
-        let target = dir.join(name);
-        match stage_matrix_market(&target, matrix, true) {
-            Ok(tmp) => staged.push((tmp, target)),
-            Err(e) => {
-                for (tmp, _) in &staged {
-                    let _ = std::fs::remove_file(tmp);
-                }
-                return Err(e);
-            }
-        }
+        stage_matrix_market(&mut set, &dir.join(name), matrix, true)?;
     }
-    commit(&staged)
+    set.commit()
 }
 
 /// Converts a faer sparse matrix to `nalgebra_sparse::CscMatrix` (same entries; row indices

@@ -68,6 +68,23 @@ pub fn is_degenerate_triangle(corners: [[f64; 3]; 3]) -> bool {
     !(area > DEGENERATE_AREA_RATIO * longest_sq && true_area >= f64::MIN_POSITIVE)
 }
 
+/// A face with an angle closer than this (radians) to 0 or π is reported as a
+/// [`Problem::NeedleFace`] (|cot| > 10⁴).
+pub const NEEDLE_ANGLE: f64 = 1e-4;
+
+/// The largest |cot| of the three angles of a triangle (scale invariant; ∞ for a degenerate
+/// one).
+fn max_abs_cotangent(corners: [[f64; 3]; 3]) -> f64 {
+    let Some(([d01, d12, d20], _)) = scaled_edges(corners) else {
+        return f64::INFINITY;
+    };
+    let double_area = norm(cross(d01, neg(d20)));
+    [(d01, neg(d20)), (d12, neg(d01)), (d20, neg(d12))]
+        .iter()
+        .map(|&(e1, e2)| (dot(e1, e2) / double_area).abs())
+        .fold(0.0, f64::max)
+}
+
 /// How serious a [`Problem`] is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 pub enum Severity {
@@ -135,6 +152,20 @@ pub enum Problem {
     NonOrientable {
         /// The edge's vertices, ascending.
         edge: [u32; 2],
+    },
+    /// A needle or cap triangle: one of its angles is below [`NEEDLE_ANGLE`] from 0 or π, so
+    /// a cotangent weight of L exceeds 1/NEEDLE_ANGLE in magnitude. The operators still
+    /// assemble, but rounding errors in L grow with these weights: the heat kernel solvers
+    /// measure the resulting loss of accuracy (`wfem_heat::Operators::conditioning`) and refuse
+    /// when it is too large. Fix: drop or collapse such faces, or use an intrinsic Delaunay
+    /// Laplacian.
+    NeedleFace {
+        /// Face index.
+        face: usize,
+        /// Its vertex indices.
+        vertices: [u32; 3],
+        /// The largest |cot| of its angles.
+        cotangent: f64,
     },
     /// The mesh has several connected components.
     SeveralComponents {
@@ -210,6 +241,14 @@ impl fmt::Display for Problem {
             Problem::NonOrientable { edge } => {
                 write!(f, "the component containing edge {edge:?} is not orientable")
             }
+            Problem::NeedleFace {
+                face,
+                vertices,
+                cotangent,
+            } => write!(
+                f,
+                "face {face} {vertices:?} is a needle or cap (|cot| of an angle = {cotangent:.1e})"
+            ),
             Problem::SeveralComponents { count } => write!(f, "{count} connected components"),
             Problem::Boundary { loops, edges } => {
                 write!(
@@ -242,6 +281,8 @@ pub struct ProblemCounts {
     pub inconsistently_oriented_edges: usize,
     /// Components that cannot be oriented.
     pub non_orientable_components: usize,
+    /// Needle or cap faces (an angle within [`NEEDLE_ANGLE`] of 0 or π).
+    pub needle_faces: usize,
     /// Connected components (1 for a connected mesh; not a problem by itself).
     pub components: usize,
     /// Boundary loops (0 for a closed mesh).
@@ -340,6 +381,9 @@ impl ValidationReport {
                     "; L and B do not depend on it; fix: RepairOptions::orient_faces"
                 }
                 Problem::NonOrientable { .. } => "; L and B do not depend on it, but no consistent normals exist",
+                Problem::NeedleFace { .. } => {
+                    "; rounding in L grows with |cot|: drop or collapse such faces if the heat kernel refuses them"
+                }
                 Problem::SeveralComponents { .. } => "; L has one zero eigenvalue per component",
                 Problem::Boundary { .. } => "; natural (Neumann) boundary conditions apply",
             };
@@ -407,6 +451,22 @@ pub fn validate(mesh: &TriMesh) -> ValidationReport {
     for &v in &topo.non_manifold_vertices {
         counts.non_manifold_vertices += 1;
         problems.push(Problem::NonManifoldVertex { vertex: v as usize });
+    }
+    let needles: Vec<(usize, f64)> = (0..faces.len())
+        .into_par_iter()
+        .filter(|&f| !degenerate[f])
+        .filter_map(|f| {
+            let c = max_abs_cotangent(mesh.corners(f));
+            (c > 1.0 / NEEDLE_ANGLE).then_some((f, c))
+        })
+        .collect();
+    for (face, cotangent) in needles {
+        counts.needle_faces += 1;
+        problems.push(Problem::NeedleFace {
+            face,
+            vertices: faces[face],
+            cotangent,
+        });
     }
     for (face, first) in duplicate_faces(faces) {
         counts.duplicate_faces += 1;

@@ -15,12 +15,12 @@
 
 use crate::check;
 use crate::kmeans::{kmeans, nearest_center, squared_distance, KmeansParams};
-use mesh_fem::rng::SplitMix64;
 use crate::RetrievalError;
 use faer::linalg::matmul::matmul;
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatRef, Par};
+use mesh_fem::rng::SplitMix64;
 use rayon::prelude::*;
 
 /// Options of [`Vocabulary::train`].

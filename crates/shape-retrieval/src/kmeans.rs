@@ -6,8 +6,8 @@
 
 use crate::check;
 use crate::RetrievalError;
-use mesh_fem::rng::SplitMix64;
 use faer::{Mat, MatRef};
+use mesh_fem::rng::SplitMix64;
 use rayon::prelude::*;
 
 /// Options of [`kmeans`].

@@ -37,18 +37,11 @@ pub mod standardize;
 pub mod store;
 
 pub use bof::{vertex_areas, Assignment, Vocabulary, VocabularyParams};
-pub use distance::{chi_squared_distance, l1_distance, pairwise_distances, pairwise_l1, BagDistance};
-pub use model::{
-    BagSettings, DescriptorSettings, DescriptorSpec, GlobalSignature, IndexEntry, Ranked, RetrievalIndex,
-    RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams, VertexWeights,
-    VocabularyModel,
-};
-pub use standardize::Standardizer;
-pub use store::{IndexStore, JsonFile, VocabularyStore};
 pub use descriptor::{
     dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, ShapeDescriptors,
     DEFAULT_EIGENPAIRS,
 };
+pub use distance::{chi_squared_distance, l1_distance, pairwise_distances, pairwise_l1, BagDistance};
 pub use error::RetrievalError;
 pub use features::{descriptor_distance, local_maxima, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
 pub use hks::{
@@ -56,5 +49,12 @@ pub use hks::{
     TimeSampling,
 };
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
+pub use model::{
+    BagSettings, DescriptorSettings, DescriptorSpec, GlobalSignature, IndexEntry, Ranked, RetrievalIndex,
+    RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams, VertexWeights,
+    VocabularyModel,
+};
 pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
 pub use sihks::{scale_invariant_hks, SihksParams, TimeUnit};
+pub use standardize::Standardizer;
+pub use store::{IndexStore, JsonFile, VocabularyStore};

@@ -47,7 +47,10 @@ impl Standardizer {
             let s = var.sqrt();
             // A spread below round-off of the mean is no spread at all.
             if !(s > 0.0 && s > 1e-12 * mu.abs()) {
-                return Err(RetrievalError::ConstantDimension { dimension: j, value: mu });
+                return Err(RetrievalError::ConstantDimension {
+                    dimension: j,
+                    value: mu,
+                });
             }
             mean[j] = mu;
             std[j] = s;

@@ -85,7 +85,9 @@ impl JsonFile {
     }
 
     fn read<T: for<'de> Deserialize<'de>>(&self, format: &str) -> Result<T, RetrievalError> {
-        let text = std::fs::read_to_string(&self.path).map_err(|e| self.storage(e.to_string()))?;
+        // Regular files only: a FIFO or device would block or never end.
+        let bytes = mesh_fem::io::read_regular_file(&self.path).map_err(|e| self.storage(e.to_string()))?;
+        let text = String::from_utf8(bytes).map_err(|_| self.storage("not UTF-8 text"))?;
         // Check the tag first, so that another JSON file gets a clear message.
         let header: Header =
             serde_json::from_str(&text).map_err(|e| self.storage(format!("not a {format} file: {e}")))?;

@@ -10,9 +10,9 @@
 //! through a complex sparse LU of tL − zB), at most 60 steps each: the estimates are lower
 //! bounds of max and upper bounds of min that are exact once the Krylov space is invariant.
 
-use crate::factor::SeqLu;
+use crate::factor::{lu_symbolic, SeqLu};
 use crate::iterative::{PrecondFactor, Preconditioner, PreconditionerShift};
-use crate::lanczos::tridiagonal_eigen;
+use crate::lanczos::largest_ritz_value;
 use crate::solver::{check_time, ShiftedSolver};
 use crate::SolveError;
 use faer::c64;
@@ -40,46 +40,20 @@ pub struct ConditionReport {
 const MAX_STEPS: usize = 60;
 
 /// Largest eigenvalue of an operator S that is self-adjoint and positive in the M-inner
-/// product, by Lanczos with full reorthogonalisation.
+/// product: [`largest_ritz_value`] run for (at most) `MAX_STEPS` steps from a deterministic
+/// start vector (a lower bound, exact once the Krylov space is invariant).
 fn lanczos_max(
     dim: usize,
-    mut apply_s: impl FnMut(&[f64]) -> Result<Vec<f64>, SolveError>,
-    apply_m: &dyn Fn(&[f64]) -> Vec<f64>,
+    apply_s: impl Fn(&[f64]) -> Result<Vec<f64>, SolveError> + Sync,
+    apply_m: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
 ) -> Result<f64, SolveError> {
-    let steps = dim.min(MAX_STEPS);
-    let dotm = |a: &[f64], mb: &[f64]| a.iter().zip(mb).map(|(x, y)| x * y).sum::<f64>();
     // Deterministic, non-special start vector.
-    let mut q: Vec<f64> = (0..dim)
+    let start: Vec<f64> = (0..dim)
         .map(|i| 1.0 + ((i * 2654435761) % 1000) as f64 / 1000.0)
         .collect();
-    let mq = apply_m(&q);
-    let nrm = dotm(&q, &mq).sqrt();
-    q.iter_mut().for_each(|v| *v /= nrm);
-    let mut basis: Vec<Vec<f64>> = vec![q];
-    let mut mbasis: Vec<Vec<f64>> = vec![mq.iter().map(|v| v / nrm).collect()];
-    let mut alpha = Vec::new();
-    let mut beta: Vec<f64> = Vec::new();
-    for k in 0..steps {
-        let mut w = apply_s(&basis[k])?;
-        let a = dotm(&w, &mbasis[k]);
-        alpha.push(a);
-        for _ in 0..2 {
-            for (qi, mqi) in basis.iter().zip(&mbasis) {
-                let h = dotm(&w, mqi);
-                w.iter_mut().zip(qi).for_each(|(x, y)| *x -= h * y);
-            }
-        }
-        let mw = apply_m(&w);
-        let b = dotm(&w, &mw).max(0.0).sqrt();
-        if k + 1 == steps || b <= 1e-14 * a.abs().max(f64::MIN_POSITIVE) {
-            break;
-        }
-        beta.push(b);
-        basis.push(w.iter().map(|v| v / b).collect());
-        mbasis.push(mw.iter().map(|v| v / b).collect());
-    }
-    let (theta, _) = tridiagonal_eigen(&alpha, &beta)?;
-    Ok(theta.into_iter().fold(f64::MIN, f64::max))
+    let apply = |v: &[f64], _: &[f64]| apply_s(v);
+    let (theta, _, _) = largest_ritz_value(&start, &apply, apply_m, 0.0, dim.min(MAX_STEPS))?;
+    Ok(theta)
 }
 
 impl ShiftedSolver {
@@ -104,8 +78,8 @@ impl ShiftedSolver {
                 reason: "must be finite and > 0",
             });
         }
-        let ops = self.ops();
-        let n = ops.n;
+        let ops = &**self.pair();
+        let n = ops.n();
         let (p, q) = (pole.re, pole.im);
         let a2 = |x: &[f64]| -> Vec<f64> {
             let (mut lu, mut bu, mut lv, mut bv) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
@@ -118,7 +92,11 @@ impl ShiftedSolver {
             }
             y
         };
-        let lu = SeqLu::new(&self.lu_symbolic()?, ops.shifted(t, pole).as_ref())
+        let symbolic = lu_symbolic(ops.pattern()).map_err(|detail| SolveError::Factorization {
+            what: "symbolic LU",
+            detail,
+        })?;
+        let lu = SeqLu::new(&symbolic, ops.shifted(t, pole).as_ref())
             .map_err(|_| SolveError::SingularShiftedMatrix { t, pole })?;
         let a2_inv = |y: &[f64]| -> Result<Vec<f64>, SolveError> {
             // A₂[u; v] = [y₁; y₂]  ⇔  (tL − zB)(u + iv) = y₁ − i y₂.
@@ -143,7 +121,6 @@ impl ShiftedSolver {
 
         let precond = PrecondFactor::build(
             ops,
-            self.llt_symbolic(),
             Preconditioner::ShiftedCholesky(PreconditionerShift::Shared(s)),
             t,
             s,

@@ -1,7 +1,7 @@
 use faer::c64;
 
 /// Failures of the shifted solvers.
-#[derive(Debug, thiserror::Error)]
+#[derive(Debug, Clone, thiserror::Error)]
 #[non_exhaustive]
 pub enum SolveError {
     /// Matrix or vector dimensions do not agree.
@@ -85,9 +85,10 @@ pub enum SolveError {
         /// faer's message.
         detail: String,
     },
-    /// L + δB is not positive definite for a tiny δ > 0: L has a negative generalized eigenvalue
-    /// (wfem's L is positive semidefinite; libigl's `cotmatrix` has the opposite sign).
-    #[error("stiffness matrix L is not positive semidefinite: Cholesky of L + {delta:e}·B failed (did you pass −L?)")]
+    /// L + δ·diag(L) is not positive definite for a tiny relative δ > 0: L has a direction of
+    /// negative curvature (wfem's L is positive semidefinite with a positive diagonal; libigl's
+    /// `cotmatrix` has the opposite sign).
+    #[error("stiffness matrix L is not positive semidefinite: Cholesky of L + {delta:e}·diag(L) failed (did you pass −L, e.g. libigl's cotmatrix?)")]
     StiffnessIndefinite {
         /// The regularising shift δ used in the test.
         delta: f64,

@@ -68,6 +68,30 @@ impl CholeskyPattern {
         Ok(Self::from_symbolic(symbolic))
     }
 
+    /// Analyses the pattern with a supernodal factor forced (AMD ordering): what the
+    /// complex-symmetric LDLᵀ needs, so that it and every real Cholesky share one analysis.
+    ///
+    /// # Errors
+    /// [`SolveError::Factorization`] if faer's symbolic analysis fails.
+    pub fn supernodal(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result<Self, SolveError> {
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, params)
+            .map(Arc::new)
+            .map_err(|e| SolveError::Factorization {
+                what: "symbolic Cholesky",
+                detail: format!("{e:?}"),
+            })?;
+        Ok(Self::from_symbolic(symbolic))
+    }
+
+    /// The symbolic analysis.
+    pub(crate) fn symbolic(&self) -> &CholeskySymbolic {
+        &self.symbolic
+    }
+
     /// Wraps an existing analysis (and plans its tree-parallel solve).
     pub(crate) fn from_symbolic(symbolic: CholeskySymbolic) -> Self {
         let plan = match symbolic.raw() {
@@ -93,6 +117,19 @@ impl CholeskyPattern {
         factor.plan = self.plan.clone();
         Ok(factor)
     }
+
+    /// Sequential factorization whose solves are sequential too: for the many small
+    /// factorizations made inside a parallel loop (one per pole), which parallelise over poles
+    /// and right-hand sides instead.
+    ///
+    /// # Errors
+    /// As [`Self::factor`].
+    pub fn factor_sequential(&self, a: SparseColMatRef<'_, usize, f64>) -> Result<SpdFactor, SolveError> {
+        SpdFactor::with_par(&self.symbolic, a, Par::Seq).map_err(|detail| SolveError::Factorization {
+            what: "numeric Cholesky",
+            detail,
+        })
+    }
 }
 
 /// Real sparse Cholesky factor `A = PᵀRRᵀP` of a symmetric positive definite matrix.
@@ -105,16 +142,7 @@ pub struct SpdFactor {
     plan: Option<Arc<SolvePlan>>,
 }
 
-/// The sequential factor used inside one pole.
-pub(crate) type SeqLlt = SpdFactor;
-
 impl SpdFactor {
-    /// Sequential factorization; fails (with faer's message) when the matrix is not
-    /// numerically positive definite.
-    pub(crate) fn new(symbolic: &CholeskySymbolic, a: SparseColMatRef<'_, usize, f64>) -> Result<Self, String> {
-        Self::with_par(symbolic, a, Par::Seq)
-    }
-
     fn with_par(symbolic: &CholeskySymbolic, a: SparseColMatRef<'_, usize, f64>, par: Par) -> Result<Self, String> {
         let mut values = vec![0.0; symbolic.len_val()];
         let mut buf = MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))

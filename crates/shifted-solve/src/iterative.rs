@@ -13,9 +13,7 @@
 //! preconditioned spectrum is ±|tλ − z|/(tλ + s), so with s = |z| it lies in ±[~0.5, 1] and the
 //! iteration count does not depend on the mesh size.
 
-use crate::factor::{CholeskySymbolic, SeqLlt};
-use crate::ops::PairOperators;
-use crate::SolveError;
+use crate::{OperatorPair, SolveError, SpdFactor};
 use faer::MatMut;
 
 /// Preconditioner of the MINRES / CG backend.
@@ -93,30 +91,27 @@ impl MinresParams {
 /// A factored SPD preconditioner acting on n-vectors (applied blockwise to 2n-vectors).
 #[derive(Debug)]
 pub(crate) enum PrecondFactor {
-    Cholesky(SeqLlt),
+    Cholesky(SpdFactor),
     Jacobi(Vec<f64>),
     Identity,
 }
 
 impl PrecondFactor {
-    /// Builds the preconditioner for shift s (P = tL + sB).
-    pub fn build(
-        ops: &PairOperators,
-        llt_symbolic: &CholeskySymbolic,
-        kind: Preconditioner,
-        t: f64,
-        s: f64,
-    ) -> Result<Self, SolveError> {
+    /// Builds the preconditioner for shift s (P = tL + sM), sequential inside one pole.
+    pub fn build(pair: &OperatorPair, kind: Preconditioner, t: f64, s: f64) -> Result<Self, SolveError> {
         Ok(match kind {
             Preconditioner::ShiftedCholesky(_) => {
-                let p = ops.real_combination(t, s);
-                let llt = SeqLlt::new(llt_symbolic, p.as_ref()).map_err(|detail| SolveError::Factorization {
-                    what: "Cholesky of the preconditioner tL + sB",
-                    detail,
-                })?;
+                let p = pair.combination(t, s);
+                let llt = pair
+                    .cholesky()?
+                    .factor_sequential(p.as_ref())
+                    .map_err(|e| SolveError::Factorization {
+                        what: "Cholesky of the preconditioner tL + sM",
+                        detail: e.to_string(),
+                    })?;
                 PrecondFactor::Cholesky(llt)
             }
-            Preconditioner::Jacobi => PrecondFactor::Jacobi(ops.diagonal(t, s).iter().map(|d| 1.0 / d).collect()),
+            Preconditioner::Jacobi => PrecondFactor::Jacobi(pair.diagonal(t, s).iter().map(|d| 1.0 / d).collect()),
             Preconditioner::None => PrecondFactor::Identity,
         })
     }

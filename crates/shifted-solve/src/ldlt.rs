@@ -25,12 +25,9 @@ use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::triangular_solve::{solve_unit_lower_triangular_in_place, solve_unit_upper_triangular_in_place};
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
-};
-use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use faer::sparse::SymbolicSparseColMatRef;
-use faer::{c64, Accum, Mat, MatMut, MatRef, Par, Side};
+use faer::{c64, Accum, Mat, MatMut, MatRef, Par};
 
 const ZERO: c64 = c64 { re: 0.0, im: 0.0 };
 const ONE: c64 = c64 { re: 1.0, im: 0.0 };
@@ -67,18 +64,8 @@ pub(crate) struct LdltFactor {
 }
 
 impl LdltSymbolic {
-    /// The supernodal symbolic Cholesky (AMD) this factorization needs; the real Cholesky of the
-    /// same pattern can share it.
-    pub fn cholesky_analysis(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result<SymbolicCholesky<usize>, String> {
-        let params = CholeskySymbolicParams {
-            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-            ..Default::default()
-        };
-        factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, params).map_err(|e| format!("{e:?}"))
-    }
-
     /// Builds the factor layout from a pattern given with both triangles (sorted columns) and
-    /// its supernodal analysis from [`Self::cholesky_analysis`].
+    /// its supernodal analysis ([`crate::CholeskyPattern::supernodal`]).
     pub fn new(pattern: SymbolicSparseColMatRef<'_, usize>, sym: &SymbolicCholesky<usize>) -> Result<Self, String> {
         let n = pattern.nrows();
         let perm: Vec<usize> = match sym.perm() {
@@ -455,9 +442,9 @@ mod tests {
         let mesh = mesh_fem::generate::icosphere(4);
         let ops = mesh_fem::assemble(&mesh, &mesh_fem::AssemblyParams::default()).unwrap();
         let (l, b) = (ops.stiffness, ops.mass);
-        let pair = crate::ops::PairOperators::new(l.as_ref(), b.as_ref()).unwrap();
-        let analysis = LdltSymbolic::cholesky_analysis(pair.symbolic.as_ref()).unwrap();
-        let sym = std::sync::Arc::new(LdltSymbolic::new(pair.symbolic.as_ref(), &analysis).unwrap());
+        let pair = crate::OperatorPair::new(l.as_ref(), b.as_ref()).unwrap();
+        let analysis = pair.cholesky().unwrap().symbolic();
+        let sym = std::sync::Arc::new(LdltSymbolic::new(pair.pattern(), analysis).unwrap());
         let widest = (0..sym.n_supernodes())
             .map(|s| sym.begin[s + 1] - sym.begin[s])
             .max()
@@ -466,7 +453,7 @@ mod tests {
         let (t, z) = (0.3, c64::new(10.844, 19.277));
         let a = pair.shifted(t, z);
         let f = LdltFactor::new(&sym, a.val()).unwrap();
-        let n = pair.n;
+        let n = pair.n();
         let mut s = 5u64;
         let rhs = Mat::<c64>::from_fn(n, 2, |_, _| c64::new(lcg(&mut s), lcg(&mut s)));
         let mut x = rhs.clone();

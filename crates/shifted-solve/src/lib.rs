@@ -14,12 +14,23 @@
 //! sign convention; libigl's `cotmatrix` is −L) and symmetric positive definite B (the mass),
 //! as faer `SparseColMat<usize, f64>`, possibly with different sparsity patterns.
 //!
-//! * [`ShiftedSolver`]: validates (L, B), owns them on one shared pattern, and applies
-//!   r_n(tB⁻¹L) or the resolvent sum to n × k right-hand sides, with backends
-//!   [`Backend::DirectLdlt`] (complex-symmetric supernodal LDLᵀ without pivoting, the fastest;
-//!   module `ldlt`), [`Backend::DirectLu`] (pivoted complex sparse LU) and [`Backend::Minres`]
-//!   (the paper's preconditioned MINRES on the real 2n×2n form).
+//! * [`OperatorPair`]: the validated pair (L, M) on one shared pattern with its one symbolic
+//!   Cholesky analysis — the context every solver and method works on (validated once).
+//! * [`ShiftedSolver`]: a [`Backend`] prepared on a pair; applies r_n(tM⁻¹L) or the resolvent
+//!   sum to n × k right-hand sides. Backends (one module each under [`backend`]):
+//!   [`Backend::DirectLdlt`] (complex-symmetric supernodal LDLᵀ without pivoting, the default),
+//!   [`Backend::DirectLu`] (pivoted complex sparse LU), [`Backend::Minres`] (the paper's
+//!   preconditioned MINRES on the real 2n×2n form) and [`Backend::MultiShift`] (every pole in
+//!   one shift-and-invert Lanczos space, one real Cholesky per t).
 //! * [`RationalFactors`]: all poles of one t factored once, reused for many right-hand sides.
+//! * [`lanczos_function`] with [`KrylovParams`]: h(S)u for S = (M + γtL)⁻¹M, the engine of
+//!   wfem-heat's fast exact path and of the multi-shift backend.
+//! * [`largest_eigenpairs`] with [`BlockLanczosParams`]: thick-restart block Lanczos with
+//!   locking for the largest eigenpairs of an M-self-adjoint operator — with S = (L − σM)⁻¹M the
+//!   smallest pairs of `L x = λ M x`, the engine of wfem-heat's spectral path.
+//! * [`symmetric_eigen`]: the one scale-robust dense symmetric eigensolver of the Lanczos
+//!   methods and of wfem-heat's dense reference.
+//! * [`rng`]: the workspace's one seeded generator.
 //! * [`ConditionReport`]: 2-norm condition numbers of tL − zB and of the preconditioned
 //!   operator (paper Fig. 2c,d).
 
@@ -28,25 +39,38 @@
 // justified ones carry `#[allow]` and an `// invariant:` comment (checked by tests/no_unwrap.rs).
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod backend;
 mod condition;
+mod eigen;
 mod error;
 mod factor;
+mod function;
 mod iterative;
 mod lanczos;
 mod ldlt;
-mod ops;
+mod operators;
 pub mod poles;
+pub mod rng;
 mod solver;
 mod trisolve;
 
 #[cfg(test)]
 mod cf;
 
+pub use backend::{Backend, BatchReport, PoleReport, SolveMethod};
 pub use condition::ConditionReport;
+pub use eigen::{
+    largest_eigenpairs, symmetric_block_mul, BlockLanczosOutcome, BlockLanczosParams, BlockMass, BlockOperator,
+};
 pub use error::SolveError;
 pub use factor::{CholeskyPattern, SpdFactor};
 pub use faer::c64;
+pub use function::{
+    lanczos_function, lanczos_function_many, lanczos_functions, lanczos_functions_many, FunctionsResult, KrylovParams,
+    LanczosOutcome, LanczosParams,
+};
 pub use iterative::{MinresParams, Preconditioner, PreconditionerShift};
-pub use lanczos::{lanczos_function, LanczosOutcome, LanczosParams};
+pub use lanczos::{largest_ritz_value, symmetric_eigen, LanczosOperator, LanczosProcess, Reorthogonalization};
+pub use operators::OperatorPair;
 pub use poles::{RationalApprox, DEFAULT_DEGREE, PAPER_DEGREE, SHIPPED_DEGREES};
-pub use solver::{Backend, BatchReport, MultiShiftParams, PoleReport, RationalFactors, ShiftedSolver, SolveMethod};
+pub use solver::{RationalFactors, ShiftedSolver};

@@ -36,8 +36,9 @@ use faer::Mat;
 use rayon::prelude::*;
 use shape_retrieval::hks::TimeSampling;
 use shape_retrieval::{
-    descriptor_distance, repeatability, Assignment, BagDistance, BagSettings, Descriptor, DescriptorSettings, DescriptorSpec,
-    FeatureDetector, FeatureSet, GlobalSignature, RetrievalError, RetrievalSettings, TrainingParams, VertexWeights,
+    descriptor_distance, repeatability, Assignment, BagDistance, BagSettings, Descriptor, DescriptorSettings,
+    DescriptorSpec, FeatureDetector, FeatureSet, GlobalSignature, RetrievalError, RetrievalSettings, TrainingParams,
+    VertexWeights,
 };
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -249,7 +250,11 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
             "default without per-dimension z-scoring",
             variant(&|s| s.training.standardize = false),
         ),
-        ("L1", "default with the L1 distance", variant(&|s| s.bags.distance = BagDistance::L1)),
+        (
+            "L1",
+            "default with the L1 distance",
+            variant(&|s| s.bags.distance = BagDistance::L1),
+        ),
         (
             "+ Shape-DNA (w = 1)",
             "default fused with ln(λ_i A), i = 1…20, weight 1",
@@ -438,7 +443,11 @@ fn analyse(
         dense.push(shape.dense(d).map_err(BenchError::retrieval(s.file.name.clone()))?);
     }
     shape.set_times(TimeSampling::Explicit(dhk3_times.to_vec()));
-    dense.push(shape.dense(Descriptor::Dhk3).map_err(BenchError::retrieval(s.file.name.clone()))?);
+    dense.push(
+        shape
+            .dense(Descriptor::Dhk3)
+            .map_err(BenchError::retrieval(s.file.name.clone()))?,
+    );
     dense.push(
         DescriptorSpec::default()
             .compute(shape)
@@ -525,7 +534,8 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
             Ok(a)
         })
         .collect::<Result<_, BenchError>>()?;
-    let (repeatability_rows, robustness_rows) = tables_3_4(&files, &shapes, &ground_truth, &analysed, &nulls, &null_of)?;
+    let (repeatability_rows, robustness_rows) =
+        tables_3_4(&files, &shapes, &ground_truth, &analysed, &nulls, &null_of)?;
 
     // Table 5: retrieval.
     let clean_files: Vec<ShapeFile> = protocol::tosca_files(&meshes_dir)?
@@ -541,7 +551,16 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
     let mut retrieval = Vec::new();
     for m in methods(subset, k, &hks_times) {
         eprintln!("shrec-eval: retrieval with {}", m.name);
-        retrieval.push(run_method(&m, &mut shapes, &files, &nulls, &mut clean, &clean_families, &mut outside, opts)?);
+        retrieval.push(run_method(
+            &m,
+            &mut shapes,
+            &files,
+            &nulls,
+            &mut clean,
+            &clean_families,
+            &mut outside,
+            opts,
+        )?);
     }
     let n_features = |d: usize| mean(&analysed.iter().map(|a| a.features[d].len() as f64).collect::<Vec<_>>());
     Ok(EvalReport {
@@ -597,7 +616,10 @@ fn run_method(
         let outside_vocabulary = protocol::train(&settings, &f_outside)?;
         Some([
             leave_one_out(&protocol::index(&inside, &settings, &f_clean)?, clean_families)?,
-            leave_one_out(&protocol::index(&outside_vocabulary, &settings, &f_clean)?, clean_families)?,
+            leave_one_out(
+                &protocol::index(&outside_vocabulary, &settings, &f_clean)?,
+                clean_families,
+            )?,
         ])
     } else {
         None
@@ -697,7 +719,11 @@ fn tables_3_4(
     classes.sort();
     classes.dedup();
     classes.sort_by_key(|c| Class::ALL.iter().position(|x| x == c));
-    let mut strengths: Vec<u8> = files.iter().filter(|f| f.transform.is_some()).map(|f| f.strength).collect();
+    let mut strengths: Vec<u8> = files
+        .iter()
+        .filter(|f| f.transform.is_some())
+        .map(|f| f.strength)
+        .collect();
     strengths.sort_unstable();
     strengths.dedup();
     let (mut repeatability_rows, mut robustness_rows) = (Vec::new(), Vec::new());
@@ -907,7 +933,12 @@ fn retrieval_markdown(out: &mut String, report: &EvalReport) {
          | method | ≤1 | ≤2 | ≤3 | ≤4 | ≤5 |\n|---|---|---|---|---|---|"
     );
     for m in &report.retrieval {
-        let _ = writeln!(out, "| {} | {} |", m.name, row5(m.shrec.cumulative_full(all).map(|x| 100.0 * x), 2));
+        let _ = writeln!(
+            out,
+            "| {} | {} |",
+            m.name,
+            row5(m.shrec.cumulative_full(all).map(|x| 100.0 * x), 2)
+        );
     }
     let _ = writeln!(
         out,
@@ -916,7 +947,12 @@ fn retrieval_markdown(out: &mut String, report: &EvalReport) {
         report.n_clean
     );
     for m in &report.retrieval {
-        let _ = writeln!(out, "| {} | {} |", m.name, row5(m.shrec.cumulative_clean(all).map(|x| 100.0 * x), 2));
+        let _ = writeln!(
+            out,
+            "| {} | {} |",
+            m.name,
+            row5(m.shrec.cumulative_clean(all).map(|x| 100.0 * x), 2)
+        );
     }
     if let Some(m) = report.retrieval.first() {
         let _ = writeln!(
@@ -1052,8 +1088,14 @@ pub fn tosca_markdown(t: &ToscaEval) -> String {
     );
     let _ = writeln!(out, "| vocabulary | mAP | worst class | per class |\n|---|---|---|---|");
     for (label, r) in [
-        ("trained on the 76 (`wfem retrieval build`; optimistic)".to_string(), &t.inside),
-        (format!("trained on {} shapes outside (`build --vocab`)", t.n_outside), &t.outside),
+        (
+            "trained on the 76 (`wfem retrieval build`; optimistic)".to_string(),
+            &t.inside,
+        ),
+        (
+            format!("trained on {} shapes outside (`build --vocab`)", t.n_outside),
+            &t.outside,
+        ),
     ] {
         let worst = r.worst_family().map_or("–".into(), |(f, v)| format!("{f} {v:.3}"));
         let per: Vec<String> = r.per_family.iter().map(|(f, v)| format!("{f} {v:.3}")).collect();

@@ -22,8 +22,8 @@ use faer::Mat;
 use mesh_fem::TriMesh;
 use rayon::prelude::*;
 use shape_retrieval::{
-    average_precision, DescriptorSettings, DescriptorSpec, RetrievalIndex, RetrievalSettings, ShapeDescriptors, ShapeFeatures,
-    VocabularyModel,
+    average_precision, DescriptorSettings, DescriptorSpec, RetrievalIndex, RetrievalSettings, ShapeDescriptors,
+    ShapeFeatures, VocabularyModel,
 };
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -31,16 +31,44 @@ use wfem_heat::Eigenbasis;
 
 /// The paper's Table 5 (mAP in %, strength ≤ 1 … ≤ 5): method, description, values.
 pub const PAPER_TABLE5: [(&str, &str, [f64; 5]); 10] = [
-    ("VS1", "clock matching BoF, modified manifold ranking", [95.92, 90.81, 86.48, 81.94, 77.78]),
+    (
+        "VS1",
+        "clock matching BoF, modified manifold ranking",
+        [95.92, 90.81, 86.48, 81.94, 77.78],
+    ),
     ("VS2", "clock matching BoF", [99.03, 97.73, 96.71, 95.66, 94.33]),
     ("VS3", "geodesic sphere multi-view", [96.93, 93.89, 92.24, 90.56, 89.29]),
-    ("PB1", "part-based BoW, large vocabulary", [95.28, 92.11, 88.41, 85.06, 82.20]),
-    ("PB2", "part-based BoW, training-set vocabulary", [94.64, 90.52, 86.19, 82.35, 78.72]),
-    ("PB3", "part-based BoW, test-set vocabulary", [94.25, 90.16, 86.09, 82.78, 79.57]),
-    ("SG1", "Shape Google, HKS, Voronoi-cot", [94.94, 93.12, 90.84, 87.82, 85.00]),
+    (
+        "PB1",
+        "part-based BoW, large vocabulary",
+        [95.28, 92.11, 88.41, 85.06, 82.20],
+    ),
+    (
+        "PB2",
+        "part-based BoW, training-set vocabulary",
+        [94.64, 90.52, 86.19, 82.35, 78.72],
+    ),
+    (
+        "PB3",
+        "part-based BoW, test-set vocabulary",
+        [94.25, 90.16, 86.09, 82.78, 79.57],
+    ),
+    (
+        "SG1",
+        "Shape Google, HKS, Voronoi-cot",
+        [94.94, 93.12, 90.84, 87.82, 85.00],
+    ),
     ("SG2", "Shape Google, HKS, wFEM", [95.73, 93.81, 90.46, 87.40, 84.71]),
-    ("SG3", "Shape Google, SI-HKS, Voronoi-cot", [97.05, 95.16, 94.03, 92.54, 90.79]),
-    ("SS1", "HKS, 96-bit similarity-sensitive hash", [99.84, 99.48, 99.30, 99.10, 98.27]),
+    (
+        "SG3",
+        "Shape Google, SI-HKS, Voronoi-cot",
+        [97.05, 95.16, 94.03, 92.54, 90.79],
+    ),
+    (
+        "SS1",
+        "HKS, 96-bit similarity-sensitive hash",
+        [99.84, 99.48, 99.30, 99.10, 98.27],
+    ),
 ];
 
 /// A mesh file of an evaluation collection with its labels.
@@ -148,7 +176,9 @@ fn off_files(dir: &Path) -> Result<Vec<(PathBuf, String)>, BenchError> {
     let entries = std::fs::read_dir(dir).map_err(|e| BenchError::Data(format!("{}: {e}", dir.display())))?;
     let mut out = Vec::new();
     for e in entries {
-        let path = e.map_err(|e| BenchError::Data(format!("{}: {e}", dir.display())))?.path();
+        let path = e
+            .map_err(|e| BenchError::Data(format!("{}: {e}", dir.display())))?
+            .path();
         if path.extension().and_then(|x| x.to_str()) == Some("off") {
             if let Some(stem) = path.file_stem().and_then(|s| s.to_str()) {
                 let stem = stem.to_string();
@@ -174,13 +204,19 @@ pub fn shrec_files(data_dir: &Path, manifest: &Manifest) -> Vec<ShapeFile> {
             strength: 0,
         })
         .collect();
-    out.extend(manifest.outputs.iter().filter(|o| o.class != Class::Pose).map(|o| ShapeFile {
-        path: data_dir.join(&o.mesh),
-        name: o.mesh.clone(),
-        family: family(&o.shape),
-        transform: Some(o.class),
-        strength: o.strength,
-    }));
+    out.extend(
+        manifest
+            .outputs
+            .iter()
+            .filter(|o| o.class != Class::Pose)
+            .map(|o| ShapeFile {
+                path: data_dir.join(&o.mesh),
+                name: o.mesh.clone(),
+                family: family(&o.shape),
+                transform: Some(o.class),
+                strength: o.strength,
+            }),
+    );
     out
 }
 
@@ -236,7 +272,10 @@ impl EigenCache {
         let mut bytes = Vec::new();
         std::fs::File::open(path).ok()?.read_to_end(&mut bytes).ok()?;
         let word = |i: usize| -> Option<[u8; 8]> { bytes.get(8 * i..8 * i + 8)?.try_into().ok() };
-        let (n, k) = (u64::from_le_bytes(word(0)?) as usize, u64::from_le_bytes(word(1)?) as usize);
+        let (n, k) = (
+            u64::from_le_bytes(word(0)?) as usize,
+            u64::from_le_bytes(word(1)?) as usize,
+        );
         if bytes.len() != 8 * (2 + k + n * k) {
             return None;
         }
@@ -362,7 +401,8 @@ pub fn index(
 /// # Errors
 /// [`BenchError::Retrieval`].
 pub fn train(settings: &RetrievalSettings, features: &[ShapeFeatures]) -> Result<VocabularyModel, BenchError> {
-    VocabularyModel::train(&settings.descriptor, &settings.training, features).map_err(BenchError::retrieval("vocabulary"))
+    VocabularyModel::train(&settings.descriptor, &settings.training, features)
+        .map_err(BenchError::retrieval("vocabulary"))
 }
 
 /// mAP over queries, with the mean per family.

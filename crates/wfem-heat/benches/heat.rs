@@ -16,11 +16,11 @@
 //! measures the same quantities at every size as one-shot medians with peak memory.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
 use mesh_fem::{assemble, generate, AssemblyParams};
-use shifted_solve::{Backend, MinresParams, MultiShiftParams};
+use shifted_solve::{Backend, KrylovParams, MinresParams};
 use std::f64::consts::PI;
 use std::hint::black_box;
 use std::time::Duration;
-use wfem_heat::{EigenParams, Eigenbasis, FastParams, HeatKernel, HeatParams, Method};
+use wfem_heat::{EigenParams, Eigenbasis, HeatKernel, HeatParams, Method};
 
 #[path = "../../../benches/common/levels.rs"]
 mod levels;
@@ -45,7 +45,7 @@ fn bench(c: &mut Criterion) {
         let f: Vec<f64> = mesh.positions().iter().map(|p| p[0]).collect();
         let mut e = vec![0.0; n];
         e[n / 3] = 1.0;
-        let fast = kernel(&ops, Method::Fast(FastParams::default()));
+        let fast = kernel(&ops, Method::Fast(KrylovParams::default()));
         for (what, v) in [("x", &f), ("e_i", &e)] {
             let (_, iters, est) = fast.apply_fast_report(v, t).unwrap();
             eprintln!("n = {n}, f = {what}: fast path {iters} iterations (estimate {est:.1e})");
@@ -77,7 +77,7 @@ fn bench(c: &mut Criterion) {
             "rational_r16_multishift",
             Method::Rational {
                 degree: 16,
-                backend: Backend::MultiShift(MultiShiftParams::default()),
+                backend: Backend::MultiShift(KrylovParams::default()),
             },
         )];
         rational.extend(if levels::heavy(level) {

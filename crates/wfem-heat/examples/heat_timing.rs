@@ -8,7 +8,7 @@
 
 use mesh_fem::{assemble, generate, AssemblyParams};
 use std::time::Instant;
-use wfem_heat::{FastParams, HeatKernel, HeatParams, Method};
+use wfem_heat::{HeatKernel, HeatParams, KrylovParams, Method};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -38,7 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let mut results = Vec::new();
     for (name, f) in [("x", &x), ("e_i", &e)] {
-        let fast = kernel(Method::Fast(FastParams::default()))?;
+        let fast = kernel(Method::Fast(KrylovParams::default()))?;
         let start = Instant::now();
         let (g, iterations, _) = fast.apply_fast_report(f, t)?;
         let t_fast = start.elapsed().as_secs_f64();

@@ -145,4 +145,30 @@ pub enum HeatError {
         /// What is required, e.g. "finite" or "> 0 on the diagonal".
         requirement: &'static str,
     },
+    /// The mesh has needle or cap triangles so thin that rounding in the assembled L alone
+    /// (cotangent weights of order ±1/angle) spoils K_t beyond the stated error: the result
+    /// would be noise ([`crate::Conditioning`]).
+    #[error(
+        "nearly degenerate triangles at vertex {vertex}: its stiffness L_ii is {ratio:.1e} times that of a \
+         well-shaped mesh, so rounding alone makes K_t uncertain by about {estimated_error:.0e} (relative); \
+         collapse or drop the needle/cap faces (mesh validation lists them) and try again"
+    )]
+    IllConditionedMesh {
+        /// A vertex of the worst row of L.
+        vertex: usize,
+        /// The conditioning ratio ([`crate::Conditioning::ratio`]).
+        ratio: f64,
+        /// The relative error rounding alone can cause.
+        estimated_error: f64,
+    },
+    /// A computation produced NaN or ∞ (it is refused instead of returned).
+    #[error("the {method} method produced a non-finite value at row {row}, column {column}")]
+    NonFiniteResult {
+        /// The method.
+        method: &'static str,
+        /// Row of the first non-finite entry.
+        row: usize,
+        /// Its column.
+        column: usize,
+    },
 }

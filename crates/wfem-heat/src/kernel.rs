@@ -1,309 +1,108 @@
-//! The heat kernel object `K_t = exp(−t M⁻¹L)` (paper, Eq. (5)–(9)) and its methods.
+//! The heat kernel object `K_t = exp(−t M⁻¹L)` (paper, Eq. (5)–(9)): an operator context
+//! ([`Operators`]) with a prepared [`Method`], applied to any number of functions and times.
 
-use crate::eigen::{EigenParams, Eigenbasis};
-use crate::krylov::{rational_krylov_exp, FastParams};
-use crate::null_space::NullSpace;
-use crate::sparse::{combine, same_pattern, spmm_sym, CholeskyPattern, SpdFactor};
-use crate::HeatError;
-use faer::sparse::SparseColMat;
+use crate::check;
+use crate::diagonal::{DiagonalInfo, DiagonalMethod, Probes};
+use crate::method::{Method, PreparedMethod};
+use crate::spectral::Eigenbasis;
+use crate::{HeatError, KernelKind, Operators};
+use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef};
 use mesh_fem::FemOperators;
-use rayon::prelude::*;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
-/// Which discrete heat kernel (paper, Table 1). All share the stiffness L (symmetric positive
-/// semidefinite, positive diagonal) and differ in the mass matrix M of `K_t = exp(−t M⁻¹L)`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum KernelKind {
-    /// The wFEM kernel `K_t = X D_t Xᵀ B` with the consistent mass B (paper, Eq. (6)).
-    #[default]
-    Wfem,
-    /// The lumped-mass kernel `K_t = X D_t Xᵀ D` with the diagonal lumped mass D (Eq. (7)).
-    Lumped,
-    /// The linear FEM kernel with B := I, `K̃_t = X D_t Xᵀ` (text after Eq. (7)).
-    Linear,
-}
-
-/// How to evaluate `K_t f`.
-#[derive(Clone, Debug, PartialEq)]
-#[non_exhaustive]
-pub enum Method {
-    /// All n eigenpairs by a dense generalized eigendecomposition, `K_t f = X e^{−tΛ} XᵀMf`
-    /// (Eq. (6)). Exact to rounding; O(n³) once, small meshes only
-    /// (n ≤ [`crate::DENSE_MAX_VERTICES`]).
-    Dense,
-    /// The truncated spectral representation with the k smallest eigenpairs,
-    /// `F_k = X_k e^{−tΛ_k} X_kᵀ M f` (Eq. (8)). Its error is the discarded tail, about
-    /// e^{−tλ_{k+1}}‖f‖: large for small t (paper, Fig. 3).
-    Spectral {
-        /// Number of eigenpairs.
-        k: usize,
-        /// Eigensolver options.
-        eigen: EigenParams,
-    },
-    /// First-order explicit Taylor step `M g = (M − tL) f`, i.e. `K_t ≈ I − tM⁻¹L`
-    /// (Eq. (9)): one solve with M (factored once). It is a first-order method: the error of
-    /// one step is `Σᵢ |e^{−tλᵢ} − 1 + tλᵢ| |cᵢ| ≈ t²λᵢ²/2` per eigencomponent cᵢ of f, so
-    /// O(t²) for fixed smooth f, O(t) when a time T is covered in T/t steps, and unbounded
-    /// (growing like tλ_max) for rough f: valid only for t → 0⁺. For comparison only.
-    Taylor,
-    /// One backward-Euler step `(M + tL) g = M f`, i.e. `K_t ≈ (I + tM⁻¹L)⁻¹`: one real
-    /// sparse Cholesky per t. First order like [`Method::Taylor`] (one-step error
-    /// `|1/(1 + tλ) − e^{−tλ}| ≈ t²λ²/2`, O(t) over a fixed horizon) but stable (it damps
-    /// every mode). For comparison only.
-    BackwardEuler,
-    /// The fast exact path (beyond the paper): shift-and-invert rational Krylov on
-    /// (M + γtL)⁻¹M, one real sparse Cholesky per t, reused for every iteration and every
-    /// right-hand side; accurate to ≈1e−12 relative. See [`FastParams`].
-    Fast(FastParams),
-    /// The paper's generalized Chebyshev method (Eq. (11)–(13)): the best uniform rational
-    /// approximation `e^{−x} ≈ c0 + 2 Re Σ_j c_j/(x − z_j)` of degree `degree` on [0, ∞)
-    /// turns K_t f into `degree/2` complex shifted solves `(tL − z_j M) g_j = M f`,
-    /// `K_t f ≈ c0 f + 2 Re Σ_j c_j g_j` (upper-half-plane poles; the paper's Eq. (13) is the
-    /// same sum in the nuclear convention θ = −conj z, α = −conj c). The error is at most
-    /// E_degree‖f‖_M (Eq. (14); E_16 = 2.1e−16, floored by rounding at ≈2e−14).
-    /// The backend is the direct complex-symmetric LDLᵀ (default), the pivoted complex LU,
-    /// MINRES (the paper's choice), or the multi-shift Lanczos that solves every pole in one
-    /// Krylov space of (M + γtL)⁻¹M with a single real Cholesky; see [`shifted_solve::Backend`].
-    Rational {
-        /// Degree n of r_n (see [`shifted_solve::SHIPPED_DEGREES`]); E_n ≈ 9.289⁻ⁿ.
-        degree: usize,
-        /// How each shifted system is solved.
-        backend: shifted_solve::Backend,
-    },
-}
-
-impl Method {
-    /// The rational Chebyshev method of `degree` with the direct complex-symmetric LDLᵀ backend
-    /// (NUMERICS §3.3d; about half the work of the pivoted LU, residual reported per pole).
-    pub fn rational(degree: usize) -> Self {
-        Method::Rational {
-            degree,
-            backend: shifted_solve::Backend::DirectLdlt,
-        }
-    }
-
-    /// The spectral method with the `k` smallest eigenpairs and default eigensolver options.
-    pub fn spectral(k: usize) -> Self {
-        Method::Spectral {
-            k,
-            eigen: EigenParams::default(),
-        }
-    }
-}
-
-/// The default is the paper's rational Chebyshev method with
-/// [`shifted_solve::DEFAULT_DEGREE`] (error ≈ 1e−14) and the direct complex-symmetric LDLᵀ backend.
-impl Default for Method {
-    fn default() -> Self {
-        Method::rational(shifted_solve::DEFAULT_DEGREE)
-    }
-}
+/// Kernels whose operators alone make K_t uncertain by more than this (relative) are refused
+/// ([`crate::Conditioning`], [`HeatError::IllConditionedMesh`]).
+pub const MAX_ROUNDING_ERROR: f64 = 1e-3;
 
 /// Options of [`HeatKernel::new`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct HeatParams {
     /// Which discrete kernel (mass matrix).
     pub kernel: KernelKind,
-    /// How to evaluate it.
+    /// How to evaluate it (default: the fast exact path, [`Method::Fast`]).
     pub method: Method,
 }
 
-#[derive(Debug)]
-enum Prepared {
-    Eigen(Eigenbasis),
-    /// Cholesky factor of M (Taylor).
-    MassFactor(SpdFactor),
-    /// Only the symbolic analysis; the numeric factor depends on t.
-    Shifted,
-    /// The shifted solver (symbolic analyses) and the rational approximation.
-    Rational(shifted_solve::ShiftedSolver, &'static shifted_solve::RationalApprox),
-}
-
-/// The heat kernel of a mesh, `K_t = exp(−t M⁻¹L)` (paper, Eq. (6)), built once from the FEM
-/// operators and applied to any number of functions and times.
+/// The heat kernel of a mesh, `K_t = exp(−t M⁻¹L)` (paper, Eq. (6)), built once from the
+/// operators and applied to any number of functions and times. Cheap to clone (shared).
 ///
 /// L is the stiffness (symmetric positive semidefinite, positive diagonal; the paper prints
 /// it with the opposite sign) and M the mass of the [`KernelKind`].
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct HeatKernel {
-    stiffness: SparseColMat<usize, f64>,
-    mass: SparseColMat<usize, f64>,
-    /// Symbolic Cholesky of the shared pattern, built on first use (the rational method has its
-    /// own analysis inside the shifted solver; a second AMD cost 0.24 s at n = 163,842).
-    pattern: std::sync::OnceLock<CholeskyPattern>,
-    params: HeatParams,
-    prepared: Prepared,
-    /// The constants on the connected components, deflated exactly (see `null_space.rs`).
-    null_space: NullSpace,
-    /// The last t-dependent factor `M + sL` and its s.
-    cache: Mutex<Option<(f64, Arc<SpdFactor>)>>,
-    /// The rational factors of the last t (`Rational` method).
-    rational_cache: Mutex<Option<(f64, Arc<shifted_solve::RationalFactors>)>>,
-}
-
-pub(crate) fn check_time(t: f64) -> Result<(), HeatError> {
-    if t.is_finite() && t > 0.0 {
-        Ok(())
-    } else {
-        Err(HeatError::InvalidTime { t })
-    }
-}
-
-pub(crate) fn check_vector(f: &[f64], n: usize) -> Result<(), HeatError> {
-    if f.len() != n {
-        return Err(HeatError::LengthMismatch {
-            expected: n,
-            found: f.len(),
-        });
-    }
-    if let Some((row, &value)) = f.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-        return Err(HeatError::NonFiniteInput { row, column: 0, value });
-    }
-    Ok(())
-}
-
-/// Validates the operators of every method (O(nnz)): all entries of L and M finite, every
-/// diagonal entry of M positive. Without it a NaN in L passed through the Taylor step as NaN
-/// output, and a zero row of M (singular M, K_t undefined) went through the fast path as a
-/// finite answer.
-pub(crate) fn check_operators(
-    stiffness: &SparseColMat<usize, f64>,
-    mass: &SparseColMat<usize, f64>,
-) -> Result<(), HeatError> {
-    for (matrix, a) in [("stiffness L", stiffness), ("mass M", mass)] {
-        let s = a.symbolic();
-        for col in 0..a.ncols() {
-            for p in s.col_range(col) {
-                let value = a.val()[p];
-                if !value.is_finite() {
-                    return Err(HeatError::InvalidOperatorEntry {
-                        matrix,
-                        row: s.row_idx()[p],
-                        col,
-                        value,
-                        requirement: "finite",
-                    });
-                }
-            }
-        }
-    }
-    let s = mass.symbolic();
-    for col in 0..mass.ncols() {
-        let value: f64 = s
-            .col_range(col)
-            .filter(|&p| s.row_idx()[p] == col)
-            .map(|p| mass.val()[p])
-            .sum();
-        if value <= 0.0 {
-            return Err(HeatError::InvalidOperatorEntry {
-                matrix: "mass M",
-                row: col,
-                col,
-                value,
-                requirement: "> 0 on the diagonal",
-            });
-        }
-    }
-    Ok(())
+    ops: Operators,
+    method: Method,
+    prepared: Arc<dyn PreparedMethod>,
 }
 
 impl HeatKernel {
-    /// Prepares the kernel: picks the mass matrix of `params.kernel`, runs the symbolic
-    /// Cholesky analysis of the shared pattern and the t-independent work of the method
-    /// (the eigenpairs for `Dense`/`Spectral`, the factor of M for `Taylor`).
+    /// Builds the operator context of `params.kernel` ([`Operators::new`]) and prepares
+    /// `params.method` on it.
     ///
     /// # Errors
-    /// [`HeatError::InconsistentOperators`] if L and M differ in size or pattern;
-    /// [`HeatError::InvalidOperatorEntry`] for a NaN/∞ entry or a non-positive diagonal
-    /// entry of M; [`HeatError::TooLargeForDense`]; [`HeatError::EigenNoConvergence`];
+    /// Those of [`Operators::new`] and [`Self::with_operators`].
+    pub fn new(fem: &FemOperators, params: HeatParams) -> Result<Self, HeatError> {
+        Self::with_operators(&Operators::new(fem, params.kernel)?, params.method)
+    }
+
+    /// Prepares `method` on a validated context (shared with other kernels, distances, …): the
+    /// t-independent work of the method (the eigenpairs for `Dense`/`Spectral`, the factor of M
+    /// for `Taylor`, the backend's analysis for `Rational`).
+    ///
+    /// # Errors
+    /// [`HeatError::TooLargeForDense`]; [`HeatError::EigenNoConvergence`];
     /// [`HeatError::InvalidParameter`] for bad method parameters;
-    /// [`HeatError::NotPositiveDefinite`].
-    pub fn new(ops: &FemOperators, params: HeatParams) -> Result<Self, HeatError> {
-        let stiffness = ops.stiffness.clone();
-        let mass = match params.kernel {
-            KernelKind::Wfem => ops.mass.clone(),
-            KernelKind::Lumped => ops.lumped_mass.clone(),
-            KernelKind::Linear => ops.identity_mass(),
-        };
-        if !same_pattern(&stiffness, &mass) || stiffness.nrows() != stiffness.ncols() {
-            return Err(HeatError::InconsistentOperators {
-                reason: format!("stiffness and {:?} mass do not share one square pattern", params.kernel),
+    /// [`HeatError::NotPositiveDefinite`]; [`HeatError::Solve`] (e.g. L not positive
+    /// semidefinite for the rational method).
+    pub fn with_operators(ops: &Operators, method: Method) -> Result<Self, HeatError> {
+        let conditioning = ops.conditioning();
+        let estimated_error = conditioning.rounding_error();
+        if estimated_error > MAX_ROUNDING_ERROR {
+            return Err(HeatError::IllConditionedMesh {
+                vertex: conditioning.vertex,
+                ratio: conditioning.ratio,
+                estimated_error,
             });
         }
-        check_operators(&stiffness, &mass)?;
-        let pattern = std::sync::OnceLock::new();
-        let analysed = || analysed_pattern(&pattern, &stiffness);
-        let prepared = match &params.method {
-            Method::Dense => Prepared::Eigen(Eigenbasis::dense(&stiffness, &mass)?),
-            Method::Spectral { k, eigen } => Prepared::Eigen(Eigenbasis::partial(&stiffness, &mass, *k, eigen)?),
-            Method::Taylor => Prepared::MassFactor(analysed()?.factor(&mass, || "mass matrix M".into())?),
-            Method::BackwardEuler => {
-                analysed()?;
-                Prepared::Shifted
-            }
-            Method::Fast(fp) => {
-                if !(fp.gamma > 0.0 && fp.gamma.is_finite()) {
-                    return Err(HeatError::InvalidParameter {
-                        name: "gamma",
-                        reason: format!("γ = {} must be positive", fp.gamma),
-                    });
-                }
-                if !(fp.tol > 0.0 && fp.tol < 1.0) {
-                    return Err(HeatError::InvalidParameter {
-                        name: "tol",
-                        reason: format!("{} is not in (0, 1)", fp.tol),
-                    });
-                }
-                if fp.max_iter == 0 {
-                    return Err(HeatError::InvalidParameter {
-                        name: "max_iter",
-                        reason: "must be positive".into(),
-                    });
-                }
-                analysed()?;
-                Prepared::Shifted
-            }
-            Method::Rational { degree, backend } => {
-                let approx = shifted_solve::RationalApprox::cram(*degree)?;
-                let solver = shifted_solve::ShiftedSolver::new(stiffness.as_ref(), mass.as_ref(), *backend)?;
-                Prepared::Rational(solver, approx)
-            }
-        };
-        let null_space = NullSpace::new(&stiffness, &mass);
+        let prepared = method.prepare(ops)?;
         Ok(Self {
-            stiffness,
-            mass,
-            pattern,
-            params,
-            prepared,
-            null_space,
-            cache: Mutex::new(None),
-            rational_cache: Mutex::new(None),
+            ops: ops.clone(),
+            method,
+            prepared: Arc::from(prepared),
         })
     }
 
     /// Number of vertices n.
     pub fn n(&self) -> usize {
-        self.stiffness.nrows()
+        self.ops.n()
     }
 
-    /// The parameters the kernel was built with.
-    pub fn params(&self) -> &HeatParams {
-        &self.params
+    /// The operator context.
+    pub fn operators(&self) -> &Operators {
+        &self.ops
     }
 
-    /// The mass matrix M of the kernel (B, D or I).
-    pub fn mass(&self) -> &SparseColMat<usize, f64> {
-        &self.mass
+    /// The method the kernel was built with.
+    pub fn method(&self) -> &Method {
+        &self.method
+    }
+
+    /// The mass matrix M of the kernel (B, D, I or a custom one).
+    pub fn mass(&self) -> SparseColMatRef<'_, usize, f64> {
+        self.ops.mass()
+    }
+
+    /// The relative error that rounding in the operators alone can cause in K_t
+    /// ([`crate::Conditioning::rounding_error`]): about 1e−15 on a well-shaped mesh; a CLI
+    /// should warn above 1e−8. Kernels above [`MAX_ROUNDING_ERROR`] are refused.
+    pub fn rounding_error(&self) -> f64 {
+        self.ops.conditioning().rounding_error()
     }
 
     /// The eigenpairs, for the `Dense` and `Spectral` methods.
     pub fn eigenbasis(&self) -> Option<&Eigenbasis> {
-        match &self.prepared {
-            Prepared::Eigen(e) => Some(e),
-            _ => None,
-        }
+        self.prepared.eigenbasis()
     }
 
     /// Applies the heat kernel, `g = K_t f = exp(−t M⁻¹L) f = X e^{−tΛ} XᵀM f`
@@ -312,7 +111,9 @@ impl HeatKernel {
     /// The null space of L (the constants on every connected component) is deflated exactly,
     /// `K_t f = Pf + (I − P) K_t (I − P) f` with P the M-orthogonal projector onto it, so every
     /// method conserves each component's mass `1_cᵀM K_t f = 1_cᵀM f` to rounding for any t
-    /// (without it the drift grew like ε·t·λ_max: 1.6e−5 at t = 1e8·h̄²).
+    /// (without it the drift grew like ε·t·λ_max: 1.6e−5 at t = 1e8·h̄²). From
+    /// [`Operators::time_at_infinity`] on, `K_t f = P f` exactly (every other mode has
+    /// decayed below the smallest double), whatever the method.
     ///
     /// # Errors
     /// [`HeatError::InvalidTime`] unless t is finite and positive;
@@ -329,142 +130,282 @@ impl HeatKernel {
     /// # Errors
     /// As [`HeatKernel::apply`]; [`HeatError::NonFiniteInput`] names row and column.
     pub fn apply_many(&self, f: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
-        check_time(t)?;
-        let n = self.n();
-        if f.nrows() != n {
-            return Err(HeatError::LengthMismatch {
-                expected: n,
-                found: f.nrows(),
-            });
-        }
-        for c in 0..f.ncols() {
-            for r in 0..n {
-                let value = f[(r, c)];
-                if !value.is_finite() {
-                    return Err(HeatError::NonFiniteInput {
-                        row: r,
-                        column: c,
-                        value,
-                    });
-                }
-            }
-        }
+        check::time(t)?;
+        check::block(f, self.n())?;
         // K_t f = P f + (I − P) K_t (I − P) f with P the M-orthogonal projector onto the
         // constants of each component (exact: K_t P = P); see `null_space.rs`.
-        let (deflated, coefs) = self.null_space.split(f);
-        let mut g = self.apply_method(deflated.as_ref(), t)?;
-        self.null_space.restore(&mut g, &coefs);
-        Ok(g)
-    }
-
-    /// `K_t f` by the method of the kernel, without the null-space deflation (`f` validated).
-    fn apply_method(&self, f: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
-        let n = self.n();
-        match (&self.params.method, &self.prepared) {
-            (_, Prepared::Eigen(e)) => Ok(e.apply_heat_many(&self.mass, f, t)),
-            (Method::Taylor, Prepared::MassFactor(mf)) => {
-                // M g = (M − tL) f, i.e. g = f − t M⁻¹L f.
-                let lf = spmm_sym(&self.stiffness, f);
-                let mut step = lf;
-                mf.solve_in_place(step.as_mut());
-                Ok(Mat::from_fn(n, f.ncols(), |i, j| f[(i, j)] - t * step[(i, j)]))
-            }
-            (Method::BackwardEuler, _) => {
-                let factor = self.shifted_factor(t, "M + tL")?;
-                let mut g = spmm_sym(&self.mass, f);
-                factor.solve_in_place(g.as_mut());
-                Ok(g)
-            }
-            (Method::Fast(fp), _) => {
-                let factor = self.shifted_factor(fp.gamma * t, "M + γtL")?;
-                let column = |c: usize| f.col(c).iter().copied().collect::<Vec<f64>>();
-                let cols: Vec<Vec<f64>> = if f.ncols() == 1 {
-                    // One vector: its solves and products with M use every core.
-                    let solve = |b: &[f64]| factor.solve_vec(b);
-                    let (g, _) = rational_krylov_exp(&solve, &self.mass, &column(0), fp, 0, true)?;
-                    vec![g]
-                } else {
-                    (0..f.ncols())
-                        .into_par_iter()
-                        .map(|c| {
-                            let solve = |b: &[f64]| factor.solve_vec(b);
-                            rational_krylov_exp(&solve, &self.mass, &column(c), fp, c, false).map(|(g, _)| g)
-                        })
-                        .collect::<Result<_, _>>()?
-                };
-                Ok(Mat::from_fn(n, cols.len(), |i, j| cols[j][i]))
-            }
-            (_, Prepared::Rational(solver, approx)) => {
-                let factors = self.rational_factors(solver, approx, t)?;
-                Ok(factors.apply(f)?.0)
-            }
-            _ => unreachable!("every method has its prepared data"),
-        }
-    }
-
-    /// The Cholesky factor of `M + s·L`, reused when the previous call had the same s
-    /// (repeated `apply` at one t then costs only the solves).
-    fn shifted_factor(&self, s: f64, what: &str) -> Result<Arc<SpdFactor>, HeatError> {
-        let mut cache = self.cache.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-        if let Some((cached_s, factor)) = cache.as_ref() {
-            if *cached_s == s {
-                return Ok(factor.clone());
-            }
-        }
-        let a = combine(1.0, &self.mass, s, &self.stiffness);
-        let pattern = analysed_pattern(&self.pattern, &self.stiffness)?;
-        let factor = Arc::new(pattern.factor(&a, || format!("{what} with shift {s:e}"))?);
-        *cache = Some((s, factor.clone()));
-        Ok(factor)
-    }
-
-    /// The factors of every pole at time t, reused when the previous call had the same t.
-    fn rational_factors(
-        &self,
-        solver: &shifted_solve::ShiftedSolver,
-        approx: &shifted_solve::RationalApprox,
-        t: f64,
-    ) -> Result<Arc<shifted_solve::RationalFactors>, HeatError> {
-        let mut cache = self
-            .rational_cache
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner());
-        if let Some((cached_t, factors)) = cache.as_ref() {
-            if *cached_t == t {
-                return Ok(factors.clone());
-            }
-        }
-        let factors = Arc::new(solver.factor(approx, t)?);
-        *cache = Some((t, factors.clone()));
-        Ok(factors)
-    }
-
-    /// Fast path with its per-column iteration counts (for benchmarks and diagnostics).
-    #[doc(hidden)]
-    pub fn apply_fast_report(&self, f: &[f64], t: f64) -> Result<(Vec<f64>, usize, f64), HeatError> {
-        check_time(t)?;
-        check_vector(f, self.n())?;
-        let fp = match &self.params.method {
-            Method::Fast(fp) => *fp,
-            _ => FastParams::default(),
+        let null_space = self.ops.null_space();
+        let (deflated, coefs) = null_space.split(f);
+        let mut g = if t >= self.ops.time_at_infinity() {
+            Mat::zeros(f.nrows(), f.ncols())
+        } else {
+            self.prepared.apply(&self.ops, deflated.as_ref(), t)?
         };
-        let factor = self.shifted_factor(fp.gamma * t, "M + γtL")?;
-        let solve = |b: &[f64]| factor.solve_vec(b);
-        let (g, out) = rational_krylov_exp(&solve, &self.mass, f, &fp, 0, true)?;
-        Ok((g, out.iterations, out.estimate))
+        null_space.restore(&mut g, &coefs);
+        self.finite(g)
+    }
+
+    /// Refuses a result with NaN or ∞ (never returned).
+    fn finite(&self, m: Mat<f64>) -> Result<Mat<f64>, HeatError> {
+        for j in 0..m.ncols() {
+            if let Some(row) = m.col(j).iter().position(|v| !v.is_finite()) {
+                return Err(HeatError::NonFiniteResult {
+                    method: self.method.name(),
+                    row,
+                    column: j,
+                });
+            }
+        }
+        Ok(m)
+    }
+
+    /// The heat-kernel matrix applied to a block, `H_t G = K_t M⁻¹ G = X D_t Xᵀ G`
+    /// (NUMERICS §1): column i of `H_t` is the heat kernel `H_t(·, p_i)`, whose value at p_i is
+    /// the heat kernel signature HKS_t(i), and `H_{2t}` is the Gram matrix of the diffusion
+    /// distances. Symmetric positive definite. The null space is deflated exactly, so the
+    /// constant part `Σ_c 1_c 1_cᵀ/1_cᵀM1_c` (the t → ∞ limit) is exact for every t.
+    ///
+    /// # Errors
+    /// As [`Self::apply_many`]; [`HeatError::NotPositiveDefinite`] if M must be factored and
+    /// cannot be.
+    pub fn apply_kernel_matrix(&self, g: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
+        check::time(t)?;
+        check::block(g, self.n())?;
+        let null_space = self.ops.null_space();
+        let (deflated, coefs) = null_space.split_dual(g);
+        let mut h = if t >= self.ops.time_at_infinity() {
+            Mat::zeros(g.nrows(), g.ncols())
+        } else {
+            self.prepared.apply_kernel_matrix(&self.ops, deflated.as_ref(), t)?
+        };
+        null_space.restore(&mut h, &coefs);
+        self.finite(h)
     }
 }
 
-/// The symbolic Cholesky analysis of `stiffness`'s pattern held in `cell`, computed on first use.
-fn analysed_pattern<'a>(
-    cell: &'a std::sync::OnceLock<CholeskyPattern>,
-    stiffness: &SparseColMat<usize, f64>,
-) -> Result<&'a CholeskyPattern, HeatError> {
-    if let Some(p) = cell.get() {
-        return Ok(p);
+/// The heat kernel at a list of times ([`HeatKernel::apply_times`]).
+#[derive(Clone, Debug)]
+pub struct TimeSeries {
+    /// The times t, as given.
+    pub times: Vec<f64>,
+    /// `K_t F` (or `H_t F`) for each t, n × k each.
+    pub values: Vec<Mat<f64>>,
+    /// Per t, the largest relative error estimate over the columns (the fast path's
+    /// successive-iterate estimate in the M-norm); `None` for methods exact to their own
+    /// stated accuracy (dense, rational) or without an estimate (spectral, first order).
+    pub error_estimates: Vec<Option<f64>>,
+}
+
+/// Which diagonal of the heat kernel ([`HeatKernel::diagonal`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum KernelDiagonal {
+    /// `H_t(i, i) = (K_t M⁻¹)_ii = Σ_k e^{−λ_k t} x_k(i)²`: the heat kernel's value
+    /// `K_t(x_i, x_i)` (units 1/area) — the heat kernel signature of Sun, Ovsjanikov & Guibas.
+    #[default]
+    KernelValue,
+    /// `K_t(i, i) = Σ_k e^{−λ_k t} x_k(i)(M x_k)(i)`: the diagonal of the kernel matrix of the
+    /// paper's Eq. (6) (dimensionless; its sum is the heat trace).
+    MatrixDiagonal,
+}
+
+/// Options of [`HeatKernel::diagonal`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiagonalParams {
+    /// Probing or exact columns (default probing with a relative tail of 1e−10).
+    pub method: DiagonalMethod,
+    /// Refuse (rather than run for hours) when more probe columns than this would be needed
+    /// (default 4096): at large t the kernel is not local, and the spectral diagonal of a few
+    /// hundred eigenpairs is the accurate one there.
+    pub max_columns: usize,
+    /// Probe columns per block (default 64).
+    pub block: usize,
+}
+
+impl Default for DiagonalParams {
+    fn default() -> Self {
+        Self {
+            method: DiagonalMethod::default(),
+            max_columns: 4096,
+            block: 64,
+        }
     }
-    let p = CholeskyPattern::new(stiffness)?;
-    Ok(cell.get_or_init(|| p))
+}
+
+/// The diagonal of the heat kernel at a list of times ([`HeatKernel::diagonal`]).
+#[derive(Clone, Debug)]
+pub struct DiagonalSeries {
+    /// The times t, as given.
+    pub times: Vec<f64>,
+    /// n × T: column l is the diagonal at `times[l]`.
+    pub values: Mat<f64>,
+    /// How the probes were chosen; `relative_tail` bounds the probing error of each entry
+    /// relative to the entry (at the largest t; smaller t decay faster).
+    pub info: DiagonalInfo,
+    /// The kernel evaluations' own error estimates per t (see [`TimeSeries`]).
+    pub error_estimates: Vec<Option<f64>>,
+}
+
+impl HeatKernel {
+    /// `K_t F` for every t of `times` (paper Eq. (6)); with the fast path (the default), one
+    /// real sparse Cholesky of `M + σL` (σ chosen for the whole window) and one Krylov space
+    /// per column serve every t, instead of one factorization per t — the way to evaluate a
+    /// scale space, a multi-scale descriptor or a time window.
+    ///
+    /// # Errors
+    /// As [`Self::apply_many`]; [`HeatError::InvalidParameter`] for an empty list of times.
+    pub fn apply_times(&self, f: MatRef<'_, f64>, times: &[f64]) -> Result<TimeSeries, HeatError> {
+        self.times(f, times, false)
+    }
+
+    /// The heat-kernel matrix `H_t G = K_t M⁻¹ G` for every t of `times` (see
+    /// [`Self::apply_kernel_matrix`] and [`Self::apply_times`]).
+    ///
+    /// # Errors
+    /// As [`Self::apply_times`].
+    pub fn apply_kernel_matrix_times(&self, g: MatRef<'_, f64>, times: &[f64]) -> Result<TimeSeries, HeatError> {
+        self.times(g, times, true)
+    }
+
+    fn times(&self, f: MatRef<'_, f64>, times: &[f64], kernel_matrix: bool) -> Result<TimeSeries, HeatError> {
+        if times.is_empty() {
+            return Err(HeatError::InvalidParameter {
+                name: "times",
+                reason: "the list of times is empty".into(),
+            });
+        }
+        for &t in times {
+            check::time(t)?;
+        }
+        check::block(f, self.n())?;
+        let null_space = self.ops.null_space();
+        let (deflated, coefs) = if kernel_matrix {
+            null_space.split_dual(f)
+        } else {
+            null_space.split(f)
+        };
+        // Times at which only the null space survives are exact without the method.
+        let t_inf = self.ops.time_at_infinity();
+        let finite: Vec<f64> = times.iter().copied().filter(|&t| t < t_inf).collect();
+        let (computed, computed_estimates) = if finite.is_empty() {
+            (Vec::new(), Vec::new())
+        } else {
+            self.prepared
+                .apply_times(&self.ops, deflated.as_ref(), &finite, kernel_matrix)?
+        };
+        let mut values = Vec::with_capacity(times.len());
+        let mut error_estimates = Vec::with_capacity(times.len());
+        let (mut it_v, mut it_e) = (computed.into_iter(), computed_estimates.into_iter());
+        for &t in times {
+            if t < t_inf {
+                values.push(it_v.next().unwrap_or_else(|| Mat::zeros(f.nrows(), f.ncols())));
+                error_estimates.push(it_e.next().flatten());
+            } else {
+                values.push(Mat::zeros(f.nrows(), f.ncols()));
+                error_estimates.push(None);
+            }
+        }
+        let mut values = values;
+        for v in &mut values {
+            null_space.restore(v, &coefs);
+        }
+        let values = values
+            .into_iter()
+            .map(|v| self.finite(v))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(TimeSeries {
+            times: times.to_vec(),
+            values,
+            error_estimates,
+        })
+    }
+
+    /// The diagonal of the heat kernel at every t of `times`, without eigenpairs (issue #17):
+    /// probing (Tang & Saad; [`crate::diagonal`]) with a distance-p colouring of the mesh
+    /// chosen so that a sample column at the largest t has a relative tail below
+    /// `params.method`'s tolerance beyond p edges (the sample is the vertex of smallest area,
+    /// where the kernel spans the most edges), and one block evaluation of all times per block
+    /// of probe columns ([`Self::apply_kernel_matrix_times`]: one factorization for all t with
+    /// the fast path). Exact where spectral truncation fails — at small t, where even 300
+    /// eigenpairs miss most of the diagonal — and cheap there, since the kernel is local.
+    ///
+    /// # Errors
+    /// [`HeatError::InvalidParameter`] for an empty list of times or when the colouring needs
+    /// more than `params.max_columns` probes (large t: use the spectral diagonal); as
+    /// [`Self::apply_times`].
+    pub fn diagonal(
+        &self,
+        times: &[f64],
+        which: KernelDiagonal,
+        params: &DiagonalParams,
+    ) -> Result<DiagonalSeries, HeatError> {
+        if times.is_empty() {
+            return Err(HeatError::InvalidParameter {
+                name: "times",
+                reason: "the list of times is empty".into(),
+            });
+        }
+        for &t in times {
+            check::time(t)?;
+        }
+        params.method.validate()?;
+        if params.block == 0 {
+            return Err(HeatError::InvalidParameter {
+                name: "block",
+                reason: "must be positive".into(),
+            });
+        }
+        let n = self.n();
+        let t_max = times.iter().copied().fold(0.0f64, f64::max);
+        let apply = |p: MatRef<'_, f64>, ts: &[f64]| -> Result<TimeSeries, HeatError> {
+            match which {
+                KernelDiagonal::KernelValue => self.apply_kernel_matrix_times(p, ts),
+                KernelDiagonal::MatrixDiagonal => self.apply_times(p, ts),
+            }
+        };
+        // The sample: the vertex of smallest area, at the largest t.
+        let areas = self.ops.vertex_areas();
+        let i = (0..n).min_by(|&a, &b| areas[a].total_cmp(&areas[b])).unwrap_or(0);
+        let sample = apply(check::unit_columns(n, &[i])?.as_ref(), &[t_max])?;
+        let col: Vec<f64> = sample.values[0].col(0).iter().copied().collect();
+        let probes = Probes::new(self.ops.pair().pattern(), params.method, i, &col);
+        if probes.info.columns > params.max_columns {
+            return Err(HeatError::InvalidParameter {
+                name: "max_columns",
+                reason: format!(
+                    "probing the diagonal at t = {t_max:e} needs {} columns (limit {}): the kernel is not \
+                     local at this time; use the spectral diagonal (a few hundred eigenpairs are accurate there)",
+                    probes.info.columns, params.max_columns
+                ),
+            });
+        }
+        let mut estimates: Vec<Option<f64>> = vec![None; times.len()];
+        let diagonals = probes.diagonals(params.block, times.len(), &mut |p| {
+            let series = apply(p.as_ref(), times)?;
+            for (e, s) in estimates.iter_mut().zip(&series.error_estimates) {
+                *e = match (*e, *s) {
+                    (Some(a), Some(b)) => Some(a.max(b)),
+                    (a, b) => a.or(b),
+                };
+            }
+            Ok(series.values)
+        })?;
+        Ok(DiagonalSeries {
+            times: times.to_vec(),
+            values: Mat::from_fn(n, times.len(), |r, l| diagonals[l][r]),
+            info: probes.info,
+            error_estimates: estimates,
+        })
+    }
+
+    /// Fast path with its iteration count and final estimate (for benchmarks and
+    /// diagnostics): the kernel's own fast method, or the default one.
+    #[doc(hidden)]
+    pub fn apply_fast_report(&self, f: &[f64], t: f64) -> Result<(Vec<f64>, usize, f64), HeatError> {
+        check::time(t)?;
+        check::vector(f, self.n())?;
+        let (g, outcome) = crate::method::fast_report(&*self.prepared, &self.ops, f, t)?;
+        Ok((g, outcome.iterations, outcome.estimate))
+    }
 }
 
 /// One-shot `K_t f` with the default parameters (wFEM kernel, fast exact path).

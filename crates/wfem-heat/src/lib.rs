@@ -1,22 +1,27 @@
 //! # wfem-heat
 //!
 //! The wFEM heat kernel `K_t = exp(−t B⁻¹L) = X D_t Xᵀ B` (paper, Eq. (6)) applied to
-//! functions on a triangle mesh.
+//! functions on a triangle mesh, without computing the spectrum. Modules follow the paper:
 //!
-//! * [`HeatKernel`]: built once from [`mesh_fem::FemOperators`], applied to many functions
-//!   and times; [`heat`] is the one-shot version.
-//! * [`KernelKind`]: the wFEM kernel (consistent mass B), the lumped kernel (D, Eq. (7)) and
-//!   the linear kernel (B = I) of the paper's Table 1.
-//! * [`Method`]: the dense reference (Eq. (6)), the truncated spectral sum (Eq. (8)), the
-//!   Taylor and backward-Euler steps (Eq. (9)) and a fast exact path (shift-and-invert
-//!   rational Krylov, one real sparse Cholesky per t).
-//! * [`Eigenbasis`]: generalized eigenpairs `L x = λ M x`, dense or the k smallest.
-//! * Canonical basis and features (Sect. 4.1–4.2): [`canonical_basis`] (K_t eᵢ for many
-//!   anchors, one factorization set), [`canonical_limit`], [`auto_diffusion`],
-//!   [`eigenfunction_features`], [`feature_approximation`] (f = f_glob + f_loc over the
-//!   multiscale hierarchy tᵢ = (i/10)/λ_k).
-//! * Scale (Sect. 5): [`largest_eigenvalue`] (λ_n by Lanczos on M⁻¹L) and the scale-invariant
-//!   [`NormalizedHeatKernel`].
+//! * [`Operators`] — the one validated context: L, the mass M of a [`KernelKind`] (wFEM B,
+//!   lumped D, linear I; Table 1), their shared pattern, symbolic analysis and null space.
+//! * [`kernel`] — [`HeatKernel`]: a context with a prepared [`Method`], applied to many
+//!   functions and times (`K_t f`, and the kernel matrix `H_t = K_t M⁻¹`); [`heat`] is the
+//!   one-shot version. [`method`] lists the methods (Eq. (6), (8), (9), (11)–(13) and the fast
+//!   exact path, the default).
+//! * [`spectral`] — [`Eigenbasis`]: generalized eigenpairs `L x = λ M x`, dense or the k
+//!   smallest (Eq. (4), (8)).
+//! * [`rkhs`] — the time-dependent scalar product (Eq. (16)), the inverse `K_{−t}`, the
+//!   reproducing kernel `H_t = X D_{−t} Xᵀ` and the embeddings (Prop. 3.1, Eq. (15)–(20)).
+//! * [`distance`] — [`DiffusionDistance`] on any kernel (Eq. (18)).
+//! * [`basis`] — the canonical basis `K_t eᵢ` (Sect. 4.1, Eq. (21)).
+//! * [`approx`] — feature points and the feature-driven approximation f = f_glob + f_loc
+//!   (Sect. 4.2).
+//! * [`scale`] — λ_max and the scale-invariant kernel (Sect. 5).
+//! * [`diagonal`] — diagonals of kernel matrices by probing.
+//!
+//! The heat kernel *signature* (HKS) is a shape descriptor and is defined once, in the
+//! `shape-retrieval` crate, on top of [`HeatKernel::apply_kernel_matrix`] and [`Eigenbasis`].
 //!
 //! ```
 //! use mesh_fem::{assemble, generate, AssemblyParams};
@@ -24,12 +29,12 @@
 //!
 //! let mesh = generate::icosphere(3).with_area(4.0 * std::f64::consts::PI)?;
 //! let ops = assemble(&mesh, &AssemblyParams::default())?;
-//! let kernel = HeatKernel::new(&ops, HeatParams::default())?; // wFEM kernel, fast path
+//! let kernel = HeatKernel::new(&ops, HeatParams::default())?; // wFEM kernel, fast exact path
 //! let f: Vec<f64> = mesh.positions().iter().map(|p| p[0]).collect();
 //! let g = kernel.apply(&f, 0.01)?; // g = K_t f
 //! // The x coordinate is nearly an eigenfunction (λ ≈ 2 on the sphere of area 4π): g ≈ e^{−2t} f.
 //! assert!((g[0] / f[0] - (-0.02f64).exp()).abs() < 3e-3);
-//! # Ok::<(), wfem_heat::HeatError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
 //! **Sign convention.** L is symmetric positive semidefinite (positive diagonal, `L·1 = 0`);
@@ -37,33 +42,39 @@
 
 #![warn(missing_docs)]
 // Robustness (issue #8): no unwrap()/expect() on user-controlled data in library code; the few
-// justified ones carry `#[allow]` and an `// invariant:` comment (checked by tests/no_unwrap.rs).
+// justified ones carry `#[allow]` and an `// invariant:` comment (checked by tests/it/no_unwrap.rs).
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
-mod basis;
-mod eigen;
+pub mod approx;
+pub mod basis;
+mod check;
+pub mod diagonal;
+pub mod distance;
 mod error;
-mod kernel;
-mod krylov;
+pub mod kernel;
+pub mod method;
 mod null_space;
-mod sparse;
+mod operators;
+pub mod rkhs;
+pub mod scale;
+pub mod spectral;
 
-pub use basis::{
-    auto_diffusion, canonical_basis, canonical_limit, eigenfunction_features, extrema, feature_approximation,
-    global_component, largest_eigenvalue, multiscale_times, ApproxParams, AutoDiffusion, Coefficients,
-    FeatureApproximation, LargestEigenParams, Normalization, NormalizedHeatKernel, Persistence, ScaleApproximation,
-    SIGNIFICANT_PERSISTENCE,
-};
-// ---- operator algebra, RKHS and diffusion distances ----
-mod algebra;
-mod distance;
-pub use algebra::{
-    embedding_g, embedding_h, embeddings_h, inner_b, inner_t, inverse_cg, inverse_spectral, norm_b, rkhs_apply,
-    InverseParams, InverseReport, TruncationReport,
-};
-pub use distance::{DiagonalInfo, DiagonalMethod, DiffusionDistance, DistanceKind, DistanceParams};
-
-pub use eigen::{EigenParams, Eigenbasis, DENSE_MAX_VERTICES};
+pub use distance::{DiffusionDistance, DistanceKind, DistanceParams};
 pub use error::HeatError;
-pub use kernel::{heat, HeatKernel, HeatParams, KernelKind, Method};
-pub use krylov::FastParams;
+pub use kernel::{
+    heat, DiagonalParams, DiagonalSeries, HeatKernel, HeatParams, KernelDiagonal, TimeSeries, MAX_ROUNDING_ERROR,
+};
+/// The mesh and FEM operator crate, re-exported so that depending on `wfem-heat` alone is
+/// enough to build the operators.
+pub use mesh_fem;
+pub use method::Method;
+pub use operators::{AsSparse, Conditioning, KernelKind, Operators};
+/// The shifted-solver crate (rational approximations, backends), re-exported.
+pub use shifted_solve;
+pub use shifted_solve::{rng, Backend, KrylovParams};
+
+/// The README's examples, compiled as doc tests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
+pub use spectral::{EigenParams, Eigenbasis, DENSE_MAX_VERTICES};

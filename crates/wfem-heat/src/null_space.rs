@@ -19,8 +19,8 @@
 //! 1e−10·max L_ii of the component), so operators that are not Neumann Laplacians (e.g. with
 //! Dirichlet rows) are left alone.
 
-use faer::sparse::SparseColMat;
 use faer::Mat;
+use shifted_solve::OperatorPair;
 
 /// Relative tolerance on the row sums of L for a component to count as a null vector.
 const ROW_SUM_TOL: f64 = 1e-10;
@@ -34,14 +34,18 @@ pub(crate) struct NullSpace {
     weights: Vec<f64>,
     /// `1_cᵀM1_c` per component.
     masses: Vec<f64>,
+    /// The vertices of every connected component of the pattern (deflated or not), in
+    /// increasing order; components ordered by their smallest vertex.
+    components: Vec<Vec<usize>>,
 }
 
 impl NullSpace {
-    /// Components of the shared sparsity pattern of `stiffness` and `mass`, kept where
-    /// `L·1_c ≈ 0` and `1_cᵀM1_c` is positive and finite. O(nnz).
-    pub(crate) fn new(stiffness: &SparseColMat<usize, f64>, mass: &SparseColMat<usize, f64>) -> Self {
-        let n = stiffness.nrows();
-        let s = stiffness.symbolic();
+    /// Components of the shared sparsity pattern of the pair, kept where `L·1_c ≈ 0` and
+    /// `1_cᵀM1_c` is positive and finite. O(nnz).
+    pub(crate) fn new(pair: &OperatorPair) -> Self {
+        let n = pair.n();
+        let s = pair.pattern();
+        let stiffness = pair.stiffness_values();
         let mut label: Vec<Option<u32>> = vec![None; n];
         let mut count = 0u32;
         let mut stack = Vec::new();
@@ -61,14 +65,19 @@ impl NullSpace {
             }
             count += 1;
         }
-        // L is symmetric, so the column sums are the row sums.
         let k = count as usize;
+        let mut components: Vec<Vec<usize>> = vec![Vec::new(); k];
+        for (v, l) in label.iter().enumerate() {
+            components[comp(&label, v)].push(v);
+            debug_assert!(l.is_some());
+        }
+        // L is symmetric, so the column sums are the row sums.
         let mut worst_sum = vec![0.0f64; k];
         let mut max_diag = vec![0.0f64; k];
         for j in 0..n {
             let mut sum = 0.0;
             for p in s.col_range(j) {
-                let v = stiffness.val()[p];
+                let v = stiffness[p];
                 sum += v;
                 if s.row_idx()[p] == j {
                     max_diag[comp(&label, j)] = max_diag[comp(&label, j)].max(v.abs());
@@ -77,11 +86,7 @@ impl NullSpace {
             let c = comp(&label, j);
             worst_sum[c] = worst_sum[c].max(if sum.is_finite() { sum.abs() } else { f64::INFINITY });
         }
-        let ms = mass.symbolic();
-        let mut weights = vec![0.0; n];
-        for (j, w) in weights.iter_mut().enumerate() {
-            *w = mass.val()[ms.col_range(j)].iter().sum();
-        }
+        let weights = pair.mass_row_sums();
         let mut masses = vec![0.0; k];
         for (j, w) in weights.iter().enumerate() {
             masses[comp(&label, j)] += w;
@@ -96,7 +101,22 @@ impl NullSpace {
                 }
             }
         }
-        Self { label, weights, masses }
+        Self {
+            label,
+            weights,
+            masses,
+            components,
+        }
+    }
+
+    /// Whether every vertex belongs to a deflated component.
+    pub(crate) fn all_deflated(&self) -> bool {
+        self.label.iter().all(Option::is_some)
+    }
+
+    /// The connected components of the pattern (vertex lists).
+    pub(crate) fn components(&self) -> &[Vec<usize>] {
+        &self.components
     }
 
     /// Component coefficients `a_c = 1_cᵀM f / 1_cᵀM1_c` of column `col`.
@@ -122,6 +142,34 @@ impl NullSpace {
             for (i, l) in self.label.iter().enumerate() {
                 if let Some(c) = l {
                     out[(i, j)] -= a[*c as usize];
+                }
+            }
+            coefs.push(a);
+        }
+        (out, coefs)
+    }
+
+    /// For the kernel matrix `H_t = K_t M⁻¹`: since `(I − P)M⁻¹ = M⁻¹(I − Pᵀ)` with
+    /// `Pᵀg = Σ_c (1_cᵀ g / 1_cᵀM1_c) M1_c`,
+    /// `H_t g = Σ_c (1_cᵀ g / 1_cᵀM1_c) 1_c + (I − P) H_t (I − Pᵀ) g`.
+    /// Returns `((I − Pᵀ) g, coefficients 1_cᵀ g / 1_cᵀM1_c)` for every column; finish with
+    /// [`Self::restore`].
+    pub(crate) fn split_dual(&self, g: faer::MatRef<'_, f64>) -> (Mat<f64>, Vec<Vec<f64>>) {
+        let mut out = g.to_owned();
+        let mut coefs = Vec::with_capacity(g.ncols());
+        for j in 0..g.ncols() {
+            let mut a = vec![0.0; self.masses.len()];
+            for (i, l) in self.label.iter().enumerate() {
+                if let Some(c) = l {
+                    a[*c as usize] += g[(i, j)];
+                }
+            }
+            for (ac, m) in a.iter_mut().zip(&self.masses) {
+                *ac /= m;
+            }
+            for (i, l) in self.label.iter().enumerate() {
+                if let Some(c) = l {
+                    out[(i, j)] -= a[*c as usize] * self.weights[i];
                 }
             }
             coefs.push(a);

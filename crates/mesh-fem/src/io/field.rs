@@ -1,66 +1,12 @@
 //! Atomic writing of per-vertex fields (PLY/NPY/CSV) and meshes (OFF/OBJ/PLY), and reading
 //! fields back (NPY/CSV).
 
+use super::parse_error;
 use super::text::{parse_f64, show, Lines};
-use super::{io_error, parse_error};
+use super::{write_atomic, AtomicSet};
 use crate::{MeshError, TriMesh};
-use std::fs::{File, OpenOptions};
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// Writes a file atomically: `write` fills a temporary file in the same directory, which is
-/// flushed, fsynced and renamed onto `path`. If `write` (or any step) fails, the temporary
-/// file is removed and `path` is left as it was (absent, or with its old content).
-///
-/// # Errors
-/// [`MeshError::Io`] naming `path` for any failure, including an error returned by `write`.
-pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<(), MeshError> {
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| {
-            io_error(
-                path,
-                std::io::Error::new(std::io::ErrorKind::InvalidInput, "path names no file"),
-            )
-        })?
-        .to_string_lossy()
-        .into_owned();
-    let tmp = dir.join(format!(
-        ".{file_name}.tmp-{}-{}",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let file = OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .map_err(|e| io_error(path, e))?;
-    let result = (|| -> std::io::Result<()> {
-        let mut w = BufWriter::new(file);
-        write(&mut w)?;
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
-        drop(file);
-        std::fs::rename(&tmp, path)?;
-        // Make the rename itself durable where the platform allows syncing a directory.
-        #[cfg(unix)]
-        if let Ok(d) = File::open(&dir) {
-            let _ = d.sync_all();
-        }
-        Ok(())
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io_error(path, e));
-    }
-    Ok(())
-}
+use std::io::Write;
+use std::path::Path;
 
 fn extension(path: &Path) -> String {
     path.extension()
@@ -119,8 +65,42 @@ fn invalid_name(path: &Path, name: &str, why: &str) -> MeshError {
     }
 }
 
+/// A file format for per-vertex fields ([`write_field`], [`read_field`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FieldFormat {
+    /// Binary little-endian PLY: the mesh with one `double` vertex property per field.
+    Ply,
+    /// NumPy `.npy`: an n × k float64 array (1-D for one field).
+    Npy,
+    /// Comma-separated values with a header line of field names.
+    Csv,
+}
+
+impl FieldFormat {
+    /// The extensions, as a message lists them.
+    pub const EXTENSIONS: &'static str = ".ply, .npy, .csv";
+
+    /// The format named by a file extension (case-insensitive, without the dot), if any.
+    pub fn from_extension(extension: &str) -> Option<Self> {
+        match extension.to_ascii_lowercase().as_str() {
+            "ply" => Some(Self::Ply),
+            "npy" => Some(Self::Npy),
+            "csv" => Some(Self::Csv),
+            _ => None,
+        }
+    }
+
+    /// The format of a path, judged by its extension.
+    ///
+    /// # Errors
+    /// [`MeshError::UnknownFormat`] if the extension is missing or names no field format.
+    pub fn from_path(path: &Path) -> Result<Self, MeshError> {
+        Self::from_extension(&extension(path)).ok_or_else(|| unsupported(path, Self::EXTENSIONS))
+    }
+}
+
 /// Writes per-vertex fields for `mesh`, atomically ([`write_atomic`]); the format follows
-/// the extension:
+/// the extension ([`FieldFormat::from_path`]):
 ///
 /// * `.ply`: binary little-endian PLY with `double x, y, z`, one `double` vertex property per
 ///   field (named as given), optional `uchar red, green, blue`, and the faces as
@@ -142,9 +122,28 @@ pub fn write_field(
     fields: &[(&str, &[f64])],
     colors: Option<&[[u8; 3]]>,
 ) -> Result<(), MeshError> {
+    let format = FieldFormat::from_path(path)?;
+    let mut set = AtomicSet::new();
+    stage_field(&mut set, path, format, mesh, fields, colors)?;
+    set.commit()
+}
+
+/// [`write_field`] in a given format, staged in `set` so that it lands together with the
+/// set's other files ([`AtomicSet::commit`]).
+///
+/// # Errors
+/// As [`write_field`] (but for the format, which is given).
+pub fn stage_field(
+    set: &mut AtomicSet,
+    path: &Path,
+    format: FieldFormat,
+    mesh: &TriMesh,
+    fields: &[(&str, &[f64])],
+    colors: Option<&[[u8; 3]]>,
+) -> Result<(), MeshError> {
     check_fields(path, mesh, fields, colors)?;
-    match extension(path).as_str() {
-        "ply" => {
+    match format {
+        FieldFormat::Ply => {
             const RESERVED: [&str; 6] = ["x", "y", "z", "red", "green", "blue"];
             for (i, (name, _)) in fields.iter().enumerate() {
                 if name.is_empty() || !name.chars().all(|c| c.is_ascii_graphic()) {
@@ -161,9 +160,9 @@ pub fn write_field(
                     return Err(invalid_name(path, name, "appears twice"));
                 }
             }
-            write_atomic(path, |w| write_ply(w, mesh, fields, colors))
+            set.stage(path, |w| write_ply(w, mesh, fields, colors))
         }
-        "npy" => {
+        FieldFormat::Npy => {
             if fields.is_empty() {
                 return Err(invalid_name(
                     path,
@@ -171,9 +170,9 @@ pub fn write_field(
                     "list is empty: an NPY file needs at least one field",
                 ));
             }
-            write_atomic(path, |w| write_npy(w, mesh.n_vertices(), fields))
+            set.stage(path, |w| write_npy(w, mesh.n_vertices(), fields))
         }
-        "csv" => {
+        FieldFormat::Csv => {
             if fields.is_empty() {
                 return Err(invalid_name(
                     path,
@@ -186,7 +185,7 @@ pub fn write_field(
                     return Err(invalid_name(path, name, "contains a comma, quote or line break"));
                 }
             }
-            write_atomic(path, |w| {
+            set.stage(path, |w| {
                 let names: Vec<&str> = fields.iter().map(|(n, _)| *n).collect();
                 writeln!(w, "{}", names.join(","))?;
                 for i in 0..mesh.n_vertices() {
@@ -201,7 +200,6 @@ pub fn write_field(
                 Ok(())
             })
         }
-        _ => Err(unsupported(path, ".ply, .npy, .csv")),
     }
 }
 
@@ -273,22 +271,24 @@ fn write_npy(w: &mut dyn Write, n: usize, fields: &[(&str, &[f64])]) -> std::io:
 ///
 /// * `.npy`: float64 or float32 (either byte order), shape `(n,)` or `(n, 1)`.
 /// * `.csv`: one value per line; a first line that is not a number is taken as a header;
-///   blank lines are skipped.
+///   blank lines are skipped; a leading UTF-8 byte order mark (written by Excel and many
+///   Windows tools) is ignored.
+///
+/// Only regular files are read ([`super::read_regular_file`]): a FIFO is refused, not waited on.
 ///
 /// # Errors
 /// [`MeshError::FieldLength`] if the field does not have `n_vertices` values,
 /// [`MeshError::NonFiniteValue`] for NaN/∞, [`MeshError::Parse`] for malformed files,
 /// [`MeshError::UnknownFormat`] for another extension, [`MeshError::Io`] if unreadable.
 pub fn read_field(path: &Path, n_vertices: usize) -> Result<Vec<f64>, MeshError> {
-    let ext = extension(path);
-    if ext != "npy" && ext != "csv" {
-        return Err(unsupported(path, ".npy, .csv"));
-    }
-    let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
-    let values = if ext == "npy" {
-        parse_npy(&bytes, path)?
-    } else {
-        parse_csv(&bytes, path)?
+    let format = match FieldFormat::from_path(path) {
+        Ok(f @ (FieldFormat::Npy | FieldFormat::Csv)) => f,
+        _ => return Err(unsupported(path, ".npy, .csv")),
+    };
+    let bytes = super::read_regular_file(path)?;
+    let values = match format {
+        FieldFormat::Npy => parse_npy(&bytes, path)?,
+        _ => parse_csv(&bytes, path)?,
     };
     let name = path
         .file_name()
@@ -391,6 +391,9 @@ fn parse_npy(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {
 }
 
 fn parse_csv(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {
+    // Without this, "\u{feff}1.5" on the first line read as a non-numeric header and the field
+    // lost its first value (issue #16).
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     let mut values = Vec::with_capacity(bytes.len() / 8);
     let mut first = true;
     for (line_no, line) in Lines::new(bytes) {

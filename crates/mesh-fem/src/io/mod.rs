@@ -11,6 +11,9 @@
 //! * Faces with more than three corners are an error ([`MeshError::Polygon`]) unless
 //!   [`LoadOptions::triangulate_polygons`] is on; then a face `(v₀, v₁, …, v_{k−1})` becomes
 //!   the fan `(v₀, v_{i}, v_{i+1})`, i = 1 … k−2.
+//! * Only regular files are read ([`read_regular_file`]): a FIFO, socket, device or directory
+//!   is refused with [`MeshError::Io`] before it is opened, because opening a FIFO for reading
+//!   blocks until a writer appears (no `O_NONBLOCK` trick: the file type is checked first).
 //! * Bad data never panics: truncated or garbage files give [`MeshError::Parse`] with the
 //!   1-based line (0 for binary data), NaN/∞ coordinates give
 //!   [`MeshError::NonFiniteCoordinate`], indices give [`MeshError::IndexOutOfRange`] or
@@ -19,13 +22,15 @@
 //!
 //! # Writing
 //! [`write_atomic`] writes through a temporary file in the target directory and renames it
-//! into place, so a crash or an error never leaves a half-written file. [`write_field`] writes
+//! into place, so a crash or an error never leaves a half-written file; [`AtomicSet`] does the
+//! same for a set of files replaced all-or-nothing. [`write_field`] writes
 //! per-vertex fields as PLY (binary little-endian), NPY or CSV; [`read_field`] reads NPY/CSV
 //! fields back; [`write_mesh`] writes OFF, OBJ or PLY meshes.
 
 use crate::{MeshError, TriMesh};
 use std::path::Path;
 
+mod atomic;
 mod field;
 mod obj;
 mod off;
@@ -33,7 +38,8 @@ mod ply;
 mod stl;
 mod text;
 
-pub use field::{read_field, write_atomic, write_field, write_mesh};
+pub use atomic::{write_atomic, AtomicSet};
+pub use field::{read_field, stage_field, write_field, write_mesh, FieldFormat};
 
 /// A supported mesh file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -121,14 +127,63 @@ impl LoadReport {
 ///
 /// # Errors
 /// [`MeshError::UnknownFormat`] for an unsupported extension, [`MeshError::Io`] if the file
-/// cannot be read, and every error of [`load_bytes`].
+/// cannot be read or is not a regular file ([`read_regular_file`]), and every error of
+/// [`load_bytes`].
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<(TriMesh, LoadReport), MeshError> {
     let format = MeshFormat::from_path(path)?;
-    let bytes = std::fs::read(path).map_err(|source| MeshError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = read_regular_file(path)?;
     load_bytes(&bytes, format, path, opts)
+}
+
+/// Reads the whole of a regular file (a symbolic link to one is followed).
+///
+/// The file type is checked with [`std::fs::metadata`] *before* the file is opened: opening a
+/// FIFO for reading blocks until some process opens it for writing, and reading a device
+/// (`/dev/zero`) or a socket may never end, so anything but a regular file is refused up front.
+/// (Checking before opening leaves a window in which the path could be replaced; that needs a
+/// deliberate race by someone who can already write to the folder, while the blocking open
+/// was reachable by an ordinary mistake such as `wfem heat mesh.off --field <(…)>`.)
+///
+/// # Errors
+/// [`MeshError::Io`] naming `path`: kind `InvalidInput` for a directory, FIFO, socket or
+/// device; the operating system's error if the file is missing or unreadable.
+pub fn read_regular_file(path: &Path) -> Result<Vec<u8>, MeshError> {
+    let meta = std::fs::metadata(path).map_err(|e| io_error(path, e))?;
+    if !meta.file_type().is_file() {
+        return Err(io_error(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!(
+                    "{} is not a regular file; only regular files are read",
+                    file_kind(&meta.file_type())
+                ),
+            ),
+        ));
+    }
+    std::fs::read(path).map_err(|e| io_error(path, e))
+}
+
+/// "a directory", "a FIFO (named pipe)", … for error messages.
+fn file_kind(t: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+    }
+    if t.is_dir() {
+        "a directory"
+    } else {
+        "a special file"
+    }
 }
 
 /// Reads a mesh of the given format from memory. `name` is only used in error messages.

@@ -7,6 +7,7 @@ mod corpus;
 mod generate;
 mod io_obj_oracle;
 mod io_readers;
+mod io_special_files;
 mod io_writers;
 mod morse;
 mod mtx;

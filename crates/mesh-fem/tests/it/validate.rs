@@ -829,3 +829,39 @@ fn summaries_read_well() {
     insta::assert_snapshot!("repair_summary", rep.summary());
     insta::assert_snapshot!("repaired_validation_summary", validate(&fixed).summary());
 }
+
+/// Issue #16: needle and cap faces (an angle within 1e−4 rad of 0 or π) are reported as
+/// warnings naming the face, with the largest |cot|; well-shaped faces are not.
+#[test]
+fn needle_and_cap_faces_are_warned() {
+    let h = 1e-7;
+    // A cap (apex angle π − 4h) and a needle (angle ≈ h at vertex 3), plus a fine triangle.
+    let p = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.5, h, 0.0],
+        [10.0, 0.0, 0.0],
+        [11.0, 0.0, 0.0],
+        [11.0, h, 0.0],
+        [20.0, 0.0, 0.0],
+        [21.0, 0.0, 0.0],
+        [20.5, 0.8, 0.0],
+    ];
+    let mesh = TriMesh::new(p, vec![[0, 1, 2], [3, 4, 5], [6, 7, 8]]).unwrap();
+    let report = validate(&mesh);
+    assert!(report.is_usable());
+    let needles: Vec<(usize, f64)> = report
+        .problems
+        .iter()
+        .filter_map(|p| match p {
+            Problem::NeedleFace { face, cotangent, .. } => Some((*face, *cotangent)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(needles.iter().map(|n| n.0).collect::<Vec<_>>(), [0, 1]);
+    assert_eq!(report.counts.needle_faces, 2);
+    for (face, cot) in needles {
+        assert!(cot > 1e6 && cot.is_finite(), "face {face}: {cot}");
+    }
+    assert!(report.summary().contains("needle or cap"), "{}", report.summary());
+}

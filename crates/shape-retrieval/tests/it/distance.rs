@@ -10,7 +10,10 @@ fn chi_squared_matches_a_hand_computation() {
     assert!((chi_squared_distance(&a, &b).unwrap() - 1.0 / 3.0).abs() < 1e-15);
     assert_eq!(l1_distance(&a, &b).unwrap(), 1.0);
     // Symmetric, zero on equal histograms, 1 (resp. 2 for L1) on disjoint ones; empty bins skipped.
-    assert_eq!(chi_squared_distance(&b, &a).unwrap(), chi_squared_distance(&a, &b).unwrap());
+    assert_eq!(
+        chi_squared_distance(&b, &a).unwrap(),
+        chi_squared_distance(&a, &b).unwrap()
+    );
     assert_eq!(chi_squared_distance(&a, &a).unwrap(), 0.0);
     assert_eq!(chi_squared_distance(&[1.0, 0.0], &[0.0, 1.0]).unwrap(), 1.0);
     assert_eq!(l1_distance(&[1.0, 0.0], &[0.0, 1.0]).unwrap(), 2.0);

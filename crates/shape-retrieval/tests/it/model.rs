@@ -54,7 +54,12 @@ fn snapshot_of_a_small_retrieval_run() {
             .collect();
         out += &format!("{}: {}\n", e.name, cells.join(", "));
     }
-    let bag: Vec<String> = index.entries()[0].signature.bag.iter().map(|x| format!("{x:.4}")).collect();
+    let bag: Vec<String> = index.entries()[0]
+        .signature
+        .bag
+        .iter()
+        .map(|x| format!("{x:.4}"))
+        .collect();
     out += &format!("bag(bumpy): {}\n", bag.join(" "));
     insta::assert_snapshot!("small_retrieval_run", out);
 }
@@ -65,7 +70,9 @@ fn snapshot_of_default_descriptor_values() {
     let f = ShapeFeatures::compute("bumpy", &small_collection()[0].1, &settings.descriptor, &settings.bags).unwrap();
     let mut out = format!("{} × {}\n", f.descriptors.nrows(), f.descriptors.ncols());
     for i in (0..f.descriptors.nrows()).step_by(20) {
-        let row: Vec<String> = (0..f.descriptors.ncols()).map(|j| sig(f.descriptors[(i, j)], 4)).collect();
+        let row: Vec<String> = (0..f.descriptors.ncols())
+            .map(|j| sig(f.descriptors[(i, j)], 4))
+            .collect();
         out += &format!("v{i:03}: {}\n", row.join(" "));
     }
     insta::assert_snapshot!("default_descriptor_bumpy2_k30", out);
@@ -99,7 +106,10 @@ fn z_scoring_statistics_are_those_of_the_pooled_training_descriptors() {
     let d = settings.descriptor.descriptor.dimension();
     let n: usize = f.iter().map(|x| x.descriptors.nrows()).sum();
     for j in 0..d {
-        let all: Vec<f64> = f.iter().flat_map(|x| x.descriptors.col(j).iter().copied().collect::<Vec<_>>()).collect();
+        let all: Vec<f64> = f
+            .iter()
+            .flat_map(|x| x.descriptors.col(j).iter().copied().collect::<Vec<_>>())
+            .collect();
         let m = all.iter().sum::<f64>() / n as f64;
         let s = (all.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n as f64).sqrt();
         assert!((z.mean()[j] - m).abs() <= 1e-12 * m.abs().max(1.0));
@@ -167,7 +177,10 @@ fn kernel_assignment_matches_its_definition() {
     let x = Mat::from_fn(4, 2, |i, j| 0.3 * i as f64 - 0.2 * j as f64 + 0.1);
     let k = v.kernel_assignment(x.as_ref()).unwrap();
     let d2 = |i: usize, w: usize| (0..2).map(|j| (x[(i, j)] - words[(w, j)]).powi(2)).sum::<f64>();
-    let m = (0..4).flat_map(|i| (0..3).map(move |w| (i, w))).map(|(i, w)| d2(i, w)).fold(f64::INFINITY, f64::min);
+    let m = (0..4)
+        .flat_map(|i| (0..3).map(move |w| (i, w)))
+        .map(|(i, w)| d2(i, w))
+        .fold(f64::INFINITY, f64::min);
     for i in 0..4 {
         for w in 0..3 {
             let want = (-(d2(i, w) - m) / (2.0 * 0.49)).exp();
@@ -196,7 +209,9 @@ fn shape_dna_is_scale_invariant_and_its_distance_is_the_mean_log_gap() {
     };
     let mesh = mesh_fem::generate::bumpy(2);
     let a = g.compute(&mut settings.shape(&mesh).unwrap()).unwrap();
-    let b = g.compute(&mut settings.shape(&mesh.scaled(0.01).unwrap()).unwrap()).unwrap();
+    let b = g
+        .compute(&mut settings.shape(&mesh.scaled(0.01).unwrap()).unwrap())
+        .unwrap();
     assert_eq!(a.len(), 8);
     for (x, y) in a.iter().zip(&b) {
         assert!((x - y).abs() < 1e-9, "{x} vs {y}");
@@ -275,7 +290,10 @@ fn invalid_settings_and_inputs_are_typed_errors() {
     });
     assert!(matches!(
         RetrievalIndex::build(&shapes, &settings, None),
-        Err(RetrievalError::InvalidParameter { name: "global eigenvalues", .. })
+        Err(RetrievalError::InvalidParameter {
+            name: "global eigenvalues",
+            ..
+        })
     ));
     settings.bags.global = Some(GlobalSignature {
         eigenvalues: 3,
@@ -283,7 +301,10 @@ fn invalid_settings_and_inputs_are_typed_errors() {
     });
     assert!(matches!(
         RetrievalIndex::build(&shapes, &settings, None),
-        Err(RetrievalError::InvalidParameter { name: "global weight", .. })
+        Err(RetrievalError::InvalidParameter {
+            name: "global weight",
+            ..
+        })
     ));
     let mut settings = small_settings();
     settings.bags.weights = VertexWeights::CappedArea { factor: -1.0 };
@@ -306,10 +327,16 @@ fn invalid_settings_and_inputs_are_typed_errors() {
     };
     assert!(matches!(
         settings.descriptor.validate(),
-        Err(RetrievalError::InvalidParameter { name: "frequencies", .. })
+        Err(RetrievalError::InvalidParameter {
+            name: "frequencies",
+            ..
+        })
     ));
     settings.descriptor.descriptor = DescriptorSpec::Dhk2 { times: vec![] };
-    assert!(matches!(settings.descriptor.validate(), Err(RetrievalError::Empty { .. })));
+    assert!(matches!(
+        settings.descriptor.validate(),
+        Err(RetrievalError::Empty { .. })
+    ));
     settings.descriptor.descriptor = DescriptorSpec::Dhk2 { times: vec![1.0, -1.0] };
     assert!(matches!(
         settings.descriptor.validate(),
@@ -335,9 +362,12 @@ fn invalid_settings_and_inputs_are_typed_errors() {
         eigenvalues: 3,
         weight: 1.0,
     });
-    let err = ShapeFeatures::compute_many(&[("twins".to_string(), two)], &settings.descriptor, &settings.bags)
-        .unwrap_err();
-    assert!(matches!(&err, RetrievalError::Shape { name, .. } if name == "twins"), "{err}");
+    let err =
+        ShapeFeatures::compute_many(&[("twins".to_string(), two)], &settings.descriptor, &settings.bags).unwrap_err();
+    assert!(
+        matches!(&err, RetrievalError::Shape { name, .. } if name == "twins"),
+        "{err}"
+    );
     assert!(err.to_string().starts_with("twins: "), "{err}");
 }
 
@@ -360,8 +390,14 @@ fn stored_parts_are_validated() {
     ] {
         let err = RetrievalIndex::from_parts(vocabulary.clone(), index.bags().clone(), vec![bad]).unwrap_err();
         let text = err.to_string();
-        assert!(matches!(err, RetrievalError::InvalidModel { what: "index", .. }), "{text}");
-        assert!(text.contains(what) && text.contains("bad.off") && !text.contains("inf"), "{text}");
+        assert!(
+            matches!(err, RetrievalError::InvalidModel { what: "index", .. }),
+            "{text}"
+        );
+        assert!(
+            text.contains(what) && text.contains("bad.off") && !text.contains("inf"),
+            "{text}"
+        );
     }
     // Words of another dimension than the descriptor's.
     let words = Vocabulary::new(Mat::from_fn(6, 3, |i, j| (i + j) as f64), 1.0).unwrap();
@@ -373,7 +409,10 @@ fn stored_parts_are_validated() {
         vocabulary.info().clone(),
     )
     .unwrap_err();
-    assert!(matches!(err, RetrievalError::InvalidModel { what: "vocabulary", .. }), "{err}");
+    assert!(
+        matches!(err, RetrievalError::InvalidModel { what: "vocabulary", .. }),
+        "{err}"
+    );
     // A query of the wrong length is refused by rank.
     let q = ShapeSignature {
         bag: vec![1.0],

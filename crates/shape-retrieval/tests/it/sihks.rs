@@ -242,11 +242,16 @@ fn sihks_area_unit_is_exactly_scale_invariant() {
     }
     // The area unit needs the area.
     assert!(matches!(
-        scale_invariant_hks(&Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref()).unwrap(), &params),
+        scale_invariant_hks(
+            &Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref()).unwrap(),
+            &params
+        ),
         Err(RetrievalError::AreaRequired)
     ));
     assert!(matches!(
-        Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref()).unwrap().with_area(-1.0),
+        Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref())
+            .unwrap()
+            .with_area(-1.0),
         Err(RetrievalError::InvalidParameter { name: "area", .. })
     ));
     assert!(matches!(

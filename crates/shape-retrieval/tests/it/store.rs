@@ -53,7 +53,10 @@ fn bad_files_are_refused_with_the_culprit_named() {
     let text = dir.path().join("mesh.off");
     std::fs::write(&text, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
     let err = JsonFile::new(&text).load_index().unwrap_err();
-    assert!(matches!(err, RetrievalError::Storage { .. }) && err.to_string().contains("mesh.off"), "{err}");
+    assert!(
+        matches!(err, RetrievalError::Storage { .. }) && err.to_string().contains("mesh.off"),
+        "{err}"
+    );
     // A vocabulary file is not an index, and the other way round.
     let vocab = dir.path().join("vocab.json");
     JsonFile::new(&vocab).save_vocabulary(index().vocabulary()).unwrap();
@@ -69,7 +72,10 @@ fn bad_files_are_refused_with_the_culprit_named() {
     let e = load_edited(|v| v["entries"][1]["bag"][0] = serde_json::json!(1e308));
     assert!(invalid(&e), "{e:?}");
     let msg = e.unwrap_err().to_string();
-    assert!(msg.contains("entry 1") && msg.contains("1e308") && !msg.contains("inf"), "{msg}");
+    assert!(
+        msg.contains("entry 1") && msg.contains("1e308") && !msg.contains("inf"),
+        "{msg}"
+    );
     // A word of another dimension, a non-positive σ, z-score statistics of the wrong length.
     assert!(invalid(&load_edited(|v| {
         v["vocabulary"]["words"][3].as_array_mut().unwrap().push(0.0.into());

@@ -246,9 +246,9 @@ fn ldlt_matches_pivoted_lu_on_every_pole() {
 /// from A⁻¹G and evaluates Q(s) instead of R(s)) equals the pivoted LU's.
 #[test]
 fn multi_shift_matches_dense_rational_operator_and_lu() {
-    let params = MultiShiftParams {
+    let params = KrylovParams {
         tol: 1e-13,
-        ..MultiShiftParams::default()
+        ..KrylovParams::default()
     };
     let cases = [mesh_pair(3), bumpy_pair(3), random_pair(150, 3)];
     for (case, (l, b)) in cases.iter().enumerate() {
@@ -287,15 +287,15 @@ fn multi_shift_errors_are_typed() {
     let (l, b) = mesh_pair(2);
     let n = l.nrows();
     for bad in [
-        MultiShiftParams {
+        KrylovParams {
             gamma: 0.0,
             ..Default::default()
         },
-        MultiShiftParams {
+        KrylovParams {
             tol: 1.5,
             ..Default::default()
         },
-        MultiShiftParams {
+        KrylovParams {
             max_iter: 0,
             ..Default::default()
         },
@@ -303,7 +303,7 @@ fn multi_shift_errors_are_typed() {
         let err = ShiftedSolver::new(l.as_ref(), b.as_ref(), Backend::MultiShift(bad)).unwrap_err();
         assert!(matches!(err, SolveError::InvalidParameter { .. }), "{err:?}");
     }
-    let capped = MultiShiftParams {
+    let capped = KrylovParams {
         max_iter: 2,
         ..Default::default()
     };

@@ -5,6 +5,7 @@ mod common;
 
 mod backends;
 mod condition;
+mod eigen;
 mod errors;
 mod singular;
 mod tables;

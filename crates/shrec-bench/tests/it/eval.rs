@@ -1,7 +1,7 @@
 //! End-to-end run of `cargo xtask shrec-eval --subset small` on real TOSCA shapes (generated
 //! into a temporary folder), with its rounded tables snapshotted.
 
-use xtask::eval::{markdown, run, verdicts, EvalOptions, Subset};
+use shrec_bench::eval::{markdown, run, verdicts, EvalOptions, Subset};
 
 #[test]
 fn small_subset_end_to_end() {

@@ -3,9 +3,9 @@
 //! real TOSCA shape.
 
 use mesh_fem::generate::bumpy;
-use mesh_fem::transform::EdgeGraph;
 use mesh_fem::TriMesh;
-use xtask::shrec::*;
+use shrec_bench::synth::*;
+use shrec_bench::transform::EdgeGraph;
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
@@ -139,7 +139,7 @@ fn noise_has_the_requested_standard_deviation() {
 #[test]
 fn shot_noise_moves_the_requested_vertices_along_the_normal() {
     let b = base();
-    let normals = mesh_fem::transform::vertex_normals(&b.mesh);
+    let normals = shrec_bench::transform::vertex_normals(&b.mesh);
     for s in 1..=5u8 {
         let t = run(&b, Class::ShotNoise, s, 3);
         let a = SHOT_AMPLITUDE * b.mean_edge;

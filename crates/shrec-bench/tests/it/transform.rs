@@ -1,11 +1,11 @@
 //! Tests of `mesh_fem::transform` against independent brute-force references.
 
 use mesh_fem::generate::{bumpy, grid, icosphere, irregular_sphere};
-use mesh_fem::transform::{
+use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
+use shrec_bench::transform::{
     close_pairs, largest_component, qem_decimate, submesh, vertex_normals, weld_vertices, EdgeGraph, QemDecimator,
     QemParams,
 };
-use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
 use std::collections::{BTreeMap, HashMap};
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -271,7 +271,7 @@ fn welding_merges_pairs_and_drops_collapsed_faces() {
     ));
 }
 
-fn check_decimation(m: &TriMesh, d: &mesh_fem::transform::DerivedMesh) {
+fn check_decimation(m: &TriMesh, d: &shrec_bench::transform::DerivedMesh) {
     assert!(d.source_vertex.windows(2).all(|w| w[0] < w[1]));
     for (i, &s) in d.source_vertex.iter().enumerate() {
         assert_eq!(d.mesh.positions()[i], m.positions()[s as usize], "survivor {s} moved");

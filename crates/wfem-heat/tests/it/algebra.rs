@@ -4,13 +4,15 @@
 
 use crate::common;
 
+use common::wfem;
 use common::{dot, matvec, ops_of, unit};
 use faer::Mat;
 use mesh_fem::{generate, FemOperators};
-use wfem_heat::{
-    embedding_g, embeddings_h, inner_b, inner_t, inverse_cg, inverse_spectral, norm_b, rkhs_apply, EigenParams,
-    Eigenbasis, HeatError, HeatKernel, HeatParams, InverseParams, KernelKind, Method,
+use wfem_heat::rkhs::{
+    diffusion_embeddings, heat_inner_product, inverse_cg, inverse_spectral, reproducing_embedding,
+    reproducing_kernel_apply, InverseParams,
 };
+use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KernelKind, Method};
 
 /// Small meshes (area 4π): the brief's icosphere(2), irregular_sphere(2, 5.6), grid(15, 15).
 fn small_meshes() -> Vec<(&'static str, FemOperators)> {
@@ -22,7 +24,14 @@ fn small_meshes() -> Vec<(&'static str, FemOperators)> {
 }
 
 fn rational(ops: &FemOperators) -> HeatKernel {
-    HeatKernel::new(ops, HeatParams::default()).unwrap()
+    HeatKernel::new(
+        ops,
+        HeatParams {
+            method: Method::rational(shifted_solve::DEFAULT_DEGREE),
+            ..Default::default()
+        },
+    )
+    .unwrap()
 }
 
 fn dense(ops: &FemOperators) -> Eigenbasis {
@@ -44,7 +53,7 @@ fn col(m: &Mat<f64>, j: usize) -> Vec<f64> {
 /// ‖a − b‖_B / ‖b‖_B.
 fn rel_b(ops: &FemOperators, a: &[f64], b: &[f64]) -> f64 {
     let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
-    norm_b(&ops.mass, &d).unwrap() / norm_b(&ops.mass, b).unwrap()
+    wfem(ops).mass_norm(&d).unwrap() / wfem(ops).mass_norm(b).unwrap()
 }
 
 /// A band-limited function: a fixed combination of the first `k` eigenvectors.
@@ -83,7 +92,7 @@ fn semigroup_and_commutativity_to_the_rational_error() {
             let ksum = k.apply(&f, t1 + t2).unwrap();
             let exact = d.apply(&f, t1 + t2).unwrap();
             // Each application errs by at most E_16 ≈ 2e−14 (float floor) in the B→B norm.
-            let scale = norm_b(&ops.mass, &f).unwrap() / norm_b(&ops.mass, &exact).unwrap();
+            let scale = wfem(&ops).mass_norm(&f).unwrap() / wfem(&ops).mass_norm(&exact).unwrap();
             for (what, v) in [("K_t1 K_t2", &k12), ("K_t2 K_t1", &k21), ("K_(t1+t2)", &ksum)] {
                 let e = rel_b(&ops, v, &exact) / scale;
                 assert!(e < 2e-13, "{name} t=({t1},{t2}) {what}: error {e:e}");
@@ -157,7 +166,7 @@ fn spectral_inverse_round_trip_and_report() {
         let t = 0.1;
         let f = band_limited(&basis, 9);
         let kb = truncate(&basis, 16);
-        let (g, report) = inverse_spectral(&kb, &ops.mass, &f, t).unwrap();
+        let (g, report) = inverse_spectral(&kb, &wfem(&ops), &f, t).unwrap();
         assert_eq!(report.k, 16);
         assert_eq!(report.lambda_k, basis.values[15]);
         assert!((report.amplification - (t * basis.values[15]).exp()).abs() < 1e-12 * report.amplification);
@@ -168,15 +177,15 @@ fn spectral_inverse_round_trip_and_report() {
         assert!(e < 1e-12, "{name}: round trip {e:e}");
         // The same with the Lanczos pairs.
         let part = Eigenbasis::partial(&ops.stiffness, &ops.mass, 16, &EigenParams::default()).unwrap();
-        let (g2, _) = inverse_spectral(&part, &ops.mass, &f, t).unwrap();
+        let (g2, _) = inverse_spectral(&part, &wfem(&ops), &f, t).unwrap();
         let e = rel_b(&ops, &g2, &g);
         assert!(e < 1e-8, "{name}: partial vs dense {e:e}");
         // A rough f: the report states what was dropped, exactly ‖f − X_k X_kᵀ B f‖_B.
         let r = rough(ops.stiffness.nrows());
-        let (_, rep) = inverse_spectral(&kb, &ops.mass, &r, t).unwrap();
+        let (_, rep) = inverse_spectral(&kb, &wfem(&ops), &r, t).unwrap();
         let bf = matvec(&ops.mass, &r);
         let kept: f64 = (0..16).map(|m| dot(&col(&basis.vectors, m), &bf).powi(2)).sum();
-        let total = norm_b(&ops.mass, &r).unwrap().powi(2);
+        let total = wfem(&ops).mass_norm(&r).unwrap().powi(2);
         let expected = (total - kept).sqrt();
         assert!(
             (rep.dropped_norm - expected).abs() < 1e-8 * total.sqrt(),
@@ -196,13 +205,13 @@ fn cg_inverse_round_trip_on_band_limited_data() {
         let (g, rep) = inverse_cg(&rk, &f, t, &InverseParams::default()).unwrap();
         // Reference truncated to the band of f: the full basis would amplify the rounding
         // noise of f's high-frequency components by e^{tλ_max} (the caveat of the inverse).
-        let (exact, _) = inverse_spectral(&truncate(&basis, 9), &ops.mass, &f, t).unwrap();
+        let (exact, _) = inverse_spectral(&truncate(&basis, 9), &wfem(&ops), &f, t).unwrap();
         let e = rel_b(&ops, &g, &exact);
         assert!(e < 1e-9, "{name}: K_(-t) f error {e:e}, {rep:?}");
         let back = rk.apply(&g, t).unwrap();
         assert!(rel_b(&ops, &back, &f) < 1e-9, "{name}: round trip");
         assert!(rep.relative_residual < 1e-9, "{name}: {rep:?}");
-        let amp = norm_b(&ops.mass, &exact).unwrap() / norm_b(&ops.mass, &f).unwrap();
+        let amp = wfem(&ops).mass_norm(&exact).unwrap() / wfem(&ops).mass_norm(&f).unwrap();
         assert!((rep.amplification - amp).abs() < 1e-8 * amp, "{name}: {rep:?} vs {amp}");
         assert!(rep.iterations <= 40, "{name}: {rep:?}");
         eprintln!("{name}: CG inverse error {e:e}, {rep:?}");
@@ -243,7 +252,7 @@ fn cg_inverse_refuses_rough_data() {
     ));
     // The spectral inverse refuses an overflowing e^{tλ_k}.
     assert!(matches!(
-        inverse_spectral(&basis, &ops.mass, &f, 10.0),
+        inverse_spectral(&basis, &wfem(&ops), &f, 10.0),
         Err(HeatError::IllConditionedInverse { .. })
     ));
     // Bad parameters are named.
@@ -267,7 +276,7 @@ fn scalar_products_symmetry_positivity_and_dense_reference() {
         let f = rough(n);
         let g: Vec<f64> = (0..n).map(|i| ((i * 7) % 11) as f64 - 5.0).collect();
         // ⟨f, g⟩_B = fᵀBg.
-        let fb = inner_b(&ops.mass, &f, &g).unwrap();
+        let fb = wfem(&ops).mass_inner_product(&f, &g).unwrap();
         assert!((fb - dot(&f, &matvec(&ops.mass, &g))).abs() < 1e-13 * fb.abs().max(1.0));
         // ⟨f, g⟩_t = fᵀ B X D_t Xᵀ B g (Eq. (16)).
         let bf = matvec(&ops.mass, &f);
@@ -276,13 +285,13 @@ fn scalar_products_symmetry_positivity_and_dense_reference() {
         let exact: f64 = (0..n)
             .map(|m| (-t * basis.values[m]).exp() * dot(&col(x, m), &bf) * dot(&col(x, m), &bg))
             .sum();
-        let fg = inner_t(&rk, &f, &g, t).unwrap();
-        let gf = inner_t(&rk, &g, &f, t).unwrap();
-        let scale = norm_b(&ops.mass, &f).unwrap() * norm_b(&ops.mass, &g).unwrap();
+        let fg = heat_inner_product(&rk, &f, &g, t).unwrap();
+        let gf = heat_inner_product(&rk, &g, &f, t).unwrap();
+        let scale = wfem(&ops).mass_norm(&f).unwrap() * wfem(&ops).mass_norm(&g).unwrap();
         assert!((fg - exact).abs() < 1e-13 * scale, "{name}: {fg} vs {exact}");
         assert!((fg - gf).abs() < 1e-13 * scale, "{name}: symmetry {fg} vs {gf}");
         for v in [&f, &g, &unit(n, 3)] {
-            let vv = inner_t(&rk, v, v, t).unwrap();
+            let vv = heat_inner_product(&rk, v, v, t).unwrap();
             assert!(vv > 0.0, "{name}: ⟨v, v⟩_t = {vv}");
         }
     }
@@ -299,7 +308,7 @@ fn eq17_on_eigenvectors_has_negative_exponents() {
             let d: Vec<f64> = (0..basis.vectors.nrows())
                 .map(|r| basis.vectors[(r, i)] - basis.vectors[(r, j)])
                 .collect();
-            let got = inner_t(&rk, &d, &d, t).unwrap();
+            let got = heat_inner_product(&rk, &d, &d, t).unwrap();
             let (li, lj) = (basis.values[i], basis.values[j]);
             let corrected = (-li * t).exp() + (-lj * t).exp();
             let printed = (li * t).exp() + (lj * t).exp();
@@ -324,11 +333,11 @@ fn reproduction_property() {
         let t = 2e-3;
         let f = rough(n);
         for i in [0, n / 2, n - 1] {
-            let (hi, rep) = rkhs_apply(&basis, &ops.mass, &unit(n, i), t).unwrap();
+            let (hi, rep) = reproducing_kernel_apply(&basis, &wfem(&ops), &unit(n, i), t).unwrap();
             assert!(rep.relative_dropped() < 1e-10, "{name}: {rep:?}");
-            let v = inner_t(&rk, &hi, &f, t).unwrap();
+            let v = heat_inner_product(&rk, &hi, &f, t).unwrap();
             // Error of the rational K_t: E·‖H_t e_i‖_B‖f‖_B.
-            let tol = 1e-13 * norm_b(&ops.mass, &hi).unwrap() * norm_b(&ops.mass, &f).unwrap();
+            let tol = 1e-13 * wfem(&ops).mass_norm(&hi).unwrap() * wfem(&ops).mass_norm(&f).unwrap();
             assert!((v - f[i]).abs() < tol, "{name} i={i}: {v} vs {}", f[i]);
         }
         // Truncated basis, band-limited f, larger t.
@@ -336,11 +345,11 @@ fn reproduction_property() {
         let kb = truncate(&basis, 25);
         let f = band_limited(&basis, 16);
         for i in [1, n / 3] {
-            let (hi, rep) = rkhs_apply(&kb, &ops.mass, &unit(n, i), t).unwrap();
+            let (hi, rep) = reproducing_kernel_apply(&kb, &wfem(&ops), &unit(n, i), t).unwrap();
             assert_eq!(rep.k, 25);
             assert!(rep.relative_dropped() > 0.5, "{name}: e_i is not band-limited: {rep:?}");
-            let v = inner_t(&rk, &hi, &f, t).unwrap();
-            let tol = 1e-13 * norm_b(&ops.mass, &hi).unwrap() * norm_b(&ops.mass, &f).unwrap();
+            let v = heat_inner_product(&rk, &hi, &f, t).unwrap();
+            let tol = 1e-13 * wfem(&ops).mass_norm(&hi).unwrap() * wfem(&ops).mass_norm(&f).unwrap();
             assert!((v - f[i]).abs() < tol, "{name} i={i}: {v} vs {} (tol {tol:e})", f[i]);
         }
     }
@@ -357,13 +366,13 @@ fn eq18_gram_identities() {
         let x = &basis.vectors;
         let t = 0.1;
         let verts = [0, 5, n / 2, n - 2];
-        let h = embeddings_h(&rk, &verts, t).unwrap();
+        let h = diffusion_embeddings(&rk, &verts, t).unwrap();
         // S_t(i,j) = Σ_m e^{−λ_m t} (Bx_m)_i (Bx_m)_j.
         let bx: Vec<Vec<f64>> = (0..n).map(|m| matvec(&ops.mass, &col(x, m))).collect();
         for (a, &i) in verts.iter().enumerate() {
             for (b, &j) in verts.iter().enumerate() {
                 let s: f64 = (0..n).map(|m| (-t * basis.values[m]).exp() * bx[m][i] * bx[m][j]).sum();
-                let got = inner_b(&ops.mass, &col(&h, a), &col(&h, b)).unwrap();
+                let got = wfem(&ops).mass_inner_product(&col(&h, a), &col(&h, b)).unwrap();
                 let scale = (ops.mass.val().iter().fold(0.0f64, |u, v| u.max(v.abs()))).max(s.abs());
                 assert!((got - s).abs() < 1e-12 * scale, "{name} S({i},{j}): {got} vs {s}");
             }
@@ -374,14 +383,14 @@ fn eq18_gram_identities() {
             let k = basis_k.values.len();
             let g: Vec<Vec<f64>> = verts
                 .iter()
-                .map(|&i| embedding_g(&basis_k, &ops.mass, i, tt).unwrap().0)
+                .map(|&i| reproducing_embedding(&basis_k, &wfem(&ops), i, tt).unwrap().0)
                 .collect();
             for (a, &i) in verts.iter().enumerate() {
                 for (b, &j) in verts.iter().enumerate() {
                     let hij: f64 = (0..k)
                         .map(|m| (tt * basis.values[m]).exp() * x[(i, m)] * x[(j, m)])
                         .sum();
-                    let got = inner_b(&ops.mass, &g[a], &g[b]).unwrap();
+                    let got = wfem(&ops).mass_inner_product(&g[a], &g[b]).unwrap();
                     let hii: f64 = (0..k).map(|m| (tt * basis.values[m]).exp() * x[(i, m)].powi(2)).sum();
                     assert!(
                         (got - hij).abs() < 1e-10 * hii,
@@ -400,28 +409,54 @@ fn errors_are_typed() {
     let basis = dense(&ops);
     let rk = rational(&ops);
     assert!(matches!(
-        inner_b(&ops.mass, &vec![1.0; n - 1], &vec![1.0; n]),
+        wfem(&ops).mass_inner_product(&vec![1.0; n - 1], &vec![1.0; n]),
         Err(HeatError::LengthMismatch { .. })
     ));
     let mut bad = vec![1.0; n];
     bad[2] = f64::NAN;
     assert!(matches!(
-        inner_t(&rk, &bad, &vec![1.0; n], 0.1),
+        heat_inner_product(&rk, &bad, &vec![1.0; n], 0.1),
         Err(HeatError::NonFiniteInput { row: 2, .. })
     ));
     assert!(matches!(
-        embeddings_h(&rk, &[0, n], 0.1),
+        diffusion_embeddings(&rk, &[0, n], 0.1),
         Err(HeatError::VertexOutOfRange { index, .. }) if index == n
     ));
     assert!(matches!(
-        embedding_g(&basis, &ops.mass, n + 3, 0.1),
+        reproducing_embedding(&basis, &wfem(&ops), n + 3, 0.1),
         Err(HeatError::VertexOutOfRange { .. })
     ));
     assert!(matches!(
-        inverse_spectral(&basis, &ops.mass, &vec![1.0; n], -1.0),
+        inverse_spectral(&basis, &wfem(&ops), &vec![1.0; n], -1.0),
         Err(HeatError::InvalidTime { .. })
     ));
     // A zero right-hand side has the zero inverse.
     let (g, rep) = inverse_cg(&rk, &vec![0.0; n], 0.1, &InverseParams::default()).unwrap();
     assert!(g.iter().all(|&v| v == 0.0) && rep.iterations == 0);
+}
+
+/// Issue #16: `inverse_cg` with its default options inverts K_t on a smooth field with the
+/// default kernel (it refused one before: the stopping tolerance sat below what K_t is
+/// evaluated to).
+#[test]
+fn issue_16_inverse_cg_default_on_a_smooth_field() {
+    for (name, ops) in small_meshes() {
+        let n = ops.n();
+        let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+        let dense = dense(&ops);
+        // A smooth field: the first 6 eigenfunctions with decaying weights.
+        let f: Vec<f64> = (0..n)
+            .map(|i| (1..7).map(|k| dense.vectors[(i, k)] / k as f64).sum())
+            .collect();
+        for t in [1e-3, 1e-2, 0.1] {
+            let (g, report) =
+                inverse_cg(&kernel, &f, t, &InverseParams::default()).unwrap_or_else(|e| panic!("{name} t = {t}: {e}"));
+            let back = kernel.apply(&g, t).unwrap();
+            let err = wfem(&ops)
+                .mass_norm(&back.iter().zip(&f).map(|(a, b)| a - b).collect::<Vec<_>>())
+                .unwrap()
+                / wfem(&ops).mass_norm(&f).unwrap();
+            assert!(err < 1e-8, "{name} t = {t}: {err:e} ({report:?})");
+        }
+    }
 }

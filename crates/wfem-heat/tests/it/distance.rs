@@ -4,12 +4,24 @@
 
 use crate::common;
 
-use common::{matvec, ops_of};
+use common::{matvec, ops_of, wfem};
 use mesh_fem::{generate, FemOperators};
+use wfem_heat::rkhs::diffusion_embeddings;
 use wfem_heat::{
-    embeddings_h, norm_b, DiffusionDistance, DistanceKind, DistanceParams, Eigenbasis, HeatError, HeatKernel,
-    HeatParams,
+    DiffusionDistance, DistanceKind, DistanceParams, Eigenbasis, HeatError, HeatKernel, HeatParams, Method,
 };
+
+/// The paper's rational method (the distances' original method).
+fn rational(ops: &FemOperators) -> HeatKernel {
+    HeatKernel::new(
+        ops,
+        HeatParams {
+            method: Method::rational(shifted_solve::DEFAULT_DEGREE),
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
 
 fn small_meshes() -> Vec<(&'static str, FemOperators)> {
     vec![
@@ -24,13 +36,13 @@ fn dense_row(ops: &FemOperators, basis: &Eigenbasis, kind: DistanceKind, t: f64,
     let n = basis.vectors.nrows();
     let x = &basis.vectors;
     let (w, weight): (Vec<Vec<f64>>, Vec<f64>) = match kind {
-        DistanceKind::Wfem => (
+        DistanceKind::MassWeighted => (
             (0..n)
                 .map(|m| matvec(&ops.mass, &x.col(m).iter().copied().collect::<Vec<_>>()))
                 .collect(),
             basis.values.iter().map(|l| (-l * t).exp()).collect(),
         ),
-        DistanceKind::Linear => (
+        DistanceKind::Diffusion => (
             (0..n).map(|m| x.col(m).iter().copied().collect()).collect(),
             basis.values.iter().map(|l| (-2.0 * l * t).exp()).collect(),
         ),
@@ -45,9 +57,17 @@ fn rows_and_pairs_match_the_dense_spectral_formula() {
     for (name, ops) in small_meshes() {
         let n = ops.stiffness.nrows();
         let basis = Eigenbasis::dense(&ops.stiffness, &ops.mass).unwrap();
-        for kind in [DistanceKind::Wfem, DistanceKind::Linear] {
+        // Every method of the kernel serves the distances: the rational method and the fast path.
+        let kernels = [
+            ("rational", rational(&ops)),
+            ("fast", HeatKernel::new(&ops, HeatParams::default()).unwrap()),
+        ];
+        for (kind, (method, kernel)) in [DistanceKind::MassWeighted, DistanceKind::Diffusion]
+            .into_iter()
+            .flat_map(|k| kernels.iter().map(move |m| (k, m)))
+        {
             for t in [0.01, 0.1] {
-                let dd = DiffusionDistance::new(&ops, kind, t, &DistanceParams::default()).unwrap();
+                let dd = DiffusionDistance::new(kernel, kind, t, &DistanceParams::default()).unwrap();
                 for i in [0, n / 2] {
                     let exact = dense_row(&ops, &basis, kind, t, i);
                     let scale = exact.iter().fold(0.0f64, |a, &b| a.max(b));
@@ -55,10 +75,13 @@ fn rows_and_pairs_match_the_dense_spectral_formula() {
                     let err = row.iter().zip(&exact).fold(0.0f64, |a, (r, e)| a.max((r - e).abs()));
                     assert!(
                         err < 1e-10 * scale,
-                        "{name} {kind:?} t={t} row {i}: error {:e}",
+                        "{name} {method} {kind:?} t={t} row {i}: error {:e}",
                         err / scale
                     );
-                    eprintln!("{name} {kind:?} t={t} row {i}: max error / max d² = {:e}", err / scale);
+                    eprintln!(
+                        "{name} {method} {kind:?} t={t} row {i}: max error / max d² = {:e}",
+                        err / scale
+                    );
                     // Pairs: one column per pair, relative to each entry (no cancellation).
                     let pairs: Vec<(usize, usize)> = (0..n).step_by(7).map(|j| (i, j)).collect();
                     let got = dd.pairs_squared(&pairs).unwrap();
@@ -66,7 +89,7 @@ fn rows_and_pairs_match_the_dense_spectral_formula() {
                         let e = exact[j];
                         assert!(
                             (g - e).abs() <= 1e-10 * e.max(1e-300) || (j == i && *g == 0.0),
-                            "{name} {kind:?} t={t} pair ({i},{j}): {g} vs {e}"
+                            "{name} {method} {kind:?} t={t} pair ({i},{j}): {g} vs {e}"
                         );
                     }
                     let d = dd.row(i).unwrap();
@@ -84,14 +107,14 @@ fn wfem_distance_is_the_b_distance_of_the_embeddings() {
     let (_, ops) = ops_of(&generate::irregular_sphere(2, 5.6));
     let n = ops.stiffness.nrows();
     let t = 0.05;
-    let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
-    let dd = DiffusionDistance::new(&ops, DistanceKind::Wfem, t, &DistanceParams::default()).unwrap();
+    let kernel = rational(&ops);
+    let dd = DiffusionDistance::new(&kernel, DistanceKind::MassWeighted, t, &DistanceParams::default()).unwrap();
     let verts = [3, 40, n - 1];
-    let h = embeddings_h(&kernel, &verts, t).unwrap();
+    let h = diffusion_embeddings(&kernel, &verts, t).unwrap();
     for a in 0..3 {
         for b in 0..3 {
             let diff: Vec<f64> = (0..n).map(|r| h[(r, a)] - h[(r, b)]).collect();
-            let want = norm_b(&ops.mass, &diff).unwrap().powi(2);
+            let want = wfem(&ops).mass_norm(&diff).unwrap().powi(2);
             let got = dd.pairs_squared(&[(verts[a], verts[b])]).unwrap()[0];
             assert!(
                 (got - want).abs() <= 1e-11 * want.max(1e-30),
@@ -99,7 +122,7 @@ fn wfem_distance_is_the_b_distance_of_the_embeddings() {
             );
         }
     }
-    assert_eq!(dd.kind(), DistanceKind::Wfem);
+    assert_eq!(dd.kind(), DistanceKind::MassWeighted);
     assert_eq!(dd.t(), t);
 }
 
@@ -113,7 +136,7 @@ fn symmetry_small_blocks_and_diagonal_is_hks() {
         block: 5,
         ..Default::default()
     };
-    let dd = DiffusionDistance::new(&ops, DistanceKind::Linear, t, &small).unwrap();
+    let dd = DiffusionDistance::new(&rational(&ops), DistanceKind::Diffusion, t, &small).unwrap();
     // The diagonal of H̃_{2t} is the heat kernel signature HKS_{2t}(j) = Σ e^{−2λt} x(j)².
     let diag = dd.diagonal().unwrap();
     for j in [0, 17, n - 1] {
@@ -134,7 +157,13 @@ fn symmetry_small_blocks_and_diagonal_is_hks() {
 fn errors_are_typed() {
     let (_, ops) = ops_of(&generate::icosphere(1));
     let n = ops.stiffness.nrows();
-    let dd = DiffusionDistance::new(&ops, DistanceKind::Wfem, 0.1, &DistanceParams::default()).unwrap();
+    let dd = DiffusionDistance::new(
+        &rational(&ops),
+        DistanceKind::MassWeighted,
+        0.1,
+        &DistanceParams::default(),
+    )
+    .unwrap();
     assert!(matches!(
         dd.row(n),
         Err(HeatError::VertexOutOfRange { index, n_vertices }) if index == n && n_vertices == n
@@ -144,7 +173,12 @@ fn errors_are_typed() {
         Err(HeatError::VertexOutOfRange { .. })
     ));
     assert!(matches!(
-        DiffusionDistance::new(&ops, DistanceKind::Linear, f64::NAN, &DistanceParams::default()),
+        DiffusionDistance::new(
+            &rational(&ops),
+            DistanceKind::Diffusion,
+            f64::NAN,
+            &DistanceParams::default()
+        ),
         Err(HeatError::InvalidTime { .. })
     ));
     let bad = DistanceParams {
@@ -152,14 +186,18 @@ fn errors_are_typed() {
         ..Default::default()
     };
     assert!(matches!(
-        DiffusionDistance::new(&ops, DistanceKind::Wfem, 0.1, &bad),
+        DiffusionDistance::new(&rational(&ops), DistanceKind::MassWeighted, 0.1, &bad),
         Err(HeatError::InvalidParameter { name: "block", .. })
     ));
-    let bad = DistanceParams {
-        degree: 1000,
-        ..Default::default()
-    };
-    assert!(DiffusionDistance::new(&ops, DistanceKind::Wfem, 0.1, &bad).is_err());
+    // The rational degree is the kernel's: an unsupported one is refused when the kernel is built.
+    assert!(HeatKernel::new(
+        &ops,
+        HeatParams {
+            method: Method::rational(1000),
+            ..Default::default()
+        }
+    )
+    .is_err());
 }
 
 /// Probing: the colouring needs a number of columns set by the decay of A (about a factor 6 per
@@ -167,17 +205,17 @@ fn errors_are_typed() {
 /// small meshes (or at large t) it falls back to the exact diagonal.
 #[test]
 fn probed_diagonal_matches_exact_columns() {
-    use wfem_heat::DiagonalMethod;
+    use wfem_heat::diagonal::DiagonalMethod;
     let (_, ops) = ops_of(&generate::icosphere(4));
     let n = ops.stiffness.nrows();
     // A short time (√(4t) < edge length): the kernel is local.
     let t = 2e-4;
-    for kind in [DistanceKind::Wfem, DistanceKind::Linear] {
+    for kind in [DistanceKind::MassWeighted, DistanceKind::Diffusion] {
         let params = DistanceParams {
             diagonal: DiagonalMethod::Probing { tol: 1e-8 },
             ..Default::default()
         };
-        let dd = DiffusionDistance::new(&ops, kind, t, &params).unwrap();
+        let dd = DiffusionDistance::new(&rational(&ops), kind, t, &params).unwrap();
         let row = dd.row_squared(n / 2).unwrap();
         let info = dd.diagonal_info().unwrap().clone();
         assert!(
@@ -212,7 +250,13 @@ fn probed_diagonal_matches_exact_columns() {
     // is exact.
     let (_, ops) = ops_of(&generate::icosphere(2));
     for t in [0.002, 1.0] {
-        let dd = DiffusionDistance::new(&ops, DistanceKind::Wfem, t, &DistanceParams::default()).unwrap();
+        let dd = DiffusionDistance::new(
+            &rational(&ops),
+            DistanceKind::MassWeighted,
+            t,
+            &DistanceParams::default(),
+        )
+        .unwrap();
         dd.diagonal().unwrap();
         let info = dd.diagonal_info().unwrap();
         assert_eq!((info.columns, info.hops), (ops.stiffness.nrows(), None));
@@ -222,7 +266,7 @@ fn probed_diagonal_matches_exact_columns() {
         ..Default::default()
     };
     assert!(matches!(
-        DiffusionDistance::new(&ops, DistanceKind::Wfem, 0.1, &bad),
+        DiffusionDistance::new(&rational(&ops), DistanceKind::MassWeighted, 0.1, &bad),
         Err(HeatError::InvalidParameter {
             name: "diagonal.tol",
             ..

@@ -2,7 +2,7 @@
 use crate::common;
 use common::*;
 use mesh_fem::generate;
-use wfem_heat::{EigenParams, Eigenbasis, FastParams, HeatError, HeatKernel, HeatParams, Method};
+use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KrylovParams, Method};
 
 fn small() -> mesh_fem::FemOperators {
     ops_of(&generate::icosphere(2)).1
@@ -90,7 +90,7 @@ fn krylov_no_convergence() {
     let k = HeatKernel::new(
         &ops,
         HeatParams {
-            method: Method::Fast(FastParams {
+            method: Method::Fast(KrylovParams {
                 max_iter: 2,
                 ..Default::default()
             }),
@@ -131,7 +131,7 @@ fn invalid_parameters() {
     let err = HeatKernel::new(
         &ops,
         HeatParams {
-            method: Method::Fast(FastParams {
+            method: Method::Fast(KrylovParams {
                 gamma: -1.0,
                 ..Default::default()
             }),

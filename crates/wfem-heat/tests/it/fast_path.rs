@@ -29,7 +29,7 @@ fn fast_path_matches_dense_reference() {
                 &ops,
                 HeatParams {
                     kernel,
-                    method: Method::default(),
+                    method: Method::fast(),
                 },
             )
             .unwrap();
@@ -56,4 +56,89 @@ fn fast_path_matches_dense_reference() {
         }
     }
     println!("worst {worst:.2e}");
+}
+
+/// Many times from one factorization (issue #17): `apply_times` on 40 log-spaced t over three
+/// decades equals the dense `K_t f` for every t (same bound as one t at a time), the kernel
+/// matrix version equals the dense `H_t e_i = X e^{−tΛ} Xᵀ e_i`, every t reports an error
+/// estimate below the tolerance, and other methods (one evaluation per t) agree.
+#[test]
+fn many_times_from_one_factorization_match_dense() {
+    let times: Vec<f64> = (0..40).map(|i| 1e-3 * 1e3f64.powf(i as f64 / 39.0)).collect();
+    for (name, mesh, ops) in meshes() {
+        let n = ops.n();
+        let f = x_coordinate(&mesh);
+        let e = unit(n, n / 3);
+        let mut block = faer::Mat::<f64>::zeros(n, 2);
+        for i in 0..n {
+            block[(i, 0)] = f[i];
+            block[(i, 1)] = e[i];
+        }
+        let dense = HeatKernel::new(
+            &ops,
+            HeatParams {
+                method: Method::Dense,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let fast = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+        let series = fast.apply_times(block.as_ref(), &times).unwrap();
+        let kernel = fast.apply_kernel_matrix_times(block.as_ref(), &times).unwrap();
+        let basis = dense.eigenbasis().unwrap();
+        assert_eq!(series.times, times);
+        for (l, &t) in times.iter().enumerate() {
+            let est = series.error_estimates[l].expect("the fast path estimates its error");
+            assert!(est <= 1e-10, "{name} t={t}: estimate {est:e}");
+            for c in 0..2 {
+                let v = if c == 0 { &f } else { &e };
+                let r = dense.apply(v, t).unwrap();
+                let g: Vec<f64> = series.values[l].col(c).iter().copied().collect();
+                let d: Vec<f64> = g.iter().zip(&r).map(|(a, b)| a - b).collect();
+                let bound = 1e-10 * norm(&r) + 1e-12 * norm(v);
+                assert!(norm(&d) <= bound, "{name} t={t} column {c}: {:e}", norm(&d) / bound);
+                // H_t v = X e^{−tΛ} Xᵀ v.
+                let coef: Vec<f64> = (0..n)
+                    .map(|k| (-t * basis.values[k]).exp() * (0..n).map(|i| basis.vectors[(i, k)] * v[i]).sum::<f64>())
+                    .collect();
+                let h: Vec<f64> = (0..n)
+                    .map(|i| (0..n).map(|k| basis.vectors[(i, k)] * coef[k]).sum())
+                    .collect();
+                let got: Vec<f64> = kernel.values[l].col(c).iter().copied().collect();
+                assert!(
+                    rel_err(&got, &h) < 1e-9,
+                    "{name} H_t t={t} column {c}: {:e}",
+                    rel_err(&got, &h)
+                );
+            }
+        }
+        // Another method evaluates each t on its own, through the same call.
+        let rational = HeatKernel::new(
+            &ops,
+            HeatParams {
+                method: Method::rational(shifted_solve::DEFAULT_DEGREE),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let few = [times[0], times[20], times[39]];
+        let other = rational.apply_times(block.as_ref(), &few).unwrap();
+        assert!(other.error_estimates.iter().all(Option::is_none));
+        for (l, &t) in few.iter().enumerate() {
+            let r = dense.apply(&f, t).unwrap();
+            let g: Vec<f64> = other.values[l].col(0).iter().copied().collect();
+            assert!(rel_err(&g, &r) < 1e-10, "{name} rational t={t}");
+        }
+    }
+    let (_, _, ops) = meshes().remove(0);
+    let fast = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+    let f = faer::Mat::<f64>::zeros(ops.n(), 1);
+    assert!(matches!(
+        fast.apply_times(f.as_ref(), &[]),
+        Err(wfem_heat::HeatError::InvalidParameter { name: "times", .. })
+    ));
+    assert!(matches!(
+        fast.apply_times(f.as_ref(), &[0.1, -1.0]),
+        Err(wfem_heat::HeatError::InvalidTime { .. })
+    ));
 }

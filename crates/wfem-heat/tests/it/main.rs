@@ -5,6 +5,7 @@ mod common;
 
 mod algebra;
 mod basis;
+mod diagonal;
 mod distance;
 mod edge_cases;
 mod eigen_scale;

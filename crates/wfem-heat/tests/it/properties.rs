@@ -23,7 +23,7 @@ fn kernels(ops: &mesh_fem::FemOperators, kind: KernelKind) -> Vec<(&'static str,
                 ops,
                 HeatParams {
                     kernel: kind,
-                    method: Method::default(),
+                    method: Method::rational(shifted_solve::DEFAULT_DEGREE),
                 },
             )
             .unwrap(),
@@ -175,7 +175,7 @@ fn apply_many_matches_apply_for_every_method() {
         },
         Method::Taylor,
         Method::BackwardEuler,
-        Method::default(),
+        Method::rational(shifted_solve::DEFAULT_DEGREE),
     ];
     for method in methods {
         let k = HeatKernel::new(
@@ -201,7 +201,7 @@ fn apply_many_matches_apply_for_every_method() {
 fn factor_cache_follows_t() {
     let (_, mesh, ops) = meshes().remove(0);
     let f = x_coordinate(&mesh);
-    for method in [Method::BackwardEuler, Method::default()] {
+    for method in [Method::BackwardEuler, Method::rational(shifted_solve::DEFAULT_DEGREE)] {
         let params = HeatParams {
             kernel: KernelKind::Wfem,
             method,

@@ -3,10 +3,8 @@
 use crate::common;
 use common::*;
 use mesh_fem::{assemble, generate, AssemblyParams};
-use wfem_heat::{
-    largest_eigenvalue, Eigenbasis, HeatError, HeatKernel, HeatParams, KernelKind, LargestEigenParams, Method,
-    Normalization, NormalizedHeatKernel,
-};
+use wfem_heat::scale::{largest_eigenvalue, LargestEigenParams, Normalization, NormalizedHeatKernel};
+use wfem_heat::{Eigenbasis, HeatError, HeatKernel, HeatParams, KernelKind, Method, Operators};
 
 fn mass_of(ops: &mesh_fem::FemOperators, kind: KernelKind) -> faer::sparse::SparseColMat<usize, f64> {
     match kind {
@@ -27,7 +25,7 @@ fn scale_covariance_without_normalisation() {
     let n = mesh.n_vertices();
     let f: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 / 101.0 - 0.5).collect();
     let e = unit(n, 17);
-    for method in [Method::default(), Method::Dense] {
+    for method in [Method::rational(shifted_solve::DEFAULT_DEGREE), Method::Dense] {
         let params = HeatParams {
             kernel: KernelKind::Wfem,
             method: method.clone(),
@@ -63,7 +61,8 @@ fn largest_eigenvalue_matches_dense() {
             let m = mass_of(&ops, kind);
             let dense = Eigenbasis::dense(&ops.stiffness, &m).unwrap();
             let expected = *dense.values.last().unwrap();
-            let got = largest_eigenvalue(&ops.stiffness, &m, &LargestEigenParams::default()).unwrap();
+            let pair = Operators::from_matrices(ops.stiffness.as_ref(), m.as_ref()).unwrap();
+            let got = largest_eigenvalue(&pair, &LargestEigenParams::default()).unwrap();
             let err = (got - expected).abs() / expected;
             assert!(err < 1e-10, "{name} {kind:?}: {got} vs {expected} ({err:e})");
         }
@@ -78,19 +77,19 @@ fn largest_eigenvalue_rejects_bad_input() {
         ..LargestEigenParams::default()
     };
     assert!(matches!(
-        largest_eigenvalue(&ops.stiffness, &ops.mass, &bad),
+        largest_eigenvalue(&wfem(&ops), &bad),
         Err(HeatError::InvalidParameter { name: "tol", .. })
     ));
     let (_, other) = ops_of(&generate::icosphere(2));
     assert!(matches!(
-        largest_eigenvalue(&ops.stiffness, &other.mass, &LargestEigenParams::default()),
+        Operators::from_matrices(ops.stiffness.as_ref(), other.mass.as_ref()),
         Err(HeatError::InconsistentOperators { .. })
     ));
     let too_few = LargestEigenParams {
         max_iter: 2,
         ..LargestEigenParams::default()
     };
-    assert!(largest_eigenvalue(&ops.stiffness, &ops.mass, &too_few).is_err());
+    assert!(largest_eigenvalue(&wfem(&ops), &too_few).is_err());
 }
 
 /// The normalised kernel K̂_τ = K_{τ/s} (s = λ_n, or 1/area) is unchanged under a global

@@ -44,7 +44,13 @@ pub fn rel_err(a: &[f64], b: &[f64]) -> f64 {
     norm(&d) / norm(b)
 }
 
-pub fn matvec(a: &faer::sparse::SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
+/// The wFEM operator context of assembled operators (L, B).
+pub fn wfem(fem: &FemOperators) -> wfem_heat::Operators {
+    wfem_heat::Operators::new(fem, wfem_heat::KernelKind::Wfem).expect("valid operators")
+}
+
+pub fn matvec(a: impl wfem_heat::AsSparse, x: &[f64]) -> Vec<f64> {
+    let a = a.as_sparse();
     let mut y = vec![0.0; a.nrows()];
     let s = a.symbolic();
     for (j, xj) in x.iter().enumerate() {

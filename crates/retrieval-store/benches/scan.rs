@@ -1,0 +1,86 @@
+//! A top-10 query over a million bags (issue #14: "well under a second on this machine").
+//!
+//! Builds (once, reused across runs) a store of `WFEM_STORE_BENCH_SHAPES` (default 1,000,000)
+//! random 48-word histograms under `target/tmp`, then times, for L1 and χ²:
+//!
+//! * `open_readonly` + `search_metric(k = 10)`: what `wfem retrieval query` pays per call;
+//! * `search_metric` on an open store: what a long-lived process (Python) pays per query.
+use criterion::{criterion_group, criterion_main, Criterion};
+use retrieval_store::{Entry, Metric, Store, StoreParams};
+use std::path::PathBuf;
+use std::time::Instant;
+
+const WORDS: usize = 48;
+
+fn histogram(seed: u64) -> Vec<f64> {
+    // splitmix64: a cheap, well-spread deterministic generator.
+    let mut s = seed;
+    let mut next = move || {
+        s = s.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut v: Vec<f64> = (0..WORDS).map(|_| next().powi(3)).collect();
+    let total: f64 = v.iter().sum();
+    v.iter_mut().for_each(|x| *x /= total);
+    v
+}
+
+fn store_path(shapes: usize) -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("retrieval-store-bench-{shapes}.sqlite"))
+}
+
+fn build(shapes: usize) -> PathBuf {
+    let path = store_path(shapes);
+    if let Ok(store) = Store::open_readonly(&path) {
+        if store.len().unwrap() == shapes && store.dimension() == WORDS {
+            return path;
+        }
+    }
+    let start = Instant::now();
+    let mut store = Store::create(&path, &StoreParams::new(WORDS), true).unwrap();
+    let batch = 50_000;
+    for b0 in (0..shapes).step_by(batch) {
+        let b1 = (b0 + batch).min(shapes);
+        let names: Vec<String> = (b0..b1).map(|i| format!("shapes/{i:07}.off")).collect();
+        let vectors: Vec<Vec<f64>> = (b0..b1).map(|i| histogram(i as u64)).collect();
+        let entries: Vec<Entry<'_>> = names.iter().zip(&vectors).map(|(n, v)| Entry::new(n, "", v)).collect();
+        store.add(&entries).unwrap();
+    }
+    let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+    eprintln!(
+        "built {shapes} bags of {WORDS} words in {:.1} s ({:.0} MB)",
+        start.elapsed().as_secs_f64(),
+        size as f64 / 1e6
+    );
+    path
+}
+
+fn scan(c: &mut Criterion) {
+    let shapes: usize = std::env::var("WFEM_STORE_BENCH_SHAPES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1_000_000);
+    let path = build(shapes);
+    let query = histogram(u64::MAX);
+    let mut group = c.benchmark_group(format!("retrieval_store_top10_{shapes}"));
+    group.sample_size(10);
+    for (name, metric) in [("l1", Metric::L1), ("chi2", Metric::ChiSquared)] {
+        group.bench_function(format!("open_and_query_{name}"), |b| {
+            b.iter(|| {
+                let store = Store::open_readonly(&path).unwrap();
+                store.search_metric(&query, 10, metric).unwrap()
+            })
+        });
+        let store = Store::open_readonly(&path).unwrap();
+        group.bench_function(format!("query_{name}"), |b| {
+            b.iter(|| store.search_metric(&query, 10, metric).unwrap())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, scan);
+criterion_main!(benches);

@@ -1,0 +1,115 @@
+use std::path::PathBuf;
+
+/// Failures of the retrieval store. Each variant names the file and the culprit (shape name,
+/// chunk, index) so a user can find it.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum StoreError {
+    /// SQLite reported an error (I/O, locking, a full disk, a corrupt page).
+    #[error("{path}: {source}")]
+    Sqlite {
+        /// The store file.
+        path: PathBuf,
+        /// SQLite's error.
+        #[source]
+        source: rusqlite::Error,
+    },
+    /// An operating-system error outside SQLite (creating or renaming the file).
+    #[error("{path}: {source}")]
+    Io {
+        /// The file involved.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not a store of this format (another SQLite database, or not SQLite).
+    #[error("{path} is not a wfem retrieval store: {reason}")]
+    NotAStore {
+        /// The file.
+        path: PathBuf,
+        /// What was missing or wrong.
+        reason: String,
+    },
+    /// The store was written by an incompatible version of this crate.
+    #[error("{path}: store format version {found} is not supported (this build reads version {supported})")]
+    UnsupportedVersion {
+        /// The file.
+        path: PathBuf,
+        /// Version found in the file.
+        found: u32,
+        /// Version this build reads.
+        supported: u32,
+    },
+    /// The file already exists and overwriting was not asked for.
+    #[error("{path} already exists (pass overwrite to replace it)")]
+    Exists {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file cannot be replaced safely: its write-ahead log is not empty, so another
+    /// process has it open or a writer crashed and it was not opened since.
+    #[error(
+        "{path} is in use or was not closed cleanly ({wal} is not empty); open it once to recover, or close its users"
+    )]
+    InUse {
+        /// The file.
+        path: PathBuf,
+        /// The non-empty write-ahead log.
+        wal: PathBuf,
+    },
+    /// A vector does not have the store's dimension.
+    #[error("vector of shape {name:?} has {found} values, but the store holds vectors of {expected}")]
+    Dimension {
+        /// The shape's name.
+        name: String,
+        /// The store's dimension.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// A vector value is NaN, infinite or outside the range of f32 (the stored precision).
+    #[error("vector of shape {name:?} has the value {value} at index {index}: not a finite f32")]
+    NonFinite {
+        /// The shape's name.
+        name: String,
+        /// Index of the value in the vector.
+        index: usize,
+        /// The value given.
+        value: f64,
+    },
+    /// A shape name is already in the store (or repeated in one batch).
+    #[error("shape name {name:?} is already in the store")]
+    DuplicateName {
+        /// The repeated name.
+        name: String,
+    },
+    /// A shape name is empty.
+    #[error("shape {index} of the batch has an empty name")]
+    EmptyName {
+        /// Position in the batch.
+        index: usize,
+    },
+    /// A parameter is out of range.
+    #[error("invalid parameter {name}: {reason}")]
+    InvalidParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// What is required.
+        reason: String,
+    },
+    /// The stored rows contradict the store's invariants.
+    #[error("{path}: corrupt store: {reason}")]
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// Which invariant failed.
+        reason: String,
+    },
+    /// The distance function returned NaN for a stored shape (a query must never rank NaN).
+    #[error("the distance to shape {id} is not a number")]
+    NanDistance {
+        /// The shape's id.
+        id: u64,
+    },
+}

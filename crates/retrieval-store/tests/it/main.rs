@@ -1,0 +1,4 @@
+//! The integration tests of retrieval-store, in one test binary.
+
+mod crash;
+mod store;

@@ -1,0 +1,245 @@
+//! The diagonal of a symmetric operator A that decays with graph distance on the mesh (the
+//! heat-kernel matrix `H_t`, the Gram matrix `S_t = M K_t`), known only through products
+//! `A E` with blocks of vectors: probing (Tang & Saad, NLAA 19 (2012) 485–501; NUMERICS §4) or,
+//! as a reference, n unit vectors.
+//!
+//! **Probing.** A greedy distance-p colouring of the mesh graph (vertices within p edges get
+//! different colours) and one column per colour: `diag_j ≈ (A v_{c(j)})_j` with `v_c` the
+//! indicator of colour c. The error at j is the sum of `A_jk` over the same-coloured k, all
+//! more than p edges away. p is the smallest number of hops such that a sample column
+//! `A e_i` has `Σ_{dist(i,k) > p} |A_ik| ≤ tol · A_ii`; the heat kernel decays like
+//! e^{−d²/4t}, so p and the number of colours depend on t/h², not on n.
+
+use crate::HeatError;
+use faer::sparse::SymbolicSparseColMatRef;
+use faer::Mat;
+
+/// A block product `E ↦ A E`.
+pub(crate) type BlockOperator<'a> = dyn Fn(&Mat<f64>) -> Result<Mat<f64>, HeatError> + 'a;
+
+/// A block product for several operators at once: `P ↦ [A_0 P, A_1 P, …]`.
+pub(crate) type BlockOperators<'a> = dyn FnMut(&Mat<f64>) -> Result<Vec<Mat<f64>>, HeatError> + 'a;
+
+/// How a diagonal is computed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DiagonalMethod {
+    /// Exactly (to the method's accuracy) from n unit-vector columns: cost grows like
+    /// n × (one block application), for small meshes or as a reference.
+    Exact,
+    /// Probing with a distance-p colouring chosen for a relative tail `tol` (see the module
+    /// docs). Falls back to [`Self::Exact`] when the colouring would need more than n/4
+    /// colours (large t).
+    Probing {
+        /// Relative tail tolerance (default 1e−10).
+        tol: f64,
+    },
+}
+
+impl Default for DiagonalMethod {
+    fn default() -> Self {
+        DiagonalMethod::Probing { tol: 1e-10 }
+    }
+}
+
+impl DiagonalMethod {
+    pub(crate) fn validate(&self) -> Result<(), HeatError> {
+        if let DiagonalMethod::Probing { tol } = *self {
+            if !(tol > 0.0 && tol < 1.0) {
+                return Err(HeatError::InvalidParameter {
+                    name: "diagonal.tol",
+                    reason: format!("{tol} is not in (0, 1)"),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// How a diagonal was computed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiagonalInfo {
+    /// Number of probe columns used (n for the exact method).
+    pub columns: usize,
+    /// Graph distance p of the colouring (`None` for the exact method).
+    pub hops: Option<usize>,
+    /// The relative tail `Σ_{dist(i,k) > p} |A_ik| / A_ii` of the sample column used to choose
+    /// p: the stated error bound of every entry, relative to its own size, when the kernel's
+    /// decay is uniform over the mesh (0 for the exact method).
+    pub relative_tail: f64,
+}
+
+/// The probe vectors of a diagonal: the colour of every vertex (one probe column per colour).
+#[derive(Clone, Debug)]
+pub(crate) struct Probes {
+    colour: Vec<usize>,
+    n_colours: usize,
+    pub(crate) info: DiagonalInfo,
+}
+
+impl Probes {
+    /// The probes of `method` for an operator whose column at vertex i is `col = A e_i` (the
+    /// sample that sets the colouring distance), on the mesh graph `pattern`.
+    pub(crate) fn new(
+        pattern: SymbolicSparseColMatRef<'_, usize>,
+        method: DiagonalMethod,
+        i: usize,
+        col: &[f64],
+    ) -> Self {
+        let n = pattern.nrows();
+        let probed = match method {
+            DiagonalMethod::Exact => None,
+            DiagonalMethod::Probing { tol } => colouring(pattern, i, col, tol),
+        };
+        match probed {
+            Some((colour, n_colours, hops, relative_tail)) => Self {
+                colour,
+                n_colours,
+                info: DiagonalInfo {
+                    columns: n_colours,
+                    hops: Some(hops),
+                    relative_tail,
+                },
+            },
+            None => Self {
+                colour: (0..n).collect(),
+                n_colours: n,
+                info: DiagonalInfo {
+                    columns: n,
+                    hops: None,
+                    relative_tail: 0.0,
+                },
+            },
+        }
+    }
+
+    /// The diagonals of several operators sharing the probes: `apply(P)` returns one block
+    /// `A_l P` per operator for a block P of probe columns (at most `block` columns).
+    pub(crate) fn diagonals(
+        &self,
+        block: usize,
+        outputs: usize,
+        apply: &mut BlockOperators<'_>,
+    ) -> Result<Vec<Vec<f64>>, HeatError> {
+        let n = self.colour.len();
+        let mut d = vec![vec![0.0; n]; outputs];
+        let mut start = 0;
+        while start < self.n_colours {
+            let end = (start + block.max(1)).min(self.n_colours);
+            let mut p = Mat::<f64>::zeros(n, end - start);
+            for (v, &c) in self.colour.iter().enumerate() {
+                if (start..end).contains(&c) {
+                    p[(v, c - start)] = 1.0;
+                }
+            }
+            let ys = apply(&p)?;
+            for (dl, y) in d.iter_mut().zip(&ys) {
+                for (v, &c) in self.colour.iter().enumerate() {
+                    if (start..end).contains(&c) {
+                        dl[v] = y[(v, c - start)];
+                    }
+                }
+            }
+            start = end;
+        }
+        Ok(d)
+    }
+}
+
+/// `diag(A)` from block products `apply(E) = A E` (blocks of at most `block` columns), given
+/// the sample column `col = A e_i` of vertex i and the mesh graph `pattern`.
+pub(crate) fn diagonal(
+    pattern: SymbolicSparseColMatRef<'_, usize>,
+    method: DiagonalMethod,
+    block: usize,
+    i: usize,
+    col: &[f64],
+    apply: &BlockOperator<'_>,
+) -> Result<(Vec<f64>, DiagonalInfo), HeatError> {
+    let probes = Probes::new(pattern, method, i, col);
+    let mut d = probes.diagonals(block, 1, &mut |p| Ok(vec![apply(p)?]))?;
+    Ok((d.remove(0), probes.info))
+}
+
+/// Chooses p from the tail of `col = A e_i` and colours the graph at distance p.
+/// Returns (colour of each vertex, number of colours, p, relative tail), or `None` when more
+/// than n/4 colours would be needed.
+fn colouring(
+    pattern: SymbolicSparseColMatRef<'_, usize>,
+    i: usize,
+    col: &[f64],
+    tol: f64,
+) -> Option<(Vec<usize>, usize, usize, f64)> {
+    let n = pattern.nrows();
+    let (ptr, idx) = (pattern.col_ptr(), pattern.row_idx());
+    // BFS distances from i.
+    let mut dist = vec![usize::MAX; n];
+    dist[i] = 0;
+    let mut queue = std::collections::VecDeque::from([i]);
+    let mut per_depth: Vec<f64> = Vec::new();
+    while let Some(v) = queue.pop_front() {
+        let d = dist[v];
+        if per_depth.len() <= d {
+            per_depth.resize(d + 1, 0.0);
+        }
+        per_depth[d] += col[v].abs();
+        for &w in &idx[ptr[v]..ptr[v + 1]] {
+            if dist[w] == usize::MAX {
+                dist[w] = d + 1;
+                queue.push_back(w);
+            }
+        }
+    }
+    let aii = col[i].abs();
+    let mut tail: f64 = per_depth.iter().skip(1).sum();
+    let mut hops = 0;
+    while tail > tol * aii && hops + 1 < per_depth.len() {
+        hops += 1;
+        tail -= per_depth[hops];
+    }
+    let tail = tail.max(0.0);
+    if tail > tol * aii {
+        return None;
+    }
+    // Greedy distance-p colouring.
+    let max_colours = n / 4;
+    let mut colour = vec![usize::MAX; n];
+    let mut stamp = vec![usize::MAX; n];
+    let mut used: Vec<usize> = Vec::new();
+    let mut n_colours = 0;
+    let mut frontier = Vec::new();
+    let mut next = Vec::new();
+    for v in 0..n {
+        used.clear();
+        stamp[v] = v;
+        frontier.clear();
+        frontier.push(v);
+        for _ in 0..hops {
+            next.clear();
+            for &u in &frontier {
+                for &w in &idx[ptr[u]..ptr[u + 1]] {
+                    if stamp[w] != v {
+                        stamp[w] = v;
+                        next.push(w);
+                        if colour[w] != usize::MAX {
+                            used.push(colour[w]);
+                        }
+                    }
+                }
+            }
+            std::mem::swap(&mut frontier, &mut next);
+        }
+        used.sort_unstable();
+        used.dedup();
+        let c = used
+            .iter()
+            .enumerate()
+            .find(|(k, &u)| *k != u)
+            .map_or(used.len(), |(k, _)| k);
+        colour[v] = c;
+        n_colours = n_colours.max(c + 1);
+        if n_colours > max_colours {
+            return None;
+        }
+    }
+    Some((colour, n_colours, hops, if aii > 0.0 { tail / aii } else { 0.0 }))
+}

@@ -1,0 +1,135 @@
+//! The exact heat kernel diagonal without eigenpairs (issue #17): probing with one factorization
+//! for all times, against the dense diagonal, at times where 300 eigenpairs are far off.
+use crate::common;
+use common::*;
+use mesh_fem::generate;
+use wfem_heat::diagonal::DiagonalMethod;
+use wfem_heat::{DiagonalParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KernelDiagonal};
+
+#[test]
+fn probed_diagonal_matches_dense_where_truncation_fails() {
+    let (_, ops) = ops_of(&generate::icosphere(4));
+    let n = ops.n();
+    let dense = Eigenbasis::dense(&ops.stiffness, &ops.mass).unwrap();
+    // B X, for the matrix diagonal Σ_k e^{−λ_k t} x_k(i)(Bx_k)(i).
+    let mut bx = faer::Mat::<f64>::zeros(n, n);
+    faer::sparse::linalg::matmul::sparse_dense_matmul(
+        bx.as_mut(),
+        faer::Accum::Replace,
+        ops.mass.as_ref(),
+        dense.vectors.as_ref(),
+        1.0,
+        faer::Par::Seq,
+    );
+    let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+    let times = [2e-4, 5e-4, 1e-3];
+    let series = kernel
+        .diagonal(&times, KernelDiagonal::KernelValue, &DiagonalParams::default())
+        .unwrap();
+    let matrix = kernel
+        .diagonal(&times, KernelDiagonal::MatrixDiagonal, &DiagonalParams::default())
+        .unwrap();
+    eprintln!("n = {n}: {:?}", series.info);
+    assert!(
+        series.info.hops.is_some() && series.info.columns < n / 4,
+        "{:?}",
+        series.info
+    );
+    for (l, &t) in times.iter().enumerate() {
+        let mut worst = 0.0f64;
+        let mut worst_matrix = 0.0f64;
+        let mut truncated = 0.0f64;
+        for i in 0..n {
+            // H_t(i,i) = Σ_k e^{−λ_k t} x_k(i)², K_t(i,i) = Σ_k e^{−λ_k t} x_k(i)(Bx_k)(i).
+            let mut exact = 0.0;
+            let mut k300 = 0.0;
+            let mut exact_matrix = 0.0;
+            for k in 0..n {
+                let w = (-t * dense.values[k]).exp();
+                let x = dense.vectors[(i, k)];
+                exact += w * x * x;
+                exact_matrix += w * x * bx[(i, k)];
+                if k < 300 {
+                    k300 += w * x * x;
+                }
+            }
+            worst = worst.max((series.values[(i, l)] - exact).abs() / exact);
+            worst_matrix = worst_matrix.max((matrix.values[(i, l)] - exact_matrix).abs() / exact_matrix);
+            truncated = truncated.max((k300 - exact).abs() / exact);
+        }
+        eprintln!("t = {t}: probing {worst:.1e} (matrix {worst_matrix:.1e}), 300 eigenpairs {truncated:.2}");
+        assert!(
+            truncated >= 0.1,
+            "t = {t}: the premise (300 pairs ≥ 10 % off) fails: {truncated}"
+        );
+        assert!(worst <= 1e-8, "t = {t}: {worst:e}");
+        assert!(worst_matrix <= 1e-8, "t = {t}: {worst_matrix:e}");
+        assert!(series.error_estimates[l].is_some_and(|e| e <= 1e-10));
+    }
+    // The exact method (n unit columns, here on a small mesh) agrees with probing; too many
+    // probes are refused, not run.
+    let (_, small) = ops_of(&generate::icosphere(2));
+    let small_kernel = HeatKernel::new(&small, HeatParams::default()).unwrap();
+    let exact = small_kernel
+        .diagonal(
+            &[1e-3],
+            KernelDiagonal::KernelValue,
+            &DiagonalParams {
+                method: DiagonalMethod::Exact,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    let probed = small_kernel
+        .diagonal(&[1e-3], KernelDiagonal::KernelValue, &DiagonalParams::default())
+        .unwrap();
+    assert_eq!(exact.info.columns, small.n());
+    for i in 0..small.n() {
+        assert!((exact.values[(i, 0)] - probed.values[(i, 0)]).abs() <= 1e-8 * exact.values[(i, 0)]);
+    }
+    assert!(matches!(
+        kernel.diagonal(
+            &[10.0],
+            KernelDiagonal::KernelValue,
+            &DiagonalParams {
+                max_columns: 100,
+                ..Default::default()
+            }
+        ),
+        Err(HeatError::InvalidParameter {
+            name: "max_columns",
+            ..
+        })
+    ));
+    assert!(matches!(
+        kernel.diagonal(&[], KernelDiagonal::KernelValue, &DiagonalParams::default()),
+        Err(HeatError::InvalidParameter { name: "times", .. })
+    ));
+}
+
+/// At large t the diagonal tends to 1/area (the constant mode, kept exact by the null-space
+/// deflation) for every method, without underflowing to 0 (issue #16: `hks --times 1e300`).
+#[test]
+fn diagonal_at_huge_times_is_one_over_area() {
+    let (_, ops) = ops_of(&generate::icosphere(2));
+    let n = ops.n();
+    let area = ops.area();
+    let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+    let series = kernel
+        .diagonal(
+            &[1e300],
+            KernelDiagonal::KernelValue,
+            &DiagonalParams {
+                method: DiagonalMethod::Exact,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    for i in 0..n {
+        assert!(
+            (series.values[(i, 0)] * area - 1.0).abs() < 1e-10,
+            "{}",
+            series.values[(i, 0)] * area
+        );
+    }
+}

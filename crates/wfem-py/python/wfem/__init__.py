@@ -1,0 +1,117 @@
+"""wfem — the wFEM heat kernel on triangle meshes, from Python.
+
+The heat kernel ``K_t = exp(−t B⁻¹L)`` applied to functions **without computing the spectrum**
+(exact to ≈1e−12), diffusion distances, heat kernel signatures (both conventions), SI-HKS,
+DHK1–3, feature points, the feature-driven approximation, vocabularies and bags of features,
+retrieval metrics and an embedded SQLite retrieval index; ``wfem.batch`` runs descriptors and
+bags over a collection on any ``concurrent.futures.Executor`` (e.g. Dask).
+
+Conventions (those of libigl): ``V`` float64 (n, 3), ``F`` int (m, 3); any object with
+``.vertices``/``.faces`` (trimesh, pyFM) works in place of ``V, F``. Sparse operators are
+``scipy.sparse.csc_matrix`` with **L positive semidefinite** (positive diagonal,
+``L = −igl.cotmatrix(V, F)``); the paper prints the opposite sign. Equation numbers refer to
+Patanè & Falcidieno, "wFEM heat kernel: discretization and applications to shape analysis and
+retrieval".
+
+Quick start::
+
+    import wfem
+    V, F = wfem.read_mesh("cat.off")
+    L, B, D = wfem.operators(V, F)            # L = −igl.cotmatrix
+    K = wfem.HeatKernel(V, F)                 # wFEM kernel, exact fast method
+    smooth = K.apply(V[:, 2], 1e-3 * B.sum()) # K_t f
+    h = wfem.hks(V, F, times=[1.0, 10.0])     # (n, 2)
+"""
+
+from __future__ import annotations
+
+from . import _wfem
+from ._errors import (
+    ConvergenceError,
+    IllConditionedError,
+    InternalError,
+    InvalidInputError,
+    MeshError,
+    MeshFileError,
+    RetrievalError,
+    SolverError,
+    StoreError,
+    WfemError,
+)
+from ._heat import KERNELS, METHODS, DiffusionDistance, HeatKernel
+from ._mesh import RepairReport, ValidationReport, extrema, mesh_stats, operators, read_mesh, repair, validate
+from ._retrieval import (
+    DESCRIPTORS,
+    Hit,
+    IndexStore,
+    RetrievalIndex,
+    Vocabulary,
+    average_precision,
+    descriptor,
+    descriptors,
+    evaluate,
+    kmeans,
+    l1_distance,
+    mean_average_precision,
+    pairwise_l1,
+    sparse_features,
+)
+from ._spectral import HKS_CONVENTIONS, Eigenbasis, eigenbasis, hks, sihks
+from . import generate
+
+__version__: str = _wfem.__version__
+
+#: Largest mesh for the dense eigendecomposition (``k=None``, ``method="dense"``).
+DENSE_MAX_VERTICES: int = _wfem.DENSE_MAX_VERTICES
+
+__all__ = [
+    # meshes and operators
+    "read_mesh",
+    "validate",
+    "repair",
+    "mesh_stats",
+    "operators",
+    "extrema",
+    "ValidationReport",
+    "RepairReport",
+    "generate",
+    # heat kernel
+    "HeatKernel",
+    "DiffusionDistance",
+    "METHODS",
+    "KERNELS",
+    # spectrum and signatures
+    "Eigenbasis",
+    "eigenbasis",
+    "hks",
+    "sihks",
+    "HKS_CONVENTIONS",
+    # retrieval
+    "DESCRIPTORS",
+    "descriptors",
+    "descriptor",
+    "sparse_features",
+    "Vocabulary",
+    "kmeans",
+    "l1_distance",
+    "pairwise_l1",
+    "evaluate",
+    "mean_average_precision",
+    "average_precision",
+    "IndexStore",
+    "RetrievalIndex",
+    "Hit",
+    # errors
+    "WfemError",
+    "InvalidInputError",
+    "MeshError",
+    "MeshFileError",
+    "RetrievalError",
+    "SolverError",
+    "ConvergenceError",
+    "IllConditionedError",
+    "StoreError",
+    "InternalError",
+    "DENSE_MAX_VERTICES",
+    "__version__",
+]

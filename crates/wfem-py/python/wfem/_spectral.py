@@ -1,0 +1,245 @@
+"""Eigenpairs ``L x = λ M x`` (paper, Eq. (4)) and the heat kernel signatures built on them."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from . import _wfem
+from ._arrays import as_float_array, as_mesh, as_sparse, as_vector
+
+__all__ = ["Eigenbasis", "eigenbasis", "hks", "sihks", "HKS_CONVENTIONS"]
+
+#: The two HKS conventions, named by what they are (see :func:`hks`).
+HKS_CONVENTIONS = ("kernel_value", "matrix_diagonal")
+
+
+class Eigenbasis:
+    """Eigenpairs of ``L x_i = λ_i M x_i`` (paper, Eq. (4)), λ ascending, with **M-orthonormal**
+    eigenvectors ``Xᵀ M X = I`` (B-orthonormal for the wFEM kernel). L is positive
+    semidefinite (= −igl.cotmatrix), so λ ≥ 0; λ₁ ≈ 0 with the constant eigenvector on a
+    connected mesh.
+
+    Build with :func:`eigenbasis` (from a mesh) or :meth:`from_operators`.
+    """
+
+    _b: Any
+
+    def __init__(self, inner: Any) -> None:
+        self._b = inner
+
+    @classmethod
+    def from_operators(
+        cls,
+        L: Any,
+        M: Any,
+        k: int | None = None,
+        *,
+        tol: float = 1e-10,
+        block_size: int = 8,
+        max_dim: int | None = None,
+        seed: int = 0x5EED2010,
+        shift: float | None = None,
+    ) -> "Eigenbasis":
+        """The k smallest eigenpairs of any (L PSD = −igl.cotmatrix, M SPD) by shift-invert
+        block Lanczos, or all of them (``k=None``, dense, n ≤ 5000)."""
+        return cls(
+            _wfem.Eigenbasis.from_operators(
+                as_sparse(L, "L"), as_sparse(M, "M"), k, tol, block_size, max_dim, seed, shift
+            )
+        )
+
+    def __repr__(self) -> str:
+        return f"Eigenbasis(n={self._b.n}, k={self._b.k})"
+
+    def __len__(self) -> int:
+        return int(self._b.k)
+
+    @property
+    def values(self) -> np.ndarray:
+        """Eigenvalues λ (k,), ascending."""
+        return np.asarray(self._b.values)
+
+    @property
+    def vectors(self) -> np.ndarray:
+        """Eigenvectors X (n, k), M-orthonormal: ``X.T @ M @ X = I``."""
+        return np.asarray(self._b.vectors)
+
+    def project(self, f: Any) -> np.ndarray:
+        """Coefficients ``c = Xᵀ M f`` = ``⟨f, x_i⟩_M`` (paper, Eq. (5)); f (n,) → (k,), (n, m) → (k, m)."""
+        a = as_float_array(f, "f", (1, 2))
+        c = self._b.project(a.reshape(a.shape[0], -1))
+        return c[:, 0] if a.ndim == 1 else c
+
+    def reconstruct(self, c: Any) -> np.ndarray:
+        """``X c``: the function with coefficients c (k,) or (k, m)."""
+        a = as_float_array(c, "c", (1, 2))
+        out = self._b.reconstruct(a.reshape(a.shape[0], -1))
+        return out[:, 0] if a.ndim == 1 else out
+
+    def heat(self, f: Any, t: float) -> np.ndarray:
+        """The truncated heat kernel ``F_k = X_k e^{−tΛ_k} X_kᵀ M f`` (paper, Eq. (8)); exact
+        when k = n. Its error, about e^{−tλ_{k+1}}‖f‖, is large at small t (Fig. 3)."""
+        return np.asarray(self._b.heat(as_vector(f, "f"), float(t)))
+
+    def inverse_heat(self, f: Any, t: float) -> tuple[np.ndarray, dict[str, float]]:
+        """``K_{−t} f`` truncated to the basis, ``X_k e^{+tΛ_k} X_kᵀ M f`` (Sect. 4), with a report
+        of what was dropped (``relative_dropped``) and the amplification e^{tλ_k}."""
+        g, r = self._b.inverse_heat(as_vector(f, "f"), float(t))
+        return np.asarray(g), dict(r)
+
+    def reproducing_kernel(self, v: Any, t: float) -> tuple[np.ndarray, dict[str, float]]:
+        """The reproducing kernel ``H_t v = X D_{−t} Xᵀ v`` (Prop. 3.1 B, Eq. (15), (20)),
+        truncated to the basis, with its truncation report."""
+        g, r = self._b.reproducing_kernel(as_vector(v, "v"), float(t))
+        return np.asarray(g), dict(r)
+
+    def hks(
+        self,
+        times: Any = None,
+        *,
+        num_times: int = 100,
+        convention: str = "kernel_value",
+        scaled: bool = False,
+        normalization: str | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """HKS of this basis: ``(values (n, T), times (T,))``; see :func:`hks`."""
+        t = None if times is None else [float(x) for x in as_vector(np.atleast_1d(times), "times")]
+        values, used = self._b.hks(t, num_times, convention, scaled, normalization)
+        return np.asarray(values), np.asarray(used)
+
+    def sihks(
+        self,
+        *,
+        alpha: float = 2.0,
+        tau_min: float = 1.0,
+        tau_max: float = 25.0,
+        tau_step: float = 1.0 / 16.0,
+        time_unit: float = 1.0,
+        num_frequencies: int = 6,
+        convention: str = "kernel_value",
+    ) -> np.ndarray:
+        """SI-HKS of this basis (n, num_frequencies); see :func:`sihks`."""
+        return np.asarray(
+            self._b.sihks(alpha, tau_min, tau_max, tau_step, time_unit, num_frequencies, convention)
+        )
+
+
+def eigenbasis(
+    V: Any,
+    F: Any = None,
+    k: int | None = 100,
+    *,
+    kernel: str = "wfem",
+    lumped: str = "barycentric",
+    tol: float = 1e-10,
+    block_size: int = 8,
+    max_dim: int | None = None,
+    seed: int = 0x5EED2010,
+    shift: float | None = None,
+) -> Eigenbasis:
+    """The k smallest eigenpairs of ``L x = λ M x`` on a mesh (paper, Eq. (4)), M = B for the
+    wFEM kernel (D for ``"lumped"``, I for ``"linear"``); ``k=None`` gives all n (dense,
+    n ≤ 5000). Shift-invert block Lanczos with one sparse Cholesky of ``L − σM``."""
+    v, f = as_mesh(V, F)
+    return Eigenbasis(
+        _wfem.Eigenbasis.from_mesh(v, f, k, kernel, lumped, tol, block_size, max_dim, seed, shift)
+    )
+
+
+def hks(
+    V: Any,
+    F: Any = None,
+    times: Any = None,
+    *,
+    k: int = 100,
+    num_times: int = 100,
+    convention: str = "kernel_value",
+    scaled: bool = False,
+    normalization: str | None = None,
+    kernel: str = "wfem",
+    basis: Eigenbasis | None = None,
+    exact: bool = False,
+    return_times: bool = False,
+) -> Any:
+    """The heat kernel signature h(i, t) at every vertex and time, shape (n, T).
+
+    From the k smallest eigenpairs of ``L x = λ B x`` (the wFEM kernel ``K_t = X D_t Xᵀ B``,
+    paper Eq. (6), truncated as in Eq. (8)), in one of two conventions:
+
+    * ``convention="kernel_value"`` (default; Sun, Ovsjanikov & Guibas 2009, pyFM):
+      ``h(i, t) = Σ_k e^{−λ_k t} x_k(i)²`` = diag(X D_t Xᵀ), the continuous kernel's value
+      K_t(p_i, p_i) (units 1/area);
+    * ``convention="matrix_diagonal"`` (the paper): ``h(i, t) = (X D_t Xᵀ B)_ii``, the diagonal
+      of the wFEM kernel matrix of Eq. (6); dimensionless, sums to the heat trace.
+
+    Args:
+        times: explicit positive times; ``None`` = ``num_times`` times log-spaced between
+            ``4 ln10/λ_max`` and ``4 ln10/λ_2`` (pyFM's ``auto_HKS``).
+        k: eigenpairs (ignored when ``basis`` is given).
+        scaled: divide each column by the heat trace ``Σ_k e^{−λ_k t}`` (pyFM ``scaled=True``).
+        normalization: ``None``, ``"max_eigenvalue"`` (λ/λ_max, DHK3) or ``"area"`` (λ·A).
+        kernel: ``"wfem"`` (B), ``"lumped"`` (D) or ``"linear"`` (I).
+        basis: a precomputed :class:`Eigenbasis` to reuse.
+        exact: no eigenpairs at all: the diagonal of the kernel itself by probing
+            (:meth:`HeatKernel.diagonal`), exact at small t where truncation fails (needs
+            explicit ``times``; ``scaled``/``normalization`` do not apply).
+        return_times: also return the times used.
+
+    Returns:
+        (n, T) array, or ``(values, times)`` with ``return_times=True``.
+    """
+    if exact:
+        from ._errors import InvalidInputError
+        from ._heat import HeatKernel
+
+        if times is None or scaled or normalization is not None or basis is not None:
+            raise InvalidInputError(
+                "exact=True needs explicit times and takes no scaled/normalization/basis", "InvalidParameter",
+                name="exact",
+            )
+        ts = np.atleast_1d(np.asarray(times, dtype=np.float64))
+        values = HeatKernel(V, F, kernel=kernel).diagonal(ts, convention)
+        return (values, ts) if return_times else values
+    if basis is None:
+        basis = eigenbasis(V, F, k, kernel=kernel)
+    values, used = basis.hks(
+        times, num_times=num_times, convention=convention, scaled=scaled, normalization=normalization
+    )
+    return (values, used) if return_times else values
+
+
+def sihks(
+    V: Any,
+    F: Any = None,
+    *,
+    k: int = 100,
+    alpha: float = 2.0,
+    tau_min: float = 1.0,
+    tau_max: float = 25.0,
+    tau_step: float = 1.0 / 16.0,
+    time_unit: float = 1.0,
+    num_frequencies: int = 6,
+    convention: str = "kernel_value",
+    kernel: str = "wfem",
+    basis: Eigenbasis | None = None,
+) -> np.ndarray:
+    """The scale-invariant HKS of Bronstein & Kokkinos (CVPR 2010), shape (n, num_frequencies).
+
+    ``log h(x, t₀α^τ)`` sampled for τ = τ_min, τ_min + Δτ, …, τ_max, differentiated in τ (removes
+    the additive −2 log β of a scaling by β) and Fourier-transformed (the modulus removes the
+    shift in τ); the first ``num_frequencies`` magnitudes are kept. Choose the window (``time_unit``
+    t₀, ``tau_*``) so that it covers t·λ_max ≪ 1 to t·λ_2 ≫ 1 for your units.
+    """
+    if basis is None:
+        basis = eigenbasis(V, F, k, kernel=kernel)
+    return basis.sihks(
+        alpha=alpha,
+        tau_min=tau_min,
+        tau_max=tau_max,
+        tau_step=tau_step,
+        time_unit=time_unit,
+        num_frequencies=num_frequencies,
+        convention=convention,
+    )

@@ -1,0 +1,259 @@
+# Type stubs of the compiled module wfem._wfem (crates/wfem-py/src). The public API is the
+# pure-Python layer (wfem/__init__.py and its modules), which converts arguments before calling
+# these functions. tests/test_stubs.py checks this file against the module (mypy.stubtest).
+
+from os import PathLike
+from typing import Any, final
+
+import numpy as np
+import numpy.typing as npt
+
+_F64 = npt.NDArray[np.float64]
+_F32 = npt.NDArray[np.float32]
+_I64 = npt.NDArray[np.int64]
+_Sparse = tuple[_I64, _I64, _F64, tuple[int, int]]
+_Mesh = tuple[_F64, _I64]
+_Path = str | PathLike[str]
+
+__version__: str
+DENSE_MAX_VERTICES: int
+DEFAULT_DEGREE: int
+SHIPPED_DEGREES: list[int]
+
+# meshes
+def read_mesh(path: _Path, triangulate: bool = False) -> tuple[_Mesh, str]: ...
+def validate_mesh(v: _F64, f: _I64) -> str: ...
+def repair_mesh(
+    v: _F64,
+    f: _I64,
+    merge_duplicate_vertices: float | None = None,
+    drop_degenerate_faces: bool = False,
+    drop_duplicate_faces: bool = False,
+    orient_faces: bool = False,
+    drop_unreferenced_vertices: bool = False,
+) -> tuple[_Mesh, str]: ...
+def mesh_stats(v: _F64, f: _I64) -> str: ...
+def operators(v: _F64, f: _I64, lumped: str = "barycentric") -> tuple[_Sparse, _Sparse, _Sparse]: ...
+def extrema(v: _F64, f: _I64, field: _F64, persistence: float | None = None) -> list[int]: ...
+def icosphere(level: int) -> _Mesh: ...
+def uv_sphere(rings: int, segments: int) -> _Mesh: ...
+def grid(nx: int, ny: int) -> _Mesh: ...
+def torus(major: float, minor: float, nu: int, nv: int) -> _Mesh: ...
+def irregular_sphere(level: int, s: float) -> _Mesh: ...
+def bumpy(level: int) -> _Mesh: ...
+
+# heat kernel
+@final
+class HeatKernel:
+    @staticmethod
+    def from_mesh(
+        v: _F64,
+        f: _I64,
+        kernel: str = "wfem",
+        method_name: str = "fast",
+        degree: int | None = None,
+        k: int | None = None,
+        backend: str | None = None,
+        lumped: str = "barycentric",
+    ) -> HeatKernel: ...
+    @staticmethod
+    def from_operators(
+        l: _Sparse,
+        m: _Sparse,
+        method_name: str = "fast",
+        degree: int | None = None,
+        k: int | None = None,
+        backend: str | None = None,
+    ) -> HeatKernel: ...
+    @property
+    def n(self) -> int: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def kernel(self) -> str: ...
+    def stiffness(self) -> _Sparse: ...
+    def mass(self) -> _Sparse: ...
+    def vertex_areas(self) -> _F64: ...
+    def apply(self, f: _F64, times: list[float]) -> _F64: ...
+    def apply_times(self, f: _F64, times: list[float]) -> tuple[_F64, list[float | None]]: ...
+    def diagonal(
+        self,
+        times: list[float],
+        convention: str = "kernel_value",
+        tol: float = 1e-10,
+        exact: bool = False,
+        max_columns: int = 4096,
+        block: int = 64,
+    ) -> tuple[_F64, dict[str, Any]]: ...
+    def apply_kernel_matrix(self, g: _F64, t: float) -> _F64: ...
+    def canonical_basis(self, anchors: list[int], t: float) -> _F64: ...
+    def canonical_limit(self, anchors: list[int]) -> _F64: ...
+    def mass_inner_product(self, f: _F64, g: _F64) -> float: ...
+    def heat_inner_product(self, f: _F64, g: _F64, t: float) -> float: ...
+    def diffusion_embeddings(self, vertices: list[int], t: float) -> _F64: ...
+    def inverse(
+        self,
+        f: _F64,
+        t: float,
+        max_amplification: float = 1e6,
+        tol: float = 1e-10,
+        max_iter: int = 300,
+        stall_window: int = 40,
+    ) -> tuple[_F64, dict[str, float]]: ...
+    def largest_eigenvalue(self, tol: float = 1e-10, max_iter: int = 300, seed: int = ...) -> float: ...
+    def feature_approximation(
+        self,
+        f: _F64,
+        k: int = 20,
+        scales: int = 10,
+        persistence: float = 0.1,
+        absolute: bool = False,
+        interpolate: bool = False,
+    ) -> dict[str, Any]: ...
+    def distance(
+        self,
+        t: float,
+        kind: str = "diffusion",
+        block: int = 64,
+        exact_diagonal: bool = False,
+        diagonal_tol: float = 1e-10,
+    ) -> DiffusionDistance: ...
+
+@final
+class DiffusionDistance:
+    @property
+    def t(self) -> float: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def n(self) -> int: ...
+    def rows(self, sources: list[int]) -> _F64: ...
+    def pairs(self, pairs: list[tuple[int, int]]) -> _F64: ...
+    def diagonal(self) -> _F64: ...
+
+# spectrum and signatures
+@final
+class Eigenbasis:
+    @staticmethod
+    def from_mesh(
+        v: _F64,
+        f: _I64,
+        k: int | None = None,
+        kernel: str = "wfem",
+        lumped: str = "barycentric",
+        tol: float = 1e-10,
+        block_size: int = 8,
+        max_dim: int | None = None,
+        seed: int = ...,
+        shift: float | None = None,
+    ) -> Eigenbasis: ...
+    @staticmethod
+    def from_operators(
+        l: _Sparse,
+        m: _Sparse,
+        k: int | None = None,
+        tol: float = 1e-10,
+        block_size: int = 8,
+        max_dim: int | None = None,
+        seed: int = ...,
+        shift: float | None = None,
+    ) -> Eigenbasis: ...
+    @property
+    def values(self) -> _F64: ...
+    @property
+    def vectors(self) -> _F64: ...
+    @property
+    def n(self) -> int: ...
+    @property
+    def k(self) -> int: ...
+    def project(self, f: _F64) -> _F64: ...
+    def reconstruct(self, c: _F64) -> _F64: ...
+    def heat(self, f: _F64, t: float) -> _F64: ...
+    def inverse_heat(self, f: _F64, t: float) -> tuple[_F64, dict[str, float]]: ...
+    def reproducing_kernel(self, v: _F64, t: float) -> tuple[_F64, dict[str, float]]: ...
+    def hks(
+        self,
+        times: list[float] | None = None,
+        num_times: int = 100,
+        convention: str = "kernel_value",
+        scaled: bool = False,
+        normalization: str | None = None,
+    ) -> tuple[_F64, list[float]]: ...
+    def sihks(
+        self,
+        alpha: float = 2.0,
+        tau_min: float = 1.0,
+        tau_max: float = 25.0,
+        tau_step: float = 0.0625,
+        time_unit: float = 1.0,
+        num_frequencies: int = 6,
+        convention: str = "kernel_value",
+    ) -> _F64: ...
+
+# retrieval
+def descriptors(
+    v: _F64,
+    f: _I64,
+    kinds: list[str],
+    k: int = 100,
+    times: list[float] | None = None,
+    num_times: int = 16,
+    sihks: dict[str, Any] | None = None,
+) -> dict[str, _F64]: ...
+def sparse_features(
+    v: _F64,
+    f: _I64,
+    detector: str = "shk1",
+    k: int = 100,
+    feature_time_factor: float = 0.1,
+    feature_rings: int = 1,
+    persistence_fraction: float = 0.05,
+) -> tuple[list[int], float]: ...
+def kmeans_clusters(
+    points: _F64, k: int, max_iter: int = 300, seed: int = 0
+) -> tuple[_F64, list[int], float, int, bool]: ...
+def evaluate_retrieval(
+    distances: _F64, labels: list[int]
+) -> tuple[list[float | None], float, list[tuple[int, float, int]]]: ...
+def pairwise_l1(bags: _F64) -> _F64: ...
+@final
+class Vocabulary:
+    def __new__(cls, words: _F64, sigma: float) -> Vocabulary: ...
+    @staticmethod
+    def train(
+        descriptors: _F64,
+        size: int = 48,
+        max_iter: int = 300,
+        seed: int = 0,
+        sigma: float | None = None,
+        max_training_points: int | None = None,
+    ) -> Vocabulary: ...
+    @property
+    def words(self) -> _F64: ...
+    @property
+    def sigma(self) -> float: ...
+    @property
+    def size(self) -> int: ...
+    def soft_assignment(self, descriptors: _F64) -> _F64: ...
+    def bag(self, descriptors: _F64, weights: _F64) -> _F64: ...
+    def spatially_sensitive_bag(self, descriptors: _F64, kernel: HeatKernel, t: float) -> _F64: ...
+
+@final
+class IndexStore:
+    @staticmethod
+    def create(path: _Path, dimension: int, chunk_rows: int = 4096, overwrite: bool = False) -> IndexStore: ...
+    @staticmethod
+    def open(path: _Path, readonly: bool = False) -> IndexStore: ...
+    @property
+    def path(self) -> str: ...
+    @property
+    def dimension(self) -> int: ...
+    def __len__(self) -> int: ...
+    def meta(self, key: str) -> bytes | None: ...
+    def set_meta(self, key: str, value: bytes) -> None: ...
+    def add(self, names: list[str], infos: list[str], vectors: _F64) -> list[int]: ...
+    def search(self, query: _F64, k: int = 10, metric: str = "l1") -> list[tuple[int, str, str, float]]: ...
+    def shapes(self) -> list[tuple[int, str, str]]: ...
+    def find(self, name: str) -> tuple[int, str] | None: ...
+    def vectors(self) -> _F32: ...
+    def vector(self, id: int) -> _F32 | None: ...

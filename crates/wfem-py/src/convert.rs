@@ -1,0 +1,169 @@
+//! NumPy ⇄ Rust. Inputs are copied out of the arrays (any strides, any memory order; the
+//! arrays are never written); outputs are new C-ordered arrays. The pure-Python layer has
+//! already converted dtypes (float32 → float64, int32 → int64) and refused the others.
+
+use crate::errors::{invalid, Error};
+use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
+use faer::{Mat, MatRef};
+use mesh_fem::TriMesh;
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+
+/// A 1-D float64 array as a vector.
+pub fn vec_in(a: &PyReadonlyArray1<'_, f64>) -> Vec<f64> {
+    a.as_array().iter().copied().collect()
+}
+
+/// A 2-D float64 array as a faer matrix.
+pub fn mat_in(a: &PyReadonlyArray2<'_, f64>) -> Mat<f64> {
+    let v = a.as_array();
+    Mat::from_fn(v.nrows(), v.ncols(), |i, j| v[[i, j]])
+}
+
+/// A faer matrix as a new (rows × cols) array.
+pub fn mat_out<'py>(py: Python<'py>, m: MatRef<'_, f64>) -> Bound<'py, PyArray2<f64>> {
+    Array2::from_shape_fn((m.nrows(), m.ncols()), |(i, j)| m[(i, j)]).into_pyarray(py)
+}
+
+/// Several n × k matrices as one (T, n, k) array.
+pub fn mats_out<'py>(py: Python<'py>, ms: &[Mat<f64>], n: usize, k: usize) -> Bound<'py, PyArray3<f64>> {
+    Array3::from_shape_fn((ms.len(), n, k), |(t, i, j)| ms[t][(i, j)]).into_pyarray(py)
+}
+
+/// A vector as a new 1-D array.
+pub fn vec_out<'py>(py: Python<'py>, v: Vec<f64>) -> Bound<'py, PyArray1<f64>> {
+    v.into_pyarray(py)
+}
+
+/// A mesh from V (n, 3) float64 and F (m, 3) int64, validated by `TriMesh::new` (indices in
+/// range, finite coordinates, not empty).
+pub fn mesh_in(py: Python<'_>, v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArray2<'_, i64>) -> PyResult<TriMesh> {
+    let (va, fa) = (v.as_array(), f.as_array());
+    if va.ncols() != 3 {
+        return Err(invalid(
+            py,
+            "VerticesShape",
+            format!("V must have shape (n, 3), got {:?}", va.shape()),
+        ));
+    }
+    if fa.ncols() != 3 {
+        return Err(invalid(
+            py,
+            "FacesShape",
+            format!("F must have shape (m, 3) (triangles), got {:?}", fa.shape()),
+        ));
+    }
+    let positions: Vec<[f64; 3]> = va.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+    let mut faces = Vec::with_capacity(fa.nrows());
+    for (face, r) in fa.rows().into_iter().enumerate() {
+        let mut tri = [0u32; 3];
+        for (c, &x) in r.iter().enumerate() {
+            tri[c] = u32::try_from(x).map_err(|_| {
+                crate::errors::raise(
+                    py,
+                    crate::errors::Class::Mesh,
+                    "IndexOutOfRange",
+                    format!("face {face} uses vertex {x}, but the mesh has {} vertices", va.nrows()),
+                    vec![
+                        ("face", face.into()),
+                        ("index", crate::errors::Value::Int(x.into())),
+                        ("n_vertices", va.nrows().into()),
+                    ],
+                )
+            })?;
+        }
+        faces.push(tri);
+    }
+    TriMesh::new(positions, faces).map_err(|e| crate::errors::mesh(py, &e))
+}
+
+/// A mesh as (V (n, 3) float64, F (m, 3) int64) arrays.
+pub fn mesh_out<'py>(py: Python<'py>, mesh: &TriMesh) -> (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>) {
+    let p = mesh.positions();
+    let f = mesh.faces();
+    let v = Array2::from_shape_fn((p.len(), 3), |(i, j)| p[i][j]).into_pyarray(py);
+    let f = Array2::from_shape_fn((f.len(), 3), |(i, j)| i64::from(f[i][j])).into_pyarray(py);
+    (v, f)
+}
+
+/// A sparse matrix argument: CSC arrays (indptr, indices, data) and its shape.
+pub type SparseIn<'py> = (
+    PyReadonlyArray1<'py, i64>,
+    PyReadonlyArray1<'py, i64>,
+    PyReadonlyArray1<'py, f64>,
+    (usize, usize),
+);
+
+/// [`sparse_in`] of an argument, raising `InvalidInputError` naming it.
+pub fn sparse_arg(py: Python<'_>, name: &str, a: &SparseIn<'_>) -> PyResult<SparseColMat<usize, f64>> {
+    sparse_in(name, &a.0, &a.1, &a.2, a.3).map_err(|e| e.into_py(py))
+}
+
+/// A sparse matrix given as CSC arrays (indptr, indices, data) and a shape, as a faer matrix.
+/// Duplicates are summed; every index is checked.
+pub fn sparse_in(
+    name: &str,
+    indptr: &PyReadonlyArray1<'_, i64>,
+    indices: &PyReadonlyArray1<'_, i64>,
+    data: &PyReadonlyArray1<'_, f64>,
+    shape: (usize, usize),
+) -> Result<SparseColMat<usize, f64>, Error> {
+    let (p, r, x) = (indptr.as_array(), indices.as_array(), data.as_array());
+    let (nrows, ncols) = shape;
+    let bad = |reason: String| Error::Invalid("SparseMatrix", format!("{name}: {reason}"));
+    if p.len() != ncols + 1 {
+        return Err(bad(format!("indptr has {} entries for {ncols} columns", p.len())));
+    }
+    if r.len() != x.len() {
+        return Err(bad(format!("{} indices but {} values", r.len(), x.len())));
+    }
+    let mut triplets = Vec::with_capacity(x.len());
+    for j in 0..ncols {
+        let (a, b) = (p[j], p[j + 1]);
+        if a < 0 || b < a || b as usize > r.len() {
+            return Err(bad(format!(
+                "indptr is not increasing within 0..={} at column {j}",
+                r.len()
+            )));
+        }
+        for q in a as usize..b as usize {
+            let i = r[q];
+            if i < 0 || i as usize >= nrows {
+                return Err(bad(format!("row index {i} in column {j} is outside 0..{nrows}")));
+            }
+            triplets.push(Triplet::new(i as usize, j, x[q]));
+        }
+    }
+    SparseColMat::try_new_from_triplets(nrows, ncols, &triplets).map_err(|e| bad(format!("{e:?}")))
+}
+
+/// CSC arrays (indptr, indices, data) of a faer matrix, one entry per stored value.
+pub type SparseOut<'py> = (
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<f64>>,
+    (usize, usize),
+);
+
+/// A faer matrix as CSC arrays for `scipy.sparse.csc_matrix((data, indices, indptr), shape)`.
+pub fn sparse_out<'py>(py: Python<'py>, a: SparseColMatRef<'_, usize, f64>) -> SparseOut<'py> {
+    let sym = a.symbolic();
+    let mut indptr = Vec::with_capacity(a.ncols() + 1);
+    let mut indices = Vec::with_capacity(a.val().len());
+    let mut data = Vec::with_capacity(a.val().len());
+    indptr.push(0i64);
+    for j in 0..a.ncols() {
+        for q in sym.col_range(j) {
+            indices.push(sym.row_idx()[q] as i64);
+            data.push(a.val()[q]);
+        }
+        indptr.push(indices.len() as i64);
+    }
+    (
+        indptr.into_pyarray(py),
+        indices.into_pyarray(py),
+        data.into_pyarray(py),
+        (a.nrows(), a.ncols()),
+    )
+}

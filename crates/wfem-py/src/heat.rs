@@ -1,0 +1,529 @@
+//! The heat kernel K_t = exp(−t M⁻¹L) (paper, Eq. (6)), its algebra and diffusion distances.
+
+use crate::convert::{
+    mat_in, mat_out, mats_out, mesh_in, sparse_arg, sparse_out, vec_in, vec_out, SparseIn, SparseOut,
+};
+use crate::errors::{invalid, invalid_param};
+use crate::mesh::lumped_kind;
+use crate::run::run;
+use faer::Mat;
+use mesh_fem::{assemble, AssemblyParams, TriMesh};
+use numpy::{PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::sync::Arc;
+use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
+use wfem_heat::rkhs::{heat_inner_product, inverse_cg, InverseParams};
+use wfem_heat::scale::{largest_eigenvalue, LargestEigenParams};
+use wfem_heat::{HeatKernel, HeatParams, KernelKind, Method, Operators};
+
+pub fn kernel_kind(py: Python<'_>, name: &str) -> PyResult<KernelKind> {
+    match name {
+        "wfem" => Ok(KernelKind::Wfem),
+        "lumped" => Ok(KernelKind::Lumped),
+        "linear" => Ok(KernelKind::Linear),
+        other => Err(invalid_param(
+            py,
+            "kernel",
+            format!("{other:?} is not one of \"wfem\", \"lumped\", \"linear\""),
+        )),
+    }
+}
+
+/// The method of a name and its options (`degree`, `backend` for "rational"; `k` for
+/// "spectral"); options that do not belong to the method are refused.
+pub fn method(
+    py: Python<'_>,
+    name: &str,
+    degree: Option<usize>,
+    k: Option<usize>,
+    backend: Option<&str>,
+) -> PyResult<Method> {
+    let unused = |what: &str| invalid_param(py, "method", format!("`{what}` does not apply to method {name:?}"));
+    if name != "rational" && degree.is_some() {
+        return Err(unused("degree"));
+    }
+    if name != "rational" && backend.is_some() {
+        return Err(unused("backend"));
+    }
+    if name != "spectral" && k.is_some() {
+        return Err(unused("k"));
+    }
+    Ok(match name {
+        "fast" => Method::fast(),
+        "dense" => Method::Dense,
+        "taylor" => Method::Taylor,
+        "backward-euler" | "backward_euler" => Method::BackwardEuler,
+        "spectral" => {
+            let k = k.ok_or_else(|| invalid_param(py, "k", "the spectral method needs k (number of eigenpairs)"))?;
+            Method::spectral(k)
+        }
+        "rational" => {
+            let degree = degree.unwrap_or(shifted_solve::DEFAULT_DEGREE);
+            let backend = match backend {
+                None => shifted_solve::Backend::DirectLdlt,
+                Some(b) => shifted_solve::Backend::from_name(b).ok_or_else(|| {
+                    invalid_param(
+                        py,
+                        "backend",
+                        format!("{b:?} is not one of {:?}", ["ldlt", "lu", "minres", "multishift"]),
+                    )
+                })?,
+            };
+            Method::Rational { degree, backend }
+        }
+        other => {
+            return Err(invalid_param(
+                py,
+                "method",
+                format!(
+                    "{other:?} is not one of \"fast\", \"rational\", \"spectral\", \"dense\", \"taylor\", \"backward-euler\""
+                ),
+            ))
+        }
+    })
+}
+
+fn check_times(py: Python<'_>, times: &[f64]) -> PyResult<()> {
+    if times.is_empty() {
+        return Err(invalid(py, "Empty", "t is empty: give at least one diffusion time"));
+    }
+    Ok(())
+}
+
+/// (K_t F for each t (T, n, k), per-t error estimates).
+type Series<'py> = (Bound<'py, PyArray3<f64>>, Vec<Option<f64>>);
+
+/// Rust side of `wfem.HeatKernel`.
+#[pyclass(name = "HeatKernel", module = "wfem._wfem", frozen)]
+pub struct PyHeatKernel {
+    pub kernel: HeatKernel,
+    pub mesh: Option<Arc<TriMesh>>,
+}
+
+#[pymethods]
+impl PyHeatKernel {
+    #[staticmethod]
+    #[pyo3(signature = (v, f, kernel="wfem", method_name="fast", degree=None, k=None, backend=None, lumped="barycentric"))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_mesh(
+        py: Python<'_>,
+        v: PyReadonlyArray2<'_, f64>,
+        f: PyReadonlyArray2<'_, i64>,
+        kernel: &str,
+        method_name: &str,
+        degree: Option<usize>,
+        k: Option<usize>,
+        backend: Option<&str>,
+        lumped: &str,
+    ) -> PyResult<Self> {
+        let mesh = mesh_in(py, &v, &f)?;
+        let kind = kernel_kind(py, kernel)?;
+        let method = method(py, method_name, degree, k, backend)?;
+        let lumped = lumped_kind(py, lumped)?;
+        run(py, move |_| {
+            let fem = assemble(&mesh, &AssemblyParams { lumped })?;
+            let kernel = HeatKernel::new(&fem, HeatParams { kernel: kind, method })?;
+            Ok(Self {
+                kernel,
+                mesh: Some(Arc::new(mesh)),
+            })
+        })
+    }
+
+    #[staticmethod]
+    #[pyo3(signature = (l, m, method_name="fast", degree=None, k=None, backend=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_operators(
+        py: Python<'_>,
+        l: SparseIn<'_>,
+        m: SparseIn<'_>,
+        method_name: &str,
+        degree: Option<usize>,
+        k: Option<usize>,
+        backend: Option<&str>,
+    ) -> PyResult<Self> {
+        let l = sparse_arg(py, "L", &l)?;
+        let m = sparse_arg(py, "M", &m)?;
+        let method = method(py, method_name, degree, k, backend)?;
+        run(py, move |_| {
+            let ops = Operators::from_matrices(l.as_ref(), m.as_ref())?;
+            Ok(Self {
+                kernel: HeatKernel::with_operators(&ops, method)?,
+                mesh: None,
+            })
+        })
+    }
+
+    /// Number of vertices n.
+    #[getter]
+    fn n(&self) -> usize {
+        self.kernel.n()
+    }
+
+    /// The method's short name.
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.kernel.method().name()
+    }
+
+    /// The kernel's name ("wfem", "lumped", "linear", or "custom" for from_operators).
+    #[getter]
+    fn kernel(&self) -> &'static str {
+        match self.kernel.operators().kind() {
+            Some(KernelKind::Wfem) => "wfem",
+            Some(KernelKind::Lumped) => "lumped",
+            Some(KernelKind::Linear) => "linear",
+            _ => "custom",
+        }
+    }
+
+    fn stiffness<'py>(&self, py: Python<'py>) -> SparseOut<'py> {
+        sparse_out(py, self.kernel.operators().stiffness())
+    }
+
+    fn mass<'py>(&self, py: Python<'py>) -> SparseOut<'py> {
+        sparse_out(py, self.kernel.mass())
+    }
+
+    fn vertex_areas<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec_out(py, self.kernel.operators().vertex_areas())
+    }
+
+    /// K_t F for every t (T, n, k): one factorization per t serves all k columns.
+    fn apply<'py>(
+        &self,
+        py: Python<'py>,
+        f: PyReadonlyArray2<'py, f64>,
+        times: Vec<f64>,
+    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        check_times(py, &times)?;
+        let f = mat_in(&f);
+        let (n, k) = (f.nrows(), f.ncols());
+        let kernel = self.kernel.clone();
+        // Each t has its own factorization, shared by every column, so every t gets the
+        // method's full accuracy; `apply_times` trades some of it for one factorization.
+        let out = run(py, move |cancel| {
+            let mut out = Vec::with_capacity(times.len());
+            for t in times {
+                cancel.check()?;
+                out.push(kernel.apply_many(f.as_ref(), t)?);
+            }
+            Ok(out)
+        })?;
+        Ok(mats_out(py, &out, n, k))
+    }
+
+    /// K_t F for every t with the per-t error estimates: ((T, n, k), [estimate or None]).
+    fn apply_times<'py>(
+        &self,
+        py: Python<'py>,
+        f: PyReadonlyArray2<'py, f64>,
+        times: Vec<f64>,
+    ) -> PyResult<Series<'py>> {
+        check_times(py, &times)?;
+        let f = mat_in(&f);
+        let (n, k) = (f.nrows(), f.ncols());
+        let kernel = self.kernel.clone();
+        let series = run(py, move |_| Ok(kernel.apply_times(f.as_ref(), &times)?))?;
+        Ok((mats_out(py, &series.values, n, k), series.error_estimates))
+    }
+
+    /// The exact diagonal of the heat kernel at every t (n, T), by probing, without eigenpairs.
+    #[pyo3(signature = (times, convention="kernel_value", tol=1e-10, exact=false, max_columns=4096, block=64))]
+    #[allow(clippy::too_many_arguments)]
+    fn diagonal<'py>(
+        &self,
+        py: Python<'py>,
+        times: Vec<f64>,
+        convention: &str,
+        tol: f64,
+        exact: bool,
+        max_columns: usize,
+        block: usize,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
+        use wfem_heat::{DiagonalParams, KernelDiagonal};
+        check_times(py, &times)?;
+        let which = match crate::spectral::convention(py, convention)? {
+            shape_retrieval::HksConvention::KernelValue => KernelDiagonal::KernelValue,
+            shape_retrieval::HksConvention::MatrixDiagonal => KernelDiagonal::MatrixDiagonal,
+        };
+        let params = DiagonalParams {
+            method: if exact {
+                wfem_heat::diagonal::DiagonalMethod::Exact
+            } else {
+                wfem_heat::diagonal::DiagonalMethod::Probing { tol }
+            },
+            max_columns,
+            block,
+        };
+        let kernel = self.kernel.clone();
+        let series = run(py, move |_| Ok(kernel.diagonal(&times, which, &params)?))?;
+        let info = PyDict::new(py);
+        info.set_item("columns", series.info.columns)?;
+        info.set_item("hops", series.info.hops)?;
+        info.set_item("relative_tail", series.info.relative_tail)?;
+        info.set_item("error_estimates", series.error_estimates)?;
+        Ok((mat_out(py, series.values.as_ref()), info))
+    }
+
+    /// H_t G = K_t M⁻¹ G (n, k).
+    fn apply_kernel_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        g: PyReadonlyArray2<'py, f64>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let g = mat_in(&g);
+        let kernel = self.kernel.clone();
+        let out = run(py, move |_| Ok(kernel.apply_kernel_matrix(g.as_ref(), t)?))?;
+        Ok(mat_out(py, out.as_ref()))
+    }
+
+    /// Columns K_t e_i for the anchors (n, |A|).
+    fn canonical_basis<'py>(&self, py: Python<'py>, anchors: Vec<u32>, t: f64) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let kernel = self.kernel.clone();
+        let out = run(py, move |_| {
+            Ok(wfem_heat::basis::canonical_basis(&kernel, &anchors, t)?)
+        })?;
+        Ok(mat_out(py, out.as_ref()))
+    }
+
+    /// lim_{t→∞} K_t e_i = c_i·1: the constants c_i.
+    fn canonical_limit<'py>(&self, py: Python<'py>, anchors: Vec<u32>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let out = wfem_heat::basis::canonical_limit(&self.kernel, &anchors).map_err(|e| crate::errors::heat(py, &e))?;
+        Ok(vec_out(py, out))
+    }
+
+    /// ⟨f, g⟩_M = fᵀMg.
+    fn mass_inner_product(
+        &self,
+        py: Python<'_>,
+        f: PyReadonlyArray1<'_, f64>,
+        g: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<f64> {
+        self.kernel
+            .operators()
+            .mass_inner_product(&vec_in(&f), &vec_in(&g))
+            .map_err(|e| crate::errors::heat(py, &e))
+    }
+
+    /// ⟨f, g⟩_t = fᵀ M K_t g (Eq. (16)).
+    fn heat_inner_product(
+        &self,
+        py: Python<'_>,
+        f: PyReadonlyArray1<'_, f64>,
+        g: PyReadonlyArray1<'_, f64>,
+        t: f64,
+    ) -> PyResult<f64> {
+        let (f, g) = (vec_in(&f), vec_in(&g));
+        let kernel = self.kernel.clone();
+        run(py, move |_| Ok(heat_inner_product(&kernel, &f, &g, t)?))
+    }
+
+    /// [h_i] = K_{t/2}[e_i] (Eq. (18b)), (n, m).
+    fn diffusion_embeddings<'py>(
+        &self,
+        py: Python<'py>,
+        vertices: Vec<usize>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let kernel = self.kernel.clone();
+        let out = run(py, move |_| {
+            Ok(wfem_heat::rkhs::diffusion_embeddings(&kernel, &vertices, t)?)
+        })?;
+        Ok(mat_out(py, out.as_ref()))
+    }
+
+    /// K_{−t} f by conjugate gradients (refused when ill-conditioned): (g, report dict).
+    #[pyo3(signature = (f, t, max_amplification=1e6, tol=1e-10, max_iter=300, stall_window=40))]
+    #[allow(clippy::too_many_arguments)]
+    fn inverse<'py>(
+        &self,
+        py: Python<'py>,
+        f: PyReadonlyArray1<'py, f64>,
+        t: f64,
+        max_amplification: f64,
+        tol: f64,
+        max_iter: usize,
+        stall_window: usize,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyDict>)> {
+        let f = vec_in(&f);
+        let kernel = self.kernel.clone();
+        let params = InverseParams {
+            max_amplification,
+            tol,
+            max_iter,
+            stall_window,
+        };
+        let (g, report) = run(py, move |_| Ok(inverse_cg(&kernel, &f, t, &params)?))?;
+        let d = PyDict::new(py);
+        d.set_item("iterations", report.iterations)?;
+        d.set_item("relative_residual", report.relative_residual)?;
+        d.set_item("amplification", report.amplification)?;
+        Ok((vec_out(py, g), d))
+    }
+
+    /// λ_max of L x = λ M x (Lanczos).
+    #[pyo3(signature = (tol=1e-10, max_iter=300, seed=0x1a2b_3c4d))]
+    fn largest_eigenvalue(&self, py: Python<'_>, tol: f64, max_iter: usize, seed: u64) -> PyResult<f64> {
+        let kernel = self.kernel.clone();
+        let params = LargestEigenParams { tol, max_iter, seed };
+        run(py, move |_| Ok(largest_eigenvalue(kernel.operators(), &params)?))
+    }
+
+    /// The feature-driven approximation (Sect. 4.2) of f on the kernel's mesh.
+    #[pyo3(signature = (f, k=20, scales=10, persistence=0.1, absolute=false, interpolate=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn feature_approximation<'py>(
+        &self,
+        py: Python<'py>,
+        f: PyReadonlyArray1<'py, f64>,
+        k: usize,
+        scales: usize,
+        persistence: f64,
+        absolute: bool,
+        interpolate: bool,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        use wfem_heat::approx::{feature_approximation, ApproxParams, Coefficients, Persistence};
+        let mesh = self.mesh.clone().ok_or_else(|| {
+            invalid(
+                py,
+                "NoMesh",
+                "the feature-driven approximation needs the mesh (build the kernel from V, F, not from operators)",
+            )
+        })?;
+        let f = vec_in(&f);
+        let kernel = self.kernel.clone();
+        let params = ApproxParams {
+            k,
+            scales,
+            persistence: if absolute {
+                Persistence::Absolute(persistence)
+            } else {
+                Persistence::Relative(persistence)
+            },
+            coefficients: if interpolate {
+                Coefficients::Interpolate
+            } else {
+                Coefficients::FeatureValues
+            },
+            ..Default::default()
+        };
+        let result = run(py, move |_| Ok(feature_approximation(&mesh, &kernel, &f, &params)?))?;
+        let d = PyDict::new(py);
+        d.set_item("anchors", result.anchors.clone())?;
+        d.set_item("lambda_k", result.lambda_k)?;
+        d.set_item("input_critical_points", result.input_critical_points)?;
+        let scales = pyo3::types::PyList::empty(py);
+        for s in result.scales {
+            let e = PyDict::new(py);
+            e.set_item("t", s.t)?;
+            e.set_item("global_", vec_out(py, s.global))?;
+            e.set_item("local", vec_out(py, s.local))?;
+            e.set_item("linf_error", s.linf_error)?;
+            e.set_item("relative_linf_error", s.relative_linf_error)?;
+            e.set_item("critical_points", s.critical_points)?;
+            e.set_item("significant_critical_points", s.significant_critical_points)?;
+            scales.append(e)?;
+        }
+        d.set_item("scales", scales)?;
+        Ok(d)
+    }
+
+    /// Diffusion distances of `kind` at time t on this kernel.
+    #[pyo3(signature = (t, kind="diffusion", block=64, exact_diagonal=false, diagonal_tol=1e-10))]
+    fn distance(
+        &self,
+        py: Python<'_>,
+        t: f64,
+        kind: &str,
+        block: usize,
+        exact_diagonal: bool,
+        diagonal_tol: f64,
+    ) -> PyResult<PyDiffusionDistance> {
+        let kind = match kind {
+            "diffusion" => DistanceKind::Diffusion,
+            "mass-weighted" | "mass_weighted" => DistanceKind::MassWeighted,
+            other => {
+                return Err(invalid_param(
+                    py,
+                    "kind",
+                    format!("{other:?} is not one of \"diffusion\", \"mass-weighted\""),
+                ))
+            }
+        };
+        let params = DistanceParams {
+            block,
+            diagonal: if exact_diagonal {
+                wfem_heat::diagonal::DiagonalMethod::Exact
+            } else {
+                wfem_heat::diagonal::DiagonalMethod::Probing { tol: diagonal_tol }
+            },
+        };
+        let inner = DiffusionDistance::new(&self.kernel, kind, t, &params).map_err(|e| crate::errors::heat(py, &e))?;
+        Ok(PyDiffusionDistance { inner: Arc::new(inner) })
+    }
+}
+
+/// Rust side of `wfem.DiffusionDistance`.
+#[pyclass(name = "DiffusionDistance", module = "wfem._wfem", frozen)]
+pub struct PyDiffusionDistance {
+    inner: Arc<DiffusionDistance>,
+}
+
+#[pymethods]
+impl PyDiffusionDistance {
+    #[getter]
+    fn t(&self) -> f64 {
+        self.inner.t()
+    }
+
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.inner.kind().name()
+    }
+
+    #[getter]
+    fn n(&self) -> usize {
+        self.inner.n()
+    }
+
+    /// d(i, ·) for each source (m, n).
+    fn rows<'py>(&self, py: Python<'py>, sources: Vec<usize>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let inner = self.inner.clone();
+        let n = inner.n();
+        let m = sources.len();
+        let rows = run(py, move |cancel| {
+            let mut rows = Vec::with_capacity(sources.len());
+            for i in sources {
+                cancel.check()?;
+                rows.push(inner.row(i)?);
+            }
+            Ok(rows)
+        })?;
+        let out = Mat::from_fn(m, n, |i, j| rows[i][j]);
+        Ok(mat_out(py, out.as_ref()))
+    }
+
+    /// d(i, j) for each pair.
+    fn pairs<'py>(&self, py: Python<'py>, pairs: Vec<(usize, usize)>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let inner = self.inner.clone();
+        let out = run(py, move |_| Ok(inner.pairs(&pairs)?))?;
+        Ok(vec_out(py, out))
+    }
+
+    /// The diagonal A_ii of the distance's Gram matrix.
+    fn diagonal<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let inner = self.inner.clone();
+        let out = run(py, move |_| Ok(inner.diagonal()?.to_vec()))?;
+        Ok(vec_out(py, out))
+    }
+}
+
+/// Registers the classes of this module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyHeatKernel>()?;
+    m.add_class::<PyDiffusionDistance>()?;
+    Ok(())
+}

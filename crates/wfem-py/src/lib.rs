@@ -1,0 +1,31 @@
+//! `wfem._wfem`: the compiled part of the Python package `wfem` (see `python/wfem`, which
+//! converts and checks arguments, builds `scipy.sparse` matrices and carries the docstrings).
+//!
+//! Every long call runs without the GIL and can be interrupted with Ctrl-C ([`run`]); every
+//! Rust error becomes an exception of `wfem._errors` keeping the culprit ([`errors`]).
+
+mod convert;
+mod errors;
+mod heat;
+mod mesh;
+mod retrieval;
+mod run;
+mod spectral;
+mod store;
+
+use pyo3::prelude::*;
+
+/// The extension module.
+#[pymodule]
+fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("DENSE_MAX_VERTICES", wfem_heat::DENSE_MAX_VERTICES)?;
+    m.add("DEFAULT_DEGREE", shifted_solve::DEFAULT_DEGREE)?;
+    m.add("SHIPPED_DEGREES", shifted_solve::SHIPPED_DEGREES.to_vec())?;
+    mesh::register(m)?;
+    heat::register(m)?;
+    spectral::register(m)?;
+    retrieval::register(m)?;
+    store::register(m)?;
+    Ok(())
+}

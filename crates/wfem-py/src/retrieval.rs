@@ -1,0 +1,334 @@
+//! Shape descriptors (DHK1–3, SI-HKS, sparse features), vocabularies, bags of features and
+//! retrieval metrics (paper, Sect. 5).
+
+use crate::convert::{mat_in, mat_out, mesh_in, vec_in, vec_out};
+use crate::errors::invalid_param;
+use crate::heat::PyHeatKernel;
+use crate::run::run;
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use shape_retrieval::hks::TimeSampling;
+use shape_retrieval::{
+    evaluate, kmeans, Descriptor, DescriptorParams, FeatureDetector, KmeansParams, RetrievalError, ShapeDescriptors,
+    SihksParams, Vocabulary, VocabularyParams,
+};
+use std::sync::Arc;
+
+fn descriptor(py: Python<'_>, name: &str) -> PyResult<Descriptor> {
+    match name.to_ascii_lowercase().replace(['-', '_'], "").as_str() {
+        "dhk1" => Ok(Descriptor::Dhk1),
+        "dhk2" => Ok(Descriptor::Dhk2),
+        "dhk3" => Ok(Descriptor::Dhk3),
+        "sihks" => Ok(Descriptor::SiHks),
+        _ => Err(invalid_param(
+            py,
+            "kind",
+            format!("{name:?} is not one of \"dhk1\", \"dhk2\", \"dhk3\", \"sihks\""),
+        )),
+    }
+}
+
+/// The descriptor pipeline's parameters from Python values.
+#[allow(clippy::too_many_arguments)]
+fn descriptor_params(
+    k: usize,
+    times: Option<Vec<f64>>,
+    num_times: usize,
+    sihks: Option<SihksParams>,
+    feature_time_factor: f64,
+    feature_rings: usize,
+    persistence_fraction: f64,
+) -> DescriptorParams {
+    DescriptorParams {
+        eigenpairs: k,
+        times: match times {
+            Some(t) => TimeSampling::Explicit(t),
+            None => TimeSampling::Auto { num_times },
+        },
+        sihks: sihks.unwrap_or_default(),
+        feature_time_factor,
+        feature_rings,
+        persistence_fraction,
+        ..Default::default()
+    }
+}
+
+fn sihks_params(py: Python<'_>, d: Option<&Bound<'_, PyDict>>) -> PyResult<Option<SihksParams>> {
+    let Some(d) = d else { return Ok(None) };
+    let mut p = SihksParams::default();
+    for (key, value) in d.iter() {
+        let key: String = key.extract()?;
+        match key.as_str() {
+            "alpha" => p.alpha = value.extract()?,
+            "tau_min" => p.tau_min = value.extract()?,
+            "tau_max" => p.tau_max = value.extract()?,
+            "tau_step" => p.tau_step = value.extract()?,
+            "time_unit" => p.time_unit = value.extract()?,
+            "num_frequencies" => p.num_frequencies = value.extract()?,
+            "convention" => p.convention = crate::spectral::convention(py, &value.extract::<String>()?)?,
+            other => {
+                return Err(invalid_param(
+                    py,
+                    "sihks",
+                    format!(
+                        "unknown option {other:?} (alpha, tau_min, tau_max, tau_step, time_unit, num_frequencies, convention)"
+                    ),
+                ))
+            }
+        }
+    }
+    if (p.tau_max - p.tau_min) / p.tau_step > 100_000.0 {
+        return Err(invalid_param(
+            py,
+            "sihks",
+            "the τ window would have more than 100000 samples",
+        ));
+    }
+    Ok(Some(p))
+}
+
+/// Dense descriptors of one mesh: {name: (n, d) array}, sharing one eigenbasis per mass.
+#[pyfunction]
+#[pyo3(signature = (v, f, kinds, k=100, times=None, num_times=16, sihks=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn descriptors<'py>(
+    py: Python<'py>,
+    v: PyReadonlyArray2<'py, f64>,
+    f: PyReadonlyArray2<'py, i64>,
+    kinds: Vec<String>,
+    k: usize,
+    times: Option<Vec<f64>>,
+    num_times: usize,
+    sihks: Option<Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mesh = mesh_in(py, &v, &f)?;
+    let which = kinds.iter().map(|s| descriptor(py, s)).collect::<PyResult<Vec<_>>>()?;
+    let params = descriptor_params(k, times, num_times, sihks_params(py, sihks.as_ref())?, 0.1, 1, 0.05);
+    let out = run(py, move |cancel| {
+        let mut shape = ShapeDescriptors::new(&mesh, &params)?;
+        let mut out = Vec::with_capacity(which.len());
+        for d in which {
+            cancel.check()?;
+            out.push(shape.dense(d)?);
+        }
+        Ok(out)
+    })?;
+    let d = PyDict::new(py);
+    for (name, m) in kinds.iter().zip(out) {
+        d.set_item(name, mat_out(py, m.as_ref()))?;
+    }
+    Ok(d)
+}
+
+/// Sparse feature points (SHK1 / SHK2) of a mesh and the feature time t_f.
+#[pyfunction]
+#[pyo3(signature = (v, f, detector="shk1", k=100, feature_time_factor=0.1, feature_rings=1, persistence_fraction=0.05))]
+#[allow(clippy::too_many_arguments)]
+pub fn sparse_features(
+    py: Python<'_>,
+    v: PyReadonlyArray2<'_, f64>,
+    f: PyReadonlyArray2<'_, i64>,
+    detector: &str,
+    k: usize,
+    feature_time_factor: f64,
+    feature_rings: usize,
+    persistence_fraction: f64,
+) -> PyResult<(Vec<u32>, f64)> {
+    let mesh = mesh_in(py, &v, &f)?;
+    let detector = match detector.to_ascii_lowercase().as_str() {
+        "shk1" => FeatureDetector::Shk1,
+        "shk2" => FeatureDetector::Shk2,
+        other => {
+            return Err(invalid_param(
+                py,
+                "detector",
+                format!("{other:?} is not one of \"shk1\", \"shk2\""),
+            ))
+        }
+    };
+    let params = descriptor_params(
+        k,
+        None,
+        16,
+        None,
+        feature_time_factor,
+        feature_rings,
+        persistence_fraction,
+    );
+    run(py, move |_| {
+        let mut shape = ShapeDescriptors::new(&mesh, &params)?;
+        let (t, _) = shape.feature_function()?;
+        Ok((shape.features(detector)?, t))
+    })
+}
+
+/// Rust side of `wfem.Vocabulary`.
+#[pyclass(name = "Vocabulary", module = "wfem._wfem", frozen)]
+pub struct PyVocabulary {
+    pub inner: Arc<Vocabulary>,
+}
+
+#[pymethods]
+impl PyVocabulary {
+    #[new]
+    fn new(py: Python<'_>, words: PyReadonlyArray2<'_, f64>, sigma: f64) -> PyResult<Self> {
+        let inner = Vocabulary::new(mat_in(&words), sigma).map_err(|e| crate::errors::retrieval(py, &e))?;
+        Ok(Self { inner: Arc::new(inner) })
+    }
+
+    #[staticmethod]
+    #[pyo3(signature = (descriptors, size=48, max_iter=300, seed=0, sigma=None, max_training_points=None))]
+    fn train(
+        py: Python<'_>,
+        descriptors: PyReadonlyArray2<'_, f64>,
+        size: usize,
+        max_iter: usize,
+        seed: u64,
+        sigma: Option<f64>,
+        max_training_points: Option<usize>,
+    ) -> PyResult<Self> {
+        let d = mat_in(&descriptors);
+        let params = VocabularyParams {
+            size,
+            max_iter,
+            seed,
+            sigma,
+            max_training_points,
+        };
+        run(py, move |_| {
+            Ok(Self {
+                inner: Arc::new(Vocabulary::train(d.as_ref(), &params)?),
+            })
+        })
+    }
+
+    #[getter]
+    fn words<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_out(py, self.inner.words())
+    }
+
+    #[getter]
+    fn sigma(&self) -> f64 {
+        self.inner.sigma()
+    }
+
+    #[getter]
+    fn size(&self) -> usize {
+        self.inner.size()
+    }
+
+    /// Θ (n, V), rows summing to 1.
+    fn soft_assignment<'py>(
+        &self,
+        py: Python<'py>,
+        descriptors: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let d = mat_in(&descriptors);
+        let inner = self.inner.clone();
+        let out = run(py, move |_| Ok(inner.soft_assignment(d.as_ref())?))?;
+        Ok(mat_out(py, out.as_ref()))
+    }
+
+    /// Θᵀ a (V,).
+    fn bag<'py>(
+        &self,
+        py: Python<'py>,
+        descriptors: PyReadonlyArray2<'py, f64>,
+        weights: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let d = mat_in(&descriptors);
+        let w = vec_in(&weights);
+        let inner = self.inner.clone();
+        let out = run(py, move |_| Ok(inner.bag_of_features(d.as_ref(), &w)?))?;
+        Ok(vec_out(py, out))
+    }
+
+    /// Θᵀ M K_t Θ (V, V) with the kernel's mass M and method.
+    fn spatially_sensitive_bag<'py>(
+        &self,
+        py: Python<'py>,
+        descriptors: PyReadonlyArray2<'py, f64>,
+        kernel: PyRef<'py, PyHeatKernel>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let d = mat_in(&descriptors);
+        let inner = self.inner.clone();
+        let kernel = kernel.kernel.clone();
+        let out = run(py, move |_| {
+            Ok(inner.spatially_sensitive_bag(d.as_ref(), kernel.mass(), |theta| {
+                kernel.apply_many(theta, t).map_err(RetrievalError::from)
+            })?)
+        })?;
+        Ok(mat_out(py, out.as_ref()))
+    }
+}
+
+/// (centers (k, d), assignment, inertia, iterations, converged).
+type Clusters<'py> = (Bound<'py, PyArray2<f64>>, Vec<u32>, f64, usize, bool);
+
+/// k-means.
+#[pyfunction]
+#[pyo3(signature = (points, k, max_iter=300, seed=0))]
+pub fn kmeans_clusters<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    k: usize,
+    max_iter: usize,
+    seed: u64,
+) -> PyResult<Clusters<'py>> {
+    let p = mat_in(&points);
+    let report = run(py, move |_| {
+        Ok(kmeans(p.as_ref(), &KmeansParams { k, max_iter, seed })?)
+    })?;
+    Ok((
+        mat_out(py, report.centers.as_ref()),
+        report.assignment,
+        report.inertia,
+        report.iterations,
+        report.converged,
+    ))
+}
+
+/// (AP per query (None if undefined), mAP, per class [(label, mAP, queries)]).
+type Evaluation = (Vec<Option<f64>>, f64, Vec<(u32, f64, usize)>);
+
+/// Leave-one-out retrieval on a distance matrix.
+#[pyfunction]
+pub fn evaluate_retrieval(
+    py: Python<'_>,
+    distances: PyReadonlyArray2<'_, f64>,
+    labels: Vec<u32>,
+) -> PyResult<Evaluation> {
+    let d = mat_in(&distances);
+    let report = run(py, move |_| Ok(evaluate(d.as_ref(), &labels)?))?;
+    Ok((
+        report.average_precision,
+        report.mean_average_precision,
+        report
+            .per_class
+            .iter()
+            .map(|c| (c.label, c.mean_average_precision, c.n_queries))
+            .collect(),
+    ))
+}
+
+/// Pairwise L1 distances between bags (m, m).
+#[pyfunction]
+pub fn pairwise_l1<'py>(py: Python<'py>, bags: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let b = mat_in(&bags);
+    let rows: Vec<Vec<f64>> = (0..b.nrows()).map(|i| b.row(i).iter().copied().collect()).collect();
+    let out = run(py, move |_| Ok(shape_retrieval::pairwise_l1(&rows)?))?;
+    Ok(mat_out(py, out.as_ref()))
+}
+
+/// Registers the functions and classes of this module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(descriptors, m)?)?;
+    m.add_function(wrap_pyfunction!(sparse_features, m)?)?;
+    m.add_function(wrap_pyfunction!(kmeans_clusters, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluate_retrieval, m)?)?;
+    m.add_function(wrap_pyfunction!(pairwise_l1, m)?)?;
+    m.add_class::<PyVocabulary>()?;
+    Ok(())
+}

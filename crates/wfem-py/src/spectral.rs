@@ -1,0 +1,364 @@
+//! Eigenpairs L x = λ M x (paper, Eq. (4)) and the spectral descriptors built on them: HKS in
+//! both conventions, SI-HKS, the truncated kernel (Eq. (8)) and the RKHS operators.
+
+use crate::convert::{mat_in, mat_out, mesh_in, sparse_arg, vec_in, vec_out, SparseIn};
+use crate::errors::{invalid_param, Error};
+use crate::heat::kernel_kind;
+use crate::mesh::lumped_kind;
+use crate::run::run;
+use faer::Mat;
+use mesh_fem::{assemble, AssemblyParams};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use shape_retrieval::{
+    heat_kernel_signature, scale_invariant_hks, HksConvention, HksParams, SihksParams, Spectrum, SpectrumNormalization,
+    TimeSampling,
+};
+use std::sync::Arc;
+use wfem_heat::rkhs::{inverse_spectral, reproducing_kernel_apply, TruncationReport};
+use wfem_heat::{EigenParams, Eigenbasis, Operators};
+
+/// Largest number of τ samples of an SI-HKS window (385 by default); beyond it a typo in
+/// the step would exhaust memory.
+const MAX_SIHKS_SAMPLES: f64 = 100_000.0;
+
+/// `(values, vectors)` arrays of a basis (for `ConvergenceError.found`).
+pub fn found_arrays(py: Python<'_>, basis: &Eigenbasis) -> PyResult<Py<PyAny>> {
+    let values = vec_out(py, basis.values.clone());
+    let vectors = mat_out(py, basis.vectors.as_ref());
+    Ok((values, vectors).into_pyobject(py)?.into_any().unbind())
+}
+
+pub fn convention(py: Python<'_>, name: &str) -> PyResult<HksConvention> {
+    match name {
+        "kernel_value" | "kernel-value" => Ok(HksConvention::KernelValue),
+        "matrix_diagonal" | "matrix-diagonal" => Ok(HksConvention::MatrixDiagonal),
+        other => Err(invalid_param(
+            py,
+            "convention",
+            format!("{other:?} is not one of \"kernel_value\", \"matrix_diagonal\""),
+        )),
+    }
+}
+
+/// Rust side of `wfem.Eigenbasis`: the pairs and the operators they belong to.
+#[pyclass(name = "Eigenbasis", module = "wfem._wfem", frozen)]
+pub struct PyEigenbasis {
+    pub basis: Arc<Eigenbasis>,
+    pub ops: Operators,
+}
+
+fn eigen_params(
+    py: Python<'_>,
+    tol: f64,
+    block_size: usize,
+    max_dim: Option<usize>,
+    seed: u64,
+    shift: Option<f64>,
+) -> PyResult<EigenParams> {
+    if !(tol > 0.0 && tol < 1.0) {
+        return Err(invalid_param(py, "tol", format!("{tol} is not in (0, 1)")));
+    }
+    Ok(EigenParams {
+        shift,
+        block_size,
+        tol,
+        max_dim,
+        seed,
+    })
+}
+
+fn compute(ops: &Operators, k: Option<usize>, params: &EigenParams) -> Result<Eigenbasis, Error> {
+    Ok(match k {
+        None => Eigenbasis::dense_of(ops)?,
+        Some(k) => Eigenbasis::partial_of(ops, k, params)?,
+    })
+}
+
+fn truncation<'py>(py: Python<'py>, r: &TruncationReport) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("k", r.k)?;
+    d.set_item("lambda_k", r.lambda_k)?;
+    d.set_item("amplification", r.amplification)?;
+    d.set_item("dropped_norm", r.dropped_norm)?;
+    d.set_item("input_norm", r.input_norm)?;
+    d.set_item("relative_dropped", r.relative_dropped())?;
+    Ok(d)
+}
+
+#[pymethods]
+impl PyEigenbasis {
+    #[staticmethod]
+    #[pyo3(signature = (v, f, k=None, kernel="wfem", lumped="barycentric", tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_mesh(
+        py: Python<'_>,
+        v: PyReadonlyArray2<'_, f64>,
+        f: PyReadonlyArray2<'_, i64>,
+        k: Option<usize>,
+        kernel: &str,
+        lumped: &str,
+        tol: f64,
+        block_size: usize,
+        max_dim: Option<usize>,
+        seed: u64,
+        shift: Option<f64>,
+    ) -> PyResult<Self> {
+        let mesh = mesh_in(py, &v, &f)?;
+        let kind = kernel_kind(py, kernel)?;
+        let lumped = lumped_kind(py, lumped)?;
+        let params = eigen_params(py, tol, block_size, max_dim, seed, shift)?;
+        run(py, move |_| {
+            let fem = assemble(&mesh, &AssemblyParams { lumped })?;
+            let ops = Operators::new(&fem, kind)?;
+            let basis = compute(&ops, k, &params)?;
+            Ok(Self {
+                basis: Arc::new(basis),
+                ops,
+            })
+        })
+    }
+
+    #[staticmethod]
+    #[pyo3(signature = (l, m, k=None, tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_operators(
+        py: Python<'_>,
+        l: SparseIn<'_>,
+        m: SparseIn<'_>,
+        k: Option<usize>,
+        tol: f64,
+        block_size: usize,
+        max_dim: Option<usize>,
+        seed: u64,
+        shift: Option<f64>,
+    ) -> PyResult<Self> {
+        let l = sparse_arg(py, "L", &l)?;
+        let m = sparse_arg(py, "M", &m)?;
+        let params = eigen_params(py, tol, block_size, max_dim, seed, shift)?;
+        run(py, move |_| {
+            let ops = Operators::from_matrices(l.as_ref(), m.as_ref())?;
+            let basis = compute(&ops, k, &params)?;
+            Ok(Self {
+                basis: Arc::new(basis),
+                ops,
+            })
+        })
+    }
+
+    #[getter]
+    fn values<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec_out(py, self.basis.values.clone())
+    }
+
+    #[getter]
+    fn vectors<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_out(py, self.basis.vectors.as_ref())
+    }
+
+    #[getter]
+    fn n(&self) -> usize {
+        self.basis.vectors.nrows()
+    }
+
+    #[getter]
+    fn k(&self) -> usize {
+        self.basis.values.len()
+    }
+
+    /// Coefficients Xᵀ M F (k, m).
+    fn project<'py>(&self, py: Python<'py>, f: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let f = mat_in(&f);
+        let (basis, ops) = (self.basis.clone(), self.ops.clone());
+        let out = run(py, move |_| {
+            let n = basis.vectors.nrows();
+            if f.nrows() != n {
+                return Err(wfem_heat::HeatError::LengthMismatch {
+                    expected: n,
+                    found: f.nrows(),
+                }
+                .into());
+            }
+            check_finite(&f)?;
+            let mut mf = Mat::<f64>::zeros(n, f.ncols());
+            for j in 0..f.ncols() {
+                let col: Vec<f64> = f.col(j).iter().copied().collect();
+                let m = ops.mass_mul(&col);
+                mf.col_mut(j).iter_mut().zip(m).for_each(|(o, x)| *o = x);
+            }
+            Ok(basis.vectors.transpose() * &mf)
+        })?;
+        Ok(mat_out(py, out.as_ref()))
+    }
+
+    /// X C (n, m) for coefficients C (k, m).
+    fn reconstruct<'py>(&self, py: Python<'py>, c: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let c = mat_in(&c);
+        let basis = self.basis.clone();
+        let out = run(py, move |_| {
+            let k = basis.values.len();
+            if c.nrows() != k {
+                return Err(Error::Invalid(
+                    "LengthMismatch",
+                    format!("coefficients have {} rows, the basis has {k} eigenpairs", c.nrows()),
+                ));
+            }
+            check_finite(&c)?;
+            Ok(&basis.vectors * &c)
+        })?;
+        Ok(mat_out(py, out.as_ref()))
+    }
+
+    /// Truncated K_t f = X e^{−tΛ} Xᵀ M f (Eq. (8)).
+    fn heat<'py>(&self, py: Python<'py>, f: PyReadonlyArray1<'py, f64>, t: f64) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let f = vec_in(&f);
+        let (basis, ops) = (self.basis.clone(), self.ops.clone());
+        let out = run(py, move |_| Ok(basis.apply_heat(ops.mass(), &f, t)?))?;
+        Ok(vec_out(py, out))
+    }
+
+    /// Truncated K_{−t} f: (g, report).
+    fn inverse_heat<'py>(
+        &self,
+        py: Python<'py>,
+        f: PyReadonlyArray1<'py, f64>,
+        t: f64,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyDict>)> {
+        self.truncated(py, &f, t, inverse_spectral)
+    }
+
+    /// Truncated reproducing kernel H_t v = X e^{+tΛ} Xᵀ v (Prop. 3.1 B): (g, report).
+    fn reproducing_kernel<'py>(
+        &self,
+        py: Python<'py>,
+        v: PyReadonlyArray1<'py, f64>,
+        t: f64,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyDict>)> {
+        self.truncated(py, &v, t, reproducing_kernel_apply)
+    }
+
+    /// The heat kernel signature (n, T) and its times.
+    #[pyo3(signature = (times=None, num_times=100, convention="kernel_value", scaled=false, normalization=None))]
+    fn hks<'py>(
+        &self,
+        py: Python<'py>,
+        times: Option<Vec<f64>>,
+        num_times: usize,
+        convention: &str,
+        scaled: bool,
+        normalization: Option<&str>,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Vec<f64>)> {
+        let convention = self::convention(py, convention)?;
+        let normalization = match normalization {
+            None | Some("none") => SpectrumNormalization::None,
+            Some("max_eigenvalue") | Some("max-eigenvalue") => SpectrumNormalization::MaxEigenvalue,
+            Some("area") => SpectrumNormalization::UnitArea {
+                area: self.ops.total_mass(),
+            },
+            Some(other) => {
+                return Err(invalid_param(
+                    py,
+                    "normalization",
+                    format!("{other:?} is not one of None, \"max_eigenvalue\", \"area\""),
+                ))
+            }
+        };
+        let params = HksParams {
+            convention,
+            times: match times {
+                Some(t) => TimeSampling::Explicit(t),
+                None => TimeSampling::Auto { num_times },
+            },
+            scaled,
+            normalization,
+        };
+        let (basis, ops) = (self.basis.clone(), self.ops.clone());
+        let sig = run(py, move |_| {
+            let spectrum = Spectrum::new(&basis.values, basis.vectors.as_ref())?.with_mass(ops.mass())?;
+            Ok(heat_kernel_signature(&spectrum, &params)?)
+        })?;
+        Ok((mat_out(py, sig.values.as_ref()), sig.times))
+    }
+
+    /// The scale-invariant HKS (n, K) of Bronstein & Kokkinos.
+    #[pyo3(signature = (alpha=2.0, tau_min=1.0, tau_max=25.0, tau_step=0.0625, time_unit=1.0, num_frequencies=6, convention="kernel_value"))]
+    #[allow(clippy::too_many_arguments)]
+    fn sihks<'py>(
+        &self,
+        py: Python<'py>,
+        alpha: f64,
+        tau_min: f64,
+        tau_max: f64,
+        tau_step: f64,
+        time_unit: f64,
+        num_frequencies: usize,
+        convention: &str,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let convention = self::convention(py, convention)?;
+        let samples = (tau_max - tau_min) / tau_step;
+        if samples.is_finite() && samples > MAX_SIHKS_SAMPLES {
+            return Err(invalid_param(
+                py,
+                "tau_step",
+                format!("the window would have {samples:.0} samples (limit {MAX_SIHKS_SAMPLES})"),
+            ));
+        }
+        let params = SihksParams {
+            alpha,
+            tau_min,
+            tau_max,
+            tau_step,
+            time_unit,
+            num_frequencies,
+            convention,
+        };
+        let (basis, ops) = (self.basis.clone(), self.ops.clone());
+        let out = run(py, move |_| {
+            let spectrum = Spectrum::new(&basis.values, basis.vectors.as_ref())?.with_mass(ops.mass())?;
+            Ok(scale_invariant_hks(&spectrum, &params)?)
+        })?;
+        Ok(mat_out(py, out.as_ref()))
+    }
+}
+
+/// A spectrally truncated amplifying operator (K_{−t}, H_t) of the rkhs module.
+type Truncated = fn(&Eigenbasis, &Operators, &[f64], f64) -> Result<(Vec<f64>, TruncationReport), wfem_heat::HeatError>;
+
+impl PyEigenbasis {
+    fn truncated<'py>(
+        &self,
+        py: Python<'py>,
+        v: &PyReadonlyArray1<'py, f64>,
+        t: f64,
+        op: Truncated,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyDict>)> {
+        let v = vec_in(v);
+        let (basis, ops) = (self.basis.clone(), self.ops.clone());
+        let (g, r) = run(py, move |_| Ok(op(&basis, &ops, &v, t)?))?;
+        Ok((vec_out(py, g), truncation(py, &r)?))
+    }
+}
+
+fn check_finite(m: &Mat<f64>) -> Result<(), Error> {
+    for j in 0..m.ncols() {
+        for i in 0..m.nrows() {
+            let value = m[(i, j)];
+            if !value.is_finite() {
+                return Err(wfem_heat::HeatError::NonFiniteInput {
+                    row: i,
+                    column: j,
+                    value,
+                }
+                .into());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Registers the classes of this module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyEigenbasis>()?;
+    Ok(())
+}

@@ -1,0 +1,65 @@
+"""The Python package gives the same numbers as the `wfem` command-line tool (when it is built:
+`cargo test-all` passes its path in WFEM_CLI)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.io
+
+import wfem
+from conftest import REPO, write_off
+
+
+@pytest.fixture(scope="module")
+def cli() -> str:
+    candidates = [os.environ.get("WFEM_CLI"), shutil.which("wfem"), str(REPO / "target" / "debug" / "wfem")]
+    for c in candidates:
+        if c and Path(c).is_file() and os.access(c, os.X_OK):
+            return c
+    pytest.skip("the wfem CLI is not built (cargo build; or set WFEM_CLI)")
+
+
+@pytest.fixture(scope="module")
+def mesh_file(tmp_path_factory):
+    V, F = wfem.generate.bumpy(3)
+    p = tmp_path_factory.mktemp("cli") / "bumpy.off"
+    write_off(p, V, F)
+    return p
+
+
+def run(cli, *args):
+    r = subprocess.run([cli, *map(str, args)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+
+
+def test_heat_matches_the_cli(cli, mesh_file, tmp_path):
+    V, F = wfem.read_mesh(mesh_file)
+    f = np.random.default_rng(0).standard_normal(len(V))
+    np.save(tmp_path / "f.npy", f)
+    for method in ("fast", "rational"):
+        out = tmp_path / f"g_{method}.npy"
+        run(cli, "heat", mesh_file, "--t", "0.01", "--field", tmp_path / "f.npy", "--method", method, "-o", out)
+        g = wfem.HeatKernel(V, F, method=method).apply(f, 0.01)
+        assert np.max(np.abs(np.load(out).reshape(g.shape) - g)) <= 1e-13 * np.max(np.abs(f)), method
+
+
+def test_hks_matches_the_cli(cli, mesh_file, tmp_path):
+    V, F = wfem.read_mesh(mesh_file)
+    out = tmp_path / "h.npy"
+    run(cli, "hks", mesh_file, "--times", "0.01", "0.1", "--eigs", "40", "-o", out)
+    h = wfem.hks(V, F, [0.01, 0.1], k=40)
+    np.testing.assert_allclose(np.load(out), h, rtol=1e-10)
+
+
+def test_operators_match_the_cli(cli, mesh_file, tmp_path):
+    run(cli, "operators", mesh_file, "--out", tmp_path / "ops")
+    L, B, D = wfem.operators(*wfem.read_mesh(mesh_file))
+    for name, m in [("stiffness", L), ("mass", B), ("lumped_mass", D)]:
+        other = scipy.io.mmread(tmp_path / "ops" / f"{name}.mtx").tocsc()
+        assert abs(other - m).max() <= 1e-15 * abs(m).max(), name

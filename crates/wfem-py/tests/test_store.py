@@ -1,0 +1,145 @@
+"""The SQLite retrieval index: round trip, adding without rebuilding, concurrent readers
+(threads and another process), RetrievalIndex on meshes."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import wfem
+from conftest import write_off
+
+
+def random_bags(n, d, seed=0):
+    rng = np.random.default_rng(seed)
+    b = rng.random((n, d)) ** 3
+    return b / b.sum(axis=1, keepdims=True)
+
+
+def test_round_trip_and_search(tmp_path):
+    path = tmp_path / "index.sqlite"
+    bags = random_bags(300, 16)
+    store = wfem.IndexStore.create(path, 16, chunk_rows=64)
+    store.set_meta("settings", '{"a": 1}')
+    ids = store.add([f"s{i}" for i in range(300)], bags, infos=[f"class{i % 3}" for i in range(300)])
+    assert ids == list(range(300))
+    again = wfem.IndexStore.open(path, readonly=True)
+    assert len(again) == 300 and again.dimension == 16
+    assert again.meta("settings") == b'{"a": 1}' and again.meta("nope") is None
+    np.testing.assert_array_equal(again.vectors(), bags.astype(np.float32))
+    assert again.find("s5") == (5, "class2")
+    q = bags[42]
+    hits = again.search(q, k=5)
+    stored = bags.astype(np.float32).astype(np.float64)
+    ref = np.argsort(np.abs(stored - q).sum(axis=1), kind="stable")[:5]
+    assert [h.id for h in hits] == list(ref)
+    assert hits[0].name == "s42" and hits[0].info == "class0" and hits[0].distance < 1e-6
+    for metric in ("chi2", "euclidean"):
+        assert again.search(q, k=1, metric=metric)[0].id == 42
+
+
+def test_adding_does_not_rebuild_and_keeps_ids(tmp_path):
+    path = tmp_path / "index.sqlite"
+    store = wfem.IndexStore.create(path, 4, chunk_rows=8)
+    b = random_bags(30, 4, seed=1)
+    store.add([f"a{i}" for i in range(5)], b[:5])
+    store.add([f"a{i}" for i in range(5, 30)], b[5:])
+    assert [s[0] for s in store.shapes()] == list(range(30))
+    np.testing.assert_array_equal(store.vectors(), b.astype(np.float32))
+    with pytest.raises(wfem.InvalidInputError) as e:
+        store.add(["a3"], b[:1])
+    assert e.value.kind == "DuplicateName" and e.value.name == "a3"
+    with pytest.raises(wfem.InvalidInputError) as e2:
+        store.add(["x"], np.ones((1, 5)))
+    assert e2.value.kind == "Dimension" and e2.value.expected == 4
+    with pytest.raises(wfem.InvalidInputError):
+        store.add(["y"], np.array([[np.nan, 0, 0, 1]]))
+    assert len(store) == 30
+
+
+def test_store_errors(tmp_path):
+    with pytest.raises(wfem.StoreError) as e:
+        wfem.IndexStore.open(tmp_path / "missing.sqlite")
+    assert e.value.kind == "Io"
+    junk = tmp_path / "junk.sqlite"
+    junk.write_bytes(b"not a database at all, just bytes" * 10)
+    with pytest.raises(wfem.StoreError) as e2:
+        wfem.IndexStore.open(junk)
+    assert e2.value.kind == "NotAStore"
+    wfem.IndexStore.create(tmp_path / "a.sqlite", 3)
+    with pytest.raises(wfem.StoreError) as e3:
+        wfem.IndexStore.create(tmp_path / "a.sqlite", 3)
+    assert e3.value.kind == "Exists"
+    ro = wfem.IndexStore.open(tmp_path / "a.sqlite", readonly=True)
+    with pytest.raises(wfem.InvalidInputError):
+        ro.add(["x"], np.ones((1, 3)))
+
+
+READER = r"""
+import sys, numpy as np, wfem
+s = wfem.IndexStore.open(sys.argv[1], readonly=True)
+seen = []
+for _ in range(40):
+    n = len(s)
+    assert n % 50 == 0, n
+    hits = s.search(np.full(8, 1 / 8), k=3)
+    assert len(hits) == min(3, n)
+    seen.append(n)
+print(max(seen))
+"""
+
+
+def test_concurrent_readers_threads_and_process(tmp_path):
+    path = tmp_path / "index.sqlite"
+    store = wfem.IndexStore.create(path, 8, chunk_rows=32)
+    store.add([f"s{i}" for i in range(50)], random_bags(50, 8))
+    proc = subprocess.Popen([sys.executable, "-c", READER, str(path)], stdout=subprocess.PIPE, text=True)
+    errors = []
+
+    def read():
+        try:
+            r = wfem.IndexStore.open(path, readonly=True)
+            for _ in range(30):
+                n = len(r)
+                assert n % 50 == 0
+                r.search(np.full(8, 1 / 8), k=2)
+        except Exception as e:  # noqa: BLE001
+            errors.append(e)
+
+    threads = [threading.Thread(target=read) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for b in range(1, 20):
+        store.add([f"s{i}" for i in range(50 * b, 50 * b + 50)], random_bags(50, 8, seed=b))
+    for t in threads:
+        t.join()
+    out, _ = proc.communicate(timeout=120)
+    assert proc.returncode == 0 and int(out) >= 50
+    assert not errors
+    assert len(store) == 1000
+
+
+def test_retrieval_index_on_meshes(tmp_path):
+    paths = []
+    for i, (V, F) in enumerate([wfem.generate.icosphere(2), wfem.generate.bumpy(2), wfem.generate.torus()]):
+        for s in (1.0, 1.5):
+            p = tmp_path / f"m{i}_{s}.off"
+            write_off(p, V * s, F)
+            paths.append(p)
+    sihks = {"time_unit": 1e-4, "tau_min": 0.0, "tau_max": 22.0}
+    D = np.vstack([wfem.descriptor(*wfem.read_mesh(p), kind="sihks", k=30, sihks=sihks) for p in paths])
+    voc = wfem.Vocabulary.train(D, 10, seed=0)
+    index = wfem.RetrievalIndex.create(tmp_path / "idx.sqlite", voc, descriptor="sihks", k=30, sihks=sihks)
+    index.add_meshes(paths[:4])
+    index.add_meshes(paths[4:])
+    assert len(index) == 6
+    again = wfem.RetrievalIndex.open(tmp_path / "idx.sqlite", readonly=True)
+    np.testing.assert_array_equal(again.vocabulary.words, voc.words)
+    V, F = wfem.read_mesh(paths[2])
+    hits = again.query_mesh(V * 3.0, F, k=2)
+    # SI-HKS is scale invariant: the same shape at another scale ranks first.
+    assert {h.name for h in hits} == {str(paths[2]), str(paths[3])}

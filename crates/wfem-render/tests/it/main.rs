@@ -1,0 +1,3 @@
+//! The integration tests of wfem-render, in one test binary.
+
+mod render;

@@ -1,0 +1,343 @@
+//! Reading the mesh of a subcommand: load, the explicit repairs of `--repair`, validation,
+//! and the vertex numbering that per-vertex inputs and outputs refer to.
+
+use super::progress;
+use super::CliError;
+use clap::{Args, ValueEnum};
+use mesh_fem::io::{load, read_field, LoadOptions, LoadReport};
+use mesh_fem::{repair, MeshError, RepairOptions, RepairReport, TriMesh};
+use std::path::{Path, PathBuf};
+
+/// A repair applied by `--repair` (mesh_fem::repair; each is reported on standard error).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RepairArg {
+    /// Drop vertices that belong to no face (the original Stanford bunny has 1,113).
+    Unreferenced,
+    /// Merge vertices with identical coordinates (within --weld-tolerance): welds triangle
+    /// soups and STL-like files.
+    #[value(alias = "weld")]
+    DuplicateVertices,
+    /// Drop faces that repeat a vertex or have (numerically) zero area.
+    Degenerate,
+    /// Drop later copies of faces with the same three vertices.
+    DuplicateFaces,
+    /// Orient every orientable component consistently (L and B do not depend on it; the
+    /// normals of a written PLY do).
+    Orient,
+    /// All of the above.
+    All,
+}
+
+/// The mesh argument shared by every subcommand that reads a mesh.
+#[derive(Args, Clone, Debug, Default)]
+pub struct MeshArgs {
+    /// Mesh file (.obj, .ply, .off, .stl).
+    pub mesh: PathBuf,
+    /// Fan-triangulate polygons with more than three corners instead of refusing them.
+    #[arg(long)]
+    pub triangulate: bool,
+    /// Repair the mesh before use: unreferenced, duplicate-vertices (alias weld), degenerate,
+    /// duplicate-faces, orient or all (comma-separated or repeated). Each change is reported;
+    /// per-vertex outputs then refer to the repaired mesh.
+    #[arg(long, value_enum, value_delimiter = ',', action = clap::ArgAction::Append)]
+    pub repair: Vec<RepairArg>,
+    /// Distance below which --repair duplicate-vertices merges vertices, relative to the
+    /// bounding-box diagonal (0: identical coordinates only).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub weld_tolerance: f64,
+}
+
+impl MeshArgs {
+    /// The mesh argument for a file, with no triangulation and no repair.
+    pub fn new(mesh: PathBuf) -> Self {
+        Self {
+            mesh,
+            ..Self::default()
+        }
+    }
+
+    /// The repairs asked for, as library options.
+    ///
+    /// # Errors
+    /// [`CliError::OutOfRange`] for a negative or non-finite `--weld-tolerance`, or one given
+    /// without `--repair duplicate-vertices`.
+    pub fn repair_options(&self) -> Result<RepairOptions, CliError> {
+        let has = |r: RepairArg| self.repair.contains(&r) || self.repair.contains(&RepairArg::All);
+        let weld = has(RepairArg::DuplicateVertices);
+        if !(self.weld_tolerance.is_finite() && self.weld_tolerance >= 0.0) {
+            return Err(CliError::OutOfRange {
+                flag: "--weld-tolerance",
+                value: self.weld_tolerance.to_string(),
+                allowed: "a finite number ≥ 0".into(),
+                why: "a distance relative to the bounding-box diagonal".into(),
+            });
+        }
+        if self.weld_tolerance > 0.0 && !weld {
+            return Err(CliError::Usage(
+                "--weld-tolerance applies to --repair duplicate-vertices, which is not given".into(),
+            ));
+        }
+        Ok(RepairOptions {
+            merge_duplicate_vertices: weld.then_some(self.weld_tolerance),
+            drop_degenerate_faces: has(RepairArg::Degenerate),
+            drop_duplicate_faces: has(RepairArg::DuplicateFaces),
+            orient_faces: has(RepairArg::Orient),
+            drop_unreferenced_vertices: has(RepairArg::Unreferenced),
+        })
+    }
+}
+
+/// The `--repair` flags as given, for messages.
+pub fn repair_flags(args: &MeshArgs) -> String {
+    let names: Vec<String> = args.repair.iter().map(|r| super::name_of(*r)).collect();
+    format!("--repair {}", names.join(","))
+}
+
+/// Parses a `--field` path (clap value parser): its extension must be `.npy` or `.csv`, so a
+/// wrong file is refused before any work.
+pub fn field_path(text: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(text);
+    let ext = super::output::extension(&path);
+    if ext == "npy" || ext == "csv" {
+        Ok(path)
+    } else {
+        Err(format!(
+            "cannot read {text:?} as a field: the format is chosen by the extension, .npy or .csv (one value per vertex)"
+        ))
+    }
+}
+
+/// A mesh read for a subcommand, after the repairs.
+pub struct Input {
+    /// The mesh used (repaired if `--repair` changed it).
+    pub mesh: TriMesh,
+    /// What was read.
+    pub load_report: LoadReport,
+    /// The repair's report, if `--repair` was given.
+    pub repair: Option<RepairReport>,
+    /// Vertices in the file.
+    pub file_vertices: usize,
+    /// The mesh file's name (for titles and metadata).
+    pub name: String,
+}
+
+impl Input {
+    /// Whether the vertex numbering differs from the file's (vertices dropped or merged).
+    pub fn renumbered(&self) -> bool {
+        self.repair
+            .as_ref()
+            .is_some_and(|r| r.vertex_map.iter().enumerate().any(|(i, m)| *m != Some(i as u32)))
+    }
+
+    /// The mesh's index of vertex `i` of the file (`flag` names the option it came from).
+    ///
+    /// # Errors
+    /// [`CliError::OutOfRange`] if the file has no vertex `i` or the repair dropped it.
+    pub fn vertex(&self, flag: &'static str, i: u32) -> Result<u32, CliError> {
+        let n = self.file_vertices;
+        if i as usize >= n {
+            return Err(CliError::OutOfRange {
+                flag,
+                value: i.to_string(),
+                allowed: format!("0..={}", n.saturating_sub(1)),
+                why: format!("a vertex index of {} ({n} vertices)", self.name),
+            });
+        }
+        match &self.repair {
+            None => Ok(i),
+            Some(r) => match r.vertex_map.get(i as usize).copied().flatten() {
+                Some(j) => {
+                    if j != i {
+                        progress::note(&format!(
+                            "{flag} {i}: vertex {i} of the file is vertex {j} of the repaired mesh"
+                        ));
+                    }
+                    Ok(j)
+                }
+                None => Err(CliError::Usage(format!(
+                    "{flag} {i}: the repair dropped vertex {i} of the file (it belongs to no face)"
+                ))),
+            },
+        }
+    }
+
+    /// Reads a per-vertex field (`--field`): one value per vertex of the file, or of the
+    /// repaired mesh. A field of the file is restricted to the kept vertices (a merged vertex
+    /// takes the value of the vertex it was merged into).
+    ///
+    /// # Errors
+    /// Those of [`read_field`]; [`MeshError::FieldLength`] names both accepted lengths.
+    pub fn field(&self, path: &Path) -> Result<Vec<f64>, CliError> {
+        let n = self.mesh.n_vertices();
+        let Some(report) = self.repair.as_ref().filter(|_| self.renumbered()) else {
+            return Ok(read_field(path, n)?);
+        };
+        match read_field(path, self.file_vertices) {
+            Ok(values) => Ok(file_vertex_of_row(report, n)
+                .into_iter()
+                .map(|old| values.get(old).copied().unwrap_or(0.0))
+                .collect()),
+            Err(MeshError::FieldLength { found, .. }) if found == n => Ok(read_field(path, n)?),
+            Err(MeshError::FieldLength { path, name, found, .. }) => Err(CliError::Usage(format!(
+                "{}: field {name:?} has {found} values; it needs one per vertex of the file ({}) or of the repaired mesh ({n})",
+                path.display(),
+                self.file_vertices
+            ))),
+            Err(e) => Err(e.into()),
+        }
+    }
+
+    /// Metadata of the input for the `.npy` sidecar.
+    pub fn meta(&self, path: &Path) -> serde_json::Value {
+        let mut v = serde_json::json!({
+            "mesh": path.display().to_string(),
+            "n_vertices": self.mesh.n_vertices(),
+            "n_faces": self.mesh.n_faces(),
+        });
+        if let (Some(r), Some(obj)) = (&self.repair, v.as_object_mut()) {
+            obj.insert(
+                "repair".into(),
+                serde_json::json!({
+                    "file_vertices": self.file_vertices,
+                    "merged_vertices": r.merged_vertices,
+                    "dropped_vertices": r.dropped_vertices,
+                    "dropped_faces": r.dropped_faces.len(),
+                    "flipped_faces": r.flipped_faces.len(),
+                    // Row i of the data is vertex file_vertex_of_row[i] of the file.
+                    "file_vertex_of_row": self.renumbered().then(|| file_vertex_of_row(r, self.mesh.n_vertices())),
+                }),
+            );
+        }
+        v
+    }
+}
+
+/// For each vertex of the repaired mesh, the file vertex it came from: the kept one of a
+/// merged group, which is its lowest index (a vertex merges only into an earlier one).
+fn file_vertex_of_row(report: &RepairReport, n: usize) -> Vec<usize> {
+    let mut rows = vec![usize::MAX; n];
+    for (old, m) in report.vertex_map.iter().enumerate() {
+        if let Some(new) = m {
+            let new = *new as usize;
+            if rows[new] == usize::MAX {
+                rows[new] = old;
+            }
+        }
+    }
+    rows
+}
+
+/// Loads, repairs (as asked) and validates the mesh: the one reading path of every
+/// subcommand. Repairs and the change of numbering are reported on standard error; a mesh
+/// with a fatal problem is refused with the error naming it and the `--repair` that fixes it.
+///
+/// # Errors
+/// Reading, repair and validation errors.
+pub fn read_input(args: &MeshArgs) -> Result<Input, CliError> {
+    let opts = args.repair_options()?;
+    let name = args
+        .mesh
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_else(|| args.mesh.display().to_string());
+    let (mesh, load_report) = progress::run(format!("reading {name}"), || {
+        load(&args.mesh, &LoadOptions::with_triangulation(args.triangulate))
+    })?;
+    let file_vertices = mesh.n_vertices();
+    let mut input = Input {
+        mesh,
+        load_report,
+        repair: None,
+        file_vertices,
+        name,
+    };
+    if !args.repair.is_empty() {
+        let (repaired, report) = progress::run("repairing", || repair(&input.mesh, &opts))?;
+        report_repair(args, &input.mesh, &repaired, &report);
+        input.mesh = repaired;
+        input.repair = Some(report);
+        if input.renumbered() {
+            progress::warn(&format!(
+                "the vertex numbering changed ({} vertices in the file, {} after the repair): per-vertex outputs \
+                 refer to the repaired mesh; --source/--from take vertex numbers of the file, --field files may have \
+                 one value per vertex of the file or of the repaired mesh",
+                input.file_vertices,
+                input.mesh.n_vertices()
+            ));
+        }
+    }
+    Ok(input)
+}
+
+fn report_repair(args: &MeshArgs, before: &TriMesh, after: &TriMesh, report: &RepairReport) {
+    let flags = repair_flags(args);
+    if report.is_unchanged() {
+        progress::note(&format!("{flags}: nothing to repair"));
+        return;
+    }
+    for line in report.summary().lines().skip(1) {
+        progress::note(&format!("{flags}: {}", line.trim()));
+    }
+    progress::note(&format!(
+        "{flags}: {} → {} vertices, {} → {} faces",
+        before.n_vertices(),
+        after.n_vertices(),
+        before.n_faces(),
+        after.n_faces()
+    ));
+}
+
+/// [`read_input`] followed by validation: the mesh must assemble.
+///
+/// # Errors
+/// Those of [`read_input`]; the first fatal problem of [`mesh_fem::validate`].
+pub fn read_usable(args: &MeshArgs) -> Result<Input, CliError> {
+    let input = read_input(args)?;
+    progress::run("validating", || mesh_fem::validate(&input.mesh).into_result())?;
+    Ok(input)
+}
+
+/// Loads and validates a mesh; a mesh with a fatal problem is refused with the error naming it.
+///
+/// # Errors
+/// Those of [`read_usable`].
+pub fn load_usable(args: &MeshArgs) -> Result<TriMesh, CliError> {
+    Ok(read_usable(args)?.mesh)
+}
+
+/// Library names in messages of mesh-fem and the command-line flags that do the same.
+const FLAGS: [(&str, &str); 8] = [
+    ("enable LoadOptions::triangulate_polygons", "pass --triangulate"),
+    ("LoadOptions::triangulate_polygons", "--triangulate"),
+    ("RepairOptions::drop_degenerate_faces", "--repair degenerate"),
+    ("RepairOptions::drop_unreferenced_vertices", "--repair unreferenced"),
+    ("RepairOptions::drop_duplicate_faces", "--repair duplicate-faces"),
+    ("RepairOptions::orient_faces", "--repair orient"),
+    ("with the repair option", "with --repair unreferenced"),
+    (
+        "scale the mesh down (TriMesh::scaled)",
+        "scale the mesh coordinates down",
+    ),
+];
+
+/// A mesh-fem message with its library names replaced by the command-line flags.
+pub fn with_flags(text: &str) -> String {
+    FLAGS
+        .iter()
+        .fold(text.to_string(), |s, (lib, flag)| s.replace(lib, flag))
+}
+
+/// The message of a mesh error as the CLI prints it: library names replaced by flags, and
+/// the `--repair` that fixes a fatal problem named.
+pub fn mesh_message(e: &MeshError) -> String {
+    let text = with_flags(&e.to_string());
+    match e {
+        MeshError::DegenerateFace { .. } | MeshError::RepeatedIndex { .. } => {
+            format!("{text}; drop such faces with --repair degenerate (then --repair unreferenced for the vertices they leave)")
+        }
+        MeshError::InvalidRepairOption { option, message } if *option == "merge_duplicate_vertices" => {
+            format!("--weld-tolerance: {message}")
+        }
+        _ => text,
+    }
+}

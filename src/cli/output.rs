@@ -1,0 +1,523 @@
+//! Output paths, checked before any work, and the one writer of per-vertex fields (PLY, NPY
+//! with its `.json` sidecar, CSV, PNG figures), all through [`mesh_fem::io::AtomicSet`].
+
+use super::progress;
+use super::CliError;
+use clap::{Args, ValueEnum};
+use mesh_fem::io::{stage_field, AtomicSet, FieldFormat};
+use mesh_fem::TriMesh;
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+use wfem_render::{render_png, symmetric_range, Colormap, Frame, RenderParams, UpAxis, View};
+
+/// The format of an output file, from its extension: a per-vertex field file or a rendered
+/// figure. Parsed once, when the arguments are parsed, so a wrong extension is refused before
+/// any work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// `.ply`, `.npy`, `.csv` ([`mesh_fem::io::write_field`]).
+    Field(FieldFormat),
+    /// `.png`: one rendered figure per field.
+    Png,
+}
+
+/// An output path given on the command line, with its format.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Output {
+    /// The path as given.
+    pub path: PathBuf,
+    /// Its format.
+    pub format: OutputFormat,
+}
+
+impl Output {
+    /// The extensions `-o` accepts, as messages list them.
+    pub const EXTENSIONS: &'static str = ".ply, .npy, .csv, .png";
+
+    /// Parses an output path (clap value parser): the extension must name a format.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let path = PathBuf::from(text);
+        let ext = extension(&path);
+        let format = match FieldFormat::from_extension(&ext) {
+            Some(f) => OutputFormat::Field(f),
+            None if ext == "png" => OutputFormat::Png,
+            None => {
+                return Err(format!(
+                    "cannot write {text:?}: the output format is chosen by the extension, one of {}",
+                    Self::EXTENSIONS
+                ))
+            }
+        };
+        if path.file_stem().is_none_or(|s| s.is_empty()) {
+            return Err(format!("cannot write {text:?}: the output path names no file"));
+        }
+        Ok(Self { path, format })
+    }
+
+    /// The metadata sidecar of an `.npy` output: `x.npy` → `x.json` (times, field names,
+    /// method, kernel, …; NPY itself stores only the numbers).
+    pub fn sidecar(&self) -> Option<PathBuf> {
+        (self.format == OutputFormat::Field(FieldFormat::Npy)).then(|| self.path.with_extension("json"))
+    }
+
+    /// Every file written for fields whose file-name parts are `suffixes` (see
+    /// [`Column::suffix`]): the path itself, or for several PNG figures `stem-<suffix>.png`
+    /// beside it; plus the sidecar of an `.npy` output.
+    pub fn targets(&self, suffixes: &[String]) -> Vec<PathBuf> {
+        let mut targets = match (self.format, suffixes.len()) {
+            (OutputFormat::Png, n) if n > 1 => {
+                let stem = self.path.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
+                suffixes
+                    .iter()
+                    .map(|s| self.path.with_file_name(format!("{stem}-{s}.png")))
+                    .collect()
+            }
+            _ => vec![self.path.clone()],
+        };
+        targets.extend(self.sidecar());
+        targets
+    }
+
+    /// Checks, before any work, that the outputs for fields named by `suffixes` can be
+    /// written: see [`check_targets`]. `suffixes` is `None` when the names are known only
+    /// after the computation (then the folder and the single-file targets are checked).
+    ///
+    /// # Errors
+    /// [`CliError::Output`] naming the path and the problem; [`CliError::OutOfRange`] for
+    /// more than [`super::limits::MAX_FIGURES`] figures.
+    pub fn check(&self, suffixes: Option<&[String]>, n_fields: usize, inputs: &[&Path]) -> Result<(), CliError> {
+        if self.format == OutputFormat::Png {
+            super::limits::count(
+                "-o",
+                n_fields,
+                1,
+                super::limits::MAX_FIGURES,
+                "number of PNG figures (one per field); write .npy, .csv or .ply for more",
+            )?;
+        }
+        let targets = match suffixes {
+            Some(s) => self.targets(s),
+            None if self.format == OutputFormat::Png && n_fields > 1 => self.sidecar().into_iter().collect(),
+            None => self.targets(&[]),
+        };
+        check_folder(&self.path)?;
+        check_targets(&targets, inputs)
+    }
+}
+
+/// The extension of a path, lower case ("" if none).
+pub(crate) fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+/// Why an output path cannot be used.
+fn output_error(path: &Path, reason: impl Into<String>) -> CliError {
+    CliError::Output {
+        path: path.to_path_buf(),
+        reason: reason.into(),
+    }
+}
+
+/// The folder of a path (`.` for a bare file name).
+fn folder_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// The folder of `path` exists, is a folder, and a file can be created in it (probed by
+/// creating and removing an empty hidden file).
+pub(crate) fn check_folder(path: &Path) -> Result<(), CliError> {
+    let dir = folder_of(path);
+    match std::fs::metadata(&dir) {
+        Err(_) => {
+            return Err(output_error(
+                path,
+                format!("the folder {} does not exist", dir.display()),
+            ))
+        }
+        Ok(m) if !m.is_dir() => return Err(output_error(path, format!("{} is not a folder", dir.display()))),
+        Ok(_) => {}
+    }
+    let probe = dir.join(format!(".wfem-probe-{}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        // Another run of ours left it, or it races with one: the folder is writable.
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(output_error(
+            path,
+            format!("cannot create files in {}: {e}", dir.display()),
+        )),
+    }
+}
+
+/// Checks targets before any work: none is a directory or another non-regular file (a FIFO,
+/// a device: wfem replaces only regular files), none is an input file, and no two are the
+/// same file.
+pub fn check_targets(targets: &[PathBuf], inputs: &[&Path]) -> Result<(), CliError> {
+    let inputs: Vec<PathBuf> = inputs.iter().filter_map(|p| p.canonicalize().ok()).collect();
+    let mut seen: Vec<PathBuf> = Vec::with_capacity(targets.len());
+    for target in targets {
+        if let Ok(meta) = std::fs::symlink_metadata(target) {
+            if meta.is_dir() {
+                return Err(output_error(target, "it is a directory"));
+            }
+            if !meta.is_file() && !meta.file_type().is_symlink() {
+                return Err(output_error(
+                    target,
+                    "it exists and is not a regular file (a FIFO or a device); wfem replaces only regular files",
+                ));
+            }
+        }
+        if let Ok(real) = target.canonicalize() {
+            if inputs.contains(&real) {
+                return Err(output_error(
+                    target,
+                    "it is an input file; wfem never writes over its input",
+                ));
+            }
+        }
+        let resolved = folder_of(target)
+            .canonicalize()
+            .unwrap_or_else(|_| folder_of(target))
+            .join(target.file_name().unwrap_or_default());
+        if seen.contains(&resolved) {
+            return Err(output_error(target, "two outputs of this run would be written to it"));
+        }
+        seen.push(resolved);
+    }
+    Ok(())
+}
+
+/// Checks an output folder (`demo --out`, `operators --out`) before any work: it is a folder
+/// or can be created (its nearest existing ancestor is a writable folder), and the files that
+/// will be written in it pass [`check_targets`].
+pub fn check_out_dir(dir: &Path, files: &[&str], inputs: &[&Path]) -> Result<(), CliError> {
+    match std::fs::metadata(dir) {
+        Ok(m) if !m.is_dir() => return Err(output_error(dir, "it exists and is not a folder")),
+        Ok(_) => check_folder(&dir.join("x"))?,
+        Err(_) => {
+            let existing = dir
+                .ancestors()
+                .skip(1)
+                .find(|a| a.as_os_str().is_empty() || a.exists())
+                .unwrap_or(Path::new("."));
+            let existing = if existing.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                existing
+            };
+            if !existing.is_dir() {
+                return Err(output_error(
+                    dir,
+                    format!("cannot create it: {} is not a folder", existing.display()),
+                ));
+            }
+            check_folder(&existing.join("x"))?;
+        }
+    }
+    let targets: Vec<PathBuf> = files.iter().map(|f| dir.join(f)).collect();
+    check_targets(&targets, inputs)
+}
+
+/// Creates an output folder checked by [`check_out_dir`] (after the work succeeded).
+pub fn create_out_dir(dir: &Path) -> Result<(), CliError> {
+    std::fs::create_dir_all(dir).map_err(|source| {
+        CliError::Mesh(mesh_fem::MeshError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Short numbers for names
+
+/// `x` rounded to `digits` significant digits, printed as briefly as Rust prints a double
+/// (`0.01`, `2.5e-5`, `1e300`).
+fn short(x: f64, digits: usize) -> String {
+    let rounded: f64 = format!("{:.*e}", digits.saturating_sub(1), x).parse().unwrap_or(x);
+    // Near the largest double, rounding up overflows: keep every digit there.
+    let shown = if rounded.is_finite() { rounded } else { x };
+    format!("{shown:?}")
+}
+
+/// Short, distinct labels for distinct numbers: 4 significant digits, more only where two
+/// values would otherwise print alike (so `0.010000000000000002` prints `0.01`).
+pub fn short_labels(values: &[f64]) -> Vec<String> {
+    for digits in 4..=17 {
+        let labels: Vec<String> = values.iter().map(|&v| short(v, digits)).collect();
+        let distinct = labels.iter().enumerate().all(|(i, l)| {
+            labels[..i]
+                .iter()
+                .zip(&values[..i])
+                .all(|(m, &w)| m != l || w == values[i])
+        });
+        if distinct {
+            return labels;
+        }
+    }
+    values.iter().map(|v| format!("{v:?}")).collect()
+}
+
+/// One short label.
+pub fn short_label(value: f64) -> String {
+    short(value, 4)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rendering options
+
+/// Which way is up in the figures.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum UpArg {
+    /// From the extents of the mesh (its second moments along x, y, z): +z for a shape thin
+    /// along y (a person in a TOSCA-style z-up file) or thin along x and longer in y than in z
+    /// (a standing quadruped), +y otherwise; printed on stderr.
+    #[default]
+    Auto,
+    /// +x.
+    X,
+    /// +y (most OBJ/PLY scans: bunny, armadillo, spot).
+    Y,
+    /// +z (TOSCA, CAD).
+    Z,
+    /// −x.
+    #[value(name = "-x")]
+    NegX,
+    /// −y.
+    #[value(name = "-y")]
+    NegY,
+    /// −z.
+    #[value(name = "-z")]
+    NegZ,
+}
+
+/// Options of rendered figures (`-o x.png`).
+#[derive(Args, Clone, Copy, Debug, Default)]
+pub struct RenderArgs {
+    /// Up direction of the figures (.png): auto, x, y, z, -x, -y or -z.
+    #[arg(long, value_enum, default_value_t = UpArg::Auto, allow_hyphen_values = true)]
+    pub up: UpArg,
+}
+
+impl RenderArgs {
+    /// The frame (right, up, front) of the standard views for `mesh`.
+    pub fn frame(&self, mesh: &TriMesh) -> Frame {
+        let axis = match self.up {
+            UpArg::Auto => return Frame::auto(mesh),
+            UpArg::X => UpAxis::X,
+            UpArg::Y => UpAxis::Y,
+            UpArg::Z => UpAxis::Z,
+            UpArg::NegX => UpAxis::NegX,
+            UpArg::NegY => UpAxis::NegY,
+            UpArg::NegZ => UpAxis::NegZ,
+        };
+        Frame::from_up(axis)
+    }
+}
+
+/// "+z", "−y", or the rounded vector for a direction off the axes.
+fn direction_name(v: [f64; 3]) -> String {
+    match v.map(|c| c.round() as i64) {
+        [1, 0, 0] if v[0] == 1.0 => "+x".into(),
+        [-1, 0, 0] if v[0] == -1.0 => "-x".into(),
+        [0, 1, 0] if v[1] == 1.0 => "+y".into(),
+        [0, -1, 0] if v[1] == -1.0 => "-y".into(),
+        [0, 0, 1] if v[2] == 1.0 => "+z".into(),
+        [0, 0, -1] if v[2] == -1.0 => "-z".into(),
+        _ => format!("({:.2}, {:.2}, {:.2})", v[0], v[1], v[2]),
+    }
+}
+
+/// Render parameters for a field: Viridis for one-signed fields, Coolwarm centred on zero for
+/// fields that change sign.
+pub fn figure_params(title: &str, values: &[f64], highlight: &[u32], views: Vec<View>) -> RenderParams {
+    // A diverging map centred on zero when the field really changes sign; a field with only
+    // round-off-sized negative values (e.g. K_t e_i of the wFEM kernel) keeps Viridis over its
+    // true range.
+    let (lo, hi) = values.iter().fold((0.0f64, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+    let signed = lo < 0.0 && hi > 0.0 && (-lo).min(hi) > 1e-2 * (-lo).max(hi);
+    RenderParams {
+        title: Some(title.to_string()),
+        highlight: highlight.to_vec(),
+        colormap: if signed { Colormap::Coolwarm } else { Colormap::Viridis },
+        range: if signed { symmetric_range(values) } else { None },
+        views,
+        ..RenderParams::default()
+    }
+}
+
+/// Vertex colors of a field through Viridis over its range.
+pub fn colors_of(values: &[f64]) -> Vec<[u8; 3]> {
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    values.iter().map(|&v| Colormap::Viridis.map((v - lo) / span)).collect()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing
+
+/// One per-vertex output field.
+#[derive(Clone, Debug)]
+pub struct Column {
+    /// Its name in PLY/CSV headers and the sidecar (e.g. `t=0.01`).
+    pub name: String,
+    /// Its part of a figure's file name (e.g. `t0.01` → `x-t0.01.png`).
+    pub suffix: String,
+    /// The figure's title.
+    pub title: String,
+    /// The diffusion time it belongs to, if any (recorded in the sidecar).
+    pub t: Option<f64>,
+    /// One value per vertex.
+    pub values: Vec<f64>,
+}
+
+/// How the fields are written: the rendering options and vertices to highlight in figures,
+/// and the metadata recorded in the `.npy` sidecar.
+pub struct Writing<'a> {
+    /// Figure options.
+    pub render: RenderArgs,
+    /// Vertices marked in the figures (e.g. the source of K_t e_i).
+    pub highlight: &'a [u32],
+    /// Metadata of the run (command, mesh, method, kernel, …) for the sidecar.
+    pub meta: Map<String, Value>,
+}
+
+/// Writes per-vertex fields in the format of `output`, all-or-nothing: `.png` renders one
+/// figure per field (the path itself for one field, `stem-<suffix>.png` beside it for several),
+/// `.ply` holds the mesh with one vertex property per field and vertex colors of the first,
+/// `.csv` one column per field, and `.npy` an n × k array plus its `.json` sidecar.
+///
+/// # Errors
+/// Rendering and writing errors; [`CliError::NonFinite`] if a field holds NaN or ∞.
+pub fn write_fields(
+    output: &Output,
+    mesh: &TriMesh,
+    columns: &[Column],
+    how: Writing<'_>,
+) -> Result<Vec<PathBuf>, CliError> {
+    if columns.is_empty() {
+        return Err(CliError::Usage("nothing to write".into()));
+    }
+    for c in columns {
+        if let Some((vertex, &value)) = c.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(CliError::NonFinite {
+                what: c.name.clone(),
+                vertex,
+                value,
+            });
+        }
+    }
+    let suffixes: Vec<String> = columns.iter().map(|c| c.suffix.clone()).collect();
+    let targets = output.targets(&suffixes);
+    let mut set = AtomicSet::new();
+    match output.format {
+        OutputFormat::Png => {
+            let frame = how.render.frame(mesh);
+            if how.render.up == UpArg::Auto {
+                progress::note(&format!(
+                    "figures: up is {}, front {} (--up auto, from the extents of the mesh; --up x|y|z|-x|-y|-z overrides)",
+                    direction_name(frame.up),
+                    direction_name(frame.front)
+                ));
+            }
+            let views = View::standard_in(&frame);
+            let bar = progress::bar(columns.len(), "rendering figures");
+            for (column, target) in columns.iter().zip(&targets) {
+                bar.set_detail(&column.suffix);
+                let params = figure_params(&column.title, &column.values, how.highlight, views.clone());
+                let png = render_png(mesh, &column.values, &params)?;
+                set.stage(target, |w| w.write_all(&png))?;
+                bar.inc(&column.suffix);
+            }
+            bar.done();
+        }
+        OutputFormat::Field(format) => {
+            let step = progress::step(format!("writing {}", output.path.display()));
+            let refs: Vec<(&str, &[f64])> = columns.iter().map(|c| (c.name.as_str(), c.values.as_slice())).collect();
+            let colors = (format == FieldFormat::Ply).then(|| colors_of(&columns[0].values));
+            stage_field(&mut set, &output.path, format, mesh, &refs, colors.as_deref())?;
+            if let Some(sidecar) = output.sidecar() {
+                let text = sidecar_json(output, mesh, columns, how.meta)?;
+                set.stage(&sidecar, |w| w.write_all(text.as_bytes()))?;
+            }
+            step.done();
+        }
+    }
+    let written: Vec<PathBuf> = set.targets().map(Path::to_path_buf).collect();
+    set.commit()?;
+    Ok(written)
+}
+
+/// The sidecar of an `.npy` output: what its columns are.
+fn sidecar_json(
+    output: &Output,
+    mesh: &TriMesh,
+    columns: &[Column],
+    meta: Map<String, Value>,
+) -> Result<String, CliError> {
+    let mut doc = Map::new();
+    doc.insert("wfem_version".into(), json!(env!("CARGO_PKG_VERSION")));
+    doc.insert(
+        "data".into(),
+        json!(output.path.file_name().map(|f| f.to_string_lossy().into_owned())),
+    );
+    let shape = if columns.len() == 1 {
+        json!([mesh.n_vertices()])
+    } else {
+        json!([mesh.n_vertices(), columns.len()])
+    };
+    doc.insert("shape".into(), shape);
+    doc.insert("dtype".into(), json!("float64"));
+    doc.insert(
+        "columns".into(),
+        json!(columns.iter().map(|c| c.name.as_str()).collect::<Vec<_>>()),
+    );
+    if columns.iter().any(|c| c.t.is_some()) {
+        doc.insert("times".into(), json!(columns.iter().map(|c| c.t).collect::<Vec<_>>()));
+    }
+    doc.extend(meta);
+    serde_json::to_string_pretty(&Value::Object(doc)).map_err(|e| CliError::Usage(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn short_labels_are_short_and_distinct() {
+        assert_eq!(short_labels(&[0.01, 0.1, 1.0]), ["0.01", "0.1", "1.0"]);
+        assert_eq!(short_labels(&[0.010000000000000002]), ["0.01"]);
+        assert_eq!(short_labels(&[f64::MAX]), ["1.7976931348623157e308"]);
+        assert_eq!(short_labels(&[1e300]), ["1e300"]);
+        assert_eq!(short_labels(&[2.5e-7]), ["2.5e-7"]);
+        assert_eq!(short_labels(&[0.0123456, 0.0123457]), ["0.0123456", "0.0123457"]);
+        assert_eq!(short_labels(&[0.01, 0.01]), ["0.01", "0.01"]);
+    }
+
+    #[test]
+    fn png_sets_and_npy_sidecars_have_their_targets() {
+        let png = Output::parse("dir/x.png").unwrap();
+        assert_eq!(png.targets(&["t0.01".into()]), [PathBuf::from("dir/x.png")]);
+        assert_eq!(
+            png.targets(&["t0.01".into(), "t0.1".into()]),
+            [PathBuf::from("dir/x-t0.01.png"), PathBuf::from("dir/x-t0.1.png")]
+        );
+        let npy = Output::parse("x.npy").unwrap();
+        assert_eq!(
+            npy.targets(&["a".into()]),
+            [PathBuf::from("x.npy"), PathBuf::from("x.json")]
+        );
+        assert!(Output::parse("x.obj").unwrap_err().contains(".ply, .npy, .csv, .png"));
+        assert!(Output::parse(".png").is_err());
+    }
+}

@@ -1,0 +1,230 @@
+//! `cargo test-all`: the whole test suite — Rust and Python — on a fresh machine.
+//!
+//! 1. `cargo test --workspace --locked`;
+//! 2. a virtual environment under the target directory (`$CARGO_TARGET_DIR` or `target/`,
+//!    `python-venv/`), created with `python3 -m venv` (or `$WFEM_PYTHON -m venv`); a missing
+//!    `venv` module stops with the command that installs it;
+//! 3. the pinned packages of `crates/wfem-py/requirements-test.txt` from PyPI (skipped while the
+//!    file is unchanged);
+//! 4. the extension built by maturin in the **dev** profile, the one `cargo test` just used, so
+//!    the dependencies compiled for the tests are reused, and installed into the venv as a
+//!    wheel (like a user's `pip install`);
+//! 5. pytest on `crates/wfem-py/tests`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// What to run.
+#[derive(Clone, Debug, Default)]
+pub struct TestAllOptions {
+    /// Skip `cargo test` (Python suite only).
+    pub python_only: bool,
+    /// Skip the Python suite.
+    pub rust_only: bool,
+    /// Extra arguments for pytest (e.g. `-k dask`).
+    pub pytest_args: Vec<String>,
+}
+
+/// An error of a step, with what to do about it.
+#[derive(Debug)]
+pub struct StepError(String);
+
+impl std::fmt::Display for StepError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for StepError {}
+
+fn fail<T>(message: impl Into<String>) -> Result<T, StepError> {
+    Err(StepError(message.into()))
+}
+
+/// The workspace root (xtask's parent directory).
+pub fn workspace_root() -> PathBuf {
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    manifest.parent().unwrap_or(manifest).to_path_buf()
+}
+
+/// The cargo target directory: `$CARGO_TARGET_DIR` (relative to the workspace root when
+/// relative, as cargo run from there reads it) or `<root>/target`.
+pub fn target_dir(root: &Path) -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(dir) if !dir.is_empty() => {
+            let dir = PathBuf::from(dir);
+            if dir.is_absolute() {
+                dir
+            } else {
+                root.join(dir)
+            }
+        }
+        _ => root.join("target"),
+    }
+}
+
+fn run_step(name: &str, cmd: &mut Command) -> Result<(), StepError> {
+    eprintln!("==> {name}: {cmd:?}");
+    match cmd.status() {
+        Ok(status) if status.success() => Ok(()),
+        Ok(status) => fail(format!("{name} failed ({status})")),
+        Err(e) => fail(format!("{name}: cannot run {:?}: {e}", cmd.get_program())),
+    }
+}
+
+fn bin(venv: &Path, name: &str) -> PathBuf {
+    if cfg!(windows) {
+        venv.join("Scripts").join(format!("{name}.exe"))
+    } else {
+        venv.join("bin").join(name)
+    }
+}
+
+/// Creates the venv if needed and returns its Python.
+fn ensure_venv(venv: &Path) -> Result<PathBuf, StepError> {
+    let python = bin(venv, "python");
+    if python.exists() {
+        return Ok(python);
+    }
+    let base = std::env::var("WFEM_PYTHON").unwrap_or_else(|_| "python3".into());
+    let version = Command::new(&base)
+        .args(["-c", "import sys; print('%d.%d' % sys.version_info[:2])"])
+        .output();
+    let version = match version {
+        Ok(out) if out.status.success() => String::from_utf8_lossy(&out.stdout).trim().to_string(),
+        _ => {
+            return fail(format!(
+                "no Python found ({base}): install CPython >= 3.10 (e.g. `apt install python3 python3-venv`) \
+                 or set WFEM_PYTHON to its path"
+            ))
+        }
+    };
+    let ok = version
+        .split_once('.')
+        .and_then(|(a, b)| Some((a.parse::<u32>().ok()?, b.parse::<u32>().ok()?)))
+        .is_some_and(|v| v >= (3, 10));
+    if !ok {
+        return fail(format!(
+            "{base} is Python {version}; wfem needs >= 3.10 (set WFEM_PYTHON)"
+        ));
+    }
+    eprintln!("==> creating {} with {base} ({version})", venv.display());
+    let status = Command::new(&base).args(["-m", "venv"]).arg(venv).status();
+    if !matches!(status, Ok(s) if s.success()) || !python.exists() {
+        let _ = std::fs::remove_dir_all(venv);
+        return fail(format!(
+            "`{base} -m venv {}` failed: the Python venv module (with ensurepip) is missing.\n\
+             Fix: `sudo apt install python{version}-venv` (Debian/Ubuntu; `python3-venv` for the default Python), \
+             `sudo dnf install python3` (Fedora), or point WFEM_PYTHON at a Python that has it.",
+            venv.display()
+        ));
+    }
+    Ok(python)
+}
+
+/// Installs the pinned requirements unless the venv already has exactly this file.
+fn ensure_requirements(python: &Path, venv: &Path, requirements: &Path) -> Result<(), StepError> {
+    let wanted = std::fs::read(requirements).map_err(|e| StepError(format!("{}: {e}", requirements.display())))?;
+    let stamp = venv.join("requirements-test.installed");
+    if std::fs::read(&stamp).ok().as_deref() == Some(&wanted[..]) {
+        eprintln!("==> pinned Python packages already installed");
+        return Ok(());
+    }
+    run_step("pip install", pip_install(python).arg("-r").arg(requirements))?;
+    std::fs::write(&stamp, &wanted).map_err(|e| StepError(format!("{}: {e}", stamp.display())))
+}
+
+/// Builds the wheel (dev profile) and installs it into the venv.
+fn install_wfem(python: &Path, venv: &Path, root: &Path, target: &Path) -> Result<(), StepError> {
+    let wheels = target.join("python-wheels");
+    let _ = std::fs::remove_dir_all(&wheels);
+    run_step(
+        "maturin build (dev profile)",
+        Command::new(bin(venv, "maturin"))
+            .args([
+                "build",
+                "--profile",
+                "dev",
+                "--locked",
+                "--auditwheel",
+                "skip",
+                "--manifest-path",
+            ])
+            .arg(root.join("crates/wfem-py/Cargo.toml"))
+            .arg("--interpreter")
+            .arg(python)
+            .arg("--out")
+            .arg(&wheels)
+            .env("CARGO_TARGET_DIR", target),
+    )?;
+    let wheel = std::fs::read_dir(&wheels)
+        .map_err(|e| StepError(format!("{}: {e}", wheels.display())))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.extension().is_some_and(|x| x == "whl"));
+    let Some(wheel) = wheel else {
+        return fail(format!("maturin wrote no wheel into {}", wheels.display()));
+    };
+    run_step(
+        "pip install wfem",
+        pip_install(python).args(["--no-deps", "--force-reinstall"]).arg(&wheel),
+    )
+}
+
+fn pip_install(python: &Path) -> Command {
+    let mut cmd = Command::new(python);
+    cmd.args(["-m", "pip", "install", "--disable-pip-version-check", "--no-input"]);
+    cmd
+}
+
+/// Runs the suites; prints the time of each phase.
+///
+/// # Errors
+/// The first failing step, with what to do about it.
+pub fn run(opts: &TestAllOptions) -> Result<(), StepError> {
+    let root = workspace_root();
+    let target = target_dir(&root);
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut times = Vec::new();
+    if !opts.python_only {
+        let t = Instant::now();
+        run_step(
+            "Rust suite",
+            Command::new(&cargo)
+                .args(["test", "--workspace", "--locked"])
+                .current_dir(&root),
+        )?;
+        times.push(("Rust suite (cargo test --workspace --locked)", t.elapsed()));
+    }
+    if !opts.rust_only {
+        let t = Instant::now();
+        let venv = target.join("python-venv");
+        let python = ensure_venv(&venv)?;
+        ensure_requirements(&python, &venv, &root.join("crates/wfem-py/requirements-test.txt"))?;
+        times.push(("Python environment", t.elapsed()));
+        let t = Instant::now();
+        install_wfem(&python, &venv, &root, &target)?;
+        times.push(("wfem extension (maturin, dev profile)", t.elapsed()));
+        let t = Instant::now();
+        let mut pytest = Command::new(&python);
+        pytest
+            .args(["-m", "pytest", "-q"])
+            .arg(root.join("crates/wfem-py/tests"))
+            .args(&opts.pytest_args)
+            .current_dir(&root);
+        // The CLI the Rust suite built, for the tests comparing its numbers with the package's.
+        let cli = target
+            .join("debug")
+            .join(if cfg!(windows) { "wfem.exe" } else { "wfem" });
+        if cli.is_file() && std::env::var_os("WFEM_CLI").is_none() {
+            pytest.env("WFEM_CLI", &cli);
+        }
+        run_step("Python suite", &mut pytest)?;
+        times.push(("Python suite (pytest)", t.elapsed()));
+    }
+    eprintln!("==> all suites passed");
+    for (name, d) in times {
+        eprintln!("    {:>6.0} s  {name}", d.as_secs_f64());
+    }
+    Ok(())
+}
