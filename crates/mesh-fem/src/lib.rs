@@ -9,7 +9,6 @@
 //! * [`mtx`]: Matrix Market reading and writing (atomic, 17 digits) and `nalgebra-sparse`
 //!   conversions.
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
-//! * [`rng`]: SplitMix64, the one seeded random generator of wfem.
 //! * [`operators`]: the cotangent stiffness L, the consistent mass B and the lumped mass D of
 //!   the paper's Eq. (3) and Eq. (7), assembled in parallel into faer sparse matrices.
 //!
@@ -33,7 +32,6 @@ pub mod io;
 pub mod morse;
 pub mod mtx;
 pub mod operators;
-pub mod rng;
 pub mod stats;
 pub mod validate;
 

@@ -20,8 +20,8 @@ use faer::linalg::matmul::matmul;
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatRef, Par};
-use mesh_fem::rng::SplitMix64;
 use rayon::prelude::*;
+use wfem_heat::rng::SplitMix64;
 
 /// Options of [`Vocabulary::train`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -300,7 +300,7 @@ fn sample_rows(n: usize, m: usize, seed: u64) -> Vec<usize> {
     let mut rng = SplitMix64::new(seed ^ 0x5DEE_CE66_D1CE_5EED);
     let mut idx: Vec<usize> = (0..n).collect();
     for i in 0..m {
-        let j = i + ((rng.uniform() * (n - i) as f64) as usize).min(n - i - 1);
+        let j = i + ((rng.next_f64() * (n - i) as f64) as usize).min(n - i - 1);
         idx.swap(i, j);
     }
     idx.truncate(m);

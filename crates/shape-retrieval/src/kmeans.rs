@@ -1,14 +1,14 @@
 //! Seeded k-means: k-means++ initialisation (Arthur & Vassilvitskii 2007) and Lloyd iterations.
 //!
 //! Minimises the inertia `Σ_x min_c ‖p(x) − m_c‖²` over k centres. Points are the rows of an
-//! n × d matrix. Fully deterministic for a given seed ([`mesh_fem::rng::SplitMix64`]; the parallel
+//! n × d matrix. Fully deterministic for a given seed ([`wfem_heat::rng::SplitMix64`] (the `shifted_solve` one); the parallel
 //! assignment step does not change the result).
 
 use crate::check;
 use crate::RetrievalError;
 use faer::{Mat, MatRef};
-use mesh_fem::rng::SplitMix64;
 use rayon::prelude::*;
+use wfem_heat::rng::SplitMix64;
 
 /// Options of [`kmeans`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -155,7 +155,7 @@ fn plus_plus_seeds(data: &[f64], n: usize, d: usize, k: usize, seed: u64) -> Vec
     let mut rng = SplitMix64::new(seed);
     let row = |i: usize| &data[i * d..(i + 1) * d];
     let mut centers = Vec::with_capacity(k * d);
-    let first = ((rng.uniform() * n as f64) as usize).min(n - 1);
+    let first = ((rng.next_f64() * n as f64) as usize).min(n - 1);
     centers.extend_from_slice(row(first));
     let mut d2: Vec<f64> = (0..n)
         .into_par_iter()
@@ -164,7 +164,7 @@ fn plus_plus_seeds(data: &[f64], n: usize, d: usize, k: usize, seed: u64) -> Vec
     for _ in 1..k {
         let total: f64 = d2.iter().sum();
         let next = if total > 0.0 {
-            let target = rng.uniform() * total;
+            let target = rng.next_f64() * total;
             let mut acc = 0.0;
             let mut pick = n - 1;
             for (i, v) in d2.iter().enumerate() {
@@ -181,7 +181,7 @@ fn plus_plus_seeds(data: &[f64], n: usize, d: usize, k: usize, seed: u64) -> Vec
             pick
         } else {
             // All points coincide with chosen centres (fewer distinct points than k).
-            ((rng.uniform() * n as f64) as usize).min(n - 1)
+            ((rng.next_f64() * n as f64) as usize).min(n - 1)
         };
         centers.extend_from_slice(row(next));
         let c = row(next);

@@ -12,7 +12,7 @@
 //!   (`cargo xtask shrec-eval`, `cargo xtask tosca-eval`, docs/SHREC-RESULTS.md).
 //!
 //! `xtask` is a thin command line over this crate. All randomness comes from the one seeded
-//! generator [`mesh_fem::rng::SplitMix64`].
+//! generator [`wfem_heat::rng::SplitMix64`].
 
 #![warn(missing_docs)]
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]

@@ -5,7 +5,7 @@
 //! the real-pose class `pose`, × 5 strengths,
 //! each with a ground-truth map from every new vertex to a base vertex.
 //!
-//! All randomness comes from [`mesh_fem::rng::SplitMix64`], seeded from (seed, shape, class) — **not** from
+//! All randomness comes from [`wfem_heat::rng::SplitMix64`], seeded from (seed, shape, class) — **not** from
 //! the strength — so that the five strengths of a class share their random choices (the
 //! same joint, the same hole centres in the same order, the same noise vector, …) and the
 //! amount of change grows monotonically with the strength.
@@ -33,12 +33,12 @@ use crate::transform::{
     EdgeGraph, QemDecimator, QemParams,
 };
 use crate::BenchError;
-use mesh_fem::rng::SplitMix64;
 use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::path::{Path, PathBuf};
+use wfem_heat::rng::SplitMix64;
 
 /// The seed of the random stream of one (shape, class): FNV-1a of the names mixed into the
 /// global seed. The strength is deliberately left out (see the module documentation).
@@ -471,7 +471,7 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
             })
         }
         Class::Isometry => {
-            let c = p[rng.below(n)];
+            let c = p[rng.next_below(n)];
             let m = rng.unit_vector();
             // Axis: a random direction projected into the joint plane.
             let axis = loop {
@@ -610,7 +610,7 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
             })
         }
         Class::LocalScale => {
-            let ci = rng.below(n) as u32;
+            let ci = rng.next_below(n) as u32;
             let c = p[ci as usize];
             let beta = local_scale_factor(s);
             let rho = LOCAL_SCALE_WIDTH * d;
@@ -635,7 +635,7 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
             let positions = p
                 .iter()
                 .map(|&x| {
-                    let z = [rng.normal(), rng.normal(), rng.normal()];
+                    let z = [rng.next_normal(), rng.next_normal(), rng.next_normal()];
                     [0, 1, 2].map(|k| x[k] + sigma * z[k])
                 })
                 .collect();

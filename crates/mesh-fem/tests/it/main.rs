@@ -12,6 +12,5 @@ mod io_writers;
 mod morse;
 mod mtx;
 mod operators;
-mod rng;
 mod stats;
 mod validate;

@@ -1,7 +1,7 @@
-//! `mesh_fem::rng::SplitMix64` against the published reference outputs and the moments of its
+//! `shifted_solve::rng::SplitMix64` against the published reference outputs and the moments of its
 //! distributions.
 
-use mesh_fem::rng::SplitMix64;
+use shifted_solve::rng::SplitMix64;
 
 #[test]
 fn splitmix64_reference_values_and_normals() {
@@ -12,14 +12,14 @@ fn splitmix64_reference_values_and_normals() {
     assert_eq!(r.next_u64(), 0x06C4_5D18_8009_454F);
     let mut r = SplitMix64::new(42);
     let m = 200_000;
-    let z: Vec<f64> = (0..m).map(|_| r.normal()).collect();
+    let z: Vec<f64> = (0..m).map(|_| r.next_normal()).collect();
     let mean = z.iter().sum::<f64>() / m as f64;
     let var = z.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / m as f64;
     let kurt = z.iter().map(|x| (x - mean).powi(4)).sum::<f64>() / m as f64 / (var * var);
     assert!(mean.abs() < 0.01, "mean {mean}");
     assert!((var - 1.0).abs() < 0.01, "variance {var}");
     assert!((kurt - 3.0).abs() < 0.05, "kurtosis {kurt}");
-    let u: Vec<usize> = (0..60_000).map(|_| r.below(6)).collect();
+    let u: Vec<usize> = (0..60_000).map(|_| r.next_below(6)).collect();
     for k in 0..6 {
         let c = u.iter().filter(|&&x| x == k).count();
         assert!((c as i64 - 10_000).abs() < 400, "bin {k}: {c}");
@@ -34,7 +34,7 @@ fn splitmix64_reference_values_and_normals() {
 fn uniform_is_the_top_53_bits_and_unit_vectors_are_unit() {
     let (mut a, mut b) = (SplitMix64::new(7), SplitMix64::new(7));
     for _ in 0..100 {
-        let u = a.uniform();
+        let u = a.next_f64();
         assert!((0.0..1.0).contains(&u));
         assert_eq!(u, (b.next_u64() >> 11) as f64 / (1u64 << 53) as f64);
     }
@@ -47,5 +47,5 @@ fn uniform_is_the_top_53_bits_and_unit_vectors_are_unit() {
     }
     // Isotropy: the mean of uniform unit vectors is 0 (standard error ≈ 0.004 per component).
     assert!(mean.iter().all(|m| m.abs() < 0.02), "{mean:?}");
-    assert_eq!(r.below(0), 0);
+    assert_eq!(r.next_below(0), 0);
 }
