@@ -8,9 +8,11 @@
 //! * `query` ranks the indexed meshes by distance to a query mesh: one descriptor computation
 //!   and one scan of the index.
 //!
-//! The defaults are [`shape_retrieval::RetrievalSettings::default`]: SI-HKS with times in units
-//! of the surface area (exactly scale invariant), z-scored, 48 words, soft assignment, area
-//! weights, χ² distance. Everything is recorded in the vocabulary and index files (JSON, see
+//! The defaults are [`shape_retrieval::RetrievalSettings::default`]: SI-HKS with times
+//! `t = A·2^τ`, τ ∈ [−12, 1] (A = surface area; exactly scale invariant), 5 Fourier magnitudes,
+//! k = 100, z-scored, 48 words, soft assignment, area weights, χ² distance. TOSCA-76 (76 shapes,
+//! leave-one-out, `cargo xtask tosca-eval`): mAP 0.998 with the vocabulary trained on the 76
+//! (optimistic), 0.999 with one trained on 54 other shapes. Everything is recorded in the vocabulary and index files (JSON, see
 //! [`shape_retrieval::store`]).
 
 use super::{check_output, load_usable, CliError, MeshArgs};
@@ -49,6 +51,10 @@ pub enum RetrievalAction {
         training: TrainingArgs,
     },
     /// Index meshes: describe them, train a vocabulary on them (or reuse `--vocab`), store every bag.
+    ///
+    /// Without `--vocab` the vocabulary is fit to the indexed shapes themselves: measuring
+    /// retrieval on those same shapes is then optimistic. Train one on other shapes with
+    /// `wfem retrieval vocab` for an honest measurement.
     Build {
         /// Mesh files to index.
         #[arg(required = true, num_args = 1..)]
@@ -106,16 +112,16 @@ pub struct DescriptorArgs {
     /// Eigenpairs k per shape.
     #[arg(long, default_value_t = shape_retrieval::DEFAULT_EIGENPAIRS)]
     pub eigs: usize,
-    /// SI-HKS: first τ of the times t = A·2^τ (A = surface area) [default: library default].
+    /// SI-HKS: first τ of the times t = A·2^τ (A = surface area) [default: −12].
     #[arg(long, allow_hyphen_values = true)]
     pub tau_min: Option<f64>,
-    /// SI-HKS: last τ [default: library default].
+    /// SI-HKS: last τ [default: 1].
     #[arg(long, allow_hyphen_values = true)]
     pub tau_max: Option<f64>,
-    /// SI-HKS: step Δτ [default: library default].
+    /// SI-HKS: step Δτ [default: 0.125].
     #[arg(long)]
     pub tau_step: Option<f64>,
-    /// SI-HKS: number of Fourier magnitudes kept [default: library default].
+    /// SI-HKS: number of Fourier magnitudes kept [default: 5].
     #[arg(long)]
     pub frequencies: Option<usize>,
     /// DHK1/DHK2: absolute times; DHK3: times in units of 1/λ_max (comma-separated).
@@ -312,7 +318,9 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             let vocabulary = match vocab {
                 Some(v) => {
                     check_output(v, path)?;
-                    Some(JsonFile::new(v).load_vocabulary()?)
+                    let vocabulary = JsonFile::new(v).load_vocabulary()?;
+                    super::limits::retrieval_sizes(vocabulary.descriptor().eigenpairs, vocabulary.vocabulary().size())?;
+                    Some(vocabulary)
                 }
                 None => {
                     super::limits::retrieval_sizes(descriptor.eigs, training.words)?;
@@ -340,6 +348,12 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
         }
         RetrievalAction::Query { index, input, top } => {
             let index = JsonFile::new(index).load_index()?;
+            // The stored settings pass the same bounds as `build`'s options (a hand-edited k
+            // would otherwise start an eigensolve of any size).
+            super::limits::retrieval_sizes(
+                index.vocabulary().descriptor().eigenpairs,
+                index.vocabulary().vocabulary().size(),
+            )?;
             let mesh = load_usable(input)?;
             let features = index.features(&input.mesh.display().to_string(), &mesh)?;
             let signature = index.signature(&features)?;
