@@ -73,7 +73,8 @@ pub enum CliError {
         reason: String,
     },
     /// A computed field holds NaN or ∞ (never written).
-    #[error("{what} has the non-finite value {value} at vertex {vertex}; nothing was written")]
+    #[error("{what} has the non-finite value {value} at vertex {vertex}{}; nothing was written",
+        if value.is_infinite() { " (beyond the largest finite number, 1.8e308: scale the input down)" } else { "" })]
     NonFinite {
         /// Which field.
         what: String,

@@ -316,19 +316,16 @@ impl Store {
     /// The ids must be 0..n and the chunks must hold exactly n rows (cheap: rowid bounds and
     /// the chunk table, not a scan of the shapes).
     fn check_counts(&self) -> Result<(), StoreError> {
-        let (shapes, min_id): (i64, i64) = self
+        // One statement, so one snapshot: two queries could straddle a writer's commit (a
+        // reader opened during appends saw 50 ids but 100 rows and called the file corrupt).
+        let (shapes, min_id, rows, chunks): (i64, i64, i64, i64) = self
             .conn
             .query_row(
-                "SELECT COALESCE(MAX(id) + 1, 0), COALESCE(MIN(id), 0) FROM shapes",
+                "SELECT (SELECT COALESCE(MAX(id) + 1, 0) FROM shapes), (SELECT COALESCE(MIN(id), 0) FROM shapes), \
+                 (SELECT COALESCE(SUM(rows), 0) FROM chunks), (SELECT COUNT(*) FROM chunks)",
                 [],
-                |r| Ok((r.get(0)?, r.get(1)?)),
+                |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?)),
             )
-            .map_err(self.sql())?;
-        let (rows, chunks): (i64, i64) = self
-            .conn
-            .query_row("SELECT COALESCE(SUM(rows), 0), COUNT(*) FROM chunks", [], |r| {
-                Ok((r.get(0)?, r.get(1)?))
-            })
             .map_err(self.sql())?;
         let expected_chunks = (shapes as usize).div_ceil(self.chunk_rows) as i64;
         if min_id != 0 || rows != shapes || chunks != expected_chunks {

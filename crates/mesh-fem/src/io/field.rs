@@ -103,7 +103,7 @@ impl FieldFormat {
 /// the extension ([`FieldFormat::from_path`]):
 ///
 /// * `.ply`: binary little-endian PLY with `double x, y, z`, one `double` vertex property per
-///   field (named as given), optional `uchar red, green, blue`, and the faces as
+///   field (named as given, reduced to letters, digits and `_` so that every PLY reader accepts it), optional `uchar red, green, blue`, and the faces as
 ///   `list uchar int vertex_indices`. Viewers such as MeshLab and Polyscope show the fields.
 /// * `.npy`: an n × k float64 array in C order (1-D of length n when k = 1), NPY format 1.0.
 /// * `.csv`: a header line with the field names, then one row per vertex (values printed with
@@ -203,6 +203,32 @@ pub fn stage_field(
     }
 }
 
+/// PLY property names every reader accepts (ours, plyfile, MeshLab): letters, digits and `_`;
+/// any other character (the `.` of `t0.002`, a sign, a space) becomes `_`, and a name that then
+/// repeats an earlier one (or x, y, z) gets a numeric suffix.
+pub(crate) fn ply_property_names<'a>(names: impl Iterator<Item = &'a str>) -> Vec<String> {
+    let mut taken: Vec<String> = ["x", "y", "z", "red", "green", "blue"].map(String::from).to_vec();
+    let mut out = Vec::new();
+    for name in names {
+        let mut clean: String = name
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' })
+            .collect();
+        if clean.is_empty() {
+            clean.push_str("field");
+        }
+        let base = clean.clone();
+        let mut k = 1;
+        while taken.contains(&clean) {
+            k += 1;
+            clean = format!("{base}_{k}");
+        }
+        taken.push(clean.clone());
+        out.push(clean);
+    }
+    out
+}
+
 fn write_ply(
     w: &mut dyn Write,
     mesh: &TriMesh,
@@ -213,7 +239,7 @@ fn write_ply(
     writeln!(w, "ply\nformat binary_little_endian 1.0\ncomment written by wfem")?;
     writeln!(w, "element vertex {n}")?;
     writeln!(w, "property double x\nproperty double y\nproperty double z")?;
-    for (name, _) in fields {
+    for name in ply_property_names(fields.iter().map(|(name, _)| *name)) {
         writeln!(w, "property double {name}")?;
     }
     if colors.is_some() {

@@ -96,6 +96,33 @@ fn ply_field_file_reads_back_through_ply_rs_bw_and_our_reader() {
     assert_eq!(load(&plain, &LoadOptions::default()).unwrap().0, mesh);
 }
 
+/// Field names as the CLI makes them (`rational_t0.002`, a sign) give a PLY
+/// that both readers load: names are reduced to letters, digits and `_`, kept distinct. (The
+/// demo's `basis.ply` with `rational_t0.002` could not be read back by `wfem` itself.)
+#[test]
+fn ply_property_names_are_made_readable_and_distinct() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = test_mesh();
+    let n = mesh.n_vertices();
+    let (a, b, d) = (field(n, 0), field(n, 1), field(n, 3));
+    let path = dir.path().join("names.ply");
+    let fields: [(&str, &[f64]); 3] = [("rational_t0.002", &a), ("t1e+03", &b), ("rational_t0_002", &d)];
+    write_field(&path, &mesh, &fields, None).unwrap();
+    let (back, _) = load(&path, &LoadOptions::default()).unwrap();
+    assert_eq!(back, mesh);
+    let mut f = std::fs::File::open(&path).unwrap();
+    let ply = Parser::<DefaultElement>::new().read_ply(&mut f).unwrap();
+    let v = &ply.payload["vertex"][5];
+    let get = |k: &str| match v.get(k) {
+        Some(Property::Double(x)) => *x,
+        other => panic!("property {k}: {other:?}"),
+    };
+    assert_eq!(get("rational_t0_002"), a[5]);
+    assert_eq!(get("t1e_03"), b[5]);
+    assert_eq!(get("rational_t0_002_2"), d[5]);
+    assert_eq!(get("x"), mesh.positions()[5][0]);
+}
+
 /// Decodes an NPY 1.0 float64 file independently of the library: returns (shape, data).
 fn decode_npy(bytes: &[u8]) -> (String, Vec<f64>) {
     assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
