@@ -224,7 +224,8 @@ impl DescriptorSpec {
                 for j in 0..h.ncols() {
                     for i in 0..h.nrows() {
                         let v = h[(i, j)];
-                        if !(v > 0.0) {
+                        // NaN is not positive either.
+                        if v.is_nan() || v <= 0.0 {
                             return Err(RetrievalError::NonPositiveSignature {
                                 vertex: i,
                                 time: times[j],
@@ -997,7 +998,7 @@ impl RetrievalIndex {
             )));
         }
         // ln(λA) of a real shape is within a few hundred of 0; this also keeps every sum finite.
-        if let Some((j, x)) = global.iter().enumerate().find(|(_, x)| !(x.abs() < 1e3)) {
+        if let Some((j, x)) = global.iter().enumerate().find(|(_, x)| x.is_nan() || x.abs() >= 1e3) {
             return Err(invalid(format!(
                 "entry {i} ({name}): global value {x:e} at {j} is not a finite ln(λA)"
             )));

@@ -168,15 +168,13 @@ fn check_header(path: &Path, header: &Header) -> Result<(), MeshError> {
 pub(crate) fn read(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<(TriMesh, LoadReport), MeshError> {
     let mut report = LoadReport::new(MeshFormat::Ply);
     let mut reader = Reader::new(bytes);
-    let header = Parser::<Skip>::new()
-        .read_header(&mut reader)
-        .map_err(|e| {
-            // The parser's message ends in its internal grammar state; keep the line it quotes.
-            let text = e.to_string();
-            let text = text.split("\n\tError:").next().unwrap_or(&text);
-            let text = text.replace("\n\tString: ", " ").replace('\n', "");
-            parse_error(path, e.line().unwrap_or(0), format!("PLY header: {text}"))
-        })?;
+    let header = Parser::<Skip>::new().read_header(&mut reader).map_err(|e| {
+        // The parser's message ends in its internal grammar state; keep the line it quotes.
+        let text = e.to_string();
+        let text = text.split("\n\tError:").next().unwrap_or(&text);
+        let text = text.replace("\n\tString: ", " ").replace('\n', "");
+        parse_error(path, e.line().unwrap_or(0), format!("PLY header: {text}"))
+    })?;
     check_header(path, &header)?;
     report.notes.push(
         match header.encoding {
