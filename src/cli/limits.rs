@@ -178,49 +178,6 @@ pub fn retrieval_sizes(eigs: usize, words: usize) -> Result<(), CliError> {
     Ok(())
 }
 
-/// A retrieval index read from a file is checked like the command line that made it: its
-/// eigenpairs and sizes in range, its times, words and width finite (times and width > 0),
-/// and every bag a normalised histogram (entries in [0, 1], one per word) — a hand-edited bag
-/// of 1e308 made every distance ∞.
-pub fn retrieval_index(
-    eigenpairs: usize,
-    times: &[f64],
-    words: &[Vec<f64>],
-    sigma: f64,
-    bags: &[&[f64]],
-) -> Result<(), CliError> {
-    let bad = |what: String| CliError::Usage(format!("invalid retrieval index: {what}"));
-    count(
-        "eigenpairs (index)",
-        eigenpairs,
-        1,
-        MAX_RETRIEVAL_EIGS,
-        "eigenpairs per shape",
-    )?;
-    count("words (index)", words.len(), 1, MAX_WORDS, "vocabulary size")?;
-    if times.is_empty() || times.len() > MAX_TIMES || times.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
-        return Err(bad(format!("times must be 1..={MAX_TIMES} finite positive numbers")));
-    }
-    if let Some(i) = words
-        .iter()
-        .position(|w| w.len() != times.len() || w.iter().any(|x| !x.is_finite()))
-    {
-        return Err(bad(format!("word {i} is not {} finite numbers", times.len())));
-    }
-    if !(sigma.is_finite() && sigma > 0.0) {
-        return Err(bad(format!("sigma = {sigma} must be finite and > 0")));
-    }
-    for (i, bag) in bags.iter().enumerate() {
-        if bag.len() != words.len() || bag.iter().any(|x| !(0.0..=1.0).contains(x)) {
-            return Err(bad(format!(
-                "entry {i}: a bag must hold {} values in [0, 1] (a normalised histogram)",
-                words.len()
-            )));
-        }
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

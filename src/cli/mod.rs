@@ -43,6 +43,9 @@ pub enum CliError {
     /// Heat kernel evaluation.
     #[error("{}", input::with_flags(&.0.to_string()))]
     Heat(#[from] wfem_heat::HeatError),
+    /// Descriptors, vocabularies, indexes and their files.
+    #[error(transparent)]
+    Retrieval(#[from] shape_retrieval::RetrievalError),
     /// Rendering a PNG.
     #[error(transparent)]
     Render(#[from] RenderError),
@@ -104,12 +107,6 @@ pub(crate) fn name_of<T: ValueEnum>(value: T) -> String {
         .to_possible_value()
         .map(|v| v.get_name().to_string())
         .unwrap_or_default()
-}
-
-/// Reads a text file (a regular file only: a FIFO given as the index is refused, not waited on).
-pub(crate) fn read_text(path: &Path) -> Result<String, CliError> {
-    let bytes = mesh_fem::io::read_regular_file(path)?;
-    String::from_utf8(bytes).map_err(|_| CliError::Usage(format!("{} is not UTF-8 text", path.display())))
 }
 
 /// Checks one output file before any work (its folder exists and is writable, it is not a

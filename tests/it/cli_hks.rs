@@ -234,8 +234,8 @@ fn retrieval_build_then_query_finds_the_same_shape_first() {
     args.extend(["--out", index.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
     let o = wfem(&args);
     assert!(o.status.success(), "{}", stderr(&o));
-    // A rescaled copy of the bumpy sphere retrieves the bumpy sphere first (DHK3 is
-    // scale-invariant), at distance ≈ 0.
+    // A rescaled copy of the bumpy sphere retrieves the bumpy sphere first (the default SI-HKS
+    // in area units is exactly scale invariant), at distance ≈ 0.
     let query = dir.path().join("query.off");
     mesh_fem::io::write_mesh(&query, &mesh_fem::generate::bumpy(2).scaled(5.0).unwrap()).unwrap();
     let o = wfem(&[
@@ -255,5 +255,114 @@ fn retrieval_build_then_query_finds_the_same_shape_first() {
     assert_eq!(text.lines().count(), 2);
     // A file that is not an index is refused.
     let o = wfem(&["retrieval", "query", files[0].as_str(), query.to_str().unwrap()]);
+    assert!(!o.status.success());
+}
+
+#[test]
+fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
+    // `vocab` and `build` with no option write the documented defaults (issue #13): SI-HKS of the
+    // wFEM kernel, area time unit, τ ∈ [−12, 1] step 1/8, α = 2, K = 5, k = 100, z-scored,
+    // 48 words, soft assignment, area weights, χ², no fusion; `build --vocab` reuses the
+    // vocabulary as it was written.
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    for (name, mesh) in [
+        ("bumpy.off", mesh_fem::generate::bumpy(2)),
+        ("sphere.off", mesh_fem::generate::icosphere(2)),
+        ("torus.off", mesh_fem::generate::torus(1.0, 0.4, 20, 10)),
+    ] {
+        let p = dir.path().join(name);
+        mesh_fem::io::write_mesh(&p, &mesh).unwrap();
+        files.push(p.to_str().unwrap().to_string());
+    }
+    let read = |p: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let vocab = dir.path().join("vocab.json");
+    let mut args = vec!["retrieval", "vocab"];
+    args.extend(files.iter().map(|s| s.as_str()));
+    args.extend(["--out", vocab.to_str().unwrap()]);
+    let o = wfem(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v = read(&vocab);
+    assert_eq!(v["format"], "wfem-retrieval-vocabulary");
+    assert_eq!(
+        v["descriptor"],
+        serde_json::json!({
+            "eigenpairs": 100,
+            "descriptor": {"kind": "si-hks", "alpha": 2.0, "tau_min": -12.0, "tau_max": 1.0,
+                           "tau_step": 0.125, "frequencies": 5}
+        })
+    );
+    assert_eq!(v["training"]["words"], 48);
+    assert_eq!(v["training"]["standardize"], true);
+    assert_eq!(v["words"].as_array().unwrap().len(), 48);
+    assert!(v["words"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|w| w.as_array().unwrap().len() == 5));
+    assert_eq!(v["standardizer"]["mean"].as_array().unwrap().len(), 5);
+    assert_eq!(v["standardizer"]["std"].as_array().unwrap().len(), 5);
+
+    // build without --vocab: the same defaults, trained on the indexed shapes.
+    let index = dir.path().join("index.json");
+    let mut args = vec!["retrieval", "build"];
+    args.extend(files.iter().map(|s| s.as_str()));
+    args.extend(["--out", index.to_str().unwrap()]);
+    let o = wfem(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("optimistic"));
+    let i = read(&index);
+    assert_eq!(i["format"], "wfem-retrieval-index");
+    assert_eq!(i["vocabulary"]["descriptor"], v["descriptor"]);
+    assert_eq!(i["vocabulary"]["training"], v["training"]);
+    assert_eq!(
+        i["bags"],
+        serde_json::json!({"weights": {"kind": "area"}, "assignment": "normalized",
+                           "distance": "chi-squared", "global": null})
+    );
+    assert_eq!(i["entries"].as_array().unwrap().len(), 3);
+    for e in i["entries"].as_array().unwrap() {
+        let bag: Vec<f64> = e["bag"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert_eq!(bag.len(), 48);
+        assert!((bag.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+
+    // build --vocab: the stored vocabulary verbatim, the chosen distance recorded.
+    let reused = dir.path().join("reused.json");
+    let mut args = vec!["retrieval", "build"];
+    args.extend(files[..2].iter().map(|s| s.as_str()));
+    args.extend([
+        "--out",
+        reused.to_str().unwrap(),
+        "--vocab",
+        vocab.to_str().unwrap(),
+        "--distance",
+        "l1",
+    ]);
+    let o = wfem(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = read(&reused);
+    assert_eq!(r["vocabulary"], v);
+    assert_eq!(r["bags"]["distance"], "l1");
+    assert_eq!(r["entries"].as_array().unwrap().len(), 2);
+    // Descriptor options conflict with --vocab (the vocabulary fixes them).
+    let o = wfem(&[
+        "retrieval",
+        "build",
+        files[0].as_str(),
+        "--out",
+        dir.path().join("x.json").to_str().unwrap(),
+        "--vocab",
+        vocab.to_str().unwrap(),
+        "--words",
+        "8",
+    ]);
     assert!(!o.status.success());
 }

@@ -330,18 +330,22 @@ fn fixture() -> Fixture {
         e["bag"] = serde_json::json!(vec![1e308; 4]);
     }
     write(&d, "big_index.json", big.to_string());
+    // The index format nests the vocabulary (settings, z-score statistics, words, σ).
     let mut sigma = index.clone();
-    sigma["sigma"] = serde_json::json!(-1.0);
+    sigma["vocabulary"]["sigma"] = serde_json::json!(-1.0);
     write(&d, "sigma_index.json", sigma.to_string());
     let mut eigs = index.clone();
-    eigs["eigenpairs"] = serde_json::json!(u64::MAX);
+    eigs["vocabulary"]["descriptor"]["eigenpairs"] = serde_json::json!(u64::MAX);
     write(&d, "eigs_index.json", eigs.to_string());
     let mut words = index.clone();
-    words["words"][0] = serde_json::json!([1.0]);
+    words["vocabulary"]["words"][0] = serde_json::json!([1.0]);
     write(&d, "words_index.json", words.to_string());
-    let mut times = index;
-    times["times"][0] = serde_json::json!(-1.0);
+    let mut times = index.clone();
+    times["vocabulary"]["descriptor"]["descriptor"]["tau_step"] = serde_json::json!(-1.0);
     write(&d, "times_index.json", times.to_string());
+    let mut zscore = index;
+    zscore["vocabulary"]["standardizer"]["std"][0] = serde_json::json!(0.0);
+    write(&d, "zscore_index.json", zscore.to_string());
     write(&d, "garbage.json", "{not json");
     write(&d, "empty.json", "");
     Fixture { _dir: dir, d }
@@ -1078,15 +1082,15 @@ fn retrieval_rows() -> Vec<Row> {
         ),
         row(
             "retrieval query {d}/empty.json {d}/sphere.off",
-            Typed(&["not a wfem retrieval index"]),
+            Typed(&["not a wfem-retrieval-index file"]),
         ),
         row(
             "retrieval query {d}/garbage.json {d}/sphere.off",
-            Typed(&["not a wfem retrieval index"]),
+            Typed(&["not a wfem-retrieval-index file"]),
         ),
         row(
             "retrieval query {d}/big_index.json {d}/sphere.off",
-            Typed(&["invalid retrieval index", "bag"]),
+            Typed(&["invalid index", "bag value 1e308"]),
         ),
         row("retrieval query {d}/sigma_index.json {d}/sphere.off", Typed(&["sigma"])),
         row(
@@ -1097,10 +1101,17 @@ fn retrieval_rows() -> Vec<Row> {
             "retrieval query {d}/words_index.json {d}/sphere.off",
             Typed(&["word 0"]),
         ),
-        row("retrieval query {d}/times_index.json {d}/sphere.off", Typed(&["times"])),
+        row(
+            "retrieval query {d}/times_index.json {d}/sphere.off",
+            Typed(&["tau_step"]),
+        ),
+        row(
+            "retrieval query {d}/zscore_index.json {d}/sphere.off",
+            Typed(&["z-score statistics"]),
+        ),
         row(
             "retrieval query {d}/f.csv {d}/sphere.off",
-            Typed(&["not a wfem retrieval index"]),
+            Typed(&["not a wfem-retrieval-index file"]),
         ),
         row("retrieval bogus", Clap),
     ]

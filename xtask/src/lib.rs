@@ -4,6 +4,5 @@
 #![warn(missing_docs)]
 
 pub mod bench;
-pub mod eval;
-pub mod shrec;
+pub mod lab;
 pub mod test_all;

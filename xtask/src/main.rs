@@ -1,7 +1,7 @@
 //! Project chores: `cargo xtask <command>`.
 use clap::Parser;
+use shrec_bench::synth::{generate, Class, GenerateOptions, DEFAULT_SHAPES};
 use std::path::PathBuf;
-use xtask::shrec::{generate, Class, GenerateOptions, DEFAULT_SHAPES};
 
 #[derive(Parser)]
 #[command(name = "xtask", about = "wfem project chores")]
@@ -40,11 +40,51 @@ enum Cmd {
         #[arg(long)]
         out: Option<PathBuf>,
         /// Which subset to run.
-        #[arg(long, value_enum, default_value = "default")]
-        subset: xtask::eval::Subset,
-        /// Mesh corpus folder for generation.
+        #[arg(long, default_value = "default")]
+        subset: shrec_bench::eval::Subset,
+        /// Mesh corpus folder (generation, clean and outside collections).
         #[arg(long)]
         meshes: Option<PathBuf>,
+        /// Cache eigenbases in this folder (reruns then skip the eigensolves).
+        #[arg(long)]
+        cache: Option<PathBuf>,
+    },
+    /// TOSCA-76 leave-one-out retrieval with the CLI's defaults (or --settings), vocabulary
+    /// trained on the 76 and outside them; prints a markdown section.
+    ToscaEval {
+        /// Mesh corpus folder.
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Retrieval settings as JSON (partial; missing fields take the defaults).
+        #[arg(long)]
+        settings: Option<PathBuf>,
+        /// Also report the spread over k-means seeds 0 .. N.
+        #[arg(long, default_value_t = 5)]
+        seeds: u64,
+        /// Cache eigenbases in this folder.
+        #[arg(long)]
+        cache: Option<PathBuf>,
+        /// Report file (default: print to stdout).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Retrieval experiments: evaluates settings variants on TOSCA-76 (and the SHREC data).
+    RetrievalLab {
+        /// Variants: JSON array of {"name": …, "settings": {…}} (partial settings).
+        #[arg(long)]
+        variants: PathBuf,
+        /// SHREC data folder (optional).
+        #[arg(long)]
+        shrec: Option<PathBuf>,
+        /// Mesh corpus folder.
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Spread over k-means seeds 0 .. N.
+        #[arg(long, default_value_t = 0)]
+        seeds: u64,
+        /// Cache eigenbases in this folder.
+        #[arg(long)]
+        cache: Option<PathBuf>,
     },
     /// Measure and write the benchmark report: DIR/BENCHMARKS.md (generated section) and
     /// DIR/bench/*.svg. Full run: 10K/41K/164K vertices (see docs/BENCHMARKS.md).
@@ -91,6 +131,25 @@ fn parse_strengths(text: &str) -> Result<Vec<u8>, String> {
     text.split(',').map(|s| s.trim().parse().map_err(|_| bad())).collect()
 }
 
+fn eigen_cache(dir: Option<PathBuf>) -> Result<shrec_bench::protocol::EigenCache, shrec_bench::BenchError> {
+    match dir {
+        Some(d) => shrec_bench::protocol::EigenCache::in_dir(&d),
+        None => Ok(shrec_bench::protocol::EigenCache::none()),
+    }
+}
+
+/// Writes a report atomically to `out`, or prints it.
+fn emit(text: &str, out: Option<PathBuf>) -> Result<(), Box<dyn std::error::Error>> {
+    match out {
+        Some(path) => {
+            mesh_fem::io::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+            println!("wrote {}", path.display());
+        }
+        None => print!("{text}"),
+    }
+    Ok(())
+}
+
 fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
     match cmd {
         Cmd::Version => println!("wfem xtask {}", env!("CARGO_PKG_VERSION")),
@@ -135,21 +194,51 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             out,
             subset,
             meshes,
+            cache,
         } => {
-            let data_dir = data.unwrap_or_else(|| PathBuf::from(format!("data/shrec/eval-{subset:?}").to_lowercase()));
-            let report = xtask::eval::run(&xtask::eval::EvalOptions {
+            let data_dir = data.unwrap_or_else(|| PathBuf::from(format!("data/shrec/eval-{}", subset.name())));
+            let report = shrec_bench::eval::run(&shrec_bench::eval::EvalOptions {
                 data_dir,
                 meshes_dir: meshes,
                 subset,
                 seed: 2010,
+                cache: eigen_cache(cache)?,
             })?;
-            let text = xtask::eval::markdown(&report);
-            match out {
-                Some(path) => {
-                    mesh_fem::io::write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
-                    println!("wrote {}", path.display());
-                }
-                None => print!("{text}"),
+            emit(&shrec_bench::eval::markdown(&report), out)?;
+        }
+        Cmd::ToscaEval {
+            meshes,
+            settings,
+            seeds,
+            cache,
+            out,
+        } => {
+            let meshes_dir = match meshes {
+                Some(d) => d,
+                None => mesh_fem::corpus::meshes_dir()?,
+            };
+            let settings: shape_retrieval::RetrievalSettings = match settings {
+                Some(p) => serde_json::from_str(&std::fs::read_to_string(&p)?)?,
+                None => Default::default(),
+            };
+            let t = shrec_bench::eval::tosca_eval(&meshes_dir, &settings, &eigen_cache(cache)?, seeds)?;
+            emit(&shrec_bench::eval::tosca_markdown(&t), out)?;
+        }
+        Cmd::RetrievalLab {
+            variants,
+            shrec,
+            meshes,
+            seeds,
+            cache,
+        } => {
+            let variants: Vec<xtask::lab::Variant> = serde_json::from_str(&std::fs::read_to_string(&variants)?)?;
+            let meshes_dir = match meshes {
+                Some(d) => d,
+                None => mesh_fem::corpus::meshes_dir()?,
+            };
+            let cache = eigen_cache(cache)?;
+            for v in &variants {
+                xtask::lab::run_variant(v, &meshes_dir, shrec.as_deref(), &cache, seeds)?;
             }
         }
         Cmd::Bench {

@@ -198,23 +198,4 @@ pub enum MeshError {
         message: String,
     },
     // ---- end of variants added by the validate/stats/mtx work ----
-
-    // ===== transform.rs: mesh surgery (appended by branch `shrec`) =====
-    /// A per-vertex mask does not have one entry per vertex.
-    #[error("the vertex mask has {len} entries, but the mesh has {n_vertices} vertices")]
-    MaskLength {
-        /// Number of mask entries given.
-        len: usize,
-        /// Number of vertices of the mesh.
-        n_vertices: usize,
-    },
-    /// A vertex index given as input (source vertex, pair to weld) does not exist.
-    #[error("vertex index {index} is out of range: the mesh has {n_vertices} vertices")]
-    VertexIndex {
-        /// The offending index.
-        index: u32,
-        /// Number of vertices of the mesh.
-        n_vertices: usize,
-    },
-    // ===== end of transform.rs block =====
 }

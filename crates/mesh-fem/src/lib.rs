@@ -33,7 +33,6 @@ pub mod morse;
 pub mod mtx;
 pub mod operators;
 pub mod stats;
-pub mod transform;
 pub mod validate;
 
 pub use error::MeshError;

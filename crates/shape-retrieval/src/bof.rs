@@ -11,16 +11,17 @@
 //! 4. The **spatially sensitive** bag `F(X) = ∫∫ θ(x) θ(y)ᵀ K_t(x, y) dμ(x) dμ(y) ≈ Θᵀ B K_t Θ`
 //!    (V × V, symmetric because `B K_t = K_tᵀ B`), with the wFEM heat kernel `K_t = Φ D_t Φᵀ B`
 //!    (Eq. (6)) applied to the V columns of Θ by a caller-supplied operator.
-//! 5. Shapes are compared with the **L1 distance** between bags.
+//! 5. Shapes are compared with the **L1 distance** between bags (or χ², see [`crate::distance`]).
 
 use crate::check;
-use crate::kmeans::{kmeans, nearest_center, squared_distance, KmeansParams, SplitMix64};
+use crate::kmeans::{kmeans, nearest_center, squared_distance, KmeansParams};
 use crate::RetrievalError;
 use faer::linalg::matmul::matmul;
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatRef, Par};
 use rayon::prelude::*;
+use wfem_heat::rng::SplitMix64;
 
 /// Options of [`Vocabulary::train`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -160,8 +161,35 @@ impl Vocabulary {
         Ok(Mat::from_fn(descriptors.nrows(), v, |i, j| rows[i][j]))
     }
 
+    /// The Gaussian kernel assignment `κ_i(x) = exp(−(‖p(x) − p_i‖² − m)/(2σ²))` (n × V), *not*
+    /// normalised per vertex: a descriptor far from every word gets small weights on all of them.
+    /// m = the smallest squared word distance over all the rows, a common factor `e^{m/2σ²}` that
+    /// keeps the largest entry at 1 (no underflow to 0/0) and cancels once the bag is normalised.
+    ///
+    /// # Errors
+    /// As [`Self::soft_assignment`].
+    pub fn kernel_assignment(&self, descriptors: MatRef<'_, f64>) -> Result<Mat<f64>, RetrievalError> {
+        let d = self.words.ncols();
+        check::same("descriptor dimension vs vocabulary", d, descriptors.ncols())?;
+        check::finite_mat("descriptors", descriptors)?;
+        let words = row_major(self.words.as_ref());
+        let d2: Vec<Vec<f64>> = (0..descriptors.nrows())
+            .into_par_iter()
+            .map(|i| {
+                let x: Vec<f64> = (0..d).map(|j| descriptors[(i, j)]).collect();
+                words.chunks_exact(d).map(|w| squared_distance(&x, w)).collect()
+            })
+            .collect();
+        let m = d2.iter().flatten().copied().fold(f64::INFINITY, f64::min);
+        let inv_two_sigma2 = 1.0 / (2.0 * self.sigma * self.sigma);
+        Ok(Mat::from_fn(descriptors.nrows(), self.size(), |i, j| {
+            (-(d2[i][j] - m) * inv_two_sigma2).exp()
+        }))
+    }
+
     /// The bag of features `Θᵀ a` (length V) with vertex areas `a` (e.g. [`vertex_areas`] of B,
-    /// or the lumped diagonal). It sums to `Σ a` (the area); divide by it for a distribution.
+    /// or the lumped diagonal), Θ the normalised [`Self::soft_assignment`]. It sums to `Σ a`
+    /// (the area); divide by it for a distribution.
     ///
     /// # Errors
     /// Those of [`Self::soft_assignment`]; [`RetrievalError::DimensionMismatch`] if `a` has the
@@ -171,13 +199,30 @@ impl Vocabulary {
         descriptors: MatRef<'_, f64>,
         vertex_weights: &[f64],
     ) -> Result<Vec<f64>, RetrievalError> {
+        self.bag_with(descriptors, vertex_weights, Assignment::Normalized)
+    }
+
+    /// The bag `Θᵀ a` with the given [`Assignment`] (Θ = [`Self::soft_assignment`] or
+    /// [`Self::kernel_assignment`]).
+    ///
+    /// # Errors
+    /// As [`Self::bag_of_features`].
+    pub fn bag_with(
+        &self,
+        descriptors: MatRef<'_, f64>,
+        vertex_weights: &[f64],
+        assignment: Assignment,
+    ) -> Result<Vec<f64>, RetrievalError> {
         check::same(
             "vertex weights vs descriptors",
             descriptors.nrows(),
             vertex_weights.len(),
         )?;
         check::finite_slice("vertex weights", vertex_weights)?;
-        let theta = self.soft_assignment(descriptors)?;
+        let theta = match assignment {
+            Assignment::Normalized => self.soft_assignment(descriptors)?,
+            Assignment::Kernel => self.kernel_assignment(descriptors)?,
+        };
         Ok((0..self.size())
             .map(|c| theta.col(c).iter().zip(vertex_weights).map(|(t, a)| t * a).sum())
             .collect())
@@ -229,44 +274,24 @@ impl Vocabulary {
     }
 }
 
+/// How a descriptor is spread over the words.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Assignment {
+    /// Shape Google's soft assignment: Gaussian weights normalised to sum 1 per vertex
+    /// ([`Vocabulary::soft_assignment`]); every vertex counts with its full weight.
+    #[default]
+    Normalized,
+    /// Unnormalised Gaussian weights ([`Vocabulary::kernel_assignment`]): a vertex whose
+    /// descriptor is far from every word (a spike, a hole's rim) counts less.
+    Kernel,
+}
+
 /// Vertex areas `a = B·1` (row sums of the mass matrix); for the consistent B these equal the
 /// barycentric lumped areas `Σ_{T∋i}|T|/3` (paper, Eq. (7)).
 pub fn vertex_areas(mass: SparseColMatRef<'_, usize, f64>) -> Vec<f64> {
     // B is symmetric, so row sums are column sums; columns are contiguous in CSC.
     (0..mass.ncols()).map(|j| mass.val_of_col(j).iter().sum()).collect()
-}
-
-/// L1 distance `Σ_i |a_i − b_i|` between two bags (vectors, or V × V matrices flattened).
-///
-/// # Errors
-/// [`RetrievalError::DimensionMismatch`], [`RetrievalError::NonFinite`].
-pub fn l1_distance(a: &[f64], b: &[f64]) -> Result<f64, RetrievalError> {
-    check::same("bag lengths", a.len(), b.len())?;
-    check::finite_slice("first bag", a)?;
-    check::finite_slice("second bag", b)?;
-    Ok(a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum())
-}
-
-/// The symmetric matrix of L1 distances between all pairs of bags (for [`crate::retrieval`]).
-///
-/// # Errors
-/// [`RetrievalError::Empty`], and those of [`l1_distance`].
-pub fn pairwise_l1(bags: &[Vec<f64>]) -> Result<Mat<f64>, RetrievalError> {
-    check::non_empty("bags", bags.len())?;
-    for bag in bags {
-        check::same("bag lengths", bags[0].len(), bag.len())?;
-        check::finite_slice("bag", bag)?;
-    }
-    let m = bags.len();
-    let rows: Vec<Vec<f64>> = (0..m)
-        .into_par_iter()
-        .map(|i| {
-            (0..m)
-                .map(|j| bags[i].iter().zip(&bags[j]).map(|(x, y)| (x - y).abs()).sum())
-                .collect()
-        })
-        .collect();
-    Ok(Mat::from_fn(m, m, |i, j| rows[i][j]))
 }
 
 /// `m` distinct indices of `0..n` (partial Fisher–Yates with SplitMix64), in increasing order.
@@ -289,8 +314,8 @@ fn row_major(m: MatRef<'_, f64>) -> Vec<f64> {
         .collect()
 }
 
-/// Median (mean of the two middle values for even length) of a non-empty slice.
-fn median(values: &mut [f64]) -> f64 {
+/// Median (mean of the two middle values for even length) of a non-empty slice (sorts it).
+pub(crate) fn median(values: &mut [f64]) -> f64 {
     values.sort_by(f64::total_cmp);
     let n = values.len();
     if n % 2 == 1 {

@@ -207,6 +207,35 @@ impl ShapeDescriptors {
         &self.operators
     }
 
+    /// The vertex areas `a = B·1` (row sums of the consistent mass, = barycentric lumped areas).
+    pub fn vertex_areas(&self) -> Vec<f64> {
+        crate::bof::vertex_areas(self.operators.mass.as_ref())
+    }
+
+    /// The surface area `A = 1ᵀB1` (paper, Eq. (3)).
+    pub fn area(&self) -> f64 {
+        self.vertex_areas().iter().sum()
+    }
+
+    /// Supplies a precomputed eigenbasis (e.g. from a cache) of (L, D) if `lumped`, else of
+    /// (L, B), with k columns for the k smallest eigenvalues (ascending).
+    ///
+    /// # Errors
+    /// [`RetrievalError::DimensionMismatch`] if it does not have n rows and
+    /// `min(eigenpairs, n)` columns.
+    pub fn set_eigenbasis(&mut self, lumped: bool, basis: Eigenbasis) -> Result<(), RetrievalError> {
+        let k = self.params.eigenpairs.min(self.operators.n());
+        crate::check::same("eigenbasis rows vs vertices", self.operators.n(), basis.vectors.nrows())?;
+        crate::check::same("eigenbasis columns vs eigenpairs", k, basis.vectors.ncols())?;
+        crate::check::same("eigenvalues vs eigenpairs", k, basis.values.len())?;
+        if lumped {
+            self.lumped = Some(basis);
+        } else {
+            self.wfem = Some(basis);
+        }
+        Ok(())
+    }
+
     /// The k smallest eigenpairs of (L, D) if `lumped`, else of (L, B), computed once.
     ///
     /// # Errors
@@ -241,10 +270,11 @@ impl ShapeDescriptors {
     /// [`heat_kernel_signature`] / [`scale_invariant_hks`].
     pub fn dense(&mut self, descriptor: Descriptor) -> Result<Mat<f64>, RetrievalError> {
         let params = self.params.clone();
+        let area = self.area();
         let basis = self.eigenbasis(descriptor.uses_lumped())?;
         let spectrum = Spectrum::new(&basis.values, basis.vectors.as_ref())?;
         match descriptor {
-            Descriptor::SiHks => scale_invariant_hks(&spectrum, &params.sihks),
+            Descriptor::SiHks => scale_invariant_hks(&spectrum.with_area(area)?, &params.sihks),
             _ => {
                 let normalization = if descriptor == Descriptor::Dhk3 {
                     SpectrumNormalization::MaxEigenvalue

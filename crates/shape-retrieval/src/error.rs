@@ -110,4 +110,49 @@ pub enum RetrievalError {
         /// The value returned.
         value: f64,
     },
+    /// A descriptor dimension has no spread over the training set, so it cannot be z-scored.
+    #[error("descriptor dimension {dimension} is constant ({value}) over the training descriptors, so it cannot be z-scored")]
+    ConstantDimension {
+        /// The dimension (column).
+        dimension: usize,
+        /// Its constant value.
+        value: f64,
+    },
+    /// A histogram bin is negative where a distance needs histograms (χ²).
+    #[error("{what} has a negative bin {value} at index {index}")]
+    NegativeBin {
+        /// Which input.
+        what: &'static str,
+        /// The bin.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// A failure on one named shape of a collection.
+    #[error("{name}: {source}")]
+    Shape {
+        /// The shape (e.g. its file).
+        name: String,
+        /// The failure.
+        source: Box<RetrievalError>,
+    },
+    /// A time window in units of the surface area was asked for, and the area is not known.
+    #[error("the time window is in units of the surface area: call Spectrum::with_area")]
+    AreaRequired,
+    /// A vocabulary or index (built here or read from storage) is inconsistent.
+    #[error("invalid {what}: {reason}")]
+    InvalidModel {
+        /// Which artifact (`index`, `vocabulary`).
+        what: &'static str,
+        /// What is wrong, naming the field (e.g. the entry and the bin).
+        reason: String,
+    },
+    /// Reading or writing a stored vocabulary or index failed.
+    #[error("{}: {reason}", path.display())]
+    Storage {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What went wrong.
+        reason: String,
+    },
 }

@@ -43,6 +43,7 @@ pub struct Spectrum<'a> {
     eigenvalues: &'a [f64],
     eigenvectors: MatRef<'a, f64>,
     mass_eigenvectors: Option<Mat<f64>>,
+    area: Option<f64>,
 }
 
 impl<'a> Spectrum<'a> {
@@ -74,7 +75,24 @@ impl<'a> Spectrum<'a> {
             eigenvalues,
             eigenvectors,
             mass_eigenvectors: None,
+            area: None,
         })
+    }
+
+    /// Attaches the surface area `A = 1ᵀB1` (the sum of the mass matrix, paper Eq. (3)), for
+    /// time windows in units of the area ([`crate::sihks::TimeUnit::Area`]).
+    ///
+    /// # Errors
+    /// [`RetrievalError::InvalidParameter`] unless the area is finite and positive.
+    pub fn with_area(mut self, area: f64) -> Result<Self, RetrievalError> {
+        check::positive("area", area)?;
+        self.area = Some(area);
+        Ok(self)
+    }
+
+    /// The surface area, if attached ([`Self::with_area`]).
+    pub fn area(&self) -> Option<f64> {
+        self.area
     }
 
     /// Attaches the mass matrix the eigenvectors are orthonormal against (n × n): the consistent

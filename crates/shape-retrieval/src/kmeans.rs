@@ -1,36 +1,14 @@
 //! Seeded k-means: k-means++ initialisation (Arthur & Vassilvitskii 2007) and Lloyd iterations.
 //!
 //! Minimises the inertia `Σ_x min_c ‖p(x) − m_c‖²` over k centres. Points are the rows of an
-//! n × d matrix. Fully deterministic for a given seed (own SplitMix64 generator; the parallel
+//! n × d matrix. Fully deterministic for a given seed ([`wfem_heat::rng::SplitMix64`] (the `shifted_solve` one); the parallel
 //! assignment step does not change the result).
 
 use crate::check;
 use crate::RetrievalError;
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
-
-/// SplitMix64 (Steele, Lea, Flood 2014): tiny, fast, good enough for seeding.
-#[derive(Clone, Debug)]
-pub(crate) struct SplitMix64(u64);
-
-impl SplitMix64 {
-    pub(crate) fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    pub(crate) fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1) with 53 random bits.
-    pub(crate) fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
+use wfem_heat::rng::SplitMix64;
 
 /// Options of [`kmeans`].
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -27,19 +27,24 @@
 pub mod bof;
 mod check;
 pub mod descriptor;
+pub mod distance;
 mod error;
 pub mod exact;
 pub mod features;
 pub mod hks;
 pub mod kmeans;
+pub mod model;
 pub mod retrieval;
 pub mod sihks;
+pub mod standardize;
+pub mod store;
 
-pub use bof::{l1_distance, pairwise_l1, vertex_areas, Vocabulary, VocabularyParams};
+pub use bof::{vertex_areas, Assignment, Vocabulary, VocabularyParams};
 pub use descriptor::{
     dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, ShapeDescriptors,
     DEFAULT_EIGENPAIRS,
 };
+pub use distance::{chi_squared_distance, l1_distance, pairwise_distances, pairwise_l1, BagDistance};
 pub use error::RetrievalError;
 pub use exact::{exact_signature, signature_by_method, truncation_bound, HksMethod, HksSource, DEFAULT_TRUNCATION_TOL};
 pub use features::{descriptor_distance, local_maxima, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
@@ -48,5 +53,12 @@ pub use hks::{
     TimeSampling,
 };
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
+pub use model::{
+    BagSettings, DescriptorSettings, DescriptorSpec, GlobalSignature, IndexEntry, Ranked, RetrievalIndex,
+    RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams, VertexWeights,
+    VocabularyModel,
+};
 pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
-pub use sihks::{scale_invariant_hks, SihksParams};
+pub use sihks::{scale_invariant_hks, SihksParams, TimeUnit};
+pub use standardize::Standardizer;
+pub use store::{IndexStore, JsonFile, VocabularyStore};

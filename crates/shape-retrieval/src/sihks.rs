@@ -1,8 +1,9 @@
 //! Scale-invariant heat kernel signature (SI-HKS; Bronstein & Kokkinos, CVPR 2010).
 //!
 //! Scaling a surface by β maps `h(x, t) → β⁻² h(x, β⁻² t)` (kernel-value convention; see
-//! [`crate::hks`] and the paper's Sect. 5: `K_t(βM) = K_{β⁻²t}(M)`). With logarithmic times
-//! `t = t₀ α^τ` this becomes a shift in τ plus an additive constant in `log h`:
+//! [`crate::hks`] and the paper's Sect. 5: `K_t(βM) = K_{β⁻²t}(M)`, from the scale covariance of
+//! the wFEM kernel Eq. (6)). With logarithmic times `t = t₀ α^τ` this becomes a shift in τ plus an
+//! additive constant in `log h`:
 //!
 //! 1. sample `h̃(x, τ) = log h(x, t₀ α^τ)` for τ = τ_min, τ_min + Δτ, …, τ_max (m samples);
 //! 2. take the forward difference `d_j = (h̃(τ_{j+1}) − h̃(τ_j))/Δτ` (j = 0 … m−2), which removes
@@ -11,19 +12,21 @@
 //!    `|D(ω)| = |Σ_j d_j e^{−2πi jω/(m−1)}|`, which removes the shift `2 log_α β`;
 //! 4. keep the first K frequencies ω = 0 … K−1 (ω = 0 included).
 //!
-//! Step 3 is exact for circular shifts only: invariance holds up to the part of the
-//! derivative that the shift moves out of the τ window. Choose the window so that
-//! `d_j → 0` at both ends, i.e. `t₀α^{τ_min} λ_max ≪ 1` (the HKS is still flat in t) and
-//! `t₀α^{τ_max} λ_2 ≫ 1` (only the constant mode is left), with room for the expected scale
-//! change on both sides. The derivative decays only like α^τ towards small τ (linearly in t),
-//! so leave more octaves below `1/λ_max` than above `1/λ_2`. Measured (test
-//! `sihks_is_scale_invariant_while_hks_is_not`): a full spectrum with λ_2 ≈ 2e−6, λ_max ≈ 4.6e−3
-//! and the default window changes by at most 4e−3 (relative, per vertex) under β ∈ {0.5, 2, 3},
-//! while the plain HKS at the same times changes by 0.7–2.7.
+//! **Time unit.** With an absolute unit t₀ ([`TimeUnit::Absolute`], Bronstein & Kokkinos' choice)
+//! step 3 is exact for circular shifts only: invariance holds up to the part of the derivative
+//! that the shift moves out of the τ window (measured: a shape ×0.1 changes the descriptor by
+//! 49 % with t₀ = 1). With the unit tied to the surface area, `t₀ = c·A` ([`TimeUnit::Area`],
+//! A = 1ᵀB1, the default), the samples of a shape scaled by β are `t = c β²A α^τ`, so
+//! `λ t` is unchanged and `log h` moves by the constant −2 log β only: steps 1–2 make the
+//! descriptor **exactly** scale invariant, with no shift at all, for any window (test
+//! `sihks_area_unit_is_exactly_scale_invariant`). Step 3 is then kept for its compact,
+//! smooth low-frequency summary of the decay curve.
 //!
-//! Defaults follow the SHREC'11 parameter file attributed to the authors: α = 2,
-//! τ ∈ [1, 25] in steps of 1/16 (385 samples), t₀ = 1, K = 6. These times assume TOSCA-like
-//! units (shapes of area ~10³–10⁶); for a unit-area shape choose t₀ ≈ 1e−5 or shift τ.
+//! **Default window** (area unit): α = 2, τ ∈ [−10, 2] in steps of 1/8 (97 samples), t₀ = A, K = 8.
+//! For a surface of area A, Weyl's law λ_k ≈ 4πk/A puts `t·λ_k = 4πk·2^τ`: the window starts
+//! where the 100th mode has `tλ ≈ 1.2` (the truncated spectrum of k = 100 eigenpairs is
+//! resolved from there on, NUMERICS §4) and ends at `t = 4A`, where only the constant mode is
+//! left on TOSCA-like shapes (λ₁A ≳ 5). Chosen by the measurements of docs/SHREC-RESULTS.md.
 
 use crate::check;
 use crate::hks::{signature_rows, HksConvention, Spectrum};
@@ -39,15 +42,15 @@ const VERTEX_BLOCK: usize = 4096;
 pub struct SihksParams {
     /// Logarithm base α of the time sampling `t = t₀ α^τ` (default 2).
     pub alpha: f64,
-    /// First τ (default 1).
+    /// First τ (default −10).
     pub tau_min: f64,
-    /// Last τ (default 25; included when `(tau_max − tau_min)/tau_step` is an integer).
+    /// Last τ (default 2; included when `(tau_max − tau_min)/tau_step` is an integer).
     pub tau_max: f64,
-    /// Step Δτ (default 1/16).
+    /// Step Δτ (default 1/8).
     pub tau_step: f64,
-    /// Time unit t₀ (default 1).
-    pub time_unit: f64,
-    /// Number K of Fourier magnitudes kept, frequencies 0 … K−1 (default 6).
+    /// Time unit t₀ (default `TimeUnit::Area(1.0)`: t₀ = A).
+    pub time_unit: TimeUnit,
+    /// Number K of Fourier magnitudes kept, frequencies 0 … K−1 (default 8).
     pub num_frequencies: usize,
     /// Which HKS diagonal is sampled (default [`HksConvention::KernelValue`]).
     pub convention: HksConvention,
@@ -57,22 +60,56 @@ impl Default for SihksParams {
     fn default() -> Self {
         Self {
             alpha: 2.0,
-            tau_min: 1.0,
-            tau_max: 25.0,
-            tau_step: 1.0 / 16.0,
-            time_unit: 1.0,
-            num_frequencies: 6,
+            tau_min: -10.0,
+            tau_max: 2.0,
+            tau_step: 1.0 / 8.0,
+            time_unit: TimeUnit::Area(1.0),
+            num_frequencies: 8,
             convention: HksConvention::KernelValue,
         }
     }
 }
 
-impl SihksParams {
-    /// The sampled times `t₀ α^τ_j`, j = 0 … m−1.
+/// The unit t₀ of the SI-HKS times `t = t₀ α^τ`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TimeUnit {
+    /// t₀ in the squared length units of the mesh (Bronstein & Kokkinos; scale invariant only
+    /// up to the window's ends).
+    Absolute(f64),
+    /// t₀ = c·A with A = 1ᵀB1 the surface area: exactly scale invariant (see the module docs).
+    Area(f64),
+}
+
+impl TimeUnit {
+    /// t₀ for a surface of the given area.
     ///
     /// # Errors
-    /// [`RetrievalError::InvalidParameter`] for α ≤ 1, a non-positive step or t₀, or τ_max < τ_min.
-    pub fn times(&self) -> Result<Vec<f64>, RetrievalError> {
+    /// [`RetrievalError::AreaRequired`] for [`TimeUnit::Area`] without an area,
+    /// [`RetrievalError::InvalidParameter`] for a non-positive factor or area.
+    pub fn resolve(self, area: Option<f64>) -> Result<f64, RetrievalError> {
+        match self {
+            TimeUnit::Absolute(t0) => {
+                check::positive("time_unit", t0)?;
+                Ok(t0)
+            }
+            TimeUnit::Area(c) => {
+                check::positive("time_unit (area factor)", c)?;
+                let area = area.ok_or(RetrievalError::AreaRequired)?;
+                check::positive("area", area)?;
+                Ok(c * area)
+            }
+        }
+    }
+}
+
+impl SihksParams {
+    /// The sampled times `t₀ α^τ_j`, j = 0 … m−1, for a surface of the given area (needed by
+    /// [`TimeUnit::Area`] only).
+    ///
+    /// # Errors
+    /// [`RetrievalError::InvalidParameter`] for α ≤ 1, a non-positive step or t₀, or τ_max < τ_min;
+    /// [`RetrievalError::AreaRequired`].
+    pub fn times(&self, area: Option<f64>) -> Result<Vec<f64>, RetrievalError> {
         if !(self.alpha.is_finite() && self.alpha > 1.0) {
             return Err(RetrievalError::InvalidParameter {
                 name: "alpha",
@@ -81,7 +118,7 @@ impl SihksParams {
             });
         }
         check::positive("tau_step", self.tau_step)?;
-        check::positive("time_unit", self.time_unit)?;
+        let t0 = self.time_unit.resolve(area)?;
         if !(self.tau_min.is_finite() && self.tau_max.is_finite() && self.tau_max >= self.tau_min) {
             return Err(RetrievalError::InvalidParameter {
                 name: "tau_max",
@@ -92,7 +129,7 @@ impl SihksParams {
         // The small slack keeps τ_max when the range is a whole number of steps up to round-off.
         let m = ((self.tau_max - self.tau_min) / self.tau_step + 1e-9).floor() as usize + 1;
         Ok((0..m)
-            .map(|j| self.time_unit * self.alpha.powf(self.tau_min + j as f64 * self.tau_step))
+            .map(|j| t0 * self.alpha.powf(self.tau_min + j as f64 * self.tau_step))
             .collect())
     }
 }
@@ -106,9 +143,10 @@ impl SihksParams {
 /// [`RetrievalError::InvalidParameter`] for bad parameters (see [`SihksParams::times`]) or
 /// `num_frequencies` not in 1 ..= (m−1)/2 + 1; [`RetrievalError::MassRequired`];
 /// [`RetrievalError::NonPositiveSignature`] if some h(x, t) ≤ 0 (e.g. a spectrum without the
-/// constant mode underflowing at large t), since its logarithm is undefined.
+/// constant mode underflowing at large t), since its logarithm is undefined;
+/// [`RetrievalError::AreaRequired`] for [`TimeUnit::Area`] without [`Spectrum::with_area`].
 pub fn scale_invariant_hks(spectrum: &Spectrum<'_>, params: &SihksParams) -> Result<Mat<f64>, RetrievalError> {
-    let times = params.times()?;
+    let times = params.times(spectrum.area())?;
     let m = times.len();
     let n_diff = m.saturating_sub(1);
     let max_k = n_diff / 2 + 1;

@@ -3,7 +3,11 @@
 //! enough for start vectors, k-means++ seeding and synthetic benchmark data, which is all the
 //! workspace needs (no `rand` dependency).
 
-/// SplitMix64 generator.
+/// SplitMix64 generator, with the second normal of each Box–Muller pair cached.
+///
+/// The state advances by the golden-ratio increment `0x9E37_79B9_7F4A_7C15` and every output
+/// is finalised by Stafford's "Mix13". Statistically adequate for seeding and sampling, not for
+/// cryptography.
 ///
 /// ```
 /// use shifted_solve::rng::SplitMix64;
@@ -12,26 +16,34 @@
 /// assert_eq!(a.next_u64(), b.next_u64()); // same seed, same stream
 /// let u = a.next_f64();
 /// assert!((0.0..1.0).contains(&u));
+/// // The first output for seed 0 (reference value of the published algorithm).
+/// assert_eq!(SplitMix64::new(0).next_u64(), 0xE220_A839_7B1D_CDAF);
 /// ```
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct SplitMix64(u64);
+#[derive(Clone, Debug, PartialEq)]
+pub struct SplitMix64 {
+    state: u64,
+    spare_normal: Option<f64>,
+}
 
 impl SplitMix64 {
-    /// A generator with the given seed.
+    /// A generator with the given seed (every seed, including 0, is valid).
     pub fn new(seed: u64) -> Self {
-        Self(seed)
+        Self {
+            state: seed,
+            spare_normal: None,
+        }
     }
 
     /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
+        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.state;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         z ^ (z >> 31)
     }
 
-    /// Uniform in [0, 1) with 53 random bits.
+    /// Uniform in [0, 1) with 53 random bits (the top 53 bits of [`Self::next_u64`]).
     pub fn next_f64(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
@@ -41,17 +53,55 @@ impl SplitMix64 {
         self.next_f64() - 0.5
     }
 
-    /// Uniform in `0..n` (n > 0; by rejection-free multiply-shift, bias < n/2⁶⁴).
+    /// Uniform integer in `0..n` by rejection (no modulo bias). `n = 0` returns 0.
     pub fn next_below(&mut self, n: usize) -> usize {
-        ((self.next_u64() as u128 * n as u128) >> 64) as usize
+        if n == 0 {
+            return 0;
+        }
+        let n = n as u64;
+        let zone = u64::MAX - u64::MAX % n;
+        loop {
+            let x = self.next_u64();
+            if x < zone {
+                return (x % n) as usize;
+            }
+        }
     }
 
-    /// A standard normal variate (Box–Muller; one of the pair is discarded).
+    /// A standard normal variate by the Box–Muller transform; the second value of each pair
+    /// is cached and returned by the next call.
     pub fn next_normal(&mut self) -> f64 {
+        if let Some(z) = self.spare_normal.take() {
+            return z;
+        }
         // 1 − u ∈ (0, 1], so the logarithm is finite.
         let u1 = 1.0 - self.next_f64();
         let u2 = self.next_f64();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+        let r = (-2.0 * u1.ln()).sqrt();
+        let phi = 2.0 * std::f64::consts::PI * u2;
+        self.spare_normal = Some(r * phi.sin());
+        r * phi.cos()
+    }
+
+    /// A uniformly distributed unit vector in ℝ³ (a normalised standard normal triple).
+    pub fn unit_vector(&mut self) -> [f64; 3] {
+        loop {
+            let v = [self.next_normal(), self.next_normal(), self.next_normal()];
+            let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            if l > 1e-9 {
+                return v.map(|c| c / l);
+            }
+        }
+    }
+
+    /// A uniformly random permutation of `0..n` (Fisher–Yates, drawing with
+    /// [`Self::next_below`]).
+    pub fn permutation(&mut self, n: usize) -> Vec<u32> {
+        let mut p: Vec<u32> = (0..n as u32).collect();
+        for i in (1..n).rev() {
+            p.swap(i, self.next_below(i + 1));
+        }
+        p
     }
 }
 

@@ -268,16 +268,6 @@ pub fn mesh(py: Python<'_>, e: &MeshError) -> PyErr {
             "MatrixMarketLine",
             fields!(path = path, line = *line, reason = message),
         ),
-        MeshError::MaskLength { len, n_vertices } => (
-            Class::InvalidInput,
-            "MaskLength",
-            fields!(len = *len, n_vertices = *n_vertices),
-        ),
-        MeshError::VertexIndex { index, n_vertices } => (
-            Class::InvalidInput,
-            "VertexIndex",
-            fields!(index = *index, n_vertices = *n_vertices),
-        ),
         other => {
             let kind = variant_name(&format!("{other:?}"));
             return raise(py, Class::Mesh, &kind, message, Vec::new());

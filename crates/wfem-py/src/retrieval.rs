@@ -64,7 +64,9 @@ fn sihks_params(py: Python<'_>, d: Option<&Bound<'_, PyDict>>) -> PyResult<Optio
             "tau_min" => p.tau_min = value.extract()?,
             "tau_max" => p.tau_max = value.extract()?,
             "tau_step" => p.tau_step = value.extract()?,
-            "time_unit" => p.time_unit = value.extract()?,
+            // t₀ in squared length units, or t₀ = c·area (exactly scale invariant).
+            "time_unit" => p.time_unit = shape_retrieval::sihks::TimeUnit::Absolute(value.extract()?),
+            "time_unit_area" => p.time_unit = shape_retrieval::sihks::TimeUnit::Area(value.extract()?),
             "num_frequencies" => p.num_frequencies = value.extract()?,
             "convention" => p.convention = crate::spectral::convention(py, &value.extract::<String>()?)?,
             other => {
@@ -72,7 +74,7 @@ fn sihks_params(py: Python<'_>, d: Option<&Bound<'_, PyDict>>) -> PyResult<Optio
                     py,
                     "sihks",
                     format!(
-                        "unknown option {other:?} (alpha, tau_min, tau_max, tau_step, time_unit, num_frequencies, convention)"
+                        "unknown option {other:?} (alpha, tau_min, tau_max, tau_step, time_unit, time_unit_area, num_frequencies, convention)"
                     ),
                 ))
             }

@@ -313,7 +313,7 @@ impl PyEigenbasis {
             tau_min,
             tau_max,
             tau_step,
-            time_unit,
+            time_unit: shape_retrieval::sihks::TimeUnit::Absolute(time_unit),
             num_frequencies,
             convention,
         };

@@ -2,5 +2,3 @@
 //! file; see README, "Running the tests"). Each module is one former `tests/<name>.rs`.
 
 mod bench_report;
-mod eval;
-mod shrec;

@@ -13,5 +13,4 @@ mod morse;
 mod mtx;
 mod operators;
 mod stats;
-mod transform;
 mod validate;

@@ -9,7 +9,7 @@ use mesh_fem::generate::bumpy;
 use mesh_fem::{assemble, AssemblyParams, LumpedMassKind};
 use shape_retrieval::{
     dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, RetrievalError, ShapeDescriptors,
-    SihksParams, TimeSampling,
+    SihksParams, TimeSampling, TimeUnit,
 };
 use wfem_heat::Eigenbasis;
 
@@ -20,10 +20,11 @@ fn params(k: usize) -> DescriptorParams {
         eigenpairs: k,
         times: TimeSampling::Explicit(TIMES.to_vec()),
         sihks: SihksParams {
-            time_unit: 1e-4,
+            time_unit: TimeUnit::Absolute(1e-4),
             tau_min: 0.0,
             tau_max: 24.0,
             tau_step: 0.25,
+            num_frequencies: 6,
             ..Default::default()
         },
         ..Default::default()

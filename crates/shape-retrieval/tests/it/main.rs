@@ -5,9 +5,13 @@ mod common;
 
 mod bof;
 mod descriptor;
+mod distance;
 mod exact;
 mod features;
 mod hks;
 mod kmeans;
+mod model;
 mod retrieval;
 mod sihks;
+mod standardize;
+mod store;

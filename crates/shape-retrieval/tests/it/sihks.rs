@@ -7,7 +7,22 @@ use faer::Mat;
 use mesh_fem::generate::bumpy;
 use shape_retrieval::{
     heat_kernel_signature, scale_invariant_hks, HksParams, RetrievalError, SihksParams, Spectrum, TimeSampling,
+    TimeUnit,
 };
+
+/// Bronstein & Kokkinos' absolute window (the SHREC'11 parameter file): t = 2^τ, τ ∈ [1, 25] in
+/// steps of 1/16, K = 6 — the default before issue #13.
+fn absolute() -> SihksParams {
+    SihksParams {
+        alpha: 2.0,
+        tau_min: 1.0,
+        tau_max: 25.0,
+        tau_step: 1.0 / 16.0,
+        time_unit: TimeUnit::Absolute(1.0),
+        num_frequencies: 6,
+        ..Default::default()
+    }
+}
 
 /// The spectrum of the mesh scaled by s: λ → λ/s², φ → φ/s (B → s²B).
 fn scaled(eigenvalues: &[f64], eigenvectors: &Mat<f64>, s: f64) -> (Vec<f64>, Mat<f64>) {
@@ -39,7 +54,7 @@ fn sihks_is_scale_invariant_while_hks_is_not() {
     // 8.6e−4 (3); the tolerance is 1e−2. Plain HKS at the same times changes by 0.7–2.7.
     let s = dense_spectrum(&bumpy(2));
     let (l1, x1) = scaled(&s.eigenvalues, &s.eigenvectors, 1000.0);
-    let params = SihksParams::default();
+    let params = absolute();
     let base = Spectrum::new(&l1, x1.as_ref()).unwrap();
     let si_base = scale_invariant_hks(&base, &params).unwrap();
     assert_eq!(si_base.ncols(), 6);
@@ -48,7 +63,7 @@ fn sihks_is_scale_invariant_while_hks_is_not() {
         let other = Spectrum::new(&l2, x2.as_ref()).unwrap();
         let si = scale_invariant_hks(&other, &params).unwrap();
         let si_change = max_row_rel_change(&si_base, &si);
-        let times = TimeSampling::Explicit(params.times().unwrap());
+        let times = TimeSampling::Explicit(params.times(None).unwrap());
         let hks_params = HksParams {
             times,
             ..Default::default()
@@ -71,10 +86,10 @@ fn sihks_matches_its_definition() {
     let params = SihksParams {
         tau_step: 0.25,
         num_frequencies: 4,
-        ..Default::default()
+        ..absolute()
     };
     let si = scale_invariant_hks(&spectrum, &params).unwrap();
-    let times = params.times().unwrap();
+    let times = params.times(None).unwrap();
     assert_eq!(times.len(), 97);
     assert_eq!(times[0], 2.0);
     assert!((times[96] - 2f64.powi(25)).abs() < 1e-6);
@@ -115,42 +130,42 @@ fn sihks_bad_parameters() {
     assert!(matches!(
         bad(SihksParams {
             alpha: 1.0,
-            ..Default::default()
+            ..absolute()
         }),
         Err(RetrievalError::InvalidParameter { name: "alpha", .. })
     ));
     assert!(matches!(
         bad(SihksParams {
             tau_step: 0.0,
-            ..Default::default()
+            ..absolute()
         }),
         Err(RetrievalError::InvalidParameter { name: "tau_step", .. })
     ));
     assert!(matches!(
         bad(SihksParams {
             tau_max: 0.0,
-            ..Default::default()
+            ..absolute()
         }),
         Err(RetrievalError::InvalidParameter { name: "tau_max", .. })
     ));
     assert!(matches!(
         bad(SihksParams {
             num_frequencies: 0,
-            ..Default::default()
+            ..absolute()
         }),
         Err(RetrievalError::InvalidParameter { .. })
     ));
     assert!(matches!(
         bad(SihksParams {
             num_frequencies: 1000,
-            ..Default::default()
+            ..absolute()
         }),
         Err(RetrievalError::InvalidParameter { .. })
     ));
     // Without the constant mode h(x, t) underflows to 0 at large t: the logarithm is undefined.
     let no_constant = Spectrum::new(&[5.0, 7.0], x.as_ref()).unwrap();
     assert!(matches!(
-        scale_invariant_hks(&no_constant, &SihksParams::default()),
+        scale_invariant_hks(&no_constant, &absolute()),
         Err(RetrievalError::NonPositiveSignature { .. })
     ));
 }
@@ -159,7 +174,7 @@ fn sihks_bad_parameters() {
 fn snapshot_sihks_on_bumpy() {
     let s = dense_spectrum(&bumpy(2));
     let (l, x) = scaled(&s.eigenvalues, &s.eigenvectors, 1000.0);
-    let si = scale_invariant_hks(&Spectrum::new(&l, x.as_ref()).unwrap(), &SihksParams::default()).unwrap();
+    let si = scale_invariant_hks(&Spectrum::new(&l, x.as_ref()).unwrap(), &absolute()).unwrap();
     let mut out = String::new();
     for i in (0..si.nrows()).step_by(16) {
         out += &format!("v{i:03}:");
@@ -184,7 +199,7 @@ fn sihks_rows_are_independent_across_vertex_blocks() {
             ((i * (k + 3)) as f64 * 0.37).sin() * 0.02
         }
     });
-    let params = SihksParams::default();
+    let params = absolute();
     let full = scale_invariant_hks(&Spectrum::new(&eigenvalues, x.as_ref()).unwrap(), &params).unwrap();
     let part = scale_invariant_hks(
         &Spectrum::new(&eigenvalues, x.as_ref().subrows(4090, 20)).unwrap(),
@@ -200,4 +215,68 @@ fn sihks_rows_are_independent_across_vertex_blocks() {
             );
         }
     }
+}
+
+#[test]
+fn sihks_area_unit_is_exactly_scale_invariant() {
+    // With t₀ = A the samples of the shape scaled by β are at t = β²A·2^τ, so λt is unchanged
+    // and log h moves by −2 ln β only: the descriptor is unchanged to rounding, for any β (the
+    // absolute unit of the test above changes by up to 4e−3 even inside its window).
+    let s = dense_spectrum(&bumpy(2));
+    let area: f64 = shape_retrieval::vertex_areas(s.ops.mass.as_ref()).iter().sum();
+    let params = SihksParams::default();
+    let base = Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref())
+        .unwrap()
+        .with_area(area)
+        .unwrap();
+    let si_base = scale_invariant_hks(&base, &params).unwrap();
+    assert_eq!(si_base.ncols(), params.num_frequencies);
+    for beta in [1e-3, 0.1, 0.5, 3.0, 1e4] {
+        let (l, x) = scaled(&s.eigenvalues, &s.eigenvectors, beta);
+        let other = Spectrum::new(&l, x.as_ref())
+            .unwrap()
+            .with_area(area * beta * beta)
+            .unwrap();
+        let change = max_row_rel_change(&si_base, &scale_invariant_hks(&other, &params).unwrap());
+        assert!(change < 1e-9, "β = {beta}: SI-HKS (area unit) changed by {change}");
+    }
+    // The area unit needs the area.
+    assert!(matches!(
+        scale_invariant_hks(
+            &Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref()).unwrap(),
+            &params
+        ),
+        Err(RetrievalError::AreaRequired)
+    ));
+    assert!(matches!(
+        Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref())
+            .unwrap()
+            .with_area(-1.0),
+        Err(RetrievalError::InvalidParameter { name: "area", .. })
+    ));
+    assert!(matches!(
+        TimeUnit::Area(0.0).resolve(Some(1.0)),
+        Err(RetrievalError::InvalidParameter { .. })
+    ));
+}
+
+#[test]
+fn snapshot_sihks_area_unit_on_bumpy() {
+    // The default window (area unit) on the unscaled bumpy sphere: a change of default shows here.
+    let s = dense_spectrum(&bumpy(2));
+    let area: f64 = shape_retrieval::vertex_areas(s.ops.mass.as_ref()).iter().sum();
+    let spectrum = Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref())
+        .unwrap()
+        .with_area(area)
+        .unwrap();
+    let si = scale_invariant_hks(&spectrum, &SihksParams::default()).unwrap();
+    let mut out = format!("{:?}\n", SihksParams::default());
+    for i in (0..si.nrows()).step_by(16) {
+        out += &format!("v{i:03}:");
+        for j in 0..si.ncols() {
+            out += &format!(" {}", sig(si[(i, j)], 5));
+        }
+        out.push('\n');
+    }
+    insta::assert_snapshot!("sihks_area_unit_bumpy2", out);
 }

@@ -7,5 +7,6 @@ mod backends;
 mod condition;
 mod eigen;
 mod errors;
+mod rng;
 mod singular;
 mod tables;

@@ -61,3 +61,33 @@ pub fn rel_err(a: &[f64], b: &[f64]) -> f64 {
 pub fn sig(v: f64, digits: usize) -> String {
     format!("{:.*e}", digits - 1, v)
 }
+
+/// Four small, distinct closed shapes for retrieval tests: a bumpy sphere, a round sphere, a
+/// torus and an ellipsoid (the sphere stretched 2.2 × 1 × 0.6), with their names.
+pub fn small_collection() -> Vec<(String, TriMesh)> {
+    use mesh_fem::generate::{bumpy, icosphere, torus};
+    let sphere = icosphere(2);
+    let ellipsoid = TriMesh::new(
+        sphere
+            .positions()
+            .iter()
+            .map(|p| [2.2 * p[0], p[1], 0.6 * p[2]])
+            .collect(),
+        sphere.faces().to_vec(),
+    )
+    .expect("a stretched sphere is a valid mesh");
+    vec![
+        ("bumpy".into(), bumpy(2)),
+        ("sphere".into(), sphere),
+        ("torus".into(), torus(1.0, 0.4, 24, 12)),
+        ("ellipsoid".into(), ellipsoid),
+    ]
+}
+
+/// Settings for fast tests: k = 30 eigenpairs, 6 words, otherwise the defaults.
+pub fn small_settings() -> shape_retrieval::RetrievalSettings {
+    let mut s = shape_retrieval::RetrievalSettings::default();
+    s.descriptor.eigenpairs = 30;
+    s.training.words = 6;
+    s
+}

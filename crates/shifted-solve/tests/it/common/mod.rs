@@ -4,26 +4,13 @@
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{c64, Mat, Side};
 
-/// SplitMix64: deterministic, dependency-free.
-pub struct Rng(pub u64);
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+/// The workspace generator (deterministic, dependency-free).
+pub use shifted_solve::rng::SplitMix64 as Rng;
 
 /// A random weighted graph Laplacian L (symmetric PSD, L·1 = 0, a ring plus random chords)
 /// and a random SPD B (diagonally dominant, ring pattern) — different sparsity patterns.
 pub fn random_pair(n: usize, seed: u64) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut lt = Vec::new();
     let add_edge = |i: usize, j: usize, w: f64, lt: &mut Vec<Triplet<usize, usize, f64>>| {
         lt.push(Triplet::new(i, j, -w));
@@ -32,21 +19,21 @@ pub fn random_pair(n: usize, seed: u64) -> (SparseColMat<usize, f64>, SparseColM
         lt.push(Triplet::new(j, j, w));
     };
     for i in 0..n {
-        let w = 0.5 + 10.0 * rng.uniform();
+        let w = 0.5 + 10.0 * rng.next_f64();
         add_edge(i, (i + 1) % n, w, &mut lt);
         let j = (rng.next_u64() % n as u64) as usize;
         if j != i {
-            let w = 5.0 * rng.uniform();
+            let w = 5.0 * rng.next_f64();
             add_edge(i, j, w, &mut lt);
         }
     }
     let l = SparseColMat::try_new_from_triplets(n, n, &lt).unwrap();
     let mut bt = Vec::new();
     for i in 0..n {
-        let off = 0.1 * rng.uniform();
+        let off = 0.1 * rng.next_f64();
         bt.push(Triplet::new(i, (i + 2) % n, off));
         bt.push(Triplet::new((i + 2) % n, i, off));
-        bt.push(Triplet::new(i, i, 0.5 + rng.uniform()));
+        bt.push(Triplet::new(i, i, 0.5 + rng.next_f64()));
     }
     let b = SparseColMat::try_new_from_triplets(n, n, &bt).unwrap();
     (l, b)
@@ -127,8 +114,8 @@ pub fn dense_shifted_solve(
 }
 
 pub fn random_rhs(n: usize, k: usize, seed: u64) -> Mat<f64> {
-    let mut rng = Rng(seed);
-    Mat::from_fn(n, k, |_, _| rng.uniform() - 0.5)
+    let mut rng = Rng::new(seed);
+    Mat::from_fn(n, k, |_, _| rng.next_f64() - 0.5)
 }
 
 /// max_ij |a − b| / max_ij |b|.

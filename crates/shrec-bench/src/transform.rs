@@ -1,8 +1,8 @@
 //! Mesh surgery with vertex bookkeeping: graph geodesics, subsetting, welding and QEM
 //! half-edge collapse.
 //!
-//! These are the building blocks of the SHREC'10-style benchmark generator (`cargo xtask
-//! shrec`, paper Sect. 5), kept here so that other crates can reuse them:
+//! These are the building blocks of the SHREC'10-style benchmark generator ([`crate::synth`],
+//! `cargo xtask shrec`, paper Sect. 5):
 //!
 //! * [`EdgeGraph`]: the edge graph of a mesh with Euclidean edge lengths; multi-source
 //!   Dijkstra ([`EdgeGraph::distances`]) gives graph geodesics d_g, which overestimate the
@@ -16,8 +16,9 @@
 //! Every routine that changes the vertex set returns a [`DerivedMesh`]: the new mesh and, for
 //! every new vertex, the index of the input vertex it comes from (a ground-truth map).
 
-use crate::mesh::{cross, dot, norm, sub};
-use crate::{MeshError, TriMesh};
+use crate::geometry::{cross, dot, norm, sub};
+use crate::BenchError;
+use mesh_fem::TriMesh;
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap, HashSet};
 
@@ -47,18 +48,18 @@ impl DerivedMesh {
     }
 }
 
-fn check_vertex(index: u32, n_vertices: usize) -> Result<(), MeshError> {
+fn check_vertex(index: u32, n_vertices: usize) -> Result<(), BenchError> {
     if (index as usize) < n_vertices {
         Ok(())
     } else {
-        Err(MeshError::VertexIndex { index, n_vertices })
+        Err(BenchError::VertexIndex { index, n_vertices })
     }
 }
 
 /// Length of the diagonal of the axis-aligned bounding box, a cheap stand-in for the shape
 /// diameter (within a factor √3 of the extrinsic diameter).
 pub fn bounding_box_diagonal(mesh: &TriMesh) -> f64 {
-    crate::validate::bbox_diagonal(mesh.positions())
+    mesh_fem::stats(mesh).bbox_diagonal
 }
 
 /// Area-weighted unit vertex normals n(v) = Σ_{T∋v} (b − a) × (c − a) / ‖·‖ (outward for
@@ -155,8 +156,8 @@ impl EdgeGraph {
     /// pass `f64::INFINITY` for no cutoff. Runs in O((V + E) log V) over the visited part.
     ///
     /// # Errors
-    /// [`MeshError::VertexIndex`] if a source is out of range.
-    pub fn distances(&self, sources: &[u32], cutoff: f64) -> Result<Vec<f64>, MeshError> {
+    /// [`BenchError::VertexIndex`] if a source is out of range.
+    pub fn distances(&self, sources: &[u32], cutoff: f64) -> Result<Vec<f64>, BenchError> {
         let n = self.n_vertices();
         let mut dist = vec![f64::INFINITY; n];
         let mut heap = BinaryHeap::new();
@@ -187,8 +188,8 @@ impl EdgeGraph {
     /// `u32::MAX`.
     ///
     /// # Errors
-    /// [`MeshError::VertexIndex`] if a source is out of range.
-    pub fn hops(&self, sources: &[u32], max_hops: u32) -> Result<Vec<u32>, MeshError> {
+    /// [`BenchError::VertexIndex`] if a source is out of range.
+    pub fn hops(&self, sources: &[u32], max_hops: u32) -> Result<Vec<u32>, BenchError> {
         let n = self.n_vertices();
         let mut hop = vec![u32::MAX; n];
         let mut frontier = Vec::new();
@@ -247,7 +248,7 @@ impl UnionFind {
 
 /// Compacts `faces` (indices into `positions`): keeps the vertices some face uses, in
 /// increasing index order, and reindexes.
-fn compact(positions: &[[f64; 3]], faces: Vec<[u32; 3]>) -> Result<DerivedMesh, MeshError> {
+fn compact(positions: &[[f64; 3]], faces: Vec<[u32; 3]>) -> Result<DerivedMesh, BenchError> {
     let mut new_index = vec![u32::MAX; positions.len()];
     for f in &faces {
         for &v in f {
@@ -276,11 +277,11 @@ fn compact(positions: &[[f64; 3]], faces: Vec<[u32; 3]>) -> Result<DerivedMesh, 
 /// in increasing order of their source index.
 ///
 /// # Errors
-/// [`MeshError::MaskLength`] if `keep.len() != mesh.n_vertices()`, [`MeshError::Empty`] if no
+/// [`BenchError::MaskLength`] if `keep.len() != mesh.n_vertices()`, [`mesh_fem::MeshError::Empty`] (as [`BenchError::Mesh`]) if no
 /// face survives.
-pub fn submesh(mesh: &TriMesh, keep: &[bool]) -> Result<DerivedMesh, MeshError> {
+pub fn submesh(mesh: &TriMesh, keep: &[bool]) -> Result<DerivedMesh, BenchError> {
     if keep.len() != mesh.n_vertices() {
-        return Err(MeshError::MaskLength {
+        return Err(BenchError::MaskLength {
             len: keep.len(),
             n_vertices: mesh.n_vertices(),
         });
@@ -299,7 +300,7 @@ pub fn submesh(mesh: &TriMesh, keep: &[bool]) -> Result<DerivedMesh, MeshError> 
 ///
 /// # Errors
 /// None in practice for a valid [`TriMesh`]; the error type is that of [`submesh`].
-pub fn largest_component(mesh: &TriMesh) -> Result<DerivedMesh, MeshError> {
+pub fn largest_component(mesh: &TriMesh) -> Result<DerivedMesh, BenchError> {
     let n = mesh.n_vertices();
     let mut uf = UnionFind::new(n);
     for &[a, b, c] in mesh.faces() {
@@ -331,9 +332,9 @@ pub fn largest_component(mesh: &TriMesh) -> Result<DerivedMesh, MeshError> {
 /// "topology" class. `source_vertex` names the representative of each merged class.
 ///
 /// # Errors
-/// [`MeshError::VertexIndex`] for a pair index out of range, [`MeshError::Empty`] if no face
+/// [`BenchError::VertexIndex`] for a pair index out of range, [`mesh_fem::MeshError::Empty`] (as [`BenchError::Mesh`]) if no face
 /// survives.
-pub fn weld_vertices(mesh: &TriMesh, pairs: &[[u32; 2]]) -> Result<DerivedMesh, MeshError> {
+pub fn weld_vertices(mesh: &TriMesh, pairs: &[[u32; 2]]) -> Result<DerivedMesh, BenchError> {
     let n = mesh.n_vertices();
     let mut uf = UnionFind::new(n);
     for &[a, b] in pairs {
@@ -497,8 +498,8 @@ impl QemDecimator {
     /// every vertex.
     ///
     /// # Errors
-    /// [`MeshError::Invalid`] if a parameter is not finite or out of range.
-    pub fn new(mesh: &TriMesh, params: QemParams) -> Result<Self, MeshError> {
+    /// [`BenchError::Argument`] if a parameter is not finite or out of range.
+    pub fn new(mesh: &TriMesh, params: QemParams) -> Result<Self, BenchError> {
         let ok = params.length_weight >= 0.0
             && params.length_weight.is_finite()
             && params.min_normal_cos > -1.0
@@ -506,9 +507,7 @@ impl QemDecimator {
             && params.min_quality >= 0.0
             && params.min_quality < 1.0;
         if !ok {
-            return Err(MeshError::Invalid {
-                reason: format!("QEM parameters out of range: {params:?}"),
-            });
+            return Err(BenchError::Argument(format!("QEM parameters out of range: {params:?}")));
         }
         let n = mesh.n_vertices();
         let positions = mesh.positions().to_vec();
@@ -735,8 +734,8 @@ impl QemDecimator {
     /// index as `source_vertex`.
     ///
     /// # Errors
-    /// [`MeshError::Empty`] if no face is left (not reachable through allowed collapses).
-    pub fn snapshot(&self) -> Result<DerivedMesh, MeshError> {
+    /// [`mesh_fem::MeshError::Empty`] (as [`BenchError::Mesh`]) if no face is left (not reachable through allowed collapses).
+    pub fn snapshot(&self) -> Result<DerivedMesh, BenchError> {
         let faces: Vec<[u32; 3]> = self
             .faces
             .iter()
@@ -753,7 +752,7 @@ impl QemDecimator {
 ///
 /// # Errors
 /// Those of [`QemDecimator::new`] and [`QemDecimator::snapshot`].
-pub fn qem_decimate(mesh: &TriMesh, target: usize) -> Result<DerivedMesh, MeshError> {
+pub fn qem_decimate(mesh: &TriMesh, target: usize) -> Result<DerivedMesh, BenchError> {
     let mut dec = QemDecimator::new(mesh, QemParams::default())?;
     dec.collapse_to(target);
     dec.snapshot()

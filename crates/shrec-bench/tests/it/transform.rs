@@ -1,11 +1,12 @@
-//! Tests of `mesh_fem::transform` against independent brute-force references.
+//! Tests of `shrec_bench::transform` against independent brute-force references.
 
 use mesh_fem::generate::{bumpy, grid, icosphere, irregular_sphere};
-use mesh_fem::transform::{
+use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
+use shrec_bench::transform::{
     close_pairs, largest_component, qem_decimate, submesh, vertex_normals, weld_vertices, EdgeGraph, QemDecimator,
     QemParams,
 };
-use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
+use shrec_bench::BenchError;
 use std::collections::{BTreeMap, HashMap};
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -160,9 +161,9 @@ fn edge_graph_basics_and_errors() {
     assert_eq!(g.neighbors(0).len(), 5); // icosahedron corners keep valence 5
     assert!(matches!(
         g.distances(&[m.n_vertices() as u32], 1.0),
-        Err(MeshError::VertexIndex { .. })
+        Err(BenchError::VertexIndex { .. })
     ));
-    assert!(matches!(g.hops(&[u32::MAX], 1), Err(MeshError::VertexIndex { .. })));
+    assert!(matches!(g.hops(&[u32::MAX], 1), Err(BenchError::VertexIndex { .. })));
 }
 
 #[test]
@@ -186,10 +187,10 @@ fn submesh_keeps_faces_inside_the_mask() {
     }
     assert!(d.source_vertex.windows(2).all(|w| w[0] < w[1]));
     assert!(assemble(&d.mesh, &AssemblyParams::default()).is_ok());
-    assert!(matches!(submesh(&m, &keep[1..]), Err(MeshError::MaskLength { .. })));
+    assert!(matches!(submesh(&m, &keep[1..]), Err(BenchError::MaskLength { .. })));
     assert!(matches!(
         submesh(&m, &vec![false; m.n_vertices()]),
-        Err(MeshError::Empty { .. })
+        Err(BenchError::Mesh(MeshError::Empty { .. }))
     ));
 }
 
@@ -267,11 +268,11 @@ fn welding_merges_pairs_and_drops_collapsed_faces() {
     assert!(!d.source_vertex.contains(&30) && !d.source_vertex.contains(&40));
     assert!(matches!(
         weld_vertices(&m, &[[0, 10_000]]),
-        Err(MeshError::VertexIndex { .. })
+        Err(BenchError::VertexIndex { .. })
     ));
 }
 
-fn check_decimation(m: &TriMesh, d: &mesh_fem::transform::DerivedMesh) {
+fn check_decimation(m: &TriMesh, d: &shrec_bench::transform::DerivedMesh) {
     assert!(d.source_vertex.windows(2).all(|w| w[0] < w[1]));
     for (i, &s) in d.source_vertex.iter().enumerate() {
         assert_eq!(d.mesh.positions()[i], m.positions()[s as usize], "survivor {s} moved");
@@ -371,5 +372,5 @@ fn qem_is_nested_and_rejects_bad_parameters() {
         min_normal_cos: 2.0,
         ..QemParams::default()
     };
-    assert!(matches!(QemDecimator::new(&m, bad), Err(MeshError::Invalid { .. })));
+    assert!(matches!(QemDecimator::new(&m, bad), Err(BenchError::Argument(_))));
 }

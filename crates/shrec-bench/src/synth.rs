@@ -5,7 +5,7 @@
 //! the real-pose class `pose`, × 5 strengths,
 //! each with a ground-truth map from every new vertex to a base vertex.
 //!
-//! All randomness comes from [`SplitMix64`], seeded from (seed, shape, class) — **not** from
+//! All randomness comes from [`wfem_heat::rng::SplitMix64`], seeded from (seed, shape, class) — **not** from
 //! the strength — so that the five strengths of a class share their random choices (the
 //! same joint, the same hole centres in the same order, the same noise vector, …) and the
 //! amount of change grows monotonically with the strength.
@@ -23,123 +23,22 @@
 //! | `noise` | x ← x + σz, z ~ N(0, I₃) per vertex | σ = 0.1·s·ℓ̄ |
 //! | `shotnoise` | a random fraction p of the vertices moves by ±a·n̂ (random sign) | p = 0.5 %·s, a = 5ℓ̄ |
 //! | `pose` | another TOSCA pose of the family (real near-isometry); ground truth from `corres/*.vts`, −1 where unknown | rank round((s−1)(m−1)/4) of the m poses sorted by Kabsch RMS deformation |
-//! | `sampling` | QEM half-edge collapse ([`mesh_fem::transform::QemDecimator`]); survivors keep positions | keep 80, 60, 40, 20, 10 % |
+//! | `sampling` | QEM half-edge collapse ([`crate::transform::QemDecimator`]); survivors keep positions | keep 80, 60, 40, 20, 10 % |
 //!
 //! Every output is validated before it is written ([`validate_output`]).
 
-use mesh_fem::transform::{
+use crate::geometry::{cross, dot, norm, sub};
+use crate::transform::{
     bounding_box_diagonal, close_pairs, largest_component, submesh, vertex_normals, weld_vertices, DerivedMesh,
     EdgeGraph, QemDecimator, QemParams,
 };
+use crate::BenchError;
 use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::path::{Path, PathBuf};
-
-/// Errors of the generator.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum ShrecError {
-    /// A mesh routine failed (reading, writing, surgery or assembly).
-    #[error(transparent)]
-    Mesh(#[from] MeshError),
-    /// A generated mesh failed validation.
-    #[error("{shape} {class} strength {strength}: invalid output: {reason}")]
-    InvalidOutput {
-        /// Base shape name.
-        shape: String,
-        /// Transformation class.
-        class: String,
-        /// Strength 1…5.
-        strength: u8,
-        /// What is wrong.
-        reason: String,
-    },
-    /// A bad command-line or API argument.
-    #[error("{0}")]
-    Argument(String),
-    /// Writing the manifest failed.
-    #[error("manifest: {0}")]
-    Json(#[from] serde_json::Error),
-}
-
-/// The SplitMix64 generator (Steele, Lea, Flood 2014): a 64-bit state advanced by the golden
-/// ratio increment and finalised by Stafford's "Mix13". Deterministic on every platform.
-#[derive(Clone, Debug)]
-pub struct SplitMix64 {
-    state: u64,
-    spare_normal: Option<f64>,
-}
-
-impl SplitMix64 {
-    /// A generator with the given seed.
-    pub fn new(seed: u64) -> Self {
-        Self {
-            state: seed,
-            spare_normal: None,
-        }
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1) with 53 random bits.
-    pub fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// Uniform integer in 0..n (n > 0), by rejection (no modulo bias).
-    pub fn below(&mut self, n: usize) -> usize {
-        let n = n as u64;
-        let zone = u64::MAX - u64::MAX % n;
-        loop {
-            let x = self.next_u64();
-            if x < zone {
-                return (x % n) as usize;
-            }
-        }
-    }
-
-    /// Standard normal by the Box–Muller transform (the second value of each pair is cached).
-    pub fn normal(&mut self) -> f64 {
-        if let Some(z) = self.spare_normal.take() {
-            return z;
-        }
-        let u1 = 1.0 - self.uniform(); // (0, 1]: ln is finite
-        let u2 = self.uniform();
-        let r = (-2.0 * u1.ln()).sqrt();
-        let phi = 2.0 * std::f64::consts::PI * u2;
-        self.spare_normal = Some(r * phi.sin());
-        r * phi.cos()
-    }
-
-    /// A uniformly distributed unit vector in R³.
-    pub fn unit_vector(&mut self) -> [f64; 3] {
-        loop {
-            let v = [self.normal(), self.normal(), self.normal()];
-            let l = norm(v);
-            if l > 1e-9 {
-                return v.map(|c| c / l);
-            }
-        }
-    }
-
-    /// A uniformly random permutation of 0..n (Fisher–Yates).
-    pub fn permutation(&mut self, n: usize) -> Vec<u32> {
-        let mut p: Vec<u32> = (0..n as u32).collect();
-        for i in (1..n).rev() {
-            p.swap(i, self.below(i + 1));
-        }
-        p
-    }
-}
+use wfem_heat::rng::SplitMix64;
 
 /// The seed of the random stream of one (shape, class): FNV-1a of the names mixed into the
 /// global seed. The strength is deliberately left out (see the module documentation).
@@ -226,14 +125,14 @@ impl Class {
     /// Parses a class name (as printed by [`Class::name`]).
     ///
     /// # Errors
-    /// [`ShrecError::Argument`] listing the known names.
-    pub fn from_name(name: &str) -> Result<Class, ShrecError> {
+    /// [`BenchError::Argument`] listing the known names.
+    pub fn from_name(name: &str) -> Result<Class, BenchError> {
         Class::ALL
             .into_iter()
             .find(|c| c.name() == name.trim().to_ascii_lowercase())
             .ok_or_else(|| {
                 let names: Vec<_> = Class::ALL.iter().map(|c| c.name()).collect();
-                ShrecError::Argument(format!("unknown class {name:?}; known: {}", names.join(", ")))
+                BenchError::Argument(format!("unknown class {name:?}; known: {}", names.join(", ")))
             })
     }
 }
@@ -308,29 +207,8 @@ pub fn parameter_table() -> serde_json::Value {
         "noise": {"recipe": "x <- x + sigma z, z ~ N(0, I3)", "sigma_mean_edge": per(&|s| json!(noise_sigma(s)))},
         "shotnoise": {"recipe": "a random fraction of the vertices moves by +-amplitude along the unit vertex normal", "amplitude_mean_edge": SHOT_AMPLITUDE, "fraction": per(&|s| json!(shot_fraction(s)))},
         "pose": {"recipe": "another TOSCA pose of the same family; poses sorted by deformation = Kabsch-aligned RMS distance of corresponding points / D; strength s takes rank round((s-1)(m-1)/4) of m poses; ground truth from corres/*.vts (row i of two files = same point), -1 where no row names the vertex"},
-        "sampling": {"recipe": "QEM half-edge collapse (mesh_fem::transform::QemDecimator, default QemParams); surviving vertices keep position and identity", "keep_fraction": SAMPLING_KEEP},
+        "sampling": {"recipe": "QEM half-edge collapse (shrec_bench::transform::QemDecimator, default QemParams); surviving vertices keep position and identity", "keep_fraction": SAMPLING_KEEP},
     })
-}
-
-#[inline]
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-#[inline]
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-#[inline]
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-#[inline]
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }
 
 /// A base (null) shape with the quantities every transformation needs.
@@ -366,9 +244,9 @@ pub struct Pose {
 }
 
 /// Reads a `.vts` file: one 1-based vertex index per line.
-fn read_vts(path: &Path, n_vertices: usize) -> Result<Vec<u32>, ShrecError> {
+fn read_vts(path: &Path, n_vertices: usize) -> Result<Vec<u32>, BenchError> {
     let text = std::fs::read_to_string(path).map_err(|source| {
-        ShrecError::Mesh(MeshError::Io {
+        BenchError::Mesh(MeshError::Io {
             path: path.to_path_buf(),
             source,
         })
@@ -378,10 +256,10 @@ fn read_vts(path: &Path, n_vertices: usize) -> Result<Vec<u32>, ShrecError> {
         .filter(|(_, l)| !l.trim().is_empty())
         .map(|(i, l)| {
             let v: usize = l.trim().parse().map_err(|_| {
-                ShrecError::Argument(format!("{}:{}: not a vertex index: {l:?}", path.display(), i + 1))
+                BenchError::Argument(format!("{}:{}: not a vertex index: {l:?}", path.display(), i + 1))
             })?;
             if v == 0 || v > n_vertices {
-                return Err(ShrecError::Argument(format!(
+                return Err(BenchError::Argument(format!(
                     "{}:{}: 1-based index {v} outside 1..={n_vertices}",
                     path.display(),
                     i + 1
@@ -430,7 +308,7 @@ impl BaseShape {
     ///
     /// # Errors
     /// Unreadable pose or `.vts` files. A base without a `.vts` file simply has no poses.
-    pub fn load_poses(&mut self, base_file: &Path) -> Result<(), ShrecError> {
+    pub fn load_poses(&mut self, base_file: &Path) -> Result<(), BenchError> {
         let dir = base_file.parent().unwrap_or(Path::new("."));
         let family = self.name.trim_end_matches(|c: char| c.is_ascii_digit()).to_string();
         let base_vts_path = dir.join("corres").join(format!("{}.vts", self.name));
@@ -439,7 +317,7 @@ impl BaseShape {
         }
         let base_vts = read_vts(&base_vts_path, self.mesh.n_vertices())?;
         let entries = std::fs::read_dir(dir).map_err(|source| {
-            ShrecError::Mesh(MeshError::Io {
+            BenchError::Mesh(MeshError::Io {
                 path: dir.to_path_buf(),
                 source,
             })
@@ -465,7 +343,7 @@ impl BaseShape {
                 mesh_fem::io::load(&dir.join(format!("{name}.off")), &mesh_fem::io::LoadOptions::default())?;
             let vts = read_vts(&vts_path, mesh.n_vertices())?;
             if vts.len() != base_vts.len() {
-                return Err(ShrecError::Argument(format!(
+                return Err(BenchError::Argument(format!(
                     "{} has {} rows but {} has {}",
                     vts_path.display(),
                     vts.len(),
@@ -497,13 +375,13 @@ impl BaseShape {
     /// Prepares a base shape.
     ///
     /// # Errors
-    /// [`ShrecError::Argument`] if the mesh has no extent or no edges.
-    pub fn new(name: &str, mesh: TriMesh) -> Result<Self, ShrecError> {
+    /// [`BenchError::Argument`] if the mesh has no extent or no edges.
+    pub fn new(name: &str, mesh: TriMesh) -> Result<Self, BenchError> {
         let graph = EdgeGraph::new(&mesh);
         let diameter = bounding_box_diagonal(&mesh);
         let mean_edge = graph.mean_edge_length();
         if !(diameter > 0.0 && mean_edge > 0.0) {
-            return Err(ShrecError::Argument(format!("base shape {name} has no extent")));
+            return Err(BenchError::Argument(format!("base shape {name} has no extent")));
         }
         Ok(Self {
             name: name.to_string(),
@@ -539,7 +417,7 @@ fn from_derived(d: DerivedMesh, params: serde_json::Value) -> Transformed {
     }
 }
 
-fn moved(base: &BaseShape, positions: Vec<[f64; 3]>, params: serde_json::Value) -> Result<Transformed, ShrecError> {
+fn moved(base: &BaseShape, positions: Vec<[f64; 3]>, params: serde_json::Value) -> Result<Transformed, BenchError> {
     let n = positions.len();
     Ok(Transformed {
         mesh: TriMesh::new(positions, base.mesh.faces().to_vec())?,
@@ -566,10 +444,10 @@ fn smoothstep(t: f64) -> f64 {
 /// `seed` is the global seed; the random stream is [`stream_seed`]`(seed, base.name, class)`.
 ///
 /// # Errors
-/// [`ShrecError::Argument`] for a strength outside 1…5, and mesh errors of the surgery.
-pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Transformed, ShrecError> {
+/// [`BenchError::Argument`] for a strength outside 1…5, and mesh errors of the surgery.
+pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Transformed, BenchError> {
     if !(1..=5).contains(&s) {
-        return Err(ShrecError::Argument(format!("strength {s} is outside 1..=5")));
+        return Err(BenchError::Argument(format!("strength {s} is outside 1..=5")));
     }
     let mut rng = SplitMix64::new(stream_seed(seed, &base.name, class));
     let p = base.mesh.positions();
@@ -579,7 +457,7 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
         Class::Pose => {
             let m = base.poses.len();
             if m == 0 {
-                return Err(ShrecError::Argument(format!(
+                return Err(BenchError::Argument(format!(
                     "{}: no other poses with ground truth were loaded (see BaseShape::load_poses)",
                     base.name
                 )));
@@ -593,7 +471,7 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
             })
         }
         Class::Isometry => {
-            let c = p[rng.below(n)];
+            let c = p[rng.next_below(n)];
             let m = rng.unit_vector();
             // Axis: a random direction projected into the joint plane.
             let axis = loop {
@@ -628,7 +506,7 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
             firsts.dedup();
             let far: Vec<Vec<[u32; 2]>> = firsts
                 .par_iter()
-                .map(|&i| -> Result<Vec<[u32; 2]>, MeshError> {
+                .map(|&i| -> Result<Vec<[u32; 2]>, BenchError> {
                     let dist = base.graph.distances(&[i], min_graph)?;
                     let lo = pairs.partition_point(|pr| pr[0] < i);
                     let hi = pairs.partition_point(|pr| pr[0] <= i);
@@ -732,7 +610,7 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
             })
         }
         Class::LocalScale => {
-            let ci = rng.below(n) as u32;
+            let ci = rng.next_below(n) as u32;
             let c = p[ci as usize];
             let beta = local_scale_factor(s);
             let rho = LOCAL_SCALE_WIDTH * d;
@@ -757,7 +635,7 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
             let positions = p
                 .iter()
                 .map(|&x| {
-                    let z = [rng.normal(), rng.normal(), rng.normal()];
+                    let z = [rng.next_normal(), rng.next_normal(), rng.next_normal()];
                     [0, 1, 2].map(|k| x[k] + sigma * z[k])
                 })
                 .collect();
@@ -924,7 +802,7 @@ pub struct Manifest {
     pub outputs: Vec<ManifestEntry>,
 }
 
-fn base_file(meshes_dir: &Path, name: &str) -> Result<(String, PathBuf), ShrecError> {
+fn base_file(meshes_dir: &Path, name: &str) -> Result<(String, PathBuf), BenchError> {
     let stem = if name.ends_with(|c: char| c.is_ascii_digit()) {
         name.to_string()
     } else {
@@ -941,10 +819,10 @@ fn base_file(meshes_dir: &Path, name: &str) -> Result<(String, PathBuf), ShrecEr
         .iter()
         .find(|p| p.is_file())
         .map(|p| (stem.clone(), p.clone()))
-        .ok_or_else(|| ShrecError::Argument(format!("no base mesh for {name:?}: tried {candidates:?}")))
+        .ok_or_else(|| BenchError::Argument(format!("no base mesh for {name:?}: tried {candidates:?}")))
 }
 
-fn write_gt(path: &Path, gt: &[i64]) -> Result<(), ShrecError> {
+fn write_gt(path: &Path, gt: &[i64]) -> Result<(), BenchError> {
     mesh_fem::io::write_atomic(path, |w| {
         let mut s = String::with_capacity(gt.len() * 6);
         for g in gt {
@@ -956,9 +834,9 @@ fn write_gt(path: &Path, gt: &[i64]) -> Result<(), ShrecError> {
     Ok(())
 }
 
-fn make_dir(dir: &Path) -> Result<(), ShrecError> {
+fn make_dir(dir: &Path) -> Result<(), BenchError> {
     std::fs::create_dir_all(dir).map_err(|source| {
-        ShrecError::Mesh(MeshError::Io {
+        BenchError::Mesh(MeshError::Io {
             path: dir.to_path_buf(),
             source,
         })
@@ -970,9 +848,9 @@ fn make_dir(dir: &Path) -> Result<(), ShrecError> {
 ///
 /// # Errors
 /// The first failure: bad options, unreadable base, failed validation or write error.
-pub fn generate(opts: &GenerateOptions) -> Result<Manifest, ShrecError> {
+pub fn generate(opts: &GenerateOptions) -> Result<Manifest, BenchError> {
     if let Some(&s) = opts.strengths.iter().find(|s| !(1..=5).contains(*s)) {
-        return Err(ShrecError::Argument(format!("strength {s} is outside 1..=5")));
+        return Err(BenchError::Argument(format!("strength {s} is outside 1..=5")));
     }
     make_dir(&opts.out_dir)?;
     let mut bases = Vec::new();
@@ -991,7 +869,7 @@ pub fn generate(opts: &GenerateOptions) -> Result<Manifest, ShrecError> {
             params: json!({}),
         };
         validate_output(&null, shape.mesh.n_vertices(), shape.diameter).map_err(|reason| {
-            ShrecError::InvalidOutput {
+            BenchError::InvalidOutput {
                 shape: stem.clone(),
                 class: "null".into(),
                 strength: 0,
@@ -1024,10 +902,10 @@ pub fn generate(opts: &GenerateOptions) -> Result<Manifest, ShrecError> {
     }
     let mut outputs = tasks
         .par_iter()
-        .map(|&(b, class, s)| -> Result<ManifestEntry, ShrecError> {
+        .map(|&(b, class, s)| -> Result<ManifestEntry, BenchError> {
             let base = &shapes[b];
             let t = transform(base, class, s, opts.seed)?;
-            validate_output(&t, base.mesh.n_vertices(), base.diameter).map_err(|reason| ShrecError::InvalidOutput {
+            validate_output(&t, base.mesh.n_vertices(), base.diameter).map_err(|reason| BenchError::InvalidOutput {
                 shape: base.name.clone(),
                 class: class.name().into(),
                 strength: s,
@@ -1054,7 +932,7 @@ pub fn generate(opts: &GenerateOptions) -> Result<Manifest, ShrecError> {
         .collect::<Result<Vec<_>, _>>()?;
     outputs.sort_by(|a, b| (&a.shape, a.class, a.strength).cmp(&(&b.shape, b.class, b.strength)));
     let manifest = Manifest {
-        generator: format!("wfem xtask shrec {}", env!("CARGO_PKG_VERSION")),
+        generator: format!("wfem shrec-bench {}", env!("CARGO_PKG_VERSION")),
         seed: opts.seed,
         meshes_dir: opts.meshes_dir.clone(),
         parameters: parameter_table(),

@@ -3,9 +3,10 @@
 //! real TOSCA shape.
 
 use mesh_fem::generate::bumpy;
-use mesh_fem::transform::EdgeGraph;
 use mesh_fem::TriMesh;
-use xtask::shrec::*;
+use shrec_bench::synth::*;
+use shrec_bench::transform::EdgeGraph;
+use wfem_heat::rng::SplitMix64;
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
@@ -54,33 +55,6 @@ fn rms_displacement(b: &BaseShape, t: &Transformed) -> f64 {
     let p = b.mesh.positions();
     let q = t.mesh.positions();
     (p.iter().zip(q).map(|(a, c)| dist(*a, *c).powi(2)).sum::<f64>() / p.len() as f64).sqrt()
-}
-
-#[test]
-fn splitmix64_reference_values_and_normals() {
-    // Reference outputs of Vigna's splitmix64.c for seed 0.
-    let mut r = SplitMix64::new(0);
-    assert_eq!(r.next_u64(), 0xE220_A839_7B1D_CDAF);
-    assert_eq!(r.next_u64(), 0x6E78_9E6A_A1B9_65F4);
-    assert_eq!(r.next_u64(), 0x06C4_5D18_8009_454F);
-    let mut r = SplitMix64::new(42);
-    let m = 200_000;
-    let z: Vec<f64> = (0..m).map(|_| r.normal()).collect();
-    let mean = z.iter().sum::<f64>() / m as f64;
-    let var = z.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / m as f64;
-    let kurt = z.iter().map(|x| (x - mean).powi(4)).sum::<f64>() / m as f64 / (var * var);
-    assert!(mean.abs() < 0.01, "mean {mean}");
-    assert!((var - 1.0).abs() < 0.01, "variance {var}");
-    assert!((kurt - 3.0).abs() < 0.05, "kurtosis {kurt}");
-    let u: Vec<usize> = (0..60_000).map(|_| r.below(6)).collect();
-    for k in 0..6 {
-        let c = u.iter().filter(|&&x| x == k).count();
-        assert!((c as i64 - 10_000).abs() < 400, "bin {k}: {c}");
-    }
-    let p = r.permutation(100);
-    let mut sorted = p.clone();
-    sorted.sort_unstable();
-    assert_eq!(sorted, (0..100).collect::<Vec<u32>>());
 }
 
 #[test]
@@ -139,7 +113,7 @@ fn noise_has_the_requested_standard_deviation() {
 #[test]
 fn shot_noise_moves_the_requested_vertices_along_the_normal() {
     let b = base();
-    let normals = mesh_fem::transform::vertex_normals(&b.mesh);
+    let normals = shrec_bench::transform::vertex_normals(&b.mesh);
     for s in 1..=5u8 {
         let t = run(&b, Class::ShotNoise, s, 3);
         let a = SHOT_AMPLITUDE * b.mean_edge;
@@ -449,9 +423,9 @@ fn poses_are_ranked_by_kabsch_deformation_with_vts_ground_truth() {
         .iter()
         .map(|p| {
             [
-                p[0] + sigma * rng.normal(),
-                p[1] + sigma * rng.normal(),
-                p[2] + sigma * rng.normal(),
+                p[0] + sigma * rng.next_normal(),
+                p[1] + sigma * rng.next_normal(),
+                p[2] + sigma * rng.next_normal(),
             ]
         })
         .collect();

@@ -1,0 +1,27 @@
+//! # shrec-bench
+//!
+//! The synthetic SHREC'10-style robustness benchmark of wfem (paper, Sect. 5, Tables 3–5):
+//!
+//! * [`transform`]: mesh surgery with vertex bookkeeping (edge-graph geodesics, sub-meshes,
+//!   welding, QEM half-edge collapse), every result carrying its ground-truth map;
+//! * [`synth`]: the nine SHREC'10 transformation classes (plus real TOSCA poses) at five
+//!   strengths, written with ground truth and a manifest (`cargo xtask shrec`, docs/SHREC.md);
+//! * [`eval`]: the feature and dense-descriptor tables (repeatability, robustness; Tables 3–4);
+//! * [`protocol`]: the retrieval protocols — SHREC'10's cumulative "strength ≤ s" mAP beside the
+//!   paper's Table 5, queries against a clean collection, and TOSCA-76 leave-one-out
+//!   (`cargo xtask shrec-eval`, `cargo xtask tosca-eval`, docs/SHREC-RESULTS.md).
+//!
+//! `xtask` is a thin command line over this crate. All randomness comes from the one seeded
+//! generator [`wfem_heat::rng::SplitMix64`].
+
+#![warn(missing_docs)]
+#![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
+
+mod error;
+pub mod eval;
+mod geometry;
+pub mod protocol;
+pub mod synth;
+pub mod transform;
+
+pub use error::BenchError;
