@@ -100,7 +100,7 @@ def test_dask_equals_serial_bit_for_bit(collection, vocabulary, client, tmp_path
     assert d_dask.equals(d_serial)
     arrays = wfem.batch.descriptor_arrays(d_dask)
     V, F = wfem.read_mesh(collection[0])
-    assert arrays[collection[0]].shape == (len(V), 6)
+    assert arrays[collection[0]].shape == (len(V), 8)
 
 
 def test_default_process_pool(collection, vocabulary):

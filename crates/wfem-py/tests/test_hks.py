@@ -92,7 +92,7 @@ def test_descriptors_equal_dense_formulas():
     np.testing.assert_allclose(d["dhk1"], hks_ref(lamd, Xd, Dv, times, k=k), rtol=1e-8)
     lmax = lam[k - 1]
     np.testing.assert_allclose(d["dhk3"], hks_ref(lam / lmax, X, B, times, k=k) / lmax, rtol=1e-8)
-    assert d["sihks"].shape == (len(V), 6) and np.isfinite(d["sihks"]).all()
+    assert d["sihks"].shape == (len(V), 8) and np.isfinite(d["sihks"]).all()
 
 
 def test_sihks_is_scale_invariant():
