@@ -17,9 +17,10 @@
 
 use super::{check_output, load_usable, CliError, MeshArgs};
 use clap::{Args, Subcommand, ValueEnum};
+use retrieval_store::SqliteIndex;
 use shape_retrieval::{
-    BagDistance, DescriptorSpec, GlobalSignature, IndexStore, JsonFile, RetrievalIndex, RetrievalSettings,
-    ShapeFeatures, Smoothing, VocabularyModel, VocabularyStore,
+    BagDistance, DescriptorSpec, GlobalSignature, IndexEntry, IndexStore, JsonFile, RetrievalError, RetrievalIndex,
+    RetrievalSettings, ShapeFeatures, Smoothing, VocabularyModel, VocabularyStore,
 };
 use std::io::Write;
 use std::path::PathBuf;
@@ -59,7 +60,8 @@ pub enum RetrievalAction {
         /// Mesh files to index.
         #[arg(required = true, num_args = 1..)]
         files: Vec<PathBuf>,
-        /// Index file (JSON).
+        /// Index file: an embedded SQLite file (any extension, e.g. `index.sqlite`; queries scan
+        /// it in parallel and `add` appends to it), or one JSON document (`.json`).
         #[arg(long)]
         out: PathBuf,
         /// Reuse a vocabulary from `wfem retrieval vocab` (its descriptor settings are used).
@@ -77,9 +79,17 @@ pub enum RetrievalAction {
         #[allow(missing_docs)]
         bags: BagArgs,
     },
+    /// Add meshes to a SQLite index (their bags use the stored vocabulary; nothing is rebuilt).
+    Add {
+        /// Index file written by `wfem retrieval build` (SQLite).
+        index: PathBuf,
+        /// Mesh files to add (names must be new to the index).
+        #[arg(required = true, num_args = 1..)]
+        files: Vec<PathBuf>,
+    },
     /// Rank the indexed meshes by distance to a query mesh.
     Query {
-        /// Index file written by `wfem retrieval build`.
+        /// Index file written by `wfem retrieval build` (SQLite or JSON).
         index: PathBuf,
         #[command(flatten)]
         #[allow(missing_docs)]
@@ -335,7 +345,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             };
             let meshes = load_all(files, path)?;
             let index = RetrievalIndex::build(&meshes, &settings, vocabulary)?;
-            JsonFile::new(path).save_index(&index)?;
+            index_file(path).save_index(&index)?;
             writeln!(
                 out,
                 "indexed {} files ({} of {} words, {} distance) with {from} into {}",
@@ -346,27 +356,101 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 path.display()
             )?;
         }
-        RetrievalAction::Query { index, input, top } => {
-            let index = JsonFile::new(index).load_index()?;
-            // The stored settings pass the same bounds as `build`'s options (a hand-edited k
-            // would otherwise start an eigensolve of any size).
-            super::limits::retrieval_sizes(
-                index.vocabulary().descriptor().eigenpairs,
-                index.vocabulary().vocabulary().size(),
-            )?;
-            let mesh = load_usable(input)?;
-            let features = index.features(&input.mesh.display().to_string(), &mesh)?;
-            let signature = index.signature(&features)?;
-            for (rank, r) in index.rank(&signature)?.iter().take(*top).enumerate() {
-                writeln!(
-                    out,
-                    "{}\t{:.6}\t{}",
-                    rank + 1,
-                    r.distance,
-                    index.entries()[r.entry].name
-                )?;
+        RetrievalAction::Add { index: path, files } => {
+            if !is_sqlite(path)? {
+                return Err(CliError::Usage(format!(
+                    "{} is a JSON index, which is written whole: add needs a SQLite index (build with --out INDEX.sqlite)",
+                    path.display()
+                )));
+            }
+            let store = SqliteIndex::new(path);
+            let (settings, _) = store.open()?;
+            stored_sizes(&settings)?;
+            let meshes = load_all(files, path)?;
+            let entries = meshes
+                .iter()
+                .map(|(name, mesh)| {
+                    let features = settings.features(name, mesh)?;
+                    Ok(IndexEntry {
+                        name: name.clone(),
+                        signature: settings.signature(&features)?,
+                    })
+                })
+                .collect::<Result<Vec<_>, RetrievalError>>()?;
+            store.append(&entries)?;
+            writeln!(out, "added {} files to {}", entries.len(), path.display())?;
+        }
+        RetrievalAction::Query {
+            index: path,
+            input,
+            top,
+        } => {
+            let ranked: Vec<(f64, String)> = if is_sqlite(path)? {
+                let store = SqliteIndex::new(path);
+                let (settings, rows) = store.open()?;
+                stored_sizes(&settings)?;
+                let mesh = load_usable(input)?;
+                let features = settings.features(&input.mesh.display().to_string(), &mesh)?;
+                let signature = settings.signature(&features)?;
+                store
+                    .search(&settings, &rows, &signature, *top)?
+                    .into_iter()
+                    .map(|h| (h.distance, h.name))
+                    .collect()
+            } else {
+                let index = JsonFile::new(path).load_index()?;
+                stored_sizes(&index)?;
+                let mesh = load_usable(input)?;
+                let features = index.features(&input.mesh.display().to_string(), &mesh)?;
+                let signature = index.signature(&features)?;
+                index
+                    .rank(&signature)?
+                    .iter()
+                    .take(*top)
+                    .map(|r| (r.distance, index.entries()[r.entry].name.clone()))
+                    .collect()
+            };
+            for (rank, (distance, name)) in ranked.iter().enumerate() {
+                writeln!(out, "{}\t{distance:.6}\t{name}", rank + 1)?;
             }
         }
     }
     Ok(())
+}
+
+/// The stored settings pass the same bounds as `build`'s options (a hand-edited k would
+/// otherwise start an eigensolve of any size).
+fn stored_sizes(index: &RetrievalIndex) -> Result<(), CliError> {
+    super::limits::retrieval_sizes(
+        index.vocabulary().descriptor().eigenpairs,
+        index.vocabulary().vocabulary().size(),
+    )
+}
+
+/// The store an index path names: JSON for `.json`, SQLite otherwise (the default).
+fn index_file(path: &std::path::Path) -> Box<dyn IndexStore> {
+    let json = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    if json {
+        Box::new(JsonFile::new(path))
+    } else {
+        Box::new(SqliteIndex::new(path))
+    }
+}
+
+/// Whether an existing index file is SQLite (by its 16-byte header), else JSON. Regular files
+/// only: a FIFO is refused, not waited on.
+fn is_sqlite(path: &std::path::Path) -> Result<bool, CliError> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path).map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
+    if !meta.is_file() {
+        return Err(CliError::Usage(format!("{} is not a regular file", path.display())));
+    }
+    let mut head = [0u8; 16];
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
+    Ok(n == 16 && &head == b"SQLite format 3\0")
 }

@@ -258,6 +258,93 @@ fn retrieval_build_then_query_finds_the_same_shape_first() {
     assert!(!o.status.success());
 }
 
+/// The default index file is SQLite (retrieval-store): the same ranking as the JSON index
+/// (distances equal up to the f32 storage), `add` appends without rebuilding, a JSON index
+/// refuses `add`, and a SQLite file that is not an index is refused by name.
+#[test]
+fn retrieval_sqlite_index_ranks_like_json_and_takes_appends() {
+    let dir = tempfile::tempdir().unwrap();
+    let shapes = [
+        ("bumpy.off", mesh_fem::generate::bumpy(2)),
+        ("sphere.off", mesh_fem::generate::icosphere(2)),
+        ("torus.off", mesh_fem::generate::torus(1.0, 0.4, 20, 10)),
+    ];
+    let mut files = Vec::new();
+    for (name, mesh) in &shapes {
+        let p = dir.path().join(name);
+        mesh_fem::io::write_mesh(&p, mesh).unwrap();
+        files.push(p.to_str().unwrap().to_string());
+    }
+    let query = dir.path().join("query.off");
+    mesh_fem::io::write_mesh(&query, &mesh_fem::generate::bumpy(2).scaled(3.0).unwrap()).unwrap();
+    let run = |args: &[&str]| {
+        let o = wfem(args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let build = |out: &Path, files: &[String]| {
+        let mut args = vec!["retrieval", "build"];
+        args.extend(files.iter().map(|s| s.as_str()));
+        args.extend(["--out", out.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+        run(&args);
+    };
+    let parse = |text: &str| -> Vec<(String, f64)> {
+        text.lines()
+            .map(|l| {
+                let c: Vec<&str> = l.split('\t').collect();
+                (c[2].to_string(), c[1].parse().unwrap())
+            })
+            .collect()
+    };
+    let (sqlite, json) = (dir.path().join("index.sqlite"), dir.path().join("index.json"));
+    build(&sqlite, &files[..2]);
+    build(&json, &files[..2]);
+    assert_eq!(&std::fs::read(&sqlite).unwrap()[..16], b"SQLite format 3\0");
+    let q = |index: &Path| {
+        parse(&run(&[
+            "retrieval",
+            "query",
+            index.to_str().unwrap(),
+            query.to_str().unwrap(),
+            "--top",
+            "3",
+        ]))
+    };
+    let (a, b) = (q(&sqlite), q(&json));
+    assert_eq!(a.len(), 2);
+    for ((na, da), (nb, db)) in a.iter().zip(&b) {
+        assert_eq!(na, nb);
+        assert!((da - db).abs() < 1e-5, "{a:?} vs {b:?}");
+    }
+    assert!(a[0].0.ends_with("bumpy.off"));
+
+    // Append the torus: the index now answers with three shapes; the first two keep their
+    // distances (nothing was rebuilt).
+    run(&["retrieval", "add", sqlite.to_str().unwrap(), files[2].as_str()]);
+    let c = q(&sqlite);
+    assert_eq!(c.len(), 3);
+    assert!(c.iter().any(|(n, _)| n.ends_with("torus.off")));
+    for (name, d) in &a {
+        let (_, d2) = c.iter().find(|(n, _)| n == name).unwrap();
+        assert_eq!(d, d2);
+    }
+    // Adding the same file again is refused, and the index is unchanged.
+    let before = std::fs::read(&sqlite).unwrap();
+    let o = wfem(&["retrieval", "add", sqlite.to_str().unwrap(), files[2].as_str()]);
+    assert!(!o.status.success());
+    assert_eq!(q(&sqlite), c);
+    assert_eq!(std::fs::read(&sqlite).unwrap().len(), before.len());
+    // A JSON index is written whole: add refuses it.
+    let o = wfem(&["retrieval", "add", json.to_str().unwrap(), files[2].as_str()]);
+    assert!(stderr(&o).contains("SQLite index"), "{}", stderr(&o));
+    // A SQLite vector store without index settings is not an index.
+    let other = dir.path().join("other.sqlite");
+    retrieval_store::Store::create(&other, &retrieval_store::StoreParams::new(8), false).unwrap();
+    let o = wfem(&["retrieval", "query", other.to_str().unwrap(), query.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("not a wfem retrieval index"), "{}", stderr(&o));
+}
+
 #[test]
 fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     // `vocab` and `build` with no option write the documented defaults (issue #13): SI-HKS of the

@@ -4,8 +4,8 @@
 //! no system library) holding
 //!
 //! * **metadata** as key → blob pairs ([`Store::meta`], [`Store::set_meta`]): the index
-//!   settings and the vocabulary, written by the layer that owns their meaning (the CLI, the
-//!   Python package); this crate only stores them;
+//!   settings and the vocabulary (shape-retrieval's JSON, [`index`]); the [`Store`] layer only
+//!   stores them;
 //! * **shapes**: an id (0, 1, 2, … in insertion order), a unique name and a free-form text
 //!   (e.g. the mesh path and its class);
 //! * **vectors**, one per shape, all of the store's dimension (a bag of features, possibly
@@ -26,6 +26,9 @@
 //! see only committed shapes; since shapes are only appended, a scan planned on a snapshot
 //! reads the same rows from any connection.
 //!
+//! [`SqliteIndex`] ([`index`]) stores shape-retrieval's `RetrievalIndex` this way (its
+//! `IndexStore` for SQLite): the default index file of `wfem retrieval`.
+//!
 //! ```
 //! use retrieval_store::{Entry, Metric, Store, StoreParams};
 //! let dir = tempfile::tempdir()?;
@@ -44,7 +47,9 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 mod error;
+pub mod index;
 mod store;
 
 pub use error::StoreError;
+pub use index::{IndexHit, SqliteIndex};
 pub use store::{Entry, Hit, Metric, ShapeRow, Store, StoreParams, DEFAULT_CHUNK_ROWS, FORMAT, FORMAT_VERSION};

@@ -61,4 +61,4 @@ pub use model::{
 pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
 pub use sihks::{scale_invariant_hks, SihksParams, TimeUnit};
 pub use standardize::Standardizer;
-pub use store::{IndexStore, JsonFile, VocabularyStore};
+pub use store::{index_from_settings, index_settings, IndexStore, JsonFile, VocabularyStore};

@@ -1080,6 +1080,15 @@ impl RetrievalIndex {
         }
     }
 
+    /// The distance of a validated query ([`Self::distance`] checked it against one entry) to
+    /// a stored signature given as its bag followed by its global signature (`row`, V + m
+    /// values), without checks: the inner loop of a scan over an external store.
+    pub fn row_distance(&self, query: &ShapeSignature, row: &[f64]) -> f64 {
+        let v = query.bag.len().min(row.len());
+        let (bag, global) = row.split_at(v);
+        self.fused(self.bags.distance.unchecked(&query.bag, bag), &query.global, global)
+    }
+
     /// Every entry by increasing distance to the query signature (ties → lower entry index):
     /// one O(N·V) scan.
     ///

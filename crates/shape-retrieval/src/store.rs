@@ -130,6 +130,52 @@ impl VocabularyStore for JsonFile {
     }
 }
 
+/// The settings of an index — its vocabulary and bag settings, without the entries — as one
+/// JSON document, for a store that keeps the entries itself (retrieval-store's SQLite file
+/// keeps them as vectors). Read back with [`index_from_settings`].
+///
+/// # Errors
+/// [`RetrievalError::Storage`] if serialization fails.
+pub fn index_settings(index: &RetrievalIndex) -> Result<String, RetrievalError> {
+    let mut record = IndexRecord::from_index(index);
+    record.entries.clear();
+    serde_json::to_string(&record).map_err(|e| RetrievalError::Storage {
+        path: PathBuf::new(),
+        reason: e.to_string(),
+    })
+}
+
+/// An index from the text of [`index_settings`] and its entries, validated exactly like a JSON
+/// index file (tags, version, settings, every bag and global signature).
+///
+/// # Errors
+/// [`RetrievalError::Storage`] for text that is not index settings of this version;
+/// [`RetrievalError::InvalidModel`] as [`IndexStore::load_index`].
+pub fn index_from_settings(text: &str, entries: Vec<IndexEntry>) -> Result<RetrievalIndex, RetrievalError> {
+    let storage = |reason: String| RetrievalError::Storage {
+        path: PathBuf::new(),
+        reason,
+    };
+    let header: Header = serde_json::from_str(text).map_err(|e| storage(format!("not index settings: {e}")))?;
+    if header.format != INDEX_FORMAT || header.version != FORMAT_VERSION {
+        return Err(storage(format!(
+            "settings tagged {:?} version {}, expected {INDEX_FORMAT:?} version {FORMAT_VERSION}",
+            header.format, header.version
+        )));
+    }
+    let mut record: IndexRecord =
+        serde_json::from_str(text).map_err(|e| storage(format!("malformed index settings: {e}")))?;
+    record.entries = entries
+        .into_iter()
+        .map(|e| EntryRecord {
+            name: e.name,
+            bag: e.signature.bag,
+            global: e.signature.global,
+        })
+        .collect();
+    record.into_index()
+}
+
 #[derive(Deserialize)]
 struct Header {
     format: String,

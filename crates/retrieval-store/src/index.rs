@@ -1,0 +1,244 @@
+//! shape-retrieval's [`RetrievalIndex`] in one SQLite store: the index settings (vocabulary,
+//! z-score statistics, bag settings; [`shape_retrieval::index_settings`]) as one metadata
+//! entry, and every shape's signature — its bag followed by its global signature — as one
+//! vector. This is the default index file of `wfem retrieval build/query/add`.
+//!
+//! * [`IndexStore`] (load/save a whole index) — saving builds the file under a temporary name
+//!   and renames it into place, so a reader sees the old index or the new one;
+//! * [`SqliteIndex::search`] — a query scans the stored vectors in parallel with the index's
+//!   own distance (χ² or L1 plus the fused global term) and returns the k nearest, without
+//!   loading the index into memory;
+//! * [`SqliteIndex::append`] — new shapes are added in one transaction, with the stored
+//!   settings, without rebuilding anything.
+//!
+//! Vectors are stored as `f32`: a bag loaded back is renormalised to sum 1 when its sum is
+//! within the rounding of `f32` (1e−4), and otherwise refused like a hand-edited JSON bag.
+
+use crate::{Entry, Store, StoreError, StoreParams};
+use shape_retrieval::{
+    index_from_settings, index_settings, IndexEntry, IndexStore, RetrievalError, RetrievalIndex, ShapeSignature,
+};
+use std::path::{Path, PathBuf};
+
+/// Metadata key of the index settings.
+pub const SETTINGS_KEY: &str = "wfem-retrieval-index";
+
+/// A retrieval index stored in a SQLite file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SqliteIndex {
+    path: PathBuf,
+}
+
+/// One answer of [`SqliteIndex::search`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct IndexHit {
+    /// Position of the shape in insertion order.
+    pub id: u64,
+    /// Its name (the file as given to `build`/`add`).
+    pub name: String,
+    /// Its distance to the query.
+    pub distance: f64,
+}
+
+impl SqliteIndex {
+    /// The index at `path` (nothing is read or written yet).
+    pub fn new(path: impl Into<PathBuf>) -> Self {
+        Self { path: path.into() }
+    }
+
+    /// Its path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn storage(&self, e: impl std::fmt::Display) -> RetrievalError {
+        RetrievalError::Storage {
+            path: self.path.clone(),
+            reason: e.to_string(),
+        }
+    }
+
+    /// Opens the store read-only and reads its settings: an index with the stored vocabulary
+    /// and bag settings and no entries (to compute query signatures with), and the store.
+    ///
+    /// # Errors
+    /// [`RetrievalError::Storage`] (not a store, no settings), [`RetrievalError::InvalidModel`].
+    pub fn open(&self) -> Result<(RetrievalIndex, Store), RetrievalError> {
+        let store = Store::open_readonly(&self.path).map_err(|e| self.storage(e))?;
+        let settings = self.settings(&store)?;
+        Ok((settings, store))
+    }
+
+    fn settings(&self, store: &Store) -> Result<RetrievalIndex, RetrievalError> {
+        let text = store
+            .meta(SETTINGS_KEY)
+            .map_err(|e| self.storage(e))?
+            .ok_or_else(|| self.storage("a vector store, but not a wfem retrieval index (no settings)"))?;
+        let text = String::from_utf8(text).map_err(|_| self.storage("the index settings are not UTF-8"))?;
+        let index = index_from_settings(&text, Vec::new()).map_err(|e| self.located(e))?;
+        let width = index.vocabulary().vocabulary().size() + index.bags().global.map_or(0, |g| g.eigenvalues);
+        if store.dimension() != width {
+            return Err(self.storage(format!(
+                "vectors of {} values, the settings describe {width}",
+                store.dimension()
+            )));
+        }
+        Ok(index)
+    }
+
+    fn located(&self, e: RetrievalError) -> RetrievalError {
+        match e {
+            RetrievalError::Storage { reason, .. } => self.storage(reason),
+            other => other,
+        }
+    }
+
+    /// The `k` indexed shapes nearest to `query` under the index's distance, nearest first
+    /// (ties by insertion order): an exact parallel scan of the store.
+    ///
+    /// # Errors
+    /// The query's checks ([`RetrievalIndex::distance`] against a stored shape);
+    /// [`RetrievalError::Storage`] for store errors.
+    pub fn search(
+        &self,
+        settings: &RetrievalIndex,
+        store: &Store,
+        query: &ShapeSignature,
+        k: usize,
+    ) -> Result<Vec<IndexHit>, RetrievalError> {
+        // Validate the query once against the first stored shape (or a copy of itself).
+        let first = match store.vector(0).map_err(|e| self.storage(e))? {
+            Some(row) => signature(settings, &row),
+            None => return Ok(Vec::new()),
+        };
+        settings.distance(query, &first)?;
+        let hits = store
+            .search(k, |row| {
+                let row: Vec<f64> = row.iter().map(|&x| f64::from(x)).collect();
+                settings.row_distance(query, &row)
+            })
+            .map_err(|e| self.storage(e))?;
+        Ok(hits
+            .into_iter()
+            .map(|h| IndexHit {
+                id: h.id,
+                name: h.name,
+                distance: h.distance,
+            })
+            .collect())
+    }
+
+    /// Appends shapes (their signatures computed with this index's settings, e.g. by
+    /// [`RetrievalIndex::signature`]) in one transaction; nothing else is rewritten.
+    ///
+    /// # Errors
+    /// [`RetrievalError::InvalidModel`] for a signature that does not fit the settings;
+    /// [`RetrievalError::Storage`] (a name already indexed, store errors).
+    pub fn append(&self, entries: &[IndexEntry]) -> Result<(), RetrievalError> {
+        let mut store = Store::open(&self.path).map_err(|e| self.storage(e))?;
+        let settings = self.settings(&store)?;
+        // The same checks as a loaded index: build a one-entry index per shape.
+        for e in entries {
+            index_from_settings(
+                &index_settings(&settings).map_err(|e| self.located(e))?,
+                vec![e.clone()],
+            )?;
+        }
+        let rows: Vec<Vec<f64>> = entries.iter().map(row).collect();
+        let batch: Vec<Entry<'_>> = entries
+            .iter()
+            .zip(&rows)
+            .map(|(e, r)| Entry::new(&e.name, "", r))
+            .collect();
+        store.add(&batch).map_err(|e| self.storage(e))?;
+        Ok(())
+    }
+}
+
+/// A stored vector as a signature: the bag (renormalised when within f32 rounding of sum 1)
+/// and the global part.
+fn signature(settings: &RetrievalIndex, row: &[f32]) -> ShapeSignature {
+    let v = settings.vocabulary().vocabulary().size().min(row.len());
+    let mut bag: Vec<f64> = row[..v].iter().map(|&x| f64::from(x)).collect();
+    let sum: f64 = bag.iter().sum();
+    if (sum - 1.0).abs() <= 1e-4 && sum > 0.0 {
+        bag.iter_mut().for_each(|x| *x /= sum);
+    }
+    ShapeSignature {
+        bag,
+        global: row[v..].iter().map(|&x| f64::from(x)).collect(),
+    }
+}
+
+fn row(e: &IndexEntry) -> Vec<f64> {
+    e.signature.bag.iter().chain(&e.signature.global).copied().collect()
+}
+
+fn sibling(path: &Path, suffix: &str) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(suffix);
+    PathBuf::from(s)
+}
+
+impl IndexStore for SqliteIndex {
+    fn load_index(&self) -> Result<RetrievalIndex, RetrievalError> {
+        let (settings, store) = self.open()?;
+        let shapes = store.shapes().map_err(|e| self.storage(e))?;
+        let vectors = store.vectors().map_err(|e| self.storage(e))?;
+        let dim = store.dimension();
+        let entries = shapes
+            .into_iter()
+            .zip(vectors.chunks_exact(dim))
+            .map(|(s, row)| IndexEntry {
+                name: s.name,
+                signature: signature(&settings, row),
+            })
+            .collect();
+        index_from_settings(&index_settings(&settings).map_err(|e| self.located(e))?, entries)
+            .map_err(|e| self.located(e))
+    }
+
+    fn save_index(&self, index: &RetrievalIndex) -> Result<(), RetrievalError> {
+        let settings = index_settings(index).map_err(|e| self.located(e))?;
+        let width = index.vocabulary().vocabulary().size() + index.bags().global.map_or(0, |g| g.eigenvalues);
+        let dir = match self.path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let name = self
+            .path
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .ok_or_else(|| self.storage("no file name"))?;
+        // The whole index is built under a temporary name, then renamed into place.
+        let tmp = dir.join(format!(".{name}.{}.build", std::process::id()));
+        let build = || -> Result<(), StoreError> {
+            let mut store = Store::create(&tmp, &StoreParams::new(width), true)?;
+            store.set_meta(SETTINGS_KEY, settings.as_bytes())?;
+            let rows: Vec<Vec<f64>> = index.entries().iter().map(row).collect();
+            let batch: Vec<Entry<'_>> = index
+                .entries()
+                .iter()
+                .zip(&rows)
+                .map(|(e, r)| Entry::new(&e.name, "", r))
+                .collect();
+            store.add(&batch)?;
+            // Closing the last connection checkpoints the log: one self-contained file.
+            drop(store);
+            std::fs::rename(&tmp, &self.path).map_err(|source| StoreError::Io {
+                path: self.path.clone(),
+                source,
+            })
+        };
+        let result = build();
+        if result.is_err() {
+            for p in [tmp.clone(), sibling(&tmp, "-wal"), sibling(&tmp, "-shm")] {
+                let _ = std::fs::remove_file(p);
+            }
+        }
+        result.map_err(|e| self.storage(e))?;
+        // A shared-memory index left by readers of the replaced file must not describe this one.
+        let _ = std::fs::remove_file(sibling(&self.path, "-shm"));
+        Ok(())
+    }
+}
