@@ -5,5 +5,6 @@
 
 pub mod bench;
 pub mod eval;
+pub mod peers;
 pub mod shrec;
 pub mod test_all;
