@@ -66,6 +66,8 @@ fn eigen_params(
         tol,
         max_dim,
         seed,
+        // Python exposes no restart bound: the library's default.
+        ..EigenParams::default()
     })
 }
 
