@@ -5,4 +5,5 @@
 
 pub mod bench;
 pub mod lab;
+pub mod peers;
 pub mod test_all;

@@ -87,7 +87,8 @@ enum Cmd {
         cache: Option<PathBuf>,
     },
     /// Measure and write the benchmark report: DIR/BENCHMARKS.md (generated section) and
-    /// DIR/bench/*.svg. Full run: 10K/41K/164K vertices (see docs/BENCHMARKS.md).
+    /// DIR/bench/*.svg. Full run: 10K/41K/164K vertices (see docs/BENCHMARKS.md), then the
+    /// peers table: wfem's CLI against scipy/libigl, whole process (xtask/src/peers.rs).
     Bench {
         /// 2.5K/10K/41K vertices: a few minutes on 2 cores.
         #[arg(long, conflicts_with = "smoke")]
@@ -101,6 +102,13 @@ enum Cmd {
         /// Output folder (BENCHMARKS.md and bench/*.svg).
         #[arg(long, default_value = "docs")]
         out: PathBuf,
+        /// Skip the peers table (wfem's CLI against scipy/libigl, whole process; needs Python
+        /// and the pinned benches/peers/requirements.txt, installed into a venv on first use).
+        #[arg(long, conflicts_with = "peers_only")]
+        no_peers: bool,
+        /// Only the peers table (rewrites only its block of BENCHMARKS.md).
+        #[arg(long)]
+        peers_only: bool,
     },
     /// The whole test suite, Rust and Python (`cargo test-all`, README's test command):
     /// `cargo test --workspace --locked`, then the `wfem` Python package built into a venv
@@ -246,8 +254,11 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             smoke,
             large,
             out,
+            no_peers,
+            peers_only,
         } => {
             use xtask::bench::{self, BenchOptions, Setting};
+            use xtask::peers::{self, PeerOptions};
             let setting = if smoke {
                 Setting::Smoke
             } else if quick {
@@ -255,12 +266,20 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             } else {
                 Setting::Full
             };
-            let options = BenchOptions::for_setting(setting, large);
-            let report = bench::run(&options)?;
-            for path in bench::write(&report, &out)? {
-                println!("wrote {}", path.display());
+            let start = std::time::Instant::now();
+            if !peers_only {
+                let options = BenchOptions::for_setting(setting, large);
+                let report = bench::run(&options)?;
+                for path in bench::write(&report, &out)? {
+                    println!("wrote {}", path.display());
+                }
             }
-            println!("benchmark report finished in {:.0} s", report.total_seconds);
+            if !no_peers {
+                let report = peers::run(&PeerOptions::for_setting(setting, large))?;
+                println!("{}", peers::markdown(&report));
+                println!("wrote {}", peers::write(&report, &out)?.display());
+            }
+            println!("benchmark report finished in {:.0} s", start.elapsed().as_secs_f64());
         }
         Cmd::TestAll {
             python_only,

@@ -73,7 +73,7 @@ fn run_step(name: &str, cmd: &mut Command) -> Result<(), StepError> {
     }
 }
 
-fn bin(venv: &Path, name: &str) -> PathBuf {
+pub(crate) fn bin(venv: &Path, name: &str) -> PathBuf {
     if cfg!(windows) {
         venv.join("Scripts").join(format!("{name}.exe"))
     } else {
@@ -82,7 +82,7 @@ fn bin(venv: &Path, name: &str) -> PathBuf {
 }
 
 /// Creates the venv if needed and returns its Python.
-fn ensure_venv(venv: &Path) -> Result<PathBuf, StepError> {
+pub(crate) fn ensure_venv(venv: &Path) -> Result<PathBuf, StepError> {
     let python = bin(venv, "python");
     if python.exists() {
         return Ok(python);
@@ -123,10 +123,14 @@ fn ensure_venv(venv: &Path) -> Result<PathBuf, StepError> {
     Ok(python)
 }
 
-/// Installs the pinned requirements unless the venv already has exactly this file.
-fn ensure_requirements(python: &Path, venv: &Path, requirements: &Path) -> Result<(), StepError> {
+/// Installs the pinned requirements unless the venv already has exactly this file (a stamp
+/// `<file stem>.installed` in the venv remembers what was installed).
+pub(crate) fn ensure_requirements(python: &Path, venv: &Path, requirements: &Path) -> Result<(), StepError> {
     let wanted = std::fs::read(requirements).map_err(|e| StepError(format!("{}: {e}", requirements.display())))?;
-    let stamp = venv.join("requirements-test.installed");
+    let stem = requirements
+        .file_stem()
+        .map_or("requirements".into(), |s| s.to_string_lossy());
+    let stamp = venv.join(format!("{stem}.installed"));
     if std::fs::read(&stamp).ok().as_deref() == Some(&wanted[..]) {
         eprintln!("==> pinned Python packages already installed");
         return Ok(());

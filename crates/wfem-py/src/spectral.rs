@@ -68,6 +68,8 @@ fn eigen_params(
         max_dim,
         max_restarts,
         seed,
+        // Python exposes no restart bound: the library's default.
+        ..EigenParams::default()
     })
 }
 
