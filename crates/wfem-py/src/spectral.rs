@@ -68,8 +68,6 @@ fn eigen_params(
         max_dim,
         max_restarts,
         seed,
-        // Python exposes no restart bound: the library's default.
-        ..EigenParams::default()
     })
 }
 
