@@ -444,13 +444,10 @@ fn index_file(path: &std::path::Path) -> Box<dyn IndexStore> {
 /// only: a FIFO is refused, not waited on.
 fn is_sqlite(path: &std::path::Path) -> Result<bool, CliError> {
     use std::io::Read;
-    let meta = std::fs::metadata(path).map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
-    if !meta.is_file() {
-        return Err(CliError::Usage(format!("{} is not a regular file", path.display())));
-    }
+    let mut file = mesh_fem::io::open_regular_file(path)?;
     let mut head = [0u8; 16];
-    let n = std::fs::File::open(path)
-        .and_then(|mut f| f.read(&mut head))
+    let n = file
+        .read(&mut head)
         .map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
     Ok(n == 16 && &head == b"SQLite format 3\0")
 }

@@ -5,6 +5,7 @@
 //! * [`TriMesh`]: vertex positions and triangles, the one mesh type of wfem.
 //! * [`io`]: reading OBJ, PLY, OFF and STL files and writing fields (PLY/NPY/CSV), atomically.
 //! * [`validate`](mod@validate): a [`validate::ValidationReport`] naming every problem, and explicit repairs.
+//! * [`vec3`]: the 3-vector helpers and bounding box every crate uses.
 //! * [`stats`](mod@stats): counts, topology (Euler characteristic, genus, boundary loops) and geometry.
 //! * [`mtx`]: Matrix Market reading and writing (atomic, 17 digits) and `nalgebra-sparse`
 //!   conversions.
@@ -34,6 +35,7 @@ pub mod mtx;
 pub mod operators;
 pub mod stats;
 pub mod validate;
+pub mod vec3;
 
 pub use error::MeshError;
 pub use mesh::TriMesh;

@@ -803,21 +803,7 @@ pub fn repair(mesh: &TriMesh, opts: &RepairOptions) -> Result<(TriMesh, RepairRe
     Ok((repaired, report))
 }
 
-/// Length of the bounding-box diagonal of `positions`.
-pub(crate) fn bbox_diagonal(positions: &[[f64; 3]]) -> f64 {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in positions {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    if positions.is_empty() {
-        return 0.0;
-    }
-    norm(sub(hi, lo))
-}
+pub(crate) use crate::vec3::bbox_diagonal;
 
 /// For each vertex, the earlier kept vertex it merges into (itself if kept): the nearest
 /// kept vertex within distance `tol`, found through a hash grid of cell size `tol`.

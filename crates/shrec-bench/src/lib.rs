@@ -19,7 +19,6 @@
 
 mod error;
 pub mod eval;
-mod geometry;
 pub mod protocol;
 pub mod synth;
 pub mod transform;

@@ -27,12 +27,12 @@
 //!
 //! Every output is validated before it is written ([`validate_output`]).
 
-use crate::geometry::{cross, dot, norm, sub};
 use crate::transform::{
     bounding_box_diagonal, close_pairs, largest_component, submesh, vertex_normals, weld_vertices, DerivedMesh,
     EdgeGraph, QemDecimator, QemParams,
 };
 use crate::BenchError;
+use mesh_fem::vec3::{cross, dot, norm, sub};
 use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};

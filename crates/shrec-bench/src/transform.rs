@@ -16,8 +16,8 @@
 //! Every routine that changes the vertex set returns a [`DerivedMesh`]: the new mesh and, for
 //! every new vertex, the index of the input vertex it comes from (a ground-truth map).
 
-use crate::geometry::{cross, dot, norm, sub};
 use crate::BenchError;
+use mesh_fem::vec3::{cross, dot, norm, sub};
 use mesh_fem::TriMesh;
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap, HashSet};

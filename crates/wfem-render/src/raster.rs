@@ -95,7 +95,7 @@ impl<'a> Scene<'a> {
         if !scale.is_finite() {
             scale = 1.0; // a single point: any scale will do
         }
-        let (bmin, bmax) = bounding_box(positions);
+        let (bmin, bmax) = mesh_fem::vec3::bounding_box(positions);
         let diameter = dot(sub(bmax, bmin), sub(bmax, bmin)).sqrt();
 
         Self {
@@ -334,21 +334,6 @@ fn edge(a: [f64; 3], b: [f64; 3], p: [f64; 3]) -> f64 {
 
 fn sub(a: V3, b: V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn bounding_box(positions: &[[f64; 3]]) -> (V3, V3) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in positions {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    if positions.is_empty() {
-        return ([0.0; 3], [0.0; 3]);
-    }
-    (lo, hi)
 }
 
 /// The projected bounding box `(x0, x1, y0, y1)`, or `None` for no positions.

@@ -148,6 +148,17 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<(TriMesh, LoadReport), Me
 /// [`MeshError::Io`] naming `path`: kind `InvalidInput` for a directory, FIFO, socket or
 /// device; the operating system's error if the file is missing or unreadable.
 pub fn read_regular_file(path: &Path) -> Result<Vec<u8>, MeshError> {
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut open_regular_file(path)?, &mut bytes).map_err(|e| io_error(path, e))?;
+    Ok(bytes)
+}
+
+/// Opens a file for reading after checking that it is a regular file (see
+/// [`read_regular_file`]), e.g. to read only its header.
+///
+/// # Errors
+/// As [`read_regular_file`].
+pub fn open_regular_file(path: &Path) -> Result<std::fs::File, MeshError> {
     let meta = std::fs::metadata(path).map_err(|e| io_error(path, e))?;
     if !meta.file_type().is_file() {
         return Err(io_error(
@@ -161,7 +172,7 @@ pub fn read_regular_file(path: &Path) -> Result<Vec<u8>, MeshError> {
             ),
         ));
     }
-    std::fs::read(path).map_err(|e| io_error(path, e))
+    std::fs::File::open(path).map_err(|e| io_error(path, e))
 }
 
 /// "a directory", "a FIFO (named pipe)", … for error messages.
