@@ -267,6 +267,75 @@ impl PyHeatKernel {
         Ok((mat_out(py, series.values.as_ref()), info))
     }
 
+    /// The HKS by method (`shape_retrieval::signature_by_method`): `spectral` (n, T) is the
+    /// truncated sum from `eigenvalues` at `times`; "auto" replaces the columns whose truncation
+    /// bound is above `tol` by the exact diagonal where probing needs at most `max_columns`
+    /// columns (tail 1e−6), "exact" replaces every column. Returns (values, [(source, bound)]).
+    #[pyo3(signature = (eigenvalues, spectral, times, convention="kernel_value", method="auto", tol=1e-6, max_columns=4096))]
+    #[allow(clippy::too_many_arguments)]
+    fn hks_by_method<'py>(
+        &self,
+        py: Python<'py>,
+        eigenvalues: Vec<f64>,
+        spectral: PyReadonlyArray2<'py, f64>,
+        times: Vec<f64>,
+        convention: &str,
+        method: &str,
+        tol: f64,
+        max_columns: usize,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Vec<(String, f64)>)> {
+        use shape_retrieval::{HksMethod, HksSource};
+        use wfem_heat::DiagonalParams;
+        check_times(py, &times)?;
+        let convention = crate::spectral::convention(py, convention)?;
+        let (method, params) = match method {
+            "auto" => (
+                HksMethod::Auto { tol },
+                DiagonalParams {
+                    method: wfem_heat::diagonal::DiagonalMethod::Probing { tol: 1e-6 },
+                    max_columns,
+                    ..Default::default()
+                },
+            ),
+            "exact" => (
+                HksMethod::Exact,
+                DiagonalParams {
+                    max_columns,
+                    ..Default::default()
+                },
+            ),
+            "spectral" => (HksMethod::Spectral, DiagonalParams::default()),
+            other => {
+                return Err(invalid_param(
+                    py,
+                    "method",
+                    format!("{other:?} is not one of \"auto\", \"exact\", \"spectral\""),
+                ))
+            }
+        };
+        let spectral = mat_in(&spectral);
+        let kernel = self.kernel.clone();
+        let (values, sources) = run(py, move |_| {
+            Ok(shape_retrieval::signature_by_method(
+                &kernel,
+                &eigenvalues,
+                spectral,
+                &times,
+                convention,
+                method,
+                &params,
+            )?)
+        })?;
+        let sources = sources
+            .iter()
+            .map(|s| match *s {
+                HksSource::Spectral { bound } => ("spectral".to_string(), bound),
+                HksSource::Exact { relative_tail } => ("exact".to_string(), relative_tail),
+            })
+            .collect();
+        Ok((mat_out(py, values.as_ref()), sources))
+    }
+
     /// H_t G = K_t M⁻¹ G (n, k).
     fn apply_kernel_matrix<'py>(
         &self,

@@ -49,13 +49,30 @@ def test_truncated_hks_equals_truncated_dense_sum():
     L, B, _ = wfem.operators(V, F)
     lam, X = dense_eigh(L, B)
     k = 30
-    h, times = wfem.hks(V, F, k=k, num_times=8, return_times=True)
+    h, times = wfem.hks(V, F, k=k, num_times=8, return_times=True, method="spectral")
     assert len(times) == 8 and np.all(np.diff(times) > 0)
     ref = hks_ref(lam, X, B, times, k=k)
     assert np.max(np.abs(h - ref)) <= 1e-8 * np.max(np.abs(ref))
     scaled = wfem.hks(V, F, times, k=k, scaled=True)
     trace = np.exp(-np.outer(lam[:k], times)).sum(axis=0)
     np.testing.assert_allclose(scaled, ref / trace, rtol=1e-8)
+
+
+@pytest.mark.parametrize("convention", wfem.HKS_CONVENTIONS)
+def test_default_auto_hks_is_the_full_hks_where_truncation_fails(convention):
+    # 30 eigenpairs are far off at t = 1e-3; the default replaces those columns by the exact
+    # diagonal and keeps the truncated sum where its bound holds.
+    V, F = wfem.generate.bumpy(2)
+    L, B, _ = wfem.operators(V, F)
+    lam, X = dense_eigh(L, B)
+    times = [1e-3, 1e-2, 0.1, 1.0]
+    full = hks_ref(lam, X, B, times, convention)
+    truncated = wfem.hks(V, F, times, k=30, convention=convention, method="spectral")
+    assert np.max(np.abs(truncated - full)) > 0.05 * np.max(np.abs(full))
+    h = wfem.hks(V, F, times, k=30, convention=convention)
+    assert np.max(np.abs(h - full)) <= 1e-6 * np.max(np.abs(full))
+    with pytest.raises(wfem.InvalidInputError):
+        wfem.hks(V, F, times, k=30, method="best")
 
 
 def test_eigenbasis_is_b_orthonormal_and_projects():

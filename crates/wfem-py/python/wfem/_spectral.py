@@ -164,6 +164,7 @@ def hks(
     normalization: str | None = None,
     kernel: str = "wfem",
     basis: Eigenbasis | None = None,
+    method: str = "auto",
     exact: bool = False,
     return_times: bool = False,
 ) -> Any:
@@ -186,15 +187,27 @@ def hks(
         normalization: ``None``, ``"max_eigenvalue"`` (λ/λ_max, DHK3) or ``"area"`` (λ·A).
         kernel: ``"wfem"`` (B), ``"lumped"`` (D) or ``"linear"`` (I).
         basis: a precomputed :class:`Eigenbasis` to reuse.
-        exact: no eigenpairs at all: the diagonal of the kernel itself by probing
-            (:meth:`HeatKernel.diagonal`), exact at small t where truncation fails (needs
-            explicit ``times``; ``scaled``/``normalization`` do not apply).
+        method: ``"auto"`` (default): per time, the truncated sum where its rigorous
+            truncation bound ``(n − k) e^{−λ_k t} / Σ e^{−λ_j t}`` is below 1e−6, and the exact
+            diagonal of the kernel (probing, :meth:`HeatKernel.diagonal`) at the smaller times
+            where it is not and probing is cheap (columns × n ≤ 4e6: every time on meshes of a
+            few thousand vertices; on large ones the truncated sum is kept); ``"exact"``: the
+            exact diagonal at every time (explicit ``times``; no eigenpairs); ``"spectral"``:
+            the truncated sum only (pyFM's HKS). With ``scaled`` or ``normalization`` the
+            spectral sum is used.
+        exact: same as ``method="exact"``.
         return_times: also return the times used.
 
     Returns:
         (n, T) array, or ``(values, times)`` with ``return_times=True``.
     """
-    if exact:
+    if method not in ("auto", "exact", "spectral"):
+        from ._errors import InvalidInputError
+
+        raise InvalidInputError(
+            f"method={method!r} is not one of 'auto', 'exact', 'spectral'", "InvalidParameter", name="method"
+        )
+    if exact or method == "exact":
         from ._errors import InvalidInputError
         from ._heat import HeatKernel
 
@@ -211,6 +224,15 @@ def hks(
     values, used = basis.hks(
         times, num_times=num_times, convention=convention, scaled=scaled, normalization=normalization
     )
+    if method == "auto" and not scaled and normalization is None:
+        from ._heat import HeatKernel
+
+        K = HeatKernel(V, F, kernel=kernel)
+        budget = int(min(4096, max(64, 4_000_000 // max(1, K.n))))
+        values, _ = K._k.hks_by_method(
+            [float(x) for x in basis.values], values, [float(t) for t in used], convention, "auto", 1e-6, budget
+        )
+        values = np.asarray(values)
     return (values, used) if return_times else values
 
 

@@ -85,6 +85,16 @@ class HeatKernel:
         max_columns: int = 4096,
         block: int = 64,
     ) -> tuple[_F64, dict[str, Any]]: ...
+    def hks_by_method(
+        self,
+        eigenvalues: list[float],
+        spectral: _F64,
+        times: list[float],
+        convention: str = "kernel_value",
+        method: str = "auto",
+        tol: float = 1e-6,
+        max_columns: int = 4096,
+    ) -> tuple[_F64, list[tuple[str, float]]]: ...
     def apply_kernel_matrix(self, g: _F64, t: float) -> _F64: ...
     def canonical_basis(self, anchors: list[int], t: float) -> _F64: ...
     def canonical_limit(self, anchors: list[int]) -> _F64: ...
