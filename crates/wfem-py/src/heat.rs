@@ -91,6 +91,9 @@ fn check_times(py: Python<'_>, times: &[f64]) -> PyResult<()> {
     Ok(())
 }
 
+/// (HKS values (n, T), per time its source and bound).
+type Sourced<'py> = (Bound<'py, PyArray2<f64>>, Vec<(String, f64)>);
+
 /// (K_t F for each t (T, n, k), per-t error estimates).
 type Series<'py> = (Bound<'py, PyArray3<f64>>, Vec<Option<f64>>);
 
@@ -283,7 +286,7 @@ impl PyHeatKernel {
         method: &str,
         tol: f64,
         max_columns: usize,
-    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Vec<(String, f64)>)> {
+    ) -> PyResult<Sourced<'py>> {
         use shape_retrieval::{HksMethod, HksSource};
         use wfem_heat::DiagonalParams;
         check_times(py, &times)?;
