@@ -188,18 +188,7 @@ struct Solved {
 
 impl ShiftedSolve for MinresSolve {
     fn resolvent(&self, g: MatRef<'_, f64>) -> Result<(Mat<f64>, Vec<PoleReport>), SolveError> {
-        let parts: Vec<(Mat<f64>, PoleReport)> = self
-            .terms
-            .par_iter()
-            .map(|term| self.term(term, g))
-            .collect::<Result<_, SolveError>>()?;
-        let mut out = Mat::<f64>::zeros(self.pair.n(), g.ncols());
-        let mut reports = Vec::with_capacity(parts.len());
-        for (m, r) in parts {
-            out += &m;
-            reports.push(r);
-        }
-        Ok((out, reports))
+        super::sum_over_poles(&self.terms, self.pair.n(), g.ncols(), |term| self.term(term, g))
     }
 }
 

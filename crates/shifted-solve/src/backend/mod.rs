@@ -218,6 +218,25 @@ pub(crate) trait ShiftedSolve: Send + Sync + Debug {
     }
 }
 
+/// Σ over the poles of one term each (the resolvent sum of Eq. (12)), the terms computed in
+/// parallel: the one loop every per-pole backend shares.
+pub(crate) fn sum_over_poles<T: Sync>(
+    terms: &[T],
+    n: usize,
+    ncols: usize,
+    term: impl Fn(&T) -> Result<(Mat<f64>, PoleReport), SolveError> + Sync,
+) -> Result<(Mat<f64>, Vec<PoleReport>), SolveError> {
+    use rayon::prelude::*;
+    let parts: Vec<(Mat<f64>, PoleReport)> = terms.par_iter().map(&term).collect::<Result<_, SolveError>>()?;
+    let mut out = Mat::<f64>::zeros(n, ncols);
+    let mut reports = Vec::with_capacity(parts.len());
+    for (m, r) in parts {
+        out += &m;
+        reports.push(r);
+    }
+    Ok((out, reports))
+}
+
 /// ‖num‖/‖den‖ from squared sums (the absolute residual for a zero right-hand side).
 pub(crate) fn relative(num_sq: f64, den_sq: f64) -> f64 {
     if den_sq == 0.0 {
