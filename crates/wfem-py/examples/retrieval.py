@@ -75,8 +75,9 @@ def main() -> int:
         bag_rows.append({"path": r["path"], "bag": voc.bag(descriptors[r["path"]], np.asarray(B.sum(axis=1)).ravel())})
 
     index_path = args.index or Path(tempfile.mkdtemp()) / "index.sqlite"
-    index = wfem.RetrievalIndex.create(index_path, voc, descriptor="sihks", k=args.k, metric="l1",
-                                       overwrite=True)
+    # This custom recipe (a vocabulary on every third shape, L1) goes into the low-level store;
+    # wfem.RetrievalIndex.build(paths, out) is the CLI's default recipe in the same kind of file.
+    index = wfem.IndexStore.create(index_path, voc.size, overwrite=True)
     index.add([r["path"] for r in bag_rows], np.array([r["bag"] for r in bag_rows]),
               infos=[labels_by_name[r["path"]] for r in bag_rows])
     print(f"index {index_path}: {len(index)} shapes, {voc.size} words")
@@ -84,7 +85,7 @@ def main() -> int:
     ap_values = []
     t1 = time.perf_counter()
     for r in bag_rows:
-        hits = [h for h in index.query(r["bag"], k=len(index)) if h.name != r["path"]]
+        hits = [h for h in index.search(r["bag"], k=len(index), metric="l1") if h.name != r["path"]]
         relevant = [h.info == labels_by_name[r["path"]] for h in hits]
         value = wfem.average_precision(relevant)
         if value is not None:
@@ -92,7 +93,7 @@ def main() -> int:
     per_query = (time.perf_counter() - t1) / len(bag_rows)
     print(f"mAP {np.mean(ap_values):.3f} over {len(ap_values)} queries ({per_query * 1e3:.1f} ms per query)")
     for r in bag_rows[:: max(1, len(bag_rows) // 4)]:
-        hits = [h for h in index.query(r["bag"], k=4) if h.name != r["path"]][:3]
+        hits = [h for h in index.search(r["bag"], k=4, metric="l1") if h.name != r["path"]][:3]
         print(f"  {Path(r['path']).name:>14} → " + ", ".join(f"{Path(h.name).name} ({h.distance:.3f})" for h in hits))
     if client is not None:
         client.close()

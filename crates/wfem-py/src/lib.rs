@@ -7,6 +7,7 @@
 mod convert;
 mod errors;
 mod heat;
+mod index;
 mod mesh;
 mod retrieval;
 mod run;
@@ -27,5 +28,6 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     spectral::register(m)?;
     retrieval::register(m)?;
     store::register(m)?;
+    index::register(m)?;
     Ok(())
 }

@@ -59,3 +59,14 @@ def write_off(path: Path, V: np.ndarray, F: np.ndarray) -> None:
             f.write(f"{float(v[0])!r} {float(v[1])!r} {float(v[2])!r}\n")
         for t in F:
             f.write(f"3 {t[0]} {t[1]} {t[2]}\n")
+
+
+def index_meshes(tmp_path):
+    """Six mesh files: three shapes, each at scales 1 and 1.5 (retrieval tests)."""
+    paths = []
+    for i, (V, F) in enumerate([wfem.generate.icosphere(2), wfem.generate.bumpy(2), wfem.generate.torus()]):
+        for s in (1.0, 1.5):
+            p = tmp_path / f"m{i}_{s}.off"
+            write_off(p, V * s, F)
+            paths.append(p)
+    return paths

@@ -13,7 +13,7 @@ import pytest
 import scipy.io
 
 import wfem
-from conftest import REPO, write_off
+from conftest import REPO, index_meshes, write_off
 
 
 @pytest.fixture(scope="module")
@@ -68,3 +68,22 @@ def test_operators_match_the_cli(cli, mesh_file, tmp_path):
     for name, m in [("stiffness", L), ("mass", B), ("lumped_mass", D)]:
         other = scipy.io.mmread(tmp_path / "ops" / f"{name}.mtx").tocsc()
         assert abs(other - m).max() <= 1e-15 * abs(m).max(), name
+
+
+def test_retrieval_index_is_shared_with_the_cli(cli, tmp_path):
+    # An index built in Python answers `wfem retrieval query`, and one built by the CLI opens
+    # here and ranks the same way.
+    paths = index_meshes(tmp_path)
+    py_index = wfem.RetrievalIndex.build(paths, tmp_path / "py.sqlite", words=8)
+    run(cli, "retrieval", "build", *paths, "--out", tmp_path / "cli.sqlite", "--words", "8")
+    cli_index = wfem.RetrievalIndex.open(tmp_path / "cli.sqlite")
+    V, F = wfem.read_mesh(paths[2])
+    a = py_index.query_mesh(V, F, k=6)
+    b = cli_index.query_mesh(V, F, k=6)
+    assert [n for n, _ in a] == [n for n, _ in b]
+    np.testing.assert_allclose([d for _, d in a], [d for _, d in b], atol=1e-9)
+    out = subprocess.run(
+        [str(cli), "retrieval", "query", str(tmp_path / "py.sqlite"), str(paths[2]), "--top", "6"],
+        capture_output=True, text=True, check=True,
+    ).stdout
+    assert [line.split("\t")[2] for line in out.splitlines()] == [n for n, _ in a]

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import wfem
-from conftest import write_off
+from conftest import index_meshes, write_off
 
 
 def random_bags(n, d, seed=0):
@@ -124,22 +124,21 @@ def test_concurrent_readers_threads_and_process(tmp_path):
 
 
 def test_retrieval_index_on_meshes(tmp_path):
-    paths = []
-    for i, (V, F) in enumerate([wfem.generate.icosphere(2), wfem.generate.bumpy(2), wfem.generate.torus()]):
-        for s in (1.0, 1.5):
-            p = tmp_path / f"m{i}_{s}.off"
-            write_off(p, V * s, F)
-            paths.append(p)
-    sihks = {"time_unit": 1e-4, "tau_min": 0.0, "tau_max": 22.0}
-    D = np.vstack([wfem.descriptor(*wfem.read_mesh(p), kind="sihks", k=30, sihks=sihks) for p in paths])
-    voc = wfem.Vocabulary.train(D, 10, seed=0)
-    index = wfem.RetrievalIndex.create(tmp_path / "idx.sqlite", voc, descriptor="sihks", k=30, sihks=sihks)
-    index.add_meshes(paths[:4])
-    index.add_meshes(paths[4:])
-    assert len(index) == 6
-    again = wfem.RetrievalIndex.open(tmp_path / "idx.sqlite", readonly=True)
-    np.testing.assert_array_equal(again.vocabulary.words, voc.words)
+    paths = index_meshes(tmp_path)
+    index = wfem.RetrievalIndex.build(paths[:4], tmp_path / "idx.sqlite", words=8)
+    assert len(index) == 4
+    assert index.add_meshes(paths[4:]) == 2
+    assert len(index) == 6 and index.names == [str(p) for p in paths]
+    assert "vocabulary" in index.settings
+    again = wfem.RetrievalIndex.open(tmp_path / "idx.sqlite")
     V, F = wfem.read_mesh(paths[2])
     hits = again.query_mesh(V * 3.0, F, k=2)
-    # SI-HKS is scale invariant: the same shape at another scale ranks first.
-    assert {h.name for h in hits} == {str(paths[2]), str(paths[3])}
+    # The default SI-HKS is exactly scale invariant: the same shape at other scales ranks first.
+    assert {name for name, _ in hits} == {str(paths[2]), str(paths[3])}
+    assert hits[0][1] < 1e-4
+    # Adding a name twice is refused, and the index is unchanged.
+    with pytest.raises(wfem.WfemError):
+        index.add_meshes(paths[:1])
+    assert len(index) == 6
+    with pytest.raises(wfem.WfemError):
+        wfem.RetrievalIndex.open(tmp_path / "m0_1.0.off")

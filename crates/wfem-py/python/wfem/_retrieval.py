@@ -305,97 +305,69 @@ class IndexStore:
 
 
 class RetrievalIndex:
-    """Shape retrieval over a collection (Shape Google with wFEM descriptors), stored in one SQLite
-    file: the descriptor settings and the vocabulary as metadata, one normalised bag of features
-    per shape. Adding shapes does not rebuild anything.
+    """The retrieval index of wfem, shared with the command line: one SQLite file holding the
+    recipe (descriptor, time window, z-score statistics, vocabulary, bag settings, distance) and
+    one signature per shape. A file built here is queried by ``wfem retrieval query`` and a file
+    built by ``wfem retrieval build`` opens here.
 
-    ``bag(mesh) = Θᵀa / Σa`` with Θ the soft assignment of the shape's dense descriptor to the
-    vocabulary and ``a = B·1`` the vertex areas; shapes are ranked by ``metric`` between bags.
+    The default recipe (paper Sect. 5, beyond Shape Google): SI-HKS of the wFEM kernel with
+    times in units of the surface area (exactly scale invariant), z-scored dimensions, 48 words,
+    soft assignment, area-weighted bags, χ² distance. Training the vocabulary on the indexed
+    shapes themselves is optimistic when the same shapes are then used to measure retrieval:
+    train one on other shapes with ``wfem retrieval vocab`` and pass it as ``vocabulary``.
+    Adding shapes appends in one transaction (nothing is rebuilt); a query is one descriptor
+    computation and a parallel scan of the file.
     """
 
-    _SETTINGS = "settings"
-    _VOCABULARY = "vocabulary"
-
-    def __init__(self, store: IndexStore) -> None:
-        raw = store.meta(self._SETTINGS)
-        voc = store.meta(self._VOCABULARY)
-        if raw is None or voc is None:
-            raise InvalidInputError(
-                f"{store.path} holds no retrieval settings/vocabulary (not written by RetrievalIndex.create)",
-                "NotAnIndex",
-            )
-        self.store = store
-        self.settings: dict[str, Any] = json.loads(raw)
-        self.vocabulary = Vocabulary.from_dict(json.loads(voc))
+    def __init__(self, inner: Any) -> None:
+        self._i = inner
 
     @classmethod
-    def create(
+    def build(
         cls,
-        path: str | os.PathLike[str],
-        vocabulary: Vocabulary,
+        paths: Iterable[str | os.PathLike[str]],
+        out: str | os.PathLike[str],
         *,
-        descriptor: str = "sihks",
-        k: int = 100,
-        times: Sequence[float] | None = None,
-        sihks: dict[str, Any] | None = None,
-        metric: str = "l1",
-        overwrite: bool = False,
+        vocabulary: str | os.PathLike[str] | None = None,
+        words: int | None = None,
+        seed: int = 0,
     ) -> "RetrievalIndex":
-        """A new, empty index with these settings (recorded in the file)."""
-        if descriptor not in DESCRIPTORS:
-            raise InvalidInputError(f"descriptor {descriptor!r} is not one of {DESCRIPTORS}", "InvalidParameter")
-        if metric not in ("l1", "chi2", "euclidean"):
-            raise InvalidInputError(f"metric {metric!r} is not one of l1, chi2, euclidean", "InvalidParameter")
-        store = IndexStore.create(path, vocabulary.size, overwrite=overwrite)
-        settings = {
-            "descriptor": descriptor,
-            "k": int(k),
-            "times": None if times is None else [float(t) for t in times],
-            "sihks": sihks,
-            "metric": metric,
-        }
-        store.set_meta(cls._SETTINGS, json.dumps(settings))
-        store.set_meta(cls._VOCABULARY, json.dumps(vocabulary.to_dict()))
-        return cls(store)
+        """Indexes mesh files with the default recipe into a new file ``out`` (replaced
+        atomically if it exists)."""
+        ps = [os.fspath(p) for p in paths]
+        voc = None if vocabulary is None else os.fspath(vocabulary)
+        return cls(_wfem.RetrievalIndex.build(ps, os.fspath(out), voc, words, seed))
 
     @classmethod
-    def open(cls, path: str | os.PathLike[str], *, readonly: bool = False) -> "RetrievalIndex":
-        return cls(IndexStore.open(path, readonly=readonly))
+    def open(cls, path: str | os.PathLike[str]) -> "RetrievalIndex":
+        """Opens an index file (checked: format, settings, sizes)."""
+        return cls(_wfem.RetrievalIndex.open(os.fspath(path)))
 
     def __len__(self) -> int:
-        return len(self.store)
+        return int(self._i.__len__())
 
     def __repr__(self) -> str:
-        return f"RetrievalIndex({self.store.path!r}, shapes={len(self)}, descriptor={self.settings['descriptor']!r})"
+        return f"RetrievalIndex({self.path!r}, shapes={len(self)})"
 
-    def bag(self, V: Any, F: Any = None) -> np.ndarray:
-        """The normalised bag of features of a mesh with the index's settings."""
+    @property
+    def path(self) -> str:
+        return str(self._i.path)
+
+    @property
+    def names(self) -> list[str]:
+        """The indexed names (the paths as given), in insertion order."""
+        return list(self._i.names())
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        """The recipe recorded in the file."""
+        return dict(json.loads(self._i.settings()))
+
+    def add_meshes(self, paths: Iterable[str | os.PathLike[str]]) -> int:
+        """Appends mesh files (named by the path as given) in one transaction; returns how many."""
+        return int(self._i.add_paths([os.fspath(p) for p in paths]))
+
+    def query_mesh(self, V: Any, F: Any = None, k: int = 10) -> list[tuple[str, float]]:
+        """The k indexed shapes nearest to a mesh: ``[(name, distance)]``, nearest first."""
         v, f = as_mesh(V, F)
-        s = self.settings
-        d = descriptor(v, f, s["descriptor"], k=s["k"], times=s["times"], sihks=s["sihks"])
-        areas = HeatKernel(v, f).vertex_areas
-        return self.vocabulary.bag(d, areas)
-
-    def add(self, names: Sequence[str], bags: Any, infos: Sequence[str] | None = None) -> list[int]:
-        """Appends precomputed bags (one transaction)."""
-        return self.store.add(names, bags, infos)
-
-    def add_meshes(self, paths: Iterable[str | os.PathLike[str]]) -> list[int]:
-        """Reads each mesh, computes its bag and appends all of them in one transaction (named
-        by the path as given)."""
-        from ._mesh import read_mesh
-
-        names, bags = [], []
-        for p in paths:
-            V, F = read_mesh(p)
-            names.append(os.fspath(p))
-            bags.append(self.bag(V, F))
-        return self.add(names, np.asarray(bags))
-
-    def query(self, bag: Any, k: int = 10) -> list[Hit]:
-        """The k indexed shapes nearest to a bag."""
-        return self.store.search(bag, k, metric=self.settings["metric"])
-
-    def query_mesh(self, V: Any, F: Any = None, k: int = 10) -> list[Hit]:
-        """The k indexed shapes nearest to a mesh."""
-        return self.query(self.bag(V, F), k)
+        return [(str(n), float(d)) for n, d in self._i.query(v, f, k)]

@@ -1,0 +1,147 @@
+//! The retrieval index shared with the CLI: shape-retrieval's model (the default recipe of
+//! `wfem retrieval build`) in retrieval-store's SQLite file (`retrieval_store::SqliteIndex`).
+//! A file built here is queried by `wfem retrieval query` and vice versa.
+
+use crate::convert::mesh_in;
+use crate::errors::Error;
+use crate::run::run;
+use mesh_fem::io::{load, LoadOptions};
+use mesh_fem::TriMesh;
+use numpy::PyReadonlyArray2;
+use pyo3::prelude::*;
+use retrieval_store::SqliteIndex;
+use shape_retrieval::{IndexEntry, IndexStore, JsonFile, RetrievalIndex, RetrievalSettings, VocabularyStore};
+use std::path::PathBuf;
+
+/// Rust side of `wfem.RetrievalIndex`.
+#[pyclass(name = "RetrievalIndex", module = "wfem._wfem", frozen)]
+pub struct PyRetrievalIndex {
+    path: PathBuf,
+}
+
+fn read_all(paths: &[PathBuf]) -> Result<Vec<(String, TriMesh)>, Error> {
+    paths
+        .iter()
+        .map(|p| Ok((p.display().to_string(), load(p, &LoadOptions::default())?.0)))
+        .collect()
+}
+
+fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
+    Ok(SqliteIndex::new(path).open()?.0)
+}
+
+#[pymethods]
+impl PyRetrievalIndex {
+    /// Indexes mesh files with the default recipe (SI-HKS in area units, z-scored, 48 words,
+    /// soft assignment, area weights, χ²) into a new SQLite file; `vocabulary`: a vocabulary
+    /// file of `wfem retrieval vocab` to reuse instead of training on these shapes.
+    #[staticmethod]
+    #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0))]
+    fn build(
+        py: Python<'_>,
+        paths: Vec<PathBuf>,
+        out: PathBuf,
+        vocabulary: Option<PathBuf>,
+        words: Option<usize>,
+        seed: u64,
+    ) -> PyResult<Self> {
+        let path = out.clone();
+        run(py, move |_| {
+            let mut settings = RetrievalSettings::default();
+            if let Some(w) = words {
+                settings.training.words = w;
+            }
+            settings.training.seed = seed;
+            let vocabulary = vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?;
+            let meshes = read_all(&paths)?;
+            let index = RetrievalIndex::build(&meshes, &settings, vocabulary)?;
+            SqliteIndex::new(&out).save_index(&index)?;
+            Ok(())
+        })?;
+        Ok(Self { path })
+    }
+
+    /// Opens an index file (written by `build` here or by `wfem retrieval build`).
+    #[staticmethod]
+    fn open(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let p = path.clone();
+        run(py, move |_| open(&p).map(|_| ()))?;
+        Ok(Self { path })
+    }
+
+    /// The file.
+    #[getter]
+    fn path(&self) -> String {
+        self.path.display().to_string()
+    }
+
+    /// The indexed names, in insertion order.
+    fn names(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        let path = self.path.clone();
+        run(py, move |_| {
+            let (_, store) = SqliteIndex::new(&path).open()?;
+            Ok(store.shapes()?.into_iter().map(|s| s.name).collect())
+        })
+    }
+
+    /// The recipe recorded in the file (descriptor, window, words, distance, …) as JSON.
+    fn settings(&self, py: Python<'_>) -> PyResult<String> {
+        let path = self.path.clone();
+        run(py, move |_| Ok(shape_retrieval::index_settings(&open(&path)?)?))
+    }
+
+    /// Appends mesh files (bags from the stored vocabulary; one transaction; nothing rebuilt).
+    fn add_paths(&self, py: Python<'_>, paths: Vec<PathBuf>) -> PyResult<usize> {
+        let path = self.path.clone();
+        run(py, move |_| {
+            let index = SqliteIndex::new(&path);
+            let settings = index.open()?.0;
+            let entries = read_all(&paths)?
+                .iter()
+                .map(|(name, mesh)| {
+                    let features = settings.features(name, mesh)?;
+                    Ok(IndexEntry {
+                        name: name.clone(),
+                        signature: settings.signature(&features)?,
+                    })
+                })
+                .collect::<Result<Vec<_>, Error>>()?;
+            index.append(&entries)?;
+            Ok(entries.len())
+        })
+    }
+
+    /// The k nearest indexed shapes to a mesh: [(name, distance)], nearest first.
+    #[pyo3(signature = (v, f, k=10))]
+    fn query<'py>(
+        &self,
+        py: Python<'py>,
+        v: PyReadonlyArray2<'py, f64>,
+        f: PyReadonlyArray2<'py, i64>,
+        k: usize,
+    ) -> PyResult<Vec<(String, f64)>> {
+        let mesh = mesh_in(py, &v, &f)?;
+        let path = self.path.clone();
+        run(py, move |_| {
+            let index = SqliteIndex::new(&path);
+            let (settings, store) = index.open()?;
+            let features = settings.features("query", &mesh)?;
+            let signature = settings.signature(&features)?;
+            Ok(index
+                .search(&settings, &store, &signature, k)?
+                .into_iter()
+                .map(|h| (h.name, h.distance))
+                .collect())
+        })
+    }
+
+    fn __len__(&self, py: Python<'_>) -> PyResult<usize> {
+        let path = self.path.clone();
+        run(py, move |_| Ok(SqliteIndex::new(&path).open()?.1.len()?))
+    }
+}
+
+/// Registers the class.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyRetrievalIndex>()
+}
