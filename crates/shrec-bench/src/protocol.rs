@@ -11,7 +11,7 @@
 //!   comes from the same null shape. A shape of strength 5 is therefore not in the database of
 //!   column "≤ 1" (it would count, as relevant, against every clean query). The report also gives
 //!   the same queries against the full database (every strength), for reference.
-//! * **Against a clean collection** ([`ShrecReport::clean`]): the same queries ranked against the
+//! * **Against a clean collection** ([`ShrecReport::cumulative_clean`]): the same queries ranked against the
 //!   76 clean TOSCA shapes; relevant = the TOSCA shapes of the query's family (class).
 //! * **TOSCA-76** ([`leave_one_out`]): every shape queries the other 75; relevant = same class
 //!   (name without its trailing digits).

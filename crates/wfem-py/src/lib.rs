@@ -1,8 +1,8 @@
 //! `wfem._wfem`: the compiled part of the Python package `wfem` (see `python/wfem`, which
 //! converts and checks arguments, builds `scipy.sparse` matrices and carries the docstrings).
 //!
-//! Every long call runs without the GIL and can be interrupted with Ctrl-C ([`run`]); every
-//! Rust error becomes an exception of `wfem._errors` keeping the culprit ([`errors`]).
+//! Every long call runs without the GIL and can be interrupted with Ctrl-C (`run.rs`); every
+//! Rust error becomes an exception of `wfem._errors` keeping the culprit (`errors.rs`).
 
 mod convert;
 mod errors;
