@@ -78,17 +78,20 @@ pub(crate) struct Probes {
 
 impl Probes {
     /// The probes of `method` for an operator whose column at vertex i is `col = A e_i` (the
-    /// sample that sets the colouring distance), on the mesh graph `pattern`.
+    /// sample that sets the colouring distance), on the mesh graph `pattern`. A colouring that
+    /// would need more than `max_columns` (or n/4) colours gives up early and falls back to
+    /// the n unit columns.
     pub(crate) fn new(
         pattern: SymbolicSparseColMatRef<'_, usize>,
         method: DiagonalMethod,
         i: usize,
         col: &[f64],
+        max_columns: usize,
     ) -> Self {
         let n = pattern.nrows();
         let probed = match method {
             DiagonalMethod::Exact => None,
-            DiagonalMethod::Probing { tol } => colouring(pattern, i, col, tol),
+            DiagonalMethod::Probing { tol } => colouring(pattern, i, col, tol, (n / 4).min(max_columns)),
         };
         match probed {
             Some((colour, n_colours, hops, relative_tail)) => Self {
@@ -155,19 +158,20 @@ pub(crate) fn diagonal(
     col: &[f64],
     apply: &BlockOperator<'_>,
 ) -> Result<(Vec<f64>, DiagonalInfo), HeatError> {
-    let probes = Probes::new(pattern, method, i, col);
+    let probes = Probes::new(pattern, method, i, col, usize::MAX);
     let mut d = probes.diagonals(block, 1, &mut |p| Ok(vec![apply(p)?]))?;
     Ok((d.remove(0), probes.info))
 }
 
 /// Chooses p from the tail of `col = A e_i` and colours the graph at distance p.
 /// Returns (colour of each vertex, number of colours, p, relative tail), or `None` when more
-/// than n/4 colours would be needed.
+/// than `max_colours` colours would be needed.
 fn colouring(
     pattern: SymbolicSparseColMatRef<'_, usize>,
     i: usize,
     col: &[f64],
     tol: f64,
+    max_colours: usize,
 ) -> Option<(Vec<usize>, usize, usize, f64)> {
     let n = pattern.nrows();
     let (ptr, idx) = (pattern.col_ptr(), pattern.row_idx());
@@ -200,8 +204,16 @@ fn colouring(
     if tail > tol * aii {
         return None;
     }
+    // Any two vertices of the ball of radius ⌊p/2⌋ around i are within p edges of each other,
+    // so they all need different colours: when that ball alone exceeds the limit, give up
+    // before the colouring (which costs n × |ball(p)| and dominated a refused probe).
+    let half_ball: usize = (0..per_depth.len().min(hops / 2 + 1))
+        .map(|d| dist.iter().filter(|&&x| x == d).count())
+        .sum();
+    if half_ball > max_colours {
+        return None;
+    }
     // Greedy distance-p colouring.
-    let max_colours = n / 4;
     let mut colour = vec![usize::MAX; n];
     let mut stamp = vec![usize::MAX; n];
     let mut used: Vec<usize> = Vec::new();

@@ -412,7 +412,7 @@ impl HeatKernel {
             KernelDiagonal::MatrixDiagonal => self.apply_times(unit.as_ref(), &[t_max]),
         }?;
         let col: Vec<f64> = sample.values[0].col(0).iter().copied().collect();
-        let probes = Probes::new(self.ops.pair().pattern(), params.method, i, &col);
+        let probes = Probes::new(self.ops.pair().pattern(), params.method, i, &col, params.max_columns);
         if probes.info.columns > params.max_columns {
             return Err(HeatError::InvalidParameter {
                 name: "max_columns",
