@@ -57,10 +57,6 @@ impl From<HksMethodArg> for HksMethod {
     }
 }
 
-/// Work --method auto spends on the exact diagonal at most: probe columns × vertices (each
-/// column is one kernel application): every column on a mesh of 1K vertices, ≈140 on 28K.
-const AUTO_WORK: usize = 4_000_000;
-
 /// Default number of automatic times.
 const DEFAULT_SCALES: usize = 16;
 
@@ -198,17 +194,10 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
             )
         })
     };
-    // Auto takes the exact diagonal only where it is cheap (at most AUTO_WORK / n probe
-    // columns, a few times the cost of the eigenpairs); --method exact goes up to the library's
-    // limit (4096 columns: minutes on a large mesh).
+    // Auto takes the exact diagonal only where it is cheap (shape_retrieval::AUTO_WORK);
+    // --method exact goes up to the library's limit (4096 columns: minutes on a large mesh).
     let diagonal = match args.method {
-        HksMethodArg::Auto => DiagonalParams {
-            method: wfem_heat::diagonal::DiagonalMethod::Probing {
-                tol: shape_retrieval::DEFAULT_TRUNCATION_TOL,
-            },
-            max_columns: (AUTO_WORK / n.max(1)).clamp(64, DiagonalParams::default().max_columns),
-            ..Default::default()
-        },
+        HksMethodArg::Auto => shape_retrieval::auto_diagonal_params(n),
         _ => DiagonalParams::default(),
     };
     let (values, used, sources) = match spectral {

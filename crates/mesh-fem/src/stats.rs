@@ -16,7 +16,7 @@
 
 use crate::mesh::{cross, dot, norm, sub};
 use crate::topology::Topology;
-use crate::validate::bbox_diagonal;
+use crate::vec3::bbox_diagonal;
 use crate::TriMesh;
 use rayon::prelude::*;
 use serde::Serialize;

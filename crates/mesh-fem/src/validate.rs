@@ -23,6 +23,7 @@
 
 use crate::mesh::{cross, dot, mul_pow2, neg, norm, scaled_edges, sub};
 use crate::topology::{Topology, NONE};
+use crate::vec3::bbox_diagonal;
 use crate::{MeshError, TriMesh};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -802,8 +803,6 @@ pub fn repair(mesh: &TriMesh, opts: &RepairOptions) -> Result<(TriMesh, RepairRe
     let repaired = TriMesh::new(new_positions, new_faces)?;
     Ok((repaired, report))
 }
-
-pub(crate) use crate::vec3::bbox_diagonal;
 
 /// For each vertex, the earlier kept vertex it merges into (itself if kept): the nearest
 /// kept vertex within distance `tol`, found through a hash grid of cell size `tol`.

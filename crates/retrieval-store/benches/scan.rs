@@ -13,16 +13,9 @@ use std::time::Instant;
 const WORDS: usize = 48;
 
 fn histogram(seed: u64) -> Vec<f64> {
-    // splitmix64: a cheap, well-spread deterministic generator.
-    let mut s = seed;
-    let mut next = move || {
-        s = s.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = s;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let mut v: Vec<f64> = (0..WORDS).map(|_| next().powi(3)).collect();
+    // The workspace's one seeded generator.
+    let mut rng = shifted_solve::rng::SplitMix64::new(seed);
+    let mut v: Vec<f64> = (0..WORDS).map(|_| rng.next_f64().powi(3)).collect();
     let total: f64 = v.iter().sum();
     v.iter_mut().for_each(|x| *x /= total);
     v

@@ -112,10 +112,18 @@ impl SqliteIndex {
             None => return Ok(Vec::new()),
         };
         settings.distance(query, &first)?;
+        thread_local! {
+            // One f64 copy of the current row per scanning thread (no allocation per row).
+            static ROW: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+        }
         let hits = store
             .search(k, |row| {
-                let row: Vec<f64> = row.iter().map(|&x| f64::from(x)).collect();
-                settings.row_distance(query, &row)
+                ROW.with(|buffer| {
+                    let mut buffer = buffer.borrow_mut();
+                    buffer.clear();
+                    buffer.extend(row.iter().map(|&x| f64::from(x)));
+                    settings.row_distance(query, &buffer)
+                })
             })
             .map_err(|e| self.storage(e))?;
         Ok(hits
@@ -137,13 +145,11 @@ impl SqliteIndex {
     pub fn append(&self, entries: &[IndexEntry]) -> Result<(), RetrievalError> {
         let mut store = Store::open(&self.path).map_err(|e| self.storage(e))?;
         let settings = self.settings(&store)?;
-        // The same checks as a loaded index: build a one-entry index per shape.
-        for e in entries {
-            index_from_settings(
-                &index_settings(&settings).map_err(|e| self.located(e))?,
-                vec![e.clone()],
-            )?;
-        }
+        // The same checks as a loaded index, on the new entries.
+        index_from_settings(
+            &index_settings(&settings).map_err(|e| self.located(e))?,
+            entries.to_vec(),
+        )?;
         let rows: Vec<Vec<f64>> = entries.iter().map(row).collect();
         let batch: Vec<Entry<'_>> = entries
             .iter()

@@ -18,6 +18,26 @@ use wfem_heat::{DiagonalParams, HeatKernel, KernelDiagonal};
 /// Relative truncation bound below which [`HksMethod::Auto`] keeps the spectral sum.
 pub const DEFAULT_TRUNCATION_TOL: f64 = 1e-6;
 
+/// Work [`HksMethod::Auto`] spends on the exact diagonal at most by default: probe columns ×
+/// vertices (each column is one kernel application) — every column on a mesh of 1K vertices,
+/// ≈140 on 28K.
+pub const AUTO_WORK: usize = 4_000_000;
+
+/// The probing [`HksMethod::Auto`] uses on a mesh of `n` vertices: a tail of
+/// [`DEFAULT_TRUNCATION_TOL`] (the accuracy asked of the spectral columns too) and at most
+/// [`AUTO_WORK`]`/n` columns (64 ..= 4096), so that auto never costs much more than the
+/// eigenpairs; [`HksMethod::Exact`] takes [`DiagonalParams::default`] (up to 4096 columns).
+pub fn auto_diagonal_params(n: usize) -> DiagonalParams {
+    let default = DiagonalParams::default();
+    DiagonalParams {
+        method: wfem_heat::diagonal::DiagonalMethod::Probing {
+            tol: DEFAULT_TRUNCATION_TOL,
+        },
+        max_columns: (AUTO_WORK / n.max(1)).clamp(64, default.max_columns),
+        ..default
+    }
+}
+
 /// How the heat kernel signature is evaluated.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum HksMethod {

@@ -62,8 +62,9 @@ pub fn symmetric_eigen(a: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>), Solve
 }
 
 /// (2⁻ᵉ, 2ᵉ) with 2ᵉ ≈ `big` ((1, 1) for zero or non-finite): scaling by a power of two is
-/// exact, so the eigenvectors are unchanged and the eigenvalues scale exactly.
-pub(crate) fn pow2_scale(big: f64) -> (f64, f64) {
+/// exact, so the eigenvectors are unchanged and the eigenvalues scale exactly (and a linear
+/// map of a field of 1e308 computed on the scaled field does not overflow).
+pub fn pow2_scale(big: f64) -> (f64, f64) {
     if big > 0.0 && big.is_finite() {
         let e = big.log2().round().clamp(-1000.0, 1000.0) as i32;
         (2f64.powi(-e), 2f64.powi(e))

@@ -70,7 +70,9 @@ pub use function::{
     LanczosOutcome, LanczosParams,
 };
 pub use iterative::{MinresParams, Preconditioner, PreconditionerShift};
-pub use lanczos::{largest_ritz_value, symmetric_eigen, LanczosOperator, LanczosProcess, Reorthogonalization};
+pub use lanczos::{
+    largest_ritz_value, pow2_scale, symmetric_eigen, LanczosOperator, LanczosProcess, Reorthogonalization,
+};
 pub use operators::OperatorPair;
 pub use poles::{RationalApprox, DEFAULT_DEGREE, PAPER_DEGREE, SHIPPED_DEGREES};
 pub use solver::{RationalFactors, ShiftedSolver};

@@ -202,24 +202,13 @@ pub fn global_component(
     check::time(t)?;
     // Every rule is homogeneous of degree 1 in f: work on f/2ᵉ with 2ᵉ ≈ max|f| (exact), so
     // that the M-products of a field of 1e308 do not overflow, and scale back.
-    let (down, up) = pow2_scale(f);
+    let (down, up) = shifted_solve::pow2_scale(linf(f));
     if down != 1.0 {
         let scaled: Vec<f64> = f.iter().map(|x| x * down).collect();
         let g = global_component_unit(kernel, anchors, &scaled, t, coefficients)?;
         return Ok(g.into_iter().map(|x| x * up).collect());
     }
     global_component_unit(kernel, anchors, f, t, coefficients)
-}
-
-/// (2⁻ᵉ, 2ᵉ) with 2ᵉ ≈ max|f| ((1, 1) for a zero field).
-fn pow2_scale(f: &[f64]) -> (f64, f64) {
-    let amax = linf(f);
-    if amax > 0.0 && amax.is_finite() {
-        let e = amax.log2().round().clamp(-1000.0, 1000.0) as i32;
-        (2f64.powi(-e), 2f64.powi(e))
-    } else {
-        (1.0, 1.0)
-    }
 }
 
 /// [`global_component`] of a validated field of moderate size.

@@ -180,12 +180,15 @@ fn colouring(
     dist[i] = 0;
     let mut queue = std::collections::VecDeque::from([i]);
     let mut per_depth: Vec<f64> = Vec::new();
+    let mut count_per_depth: Vec<usize> = Vec::new();
     while let Some(v) = queue.pop_front() {
         let d = dist[v];
         if per_depth.len() <= d {
             per_depth.resize(d + 1, 0.0);
+            count_per_depth.resize(d + 1, 0);
         }
         per_depth[d] += col[v].abs();
+        count_per_depth[d] += 1;
         for &w in &idx[ptr[v]..ptr[v + 1]] {
             if dist[w] == usize::MAX {
                 dist[w] = d + 1;
@@ -207,9 +210,7 @@ fn colouring(
     // Any two vertices of the ball of radius ⌊p/2⌋ around i are within p edges of each other,
     // so they all need different colours: when that ball alone exceeds the limit, give up
     // before the colouring (which costs n × |ball(p)| and dominated a refused probe).
-    let half_ball: usize = (0..per_depth.len().min(hops / 2 + 1))
-        .map(|d| dist.iter().filter(|&&x| x == d).count())
-        .sum();
+    let half_ball: usize = count_per_depth.iter().take(hops / 2 + 1).sum();
     if half_ball > max_colours {
         return None;
     }

@@ -355,17 +355,11 @@ impl HeatKernel {
             });
         }
         let t_max = times.iter().copied().fold(0.0f64, f64::max);
-        let apply = |p: MatRef<'_, f64>, ts: &[f64]| -> Result<TimeSeries, HeatError> {
-            match which {
-                KernelDiagonal::KernelValue => self.apply_kernel_matrix_times(p, ts),
-                KernelDiagonal::MatrixDiagonal => self.apply_times(p, ts),
-            }
-        };
         let n = self.n();
         let probes = self.probes(t_max, which, params)?;
         let mut estimates: Vec<Option<f64>> = vec![None; times.len()];
         let diagonals = probes.diagonals(params.block, times.len(), &mut |p| {
-            let series = apply(p.as_ref(), times)?;
+            let series = self.apply_diagonal_kind(which, p.as_ref(), times)?;
             for (e, s) in estimates.iter_mut().zip(&series.error_estimates) {
                 *e = match (*e, *s) {
                     (Some(a), Some(b)) => Some(a.max(b)),
@@ -400,6 +394,20 @@ impl HeatKernel {
         Ok(self.probes(t, which, params)?.info)
     }
 
+    /// The operator whose diagonal `which` names, applied to a block at several times:
+    /// `H_t P` for the kernel value, `K_t P` for the matrix diagonal.
+    fn apply_diagonal_kind(
+        &self,
+        which: KernelDiagonal,
+        p: MatRef<'_, f64>,
+        ts: &[f64],
+    ) -> Result<TimeSeries, HeatError> {
+        match which {
+            KernelDiagonal::KernelValue => self.apply_kernel_matrix_times(p, ts),
+            KernelDiagonal::MatrixDiagonal => self.apply_times(p, ts),
+        }
+    }
+
     /// The probes for times up to `t_max`: a sample column at the vertex of smallest area
     /// (where the kernel spans the most edges) at `t_max`, and its colouring.
     fn probes(&self, t_max: f64, which: KernelDiagonal, params: &DiagonalParams) -> Result<Probes, HeatError> {
@@ -407,10 +415,7 @@ impl HeatKernel {
         let areas = self.ops.vertex_areas();
         let i = (0..n).min_by(|&a, &b| areas[a].total_cmp(&areas[b])).unwrap_or(0);
         let unit = check::unit_columns(n, &[i])?;
-        let sample = match which {
-            KernelDiagonal::KernelValue => self.apply_kernel_matrix_times(unit.as_ref(), &[t_max]),
-            KernelDiagonal::MatrixDiagonal => self.apply_times(unit.as_ref(), &[t_max]),
-        }?;
+        let sample = self.apply_diagonal_kind(which, unit.as_ref(), &[t_max])?;
         let col: Vec<f64> = sample.values[0].col(0).iter().copied().collect();
         let probes = Probes::new(self.ops.pair().pattern(), params.method, i, &col, params.max_columns);
         if probes.info.columns > params.max_columns {

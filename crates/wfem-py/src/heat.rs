@@ -272,9 +272,10 @@ impl PyHeatKernel {
 
     /// The HKS by method (`shape_retrieval::signature_by_method`): `spectral` (n, T) is the
     /// truncated sum from `eigenvalues` at `times`; "auto" replaces the columns whose truncation
-    /// bound is above `tol` by the exact diagonal where probing needs at most `max_columns`
-    /// columns (tail 1e−6), "exact" replaces every column. Returns (values, [(source, bound)]).
-    #[pyo3(signature = (eigenvalues, spectral, times, convention="kernel_value", method="auto", tol=1e-6, max_columns=4096))]
+    /// bound is above `tol` by the exact diagonal where it is cheap
+    /// (`shape_retrieval::auto_diagonal_params`, as the CLI), "exact" replaces every column.
+    /// Returns (values, [(source, bound)]).
+    #[pyo3(signature = (eigenvalues, spectral, times, convention="kernel_value", method="auto", tol=1e-6))]
     #[allow(clippy::too_many_arguments)]
     fn hks_by_method<'py>(
         &self,
@@ -285,7 +286,6 @@ impl PyHeatKernel {
         convention: &str,
         method: &str,
         tol: f64,
-        max_columns: usize,
     ) -> PyResult<Sourced<'py>> {
         use shape_retrieval::{HksMethod, HksSource};
         use wfem_heat::DiagonalParams;
@@ -294,19 +294,9 @@ impl PyHeatKernel {
         let (method, params) = match method {
             "auto" => (
                 HksMethod::Auto { tol },
-                DiagonalParams {
-                    method: wfem_heat::diagonal::DiagonalMethod::Probing { tol: 1e-6 },
-                    max_columns,
-                    ..Default::default()
-                },
+                shape_retrieval::auto_diagonal_params(self.kernel.n()),
             ),
-            "exact" => (
-                HksMethod::Exact,
-                DiagonalParams {
-                    max_columns,
-                    ..Default::default()
-                },
-            ),
+            "exact" => (HksMethod::Exact, DiagonalParams::default()),
             "spectral" => (HksMethod::Spectral, DiagonalParams::default()),
             other => {
                 return Err(invalid_param(

@@ -228,9 +228,8 @@ def hks(
         from ._heat import HeatKernel
 
         K = HeatKernel(V, F, kernel=kernel)
-        budget = int(min(4096, max(64, 4_000_000 // max(1, K.n))))
         values, _ = K._k.hks_by_method(
-            [float(x) for x in basis.values], values, [float(t) for t in used], convention, "auto", 1e-6, budget
+            [float(x) for x in basis.values], values, [float(t) for t in used], convention, "auto", 1e-6
         )
         values = np.asarray(values)
     return (values, used) if return_times else values
