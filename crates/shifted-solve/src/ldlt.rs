@@ -29,6 +29,8 @@ use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use faer::sparse::SymbolicSparseColMatRef;
 use faer::{c64, Accum, Mat, MatMut, MatRef, Par};
 
+mod selinv;
+
 const ZERO: c64 = c64 { re: 0.0, im: 0.0 };
 const ONE: c64 = c64 { re: 1.0, im: 0.0 };
 

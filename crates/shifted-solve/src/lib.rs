@@ -23,6 +23,9 @@
 //!   preconditioned MINRES on the real 2n×2n form) and [`Backend::MultiShift`] (every pole in
 //!   one shift-and-invert Lanczos space, one real Cholesky per t).
 //! * [`RationalFactors`]: all poles of one t factored once, reused for many right-hand sides.
+//! * [`SelectedInversion`]: the resolvent sum (the heat-kernel matrix H_t) on the sparsity
+//!   pattern — its diagonal is the exact heat kernel signature — by selected inversion of the
+//!   LDLᵀ factors, at about the cost of the factorizations, for every t.
 //! * [`lanczos_function`] with [`KrylovParams`]: h(S)u for S = (M + γtL)⁻¹M, the engine of
 //!   wfem-heat's fast exact path and of the multi-shift backend.
 //! * [`largest_eigenpairs`] with [`BlockLanczosParams`]: thick-restart block Lanczos with
@@ -51,6 +54,7 @@ mod ldlt;
 mod operators;
 pub mod poles;
 pub mod rng;
+mod selected;
 mod solver;
 mod trisolve;
 
@@ -75,4 +79,5 @@ pub use lanczos::{
 };
 pub use operators::OperatorPair;
 pub use poles::{RationalApprox, DEFAULT_DEGREE, PAPER_DEGREE, SHIPPED_DEGREES};
+pub use selected::SelectedInversion;
 pub use solver::{RationalFactors, ShiftedSolver};

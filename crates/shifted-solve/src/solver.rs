@@ -4,7 +4,6 @@
 
 use crate::backend::{BatchReport, Pole, PoleReport, PreparedBackend, ShiftedSolve};
 use crate::{Backend, OperatorPair, RationalApprox, SolveError};
-use faer::c64;
 use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef};
 use std::sync::Arc;
@@ -141,19 +140,7 @@ impl ShiftedSolver {
     /// [`SolveError::Factorization`].
     pub fn factor(&self, approx: &RationalApprox, t: f64) -> Result<RationalFactors, SolveError> {
         check_time(t)?;
-        let mut poles: Vec<Pole> = approx
-            .poles
-            .iter()
-            .zip(approx.residues)
-            .map(|(&z, &c)| Pole { z, c, real: false })
-            .collect();
-        if let Some((z, c)) = approx.real_pole {
-            poles.push(Pole {
-                z: c64::new(z, 0.0),
-                c: c64::new(c, 0.0),
-                real: true,
-            });
-        }
+        let poles = Pole::all(approx);
         Ok(RationalFactors {
             pair: self.pair.clone(),
             t,

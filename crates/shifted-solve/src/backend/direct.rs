@@ -48,7 +48,7 @@ pub(crate) struct DirectSolve {
 }
 
 /// The power of two 2⁻ᵉ with 2ᵉ ≈ the largest |diagonal entry| of `tL − zM`.
-fn pow2_scale(pair: &OperatorPair, t: f64, z: c64) -> f64 {
+pub(crate) fn pow2_scale(pair: &OperatorPair, t: f64, z: c64) -> f64 {
     let l = pair.diagonal(1.0, 0.0);
     let m = pair.diagonal(0.0, 1.0);
     let big = l

@@ -113,6 +113,24 @@ pub(crate) struct Pole {
 }
 
 impl Pole {
+    /// The poles of `approx`: the upper-half-plane ones, then the real pole of odd degrees.
+    pub fn all(approx: &crate::RationalApprox) -> Vec<Pole> {
+        let mut poles: Vec<Pole> = approx
+            .poles
+            .iter()
+            .zip(approx.residues)
+            .map(|(&z, &c)| Pole { z, c, real: false })
+            .collect();
+        if let Some((z, c)) = approx.real_pole {
+            poles.push(Pole {
+                z: c64::new(z, 0.0),
+                c: c64::new(c, 0.0),
+                real: true,
+            });
+        }
+        poles
+    }
+
     /// Whether z is real (then `tL − zM` is a real matrix).
     pub fn on_real_axis(&self) -> bool {
         self.z.im == 0.0
