@@ -108,6 +108,16 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("kind".into(), json!(kind.name()));
     meta.insert("from_vertex".into(), json!(args.from));
+    if let Some(info) = dd.diagonal_info() {
+        meta.insert(
+            "diagonal".into(),
+            match info.hops {
+                Some(hops) => json!({ "name": "probing", "columns": info.columns, "hops": hops, "relative_tail": info.relative_tail }),
+                None if info.columns == 0 => json!({ "name": "selected inversion" }),
+                None => json!({ "name": "exact columns", "columns": info.columns }),
+            },
+        );
+    }
     meta.insert(
         "method".into(),
         args.degree.map_or(

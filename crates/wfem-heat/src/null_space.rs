@@ -177,6 +177,19 @@ impl NullSpace {
         (out, coefs)
     }
 
+    /// The diagonal of the t → ∞ limit: `H_∞ = Σ_c 1_c 1_cᵀ / 1_cᵀM1_c` (`matrix` false) or
+    /// `K_∞ = P = Σ_c 1_c 1_cᵀM / 1_cᵀM1_c` (`matrix` true); 0 outside deflated components.
+    pub(crate) fn limit_diagonal(&self, matrix: bool) -> Vec<f64> {
+        self.label
+            .iter()
+            .zip(&self.weights)
+            .map(|(l, &w)| match l {
+                Some(c) => (if matrix { w } else { 1.0 }) / self.masses[*c as usize],
+                None => 0.0,
+            })
+            .collect()
+    }
+
     /// `g ← (I − P) g + P f`, with the coefficients of P f from [`Self::split`].
     pub(crate) fn restore(&self, g: &mut Mat<f64>, coefs: &[Vec<f64>]) {
         for (j, a) in coefs.iter().enumerate() {

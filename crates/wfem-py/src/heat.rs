@@ -232,16 +232,17 @@ impl PyHeatKernel {
         Ok((mats_out(py, &series.values, n, k), series.error_estimates))
     }
 
-    /// The exact diagonal of the heat kernel at every t (n, T), by probing, without eigenpairs.
-    #[pyo3(signature = (times, convention="kernel_value", tol=1e-10, exact=false, max_columns=4096, block=64))]
+    /// The exact diagonal of the heat kernel at every t (n, T), without eigenpairs, by
+    /// `method` ([`diagonal_method`]).
+    #[pyo3(signature = (times, convention="kernel_value", method="selected_inversion", tol=1e-10, max_columns=4096, block=64))]
     #[allow(clippy::too_many_arguments)]
     fn diagonal<'py>(
         &self,
         py: Python<'py>,
         times: Vec<f64>,
         convention: &str,
+        method: &str,
         tol: f64,
-        exact: bool,
         max_columns: usize,
         block: usize,
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
@@ -252,11 +253,7 @@ impl PyHeatKernel {
             shape_retrieval::HksConvention::MatrixDiagonal => KernelDiagonal::MatrixDiagonal,
         };
         let params = DiagonalParams {
-            method: if exact {
-                wfem_heat::diagonal::DiagonalMethod::Exact
-            } else {
-                wfem_heat::diagonal::DiagonalMethod::Probing { tol }
-            },
+            method: diagonal_method(py, method, tol)?,
             max_columns,
             block,
         };
@@ -272,8 +269,8 @@ impl PyHeatKernel {
 
     /// The HKS by method (`shape_retrieval::signature_by_method`): `spectral` (n, T) is the
     /// truncated sum from `eigenvalues` at `times`; "auto" replaces the columns whose truncation
-    /// bound is above `tol` by the exact diagonal where it is cheap
-    /// (`shape_retrieval::auto_diagonal_params`, as the CLI), "exact" replaces every column.
+    /// bound is above `tol` by the exact diagonal (selected inversion, as the CLI), "exact"
+    /// replaces every column.
     /// Returns (values, [(source, bound)]).
     #[pyo3(signature = (eigenvalues, spectral, times, convention="kernel_value", method="auto", tol=1e-6))]
     #[allow(clippy::too_many_arguments)]
@@ -292,10 +289,7 @@ impl PyHeatKernel {
         check_times(py, &times)?;
         let convention = crate::spectral::convention(py, convention)?;
         let (method, params) = match method {
-            "auto" => (
-                HksMethod::Auto { tol },
-                shape_retrieval::auto_diagonal_params(self.kernel.n()),
-            ),
+            "auto" => (HksMethod::Auto { tol }, DiagonalParams::default()),
             "exact" => (HksMethod::Exact, DiagonalParams::default()),
             "spectral" => (HksMethod::Spectral, DiagonalParams::default()),
             other => {
@@ -494,14 +488,14 @@ impl PyHeatKernel {
     }
 
     /// Diffusion distances of `kind` at time t on this kernel.
-    #[pyo3(signature = (t, kind="diffusion", block=64, exact_diagonal=false, diagonal_tol=1e-10))]
+    #[pyo3(signature = (t, kind="diffusion", block=64, diagonal="selected_inversion", diagonal_tol=1e-10))]
     fn distance(
         &self,
         py: Python<'_>,
         t: f64,
         kind: &str,
         block: usize,
-        exact_diagonal: bool,
+        diagonal: &str,
         diagonal_tol: f64,
     ) -> PyResult<PyDiffusionDistance> {
         let kind = match kind {
@@ -517,11 +511,7 @@ impl PyHeatKernel {
         };
         let params = DistanceParams {
             block,
-            diagonal: if exact_diagonal {
-                wfem_heat::diagonal::DiagonalMethod::Exact
-            } else {
-                wfem_heat::diagonal::DiagonalMethod::Probing { tol: diagonal_tol }
-            },
+            diagonal: diagonal_method(py, diagonal, diagonal_tol)?,
         };
         let inner = DiffusionDistance::new(&self.kernel, kind, t, &params).map_err(|e| crate::errors::heat(py, &e))?;
         Ok(PyDiffusionDistance { inner: Arc::new(inner) })
@@ -581,6 +571,24 @@ impl PyDiffusionDistance {
         let out = run(py, move |_| Ok(inner.diagonal()?.to_vec()))?;
         Ok(vec_out(py, out))
     }
+}
+
+/// The diagonal method of a name: "selected_inversion" (exact at every t), "probing" (with
+/// relative tail `tol`) or "columns" (n unit columns).
+fn diagonal_method(py: Python<'_>, name: &str, tol: f64) -> PyResult<wfem_heat::diagonal::DiagonalMethod> {
+    use wfem_heat::diagonal::DiagonalMethod;
+    Ok(match name {
+        "selected_inversion" => DiagonalMethod::SelectedInversion,
+        "probing" => DiagonalMethod::Probing { tol },
+        "columns" => DiagonalMethod::Exact,
+        other => {
+            return Err(invalid_param(
+                py,
+                "method",
+                format!("{other:?} is not one of \"selected_inversion\", \"probing\", \"columns\""),
+            ))
+        }
+    })
 }
 
 /// Registers the classes of this module.

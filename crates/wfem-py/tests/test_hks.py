@@ -139,7 +139,13 @@ def test_exact_hks_without_eigenpairs_equals_dense_truth(convention):
     assert np.max(np.abs(h - ref) / np.abs(ref)) <= 1e-8
     values, info = wfem.HeatKernel(V, F).diagonal(times, convention, return_info=True)
     np.testing.assert_array_equal(values, h)
-    assert info["columns"] <= len(V)
+    assert info["columns"] == 0  # selected inversion: no probe columns
+    for method in ("probing", "columns"):
+        other, info = wfem.HeatKernel(V, F).diagonal(times, convention, method=method, return_info=True)
+        assert np.max(np.abs(other - ref) / np.abs(ref)) <= 1e-8
+        assert 0 < info["columns"] <= len(V)
+    with pytest.raises(wfem.InvalidInputError, match="selected_inversion"):
+        wfem.HeatKernel(V, F).diagonal(times, method="eigen")
     with pytest.raises(wfem.InvalidInputError):
         wfem.hks(V, F, exact=True)  # needs times
 

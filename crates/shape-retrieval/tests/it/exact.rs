@@ -147,6 +147,8 @@ fn auto_takes_the_spectral_sum_only_where_its_bound_holds() {
     assert!(bad.is_err());
 }
 
+/// With probing parameters, auto keeps the spectral sum where probing is out of reach and
+/// exact refuses; selected inversion (the default) reaches every time.
 #[test]
 fn auto_keeps_the_spectral_sum_where_probing_is_out_of_reach_and_exact_refuses() {
     // A mesh large enough for probing to use fewer columns than vertices at small t.
@@ -161,8 +163,12 @@ fn auto_keeps_the_spectral_sum_where_probing_is_out_of_reach_and_exact_refuses()
     let spectral = Mat::<f64>::zeros(n, times.len());
     // Allow exactly the probe columns the small t needs; the larger t needs more (the
     // refusal of `Exact` below says so).
+    let probing = DiagonalParams {
+        method: wfem_heat::diagonal::DiagonalMethod::Probing { tol: 1e-10 },
+        ..Default::default()
+    };
     let columns = |t: f64| {
-        exact_signature(&kernel, &[t], HksConvention::KernelValue, &DiagonalParams::default())
+        exact_signature(&kernel, &[t], HksConvention::KernelValue, &probing)
             .unwrap()
             .info
             .columns
@@ -171,9 +177,9 @@ fn auto_keeps_the_spectral_sum_where_probing_is_out_of_reach_and_exact_refuses()
     assert!(small < n, "probing uses {small} of {n} columns at t = {}", times[0]);
     let params = DiagonalParams {
         max_columns: small,
-        ..Default::default()
+        ..probing
     };
-    let run = |method| {
+    let run_with = |method, params: &DiagonalParams| {
         signature_by_method(
             &kernel,
             &eigenvalues,
@@ -181,13 +187,22 @@ fn auto_keeps_the_spectral_sum_where_probing_is_out_of_reach_and_exact_refuses()
             &times,
             HksConvention::KernelValue,
             method,
-            &params,
+            params,
         )
     };
+    let run = |method| run_with(method, &params);
     let (values, sources) = run(HksMethod::Auto { tol: 1e-6 }).unwrap();
     assert_eq!(sources[0].name(), "exact");
     assert_eq!(sources[1].name(), "spectral");
     assert!(values.col(0).iter().all(|&v| v > 0.0), "the exact column was filled in");
     assert!(values.col(1).iter().all(|&v| v == 0.0), "the spectral column kept");
     assert!(run(HksMethod::Exact).is_err());
+    // Selected inversion: every time exact, equal to the probed column where probing works.
+    let (all, sources) = run_with(HksMethod::Auto { tol: 1e-6 }, &DiagonalParams::default()).unwrap();
+    assert!(sources.iter().all(|s| s.name() == "exact"), "{sources:?}");
+    for i in 0..n {
+        assert!((all[(i, 0)] - values[(i, 0)]).abs() <= 1e-8 * all[(i, 0)]);
+        assert!(all[(i, 1)] > 0.0);
+    }
+    assert!(run_with(HksMethod::Exact, &DiagonalParams::default()).is_ok());
 }

@@ -72,6 +72,10 @@ fn rows_and_pairs_match_the_dense_spectral_formula() {
                     let exact = dense_row(&ops, &basis, kind, t, i);
                     let scale = exact.iter().fold(0.0f64, |a, &b| a.max(b));
                     let row = dd.row_squared(i).unwrap();
+                    // The default diagonal of the diffusion distance is selected inversion (no
+                    // probe columns); the mass-weighted one is probed.
+                    let columns = dd.diagonal_info().unwrap().columns;
+                    assert_eq!(columns == 0, kind == DistanceKind::Diffusion, "{kind:?}: {columns}");
                     let err = row.iter().zip(&exact).fold(0.0f64, |a, (r, e)| a.max((r - e).abs()));
                     assert!(
                         err < 1e-10 * scale,

@@ -178,8 +178,8 @@ class HeatKernel:
         times: Any,
         convention: str = "kernel_value",
         *,
+        method: str = "selected_inversion",
         tol: float = 1e-10,
-        exact: bool = False,
         max_columns: int = 4096,
         block: int = 64,
         return_info: bool = False,
@@ -190,13 +190,16 @@ class HeatKernel:
         * ``convention="kernel_value"``: ``H_t(i, i) = (K_t M⁻¹)_ii = Σ_k e^{−λ_k t} x_k(i)²``;
         * ``convention="matrix_diagonal"``: ``K_t(i, i)``, the diagonal of Eq. (6).
 
-        Probing (Tang & Saad): a distance-p colouring of the mesh chosen so that the kernel's
-        tail beyond p edges is below ``tol`` relative; one block evaluation of all times per
-        block of probes. ``exact=True`` uses n unit columns. Large t (a non-local kernel)
-        needs too many probes and is refused (``max_columns``): use :func:`hks` there.
+        ``method="selected_inversion"`` (default): the kernel matrix on the sparsity pattern by
+        selected inversion of the rational method's eight complex LDLᵀ factors — exact to
+        rounding at every t, 0.03 s per t at 5K vertices, 0.3 s at 28K.
+        ``method="probing"`` (Tang & Saad): a distance-p colouring of the mesh chosen so that
+        the kernel's tail beyond p edges is below ``tol`` relative, one block evaluation of all
+        times per block of probes; large t (a non-local kernel) needs too many probes and is
+        refused (``max_columns``). ``method="columns"``: n unit columns (a reference).
         """
         ts, _ = as_times(np.atleast_1d(times))
-        values, info = self._k.diagonal(ts, convention, tol, exact, max_columns, block)
+        values, info = self._k.diagonal(ts, convention, method, tol, max_columns, block)
         return (np.asarray(values), dict(info)) if return_info else np.asarray(values)
 
     def apply_kernel_matrix(self, G: Any, t: float) -> np.ndarray:
@@ -262,7 +265,7 @@ class HeatKernel:
         kind: str = "diffusion",
         *,
         block: int = 64,
-        exact_diagonal: bool = False,
+        diagonal: str = "selected_inversion",
         diagonal_tol: float = 1e-10,
     ) -> "DiffusionDistance":
         """Diffusion distances at time t through this kernel (paper, Sect. 3, Eq. (18)).
@@ -272,10 +275,13 @@ class HeatKernel:
         * ``kind="mass-weighted"``: the paper's ``‖h_i − h_j‖_M²``, ``h_i = K_{t/2} e_i``
           (Eq. (18b)), from ``A = S_t = M K_t``.
 
-        ``d²(i,j) = A_ii − 2A_ij + A_jj``; a whole row needs diag(A), by probing (``diagonal_tol``)
-        or exactly (``exact_diagonal=True``, n columns).
+        ``d²(i,j) = A_ii − 2A_ij + A_jj``; a whole row needs diag(A): by selected inversion
+        (``diagonal="selected_inversion"``, default; exact at every t, about a second at 50K
+        vertices; the mass-weighted Gram matrix is probed instead), probing
+        (``diagonal="probing"``, relative tail ``diagonal_tol``) or n unit columns
+        (``diagonal="columns"``).
         """
-        return DiffusionDistance(self._k.distance(float(t), kind, block, exact_diagonal, diagonal_tol))
+        return DiffusionDistance(self._k.distance(float(t), kind, block, diagonal, diagonal_tol))
 
     def feature_approximation(
         self,

@@ -189,9 +189,8 @@ def hks(
         basis: a precomputed :class:`Eigenbasis` to reuse.
         method: ``"auto"`` (default): per time, the truncated sum where its rigorous
             truncation bound ``(n − k) e^{−λ_k t} / Σ e^{−λ_j t}`` is below 1e−6, and the exact
-            diagonal of the kernel (probing, :meth:`HeatKernel.diagonal`) at the smaller times
-            where it is not and probing is cheap (columns × n ≤ 4e6: every time on meshes of a
-            few thousand vertices; on large ones the truncated sum is kept); ``"exact"``: the
+            diagonal of the kernel (selected inversion, :meth:`HeatKernel.diagonal`) at the
+            smaller times where it is not; ``"exact"``: the
             exact diagonal at every time (explicit ``times``; no eigenpairs); ``"spectral"``:
             the truncated sum only (pyFM's HKS). With ``scaled`` or ``normalization`` the
             spectral sum is used.

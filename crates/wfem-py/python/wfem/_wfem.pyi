@@ -80,8 +80,8 @@ class HeatKernel:
         self,
         times: list[float],
         convention: str = "kernel_value",
+        method: str = "selected_inversion",
         tol: float = 1e-10,
-        exact: bool = False,
         max_columns: int = 4096,
         block: int = 64,
     ) -> tuple[_F64, dict[str, Any]]: ...
@@ -124,7 +124,7 @@ class HeatKernel:
         t: float,
         kind: str = "diffusion",
         block: int = 64,
-        exact_diagonal: bool = False,
+        diagonal: str = "selected_inversion",
         diagonal_tol: float = 1e-10,
     ) -> DiffusionDistance: ...
 
