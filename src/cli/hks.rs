@@ -311,8 +311,8 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         if let Some(t) = truncated.iter().copied().reduce(f64::max) {
             eprintln!(
                 "wfem: warning: {} of the times (up to t = {t:e}) are below 4.6/λ_k = {:e}, where the truncated sum \
-                 of {k} eigenpairs misses more than ~1 % of the HKS; --method exact computes it exactly (probing, slow \
-                 on large meshes) or raise --eigs",
+                 of {k} eigenpairs misses more than ~1 % of the HKS; --method auto or exact computes it exactly \
+                 (selected inversion)",
                 truncated.len(),
                 4.6 / lambda_k
             );
@@ -324,7 +324,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     });
     writeln!(
         out,
-        "HKS ({kernel} kernel) at {} times from {:e} to {:e} on {n} vertices: {exact} exact (probing), {} spectral (k = {k}{})",
+        "HKS ({kernel} kernel) at {} times from {:e} to {:e} on {n} vertices: {exact} exact (selected inversion), {} spectral (k = {k}{})",
         used.len(),
         used.first().copied().unwrap_or(0.0),
         used.last().copied().unwrap_or(0.0),

@@ -8,6 +8,8 @@
 //! * the paper's rational method (Eq. (13)): degree 16 with the multi-shift backend (one real
 //!   Cholesky, every size), with the direct LDLᵀ and the MINRES backends, and degree 7 (the
 //!   paper's r) with LDLᵀ (these three at 164K only with `WFEM_BENCH_LARGE=1`);
+//! * the exact diagonal H_t(i, i) by selected inversion, and a whole row of diffusion
+//!   distances (one kernel column plus the diagonal of H_{2t});
 //! * the spectral method (Eq. (8)) with k = 100, 200, 300 eigenpairs, eigensolve included
 //!   (`HeatKernel::new` + `apply`), and the apply alone with the eigenpairs precomputed
 //!   (41K and above only with `WFEM_BENCH_LARGE=1`: tens of seconds per iteration).
@@ -20,7 +22,10 @@ use shifted_solve::{Backend, KrylovParams, MinresParams};
 use std::f64::consts::PI;
 use std::hint::black_box;
 use std::time::Duration;
-use wfem_heat::{EigenParams, Eigenbasis, HeatKernel, HeatParams, Method};
+use wfem_heat::{
+    DiagonalParams, DiffusionDistance, DistanceKind, DistanceParams, EigenParams, Eigenbasis, HeatKernel, HeatParams,
+    KernelDiagonal, Method,
+};
 
 #[path = "../../../benches/common/levels.rs"]
 mod levels;
@@ -99,6 +104,22 @@ fn bench(c: &mut Criterion) {
             let k = kernel(&ops, method);
             group.bench_function(name, |b| b.iter(|| k.apply(black_box(&e), next_t()).unwrap()));
         }
+        // The exact diagonal H_t(i, i) (the HKS without truncation) by selected inversion, and
+        // a whole row of diffusion distances (one column plus that diagonal at 2t).
+        let diagonal = DiagonalParams::default();
+        group.bench_function("diagonal_selected_inversion", |b| {
+            b.iter(|| {
+                fast.diagonal(&[next_t()], KernelDiagonal::KernelValue, &diagonal)
+                    .unwrap()
+            })
+        });
+        group.bench_function("distance_row", |b| {
+            b.iter(|| {
+                let dd = DiffusionDistance::new(&fast, DistanceKind::Diffusion, next_t(), &DistanceParams::default())
+                    .unwrap();
+                dd.row(black_box(n / 3)).unwrap()
+            })
+        });
         let ks: &[usize] = if levels::spectral(level) { &[100, 200, 300] } else { &[] };
         for &k in ks {
             group.bench_with_input(BenchmarkId::new("spectral_incl_eigensolve", k), &k, |b, &k| {
