@@ -109,6 +109,31 @@ fn face_cotangents(p: [[f64; 3]; 3]) -> (f64, [f64; 3]) {
     (0.5 * mul_pow2(double_area, 2 * k), cots)
 }
 
+/// The element of one face (paper Eq. (3)): its area |T| (the consistent mass puts |T|/6 on
+/// each vertex and |T|/12 on each edge, the barycentric lumped mass |T|/3 on each vertex), the
+/// cotangent of each corner's angle (the stiffness puts −½ cot on the opposite edge) and, for
+/// the Voronoi lumped mass, each corner's mixed Voronoi area. `None` for a degenerate face
+/// (the test is shared with `validate`, so a mesh validates as usable iff it assembles).
+#[derive(Clone, Copy)]
+struct FaceElement {
+    area: f64,
+    cots: [f64; 3],
+    voronoi: [f64; 3],
+}
+
+fn face_element(p: [[f64; 3]; 3], voronoi: bool) -> Option<FaceElement> {
+    let (area, cots) = face_cotangents(p);
+    if crate::validate::is_degenerate_triangle(p) || cots.iter().any(|c| !c.is_finite()) {
+        return None;
+    }
+    let voronoi = if voronoi {
+        voronoi_corner_areas(p, (area, cots))
+    } else {
+        [0.0; 3]
+    };
+    Some(FaceElement { area, cots, voronoi })
+}
+
 /// Columns per parallel work item of [`assemble`]: large enough to amortise the task and
 /// slice bookkeeping, small enough to balance the load on a few cores.
 const COLUMNS_PER_CHUNK: usize = 2048;
@@ -162,85 +187,12 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
     for j in 0..n {
         first[j + 1] += first[j];
     }
-    let n_corners = first[n];
 
-    // 1b. Scatter, in parallel over vertex ranges of about equal corner counts (one per
-    //     thread): each range scans all faces (cheap, sequential) and handles the corners it
-    //     owns, so every task writes only its own slice without locks or `unsafe`. A face is
-    //     measured once per range it touches, so at most three times.
     let voronoi = params.lumped == LumpedMassKind::Voronoi;
-    let n_ranges = rayon::current_num_threads().clamp(1, n);
-    let vertex_bounds: Vec<usize> = (0..=n_ranges)
-        .map(|r| {
-            let target = n_corners * r / n_ranges;
-            first.partition_point(|&c| c < target).min(n)
-        })
-        .collect();
-    let mut corners = vec![CornerEntries::default(); n_corners];
-    let mut corner_mass = vec![0.0f64; if voronoi { n_corners } else { 0 }];
-    let corner_bounds: Vec<usize> = vertex_bounds[1..].iter().map(|&v| first[v]).collect();
-    let mass_bounds: Vec<usize> = if voronoi {
-        corner_bounds.clone()
-    } else {
-        vec![0; n_ranges]
-    };
-    let degenerate: Option<usize> = split_at_bounds(&mut corners, &corner_bounds)
-        .into_iter()
-        .zip(split_at_bounds(&mut corner_mass, &mass_bounds))
-        .zip(vertex_bounds.windows(2))
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .map(|((out, mass_out), range)| {
-            let (v0, v1) = (range[0], range[1]);
-            let base = first[v0];
-            let mut cursor: Vec<usize> = first[v0..v1].iter().map(|&c| c - base).collect();
-            let mut degenerate = None;
-            for (f, face) in faces.iter().enumerate() {
-                if !face.iter().any(|&v| (v0..v1).contains(&(v as usize))) {
-                    continue;
-                }
-                let p = mesh.corners(f);
-                let (area, cots) = face_cotangents(p);
-                // The degeneracy test is shared with `validate` (relative threshold, see
-                // `validate::is_degenerate_triangle`), so a mesh validates as usable iff it
-                // assembles.
-                if crate::validate::is_degenerate_triangle(p) || cots.iter().any(|c| !c.is_finite()) {
-                    degenerate.get_or_insert(f);
-                    continue;
-                }
-                let masses = if voronoi {
-                    voronoi_corner_areas(p, (area, cots))
-                } else {
-                    [0.0; 3]
-                };
-                for k in 0..3 {
-                    let v = face[k] as usize;
-                    if !(v0..v1).contains(&v) {
-                        continue;
-                    }
-                    let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
-                    let c = &mut cursor[v - v0];
-                    // Edge v–face[k1] is opposite corner k2, edge v–face[k2] opposite k1.
-                    out[*c] = CornerEntries {
-                        rows: [face[k1], face[k2]],
-                        stiffness: [-0.5 * cots[k2], -0.5 * cots[k1]],
-                        area,
-                    };
-                    if voronoi {
-                        mass_out[*c] = masses[k];
-                    }
-                    *c += 1;
-                }
-            }
-            degenerate
-        })
-        .reduce(|| None, |a, b| a.into_iter().chain(b).min());
-    if let Some(f) = degenerate {
-        return Err(MeshError::DegenerateFace {
-            face: f,
-            vertices: faces[f],
-        });
-    }
+    let (corners, corner_mass) = scatter_corners(mesh, &first, voronoi).map_err(|f| MeshError::DegenerateFace {
+        face: f,
+        vertices: faces[f],
+    })?;
     if let Some(v) = (0..n).find(|&j| first[j + 1] == first[j]) {
         return Err(MeshError::UnreferencedVertex { vertex: v });
     }
@@ -251,6 +203,47 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
         return Err(MeshError::DegenerateMesh { area: total_area });
     }
 
+    let Columns {
+        col_ptr,
+        rows,
+        l_val,
+        b_val,
+        d_val,
+        lumped_diagonal,
+    } = merge_columns(&first, &corners, &corner_mass, voronoi);
+
+    // faer checks that every column's rows are sorted and in range (O(nnz) each); the three
+    // checks run in parallel, and meanwhile the corner records are freed (unmapping 32 bytes
+    // per corner takes a while too).
+    let [r0, r1, r2] = rows;
+    let pattern = |row_idx: Vec<usize>| SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx);
+    let (((s0, s1), s2), ()) = rayon::join(
+        || rayon::join(|| rayon::join(|| pattern(r0), || pattern(r1)), || pattern(r2)),
+        || drop(corners),
+    );
+    Ok(FemOperators {
+        stiffness: SparseColMat::new(s0, l_val),
+        mass: SparseColMat::new(s1, b_val),
+        lumped_mass: SparseColMat::new(s2, d_val),
+        lumped_diagonal,
+    })
+}
+
+/// The three matrices as column arrays on one pattern (three copies of the row indices, one
+/// per matrix) and the lumped diagonal.
+struct Columns {
+    col_ptr: Vec<usize>,
+    rows: [Vec<usize>; 3],
+    l_val: Vec<f64>,
+    b_val: Vec<f64>,
+    d_val: Vec<f64>,
+    lumped_diagonal: Vec<f64>,
+}
+
+/// Step 2 of [`assemble`]: per column j, the half-edges of j's corners merged by row (stably,
+/// in face order) into the entries of L, B and D, in parallel over chunks of columns.
+fn merge_columns(first: &[usize], corners: &[CornerEntries], corner_mass: &[f64], voronoi: bool) -> Columns {
+    let n = first.len() - 1;
     // 2a. Count the distinct rows of each column, then lay out the column pointers.
     let chunks: Vec<(usize, usize)> = (0..n)
         .step_by(COLUMNS_PER_CHUNK)
@@ -357,21 +350,92 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
             });
     }
 
-    // faer checks that every column's rows are sorted and in range (O(nnz) each); the three
-    // checks run in parallel, and meanwhile the corner records are freed (unmapping 32 bytes
-    // per corner takes a while too).
-    let [r0, r1, r2] = rows;
-    let pattern = |row_idx: Vec<usize>| SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx);
-    let (((s0, s1), s2), ()) = rayon::join(
-        || rayon::join(|| rayon::join(|| pattern(r0), || pattern(r1)), || pattern(r2)),
-        || drop(corners),
-    );
-    Ok(FemOperators {
-        stiffness: SparseColMat::new(s0, l_val),
-        mass: SparseColMat::new(s1, b_val),
-        lumped_mass: SparseColMat::new(s2, d_val),
+    Columns {
+        col_ptr,
+        rows,
+        l_val,
+        b_val,
+        d_val,
         lumped_diagonal,
-    })
+    }
+}
+
+/// Step 1b of [`assemble`]: the corners of every face, sorted by vertex into the column
+/// segments `first[j]..first[j + 1]` (in face order within a segment), with the Voronoi
+/// corner masses when asked; the first degenerate face (in face order) as the error.
+fn scatter_corners(mesh: &TriMesh, first: &[usize], voronoi: bool) -> Result<(Vec<CornerEntries>, Vec<f64>), usize> {
+    let n = mesh.n_vertices();
+    let faces = mesh.faces();
+    let n_corners = first[n];
+    // 1b. Scatter, in parallel over vertex ranges of about equal corner counts (one per
+    //     thread): each range scans all faces (cheap, sequential) and handles the corners it
+    //     owns, so every task writes only its own slice without locks or `unsafe`. A face is
+    //     measured once per range it touches, so at most three times.
+    let n_ranges = rayon::current_num_threads().clamp(1, n);
+    let vertex_bounds: Vec<usize> = (0..=n_ranges)
+        .map(|r| {
+            let target = n_corners * r / n_ranges;
+            first.partition_point(|&c| c < target).min(n)
+        })
+        .collect();
+    let mut corners = vec![CornerEntries::default(); n_corners];
+    let mut corner_mass = vec![0.0f64; if voronoi { n_corners } else { 0 }];
+    let corner_bounds: Vec<usize> = vertex_bounds[1..].iter().map(|&v| first[v]).collect();
+    let mass_bounds: Vec<usize> = if voronoi {
+        corner_bounds.clone()
+    } else {
+        vec![0; n_ranges]
+    };
+    let degenerate: Option<usize> = split_at_bounds(&mut corners, &corner_bounds)
+        .into_iter()
+        .zip(split_at_bounds(&mut corner_mass, &mass_bounds))
+        .zip(vertex_bounds.windows(2))
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|((out, mass_out), range)| {
+            let (v0, v1) = (range[0], range[1]);
+            let base = first[v0];
+            let mut cursor: Vec<usize> = first[v0..v1].iter().map(|&c| c - base).collect();
+            let mut degenerate = None;
+            for (f, face) in faces.iter().enumerate() {
+                if !face.iter().any(|&v| (v0..v1).contains(&(v as usize))) {
+                    continue;
+                }
+                let Some(FaceElement {
+                    area,
+                    cots,
+                    voronoi: masses,
+                }) = face_element(mesh.corners(f), voronoi)
+                else {
+                    degenerate.get_or_insert(f);
+                    continue;
+                };
+                for k in 0..3 {
+                    let v = face[k] as usize;
+                    if !(v0..v1).contains(&v) {
+                        continue;
+                    }
+                    let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+                    let c = &mut cursor[v - v0];
+                    // Edge v–face[k1] is opposite corner k2, edge v–face[k2] opposite k1.
+                    out[*c] = CornerEntries {
+                        rows: [face[k1], face[k2]],
+                        stiffness: [-0.5 * cots[k2], -0.5 * cots[k1]],
+                        area,
+                    };
+                    if voronoi {
+                        mass_out[*c] = masses[k];
+                    }
+                    *c += 1;
+                }
+            }
+            degenerate
+        })
+        .reduce(|| None, |a, b| a.into_iter().chain(b).min());
+    match degenerate {
+        Some(f) => Err(f),
+        None => Ok((corners, corner_mass)),
+    }
 }
 
 /// Splits `v` into consecutive pieces ending at the increasing offsets `bounds` (the last

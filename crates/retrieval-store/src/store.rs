@@ -3,6 +3,7 @@
 use crate::StoreError;
 use rayon::prelude::*;
 use rusqlite::{params, Connection, OpenFlags, OptionalExtension, TransactionBehavior, MAIN_DB};
+use shape_retrieval::BagDistance;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -101,12 +102,8 @@ impl Metric {
     pub fn eval(self, query: &[f64], row: &[f32]) -> f64 {
         let pairs = query.iter().zip(row).map(|(&a, &b)| (a, f64::from(b)));
         match self {
-            Metric::L1 => pairs.map(|(a, b)| (a - b).abs()).sum(),
-            Metric::ChiSquared => {
-                0.5 * pairs
-                    .map(|(a, b)| if a + b > 0.0 { (a - b) * (a - b) / (a + b) } else { 0.0 })
-                    .sum::<f64>()
-            }
+            Metric::L1 => BagDistance::L1.of_pairs(pairs),
+            Metric::ChiSquared => BagDistance::ChiSquared.of_pairs(pairs),
             Metric::Euclidean => pairs.map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt(),
         }
     }

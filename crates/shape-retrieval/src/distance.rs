@@ -59,12 +59,17 @@ impl BagDistance {
 
     /// The formula without checks (inputs validated by the caller).
     pub(crate) fn unchecked(self, a: &[f64], b: &[f64]) -> f64 {
+        self.of_pairs(a.iter().copied().zip(b.iter().copied()))
+    }
+
+    /// The formula on pairs of bins `(a_i, b_i)`, without checks: the one definition, also
+    /// used by retrieval-store's scan of f32 rows.
+    #[inline]
+    pub fn of_pairs(self, pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
         match self {
-            BagDistance::L1 => a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum(),
+            BagDistance::L1 => pairs.map(|(x, y)| (x - y).abs()).sum(),
             BagDistance::ChiSquared => {
-                0.5 * a
-                    .iter()
-                    .zip(b)
+                0.5 * pairs
                     .map(|(x, y)| {
                         let s = x + y;
                         if s > 0.0 {

@@ -130,14 +130,26 @@ impl HeatKernel {
     /// # Errors
     /// As [`HeatKernel::apply`]; [`HeatError::NonFiniteInput`] names row and column.
     pub fn apply_many(&self, f: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
+        self.deflated(f, t, false)
+    }
+
+    /// `K_t F` (`kernel_matrix` false) or `H_t F` (true) with the null space deflated exactly:
+    /// `K_t f = P f + (I − P) K_t (I − P) f` with P the M-orthogonal projector onto the
+    /// constants of each component (exact: K_t P = P), and the dual split for `H_t`
+    /// (`null_space.rs`); only the null space survives from [`Operators::time_at_infinity`] on.
+    fn deflated(&self, f: MatRef<'_, f64>, t: f64, kernel_matrix: bool) -> Result<Mat<f64>, HeatError> {
         check::time(t)?;
         check::block(f, self.n())?;
-        // K_t f = P f + (I − P) K_t (I − P) f with P the M-orthogonal projector onto the
-        // constants of each component (exact: K_t P = P); see `null_space.rs`.
         let null_space = self.ops.null_space();
-        let (deflated, coefs) = null_space.split(f);
+        let (deflated, coefs) = if kernel_matrix {
+            null_space.split_dual(f)
+        } else {
+            null_space.split(f)
+        };
         let mut g = if t >= self.ops.time_at_infinity() {
             Mat::zeros(f.nrows(), f.ncols())
+        } else if kernel_matrix {
+            self.prepared.apply_kernel_matrix(&self.ops, deflated.as_ref(), t)?
         } else {
             self.prepared.apply(&self.ops, deflated.as_ref(), t)?
         };
@@ -169,17 +181,7 @@ impl HeatKernel {
     /// As [`Self::apply_many`]; [`HeatError::NotPositiveDefinite`] if M must be factored and
     /// cannot be.
     pub fn apply_kernel_matrix(&self, g: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
-        check::time(t)?;
-        check::block(g, self.n())?;
-        let null_space = self.ops.null_space();
-        let (deflated, coefs) = null_space.split_dual(g);
-        let mut h = if t >= self.ops.time_at_infinity() {
-            Mat::zeros(g.nrows(), g.ncols())
-        } else {
-            self.prepared.apply_kernel_matrix(&self.ops, deflated.as_ref(), t)?
-        };
-        null_space.restore(&mut h, &coefs);
-        self.finite(h)
+        self.deflated(g, t, true)
     }
 }
 
