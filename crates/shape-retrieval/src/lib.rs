@@ -46,7 +46,10 @@ pub use descriptor::{
 };
 pub use distance::{chi_squared_distance, l1_distance, pairwise_distances, pairwise_l1, BagDistance};
 pub use error::RetrievalError;
-pub use exact::{exact_signature, signature_by_method, truncation_bound, HksMethod, HksSource, DEFAULT_TRUNCATION_TOL};
+pub use exact::{
+    exact_signature, signature_by_method, truncation_bound, truncation_estimate, HksMethod, HksSource,
+    DEFAULT_TRUNCATION_TOL,
+};
 pub use features::{descriptor_distance, local_maxima, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
 pub use hks::{
     heat_kernel_signature, heat_trace, HeatKernelSignature, HksConvention, HksParams, Spectrum, SpectrumNormalization,

@@ -316,7 +316,7 @@ impl PyHeatKernel {
         let sources = sources
             .iter()
             .map(|s| match *s {
-                HksSource::Spectral { bound } => ("spectral".to_string(), bound),
+                HksSource::Spectral { estimate, .. } => ("spectral".to_string(), estimate),
                 HksSource::Exact { relative_tail } => ("exact".to_string(), relative_tail),
             })
             .collect();

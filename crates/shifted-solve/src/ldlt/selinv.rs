@@ -22,25 +22,38 @@ use faer::{c64, Accum, Mat, MatMut, MatRef, Par};
 
 impl LdltFactor {
     /// `Z = (P A Pᵀ)⁻¹` on the pattern of the factor, in the factor's storage layout (every
-    /// supernode's diagonal block in full, then its panel rows).
-    pub(crate) fn selected_inverse(&self) -> Vec<c64> {
+    /// supernode's diagonal block in full, then its panel rows). In place: the sweep from the
+    /// root down needs a supernode's L only until its own Z replaces it, so the factor's
+    /// storage becomes Z's (no second copy of the factor in memory).
+    pub(crate) fn selected_inverse(self) -> Vec<c64> {
         let sym = &*self.symbolic;
+        let mut z = self.values;
         let n_sn = sym.n_supernodes();
         let mut col_sn = vec![0usize; sym.n];
         for s in 0..n_sn {
             col_sn[sym.begin[s]..sym.begin[s + 1]].fill(s);
         }
-        let mut z = vec![ZERO; sym.len_val()];
         let mut zrr: Vec<c64> = Vec::new();
         let mut pos: Vec<usize> = Vec::new();
         for s in (0..n_sn).rev() {
-            let (s0, s1, pat, top, bot) = self.block(s);
+            let (s0, s1) = (sym.begin[s], sym.begin[s + 1]);
+            let pat = sym.pattern(s);
             let nc = s1 - s0;
             let m = pat.len();
-            // L_JJ⁻¹ and D_J⁻¹ L_JJ⁻¹.
-            let mut linv = Mat::<c64>::identity(nc, nc);
-            solve_unit_lower_triangular_in_place(top, linv.as_mut(), Par::Seq);
-            let dlinv = Mat::<c64>::from_fn(nc, nc, |i, j| top[(i, i)].inv() * linv[(i, j)]);
+            let nr = nc + m;
+            // This supernode's L (not yet overwritten): L_JJ⁻¹, D_J⁻¹ L_JJ⁻¹ and Û = L_RJ L_JJ⁻¹.
+            let (linv, dlinv, u) = {
+                let l = MatRef::from_column_major_slice(&z[sym.val_ptr[s]..sym.val_ptr[s] + nr * nc], nr, nc);
+                let (top, bot) = l.split_at_row(nc);
+                let mut linv = Mat::<c64>::identity(nc, nc);
+                solve_unit_lower_triangular_in_place(top, linv.as_mut(), Par::Seq);
+                let dlinv = Mat::<c64>::from_fn(nc, nc, |i, j| top[(i, i)].inv() * linv[(i, j)]);
+                let mut u = Mat::<c64>::zeros(m, nc);
+                if m > 0 {
+                    matmul(u.as_mut(), Accum::Replace, bot, linv.as_ref(), ONE, Par::Seq);
+                }
+                (linv, dlinv, u)
+            };
             let mut zjj = Mat::<c64>::zeros(nc, nc);
             matmul(
                 zjj.as_mut(),
@@ -52,8 +65,6 @@ impl LdltFactor {
             );
             let mut zrj = Mat::<c64>::zeros(m, nc);
             if m > 0 {
-                let mut u = Mat::<c64>::zeros(m, nc);
-                matmul(u.as_mut(), Accum::Replace, bot, linv.as_ref(), ONE, Par::Seq);
                 // Gather Z_RR (both triangles) from the ancestors, one run of rows of the same
                 // supernode K at a time: rows inside K sit in its diagonal block, rows past K
                 // in its panel (found by binary search in K's pattern).
@@ -90,7 +101,6 @@ impl LdltFactor {
                 matmul(zrj.as_mut(), Accum::Replace, zrr_m, u.as_ref(), -ONE, Par::Seq);
                 matmul(zjj.as_mut(), Accum::Add, u.transpose(), zrj.as_ref(), -ONE, Par::Seq);
             }
-            let nr = nc + m;
             let mut dst = MatMut::from_column_major_slice_mut(&mut z[sym.val_ptr[s]..sym.val_ptr[s] + nr * nc], nr, nc);
             dst.rb_mut().subrows_mut(0, nc).copy_from(&zjj);
             dst.subrows_mut(nc, m).copy_from(&zrj);

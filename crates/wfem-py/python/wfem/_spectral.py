@@ -187,8 +187,9 @@ def hks(
         normalization: ``None``, ``"max_eigenvalue"`` (λ/λ_max, DHK3) or ``"area"`` (λ·A).
         kernel: ``"wfem"`` (B), ``"lumped"`` (D) or ``"linear"`` (I).
         basis: a precomputed :class:`Eigenbasis` to reuse.
-        method: ``"auto"`` (default): per time, the truncated sum where its rigorous
-            truncation bound ``(n − k) e^{−λ_k t} / Σ e^{−λ_j t}`` is below 1e−6, and the exact
+        method: ``"auto"`` (default): per time, the truncated sum where its truncation error
+            (Weyl-law estimate: the omitted eigenvalues grow like ``λ_k j/k``) is below 1e−6, and
+            the exact
             diagonal of the kernel (selected inversion, :meth:`HeatKernel.diagonal`) at the
             smaller times where it is not; ``"exact"``: the
             exact diagonal at every time (explicit ``times``; no eigenpairs); ``"spectral"``:
