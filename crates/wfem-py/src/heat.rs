@@ -272,7 +272,7 @@ impl PyHeatKernel {
     /// bound is above `tol` by the exact diagonal (selected inversion, as the CLI), "exact"
     /// replaces every column.
     /// Returns (values, [(source, bound)]).
-    #[pyo3(signature = (eigenvalues, spectral, times, convention="kernel_value", method="auto", tol=1e-6))]
+    #[pyo3(signature = (eigenvalues, spectral, times, convention="kernel_value", method="auto", tol=shape_retrieval::DEFAULT_TRUNCATION_TOL))]
     #[allow(clippy::too_many_arguments)]
     fn hks_by_method<'py>(
         &self,

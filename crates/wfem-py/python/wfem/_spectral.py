@@ -188,11 +188,9 @@ def hks(
         kernel: ``"wfem"`` (B), ``"lumped"`` (D) or ``"linear"`` (I).
         basis: a precomputed :class:`Eigenbasis` to reuse.
         method: ``"auto"`` (default): per time, the truncated sum where its truncation error
-            (Weyl-law estimate: the omitted eigenvalues grow like ``λ_k j/k``) is below 1e−6, and
-            the exact
-            diagonal of the kernel (selected inversion, :meth:`HeatKernel.diagonal`) at the
-            smaller times where it is not; ``"exact"``: the
-            exact diagonal at every time (explicit ``times``; no eigenpairs); ``"spectral"``:
+            (Weyl-law estimate: the omitted eigenvalues grow like ``λ_k j/k``) is below 1e−3, and
+            the exact diagonal of the kernel (selected inversion, :meth:`HeatKernel.diagonal`)
+            at the smaller times where it is not; ``"exact"``: the exact diagonal at every time (explicit ``times``; no eigenpairs); ``"spectral"``:
             the truncated sum only (pyFM's HKS). With ``scaled`` or ``normalization`` the
             spectral sum is used.
         exact: same as ``method="exact"``.
@@ -229,7 +227,7 @@ def hks(
 
         K = HeatKernel(V, F, kernel=kernel)
         values, _ = K._k.hks_by_method(
-            [float(x) for x in basis.values], values, [float(t) for t in used], convention, "auto", 1e-6
+            [float(x) for x in basis.values], values, [float(t) for t in used], convention, "auto"
         )
         values = np.asarray(values)
     return (values, used) if return_times else values
