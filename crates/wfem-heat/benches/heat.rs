@@ -8,6 +8,7 @@
 //! * the paper's rational method (Eq. (13)): degree 16 with the multi-shift backend (one real
 //!   Cholesky, every size), with the direct LDLᵀ and the MINRES backends, and degree 7 (the
 //!   paper's r) with LDLᵀ (these three at 164K only with `WFEM_BENCH_LARGE=1`);
+//! * 100 log-spaced times over three decades from one factorization (`apply_times`);
 //! * the exact diagonal H_t(i, i) by selected inversion, and a whole row of diffusion
 //!   distances (one kernel column plus the diagonal of H_{2t});
 //! * the spectral method (Eq. (8)) with k = 100, 200, 300 eigenpairs, eigensolve included
@@ -77,6 +78,16 @@ fn bench(c: &mut Criterion) {
         group.bench_function("fast_x", |b| b.iter(|| fast.apply(black_box(&f), next_t()).unwrap()));
         group.bench_function("fast_e_i", |b| b.iter(|| fast.apply(black_box(&e), next_t()).unwrap()));
         group.bench_function("fast_e_i_same_t", |b| b.iter(|| fast.apply(black_box(&e), t).unwrap()));
+        // Issue #17: 100 log-spaced t over three decades around t from one factorization
+        // (`apply_times`), against one K_t f (`fast_x`): target ≤ 3×.
+        let window: Vec<f64> = (0..100).map(|i| 0.1 * t * 1e3f64.powf(f64::from(i) / 99.0)).collect();
+        let fx = faer::Mat::from_fn(n, 1, |i, _| f[i]);
+        group.bench_function("fast_x_100_times", |b| {
+            b.iter(|| {
+                let w: Vec<f64> = window.iter().map(|&s| s * next_t() / t).collect();
+                fast.apply_times(black_box(fx.as_ref()), &w).unwrap()
+            })
+        });
         // The multi-shift rational backend costs about what the fast path costs: every level.
         let mut rational = vec![(
             "rational_r16_multishift",
