@@ -203,29 +203,23 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
         return Err(MeshError::DegenerateMesh { area: total_area });
     }
 
-    let Columns {
-        col_ptr,
-        rows,
-        l_val,
-        b_val,
-        d_val,
-        lumped_diagonal,
-    } = merge_columns(&first, &corners, &corner_mass, voronoi);
+    let columns = merge_columns(&first, &corners, &corner_mass, voronoi);
 
     // faer checks that every column's rows are sorted and in range (O(nnz) each); the three
     // checks run in parallel, and meanwhile the corner records are freed (unmapping 32 bytes
     // per corner takes a while too).
-    let [r0, r1, r2] = rows;
+    let [r0, r1, r2] = columns.rows;
+    let col_ptr = columns.col_ptr;
     let pattern = |row_idx: Vec<usize>| SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx);
     let (((s0, s1), s2), ()) = rayon::join(
         || rayon::join(|| rayon::join(|| pattern(r0), || pattern(r1)), || pattern(r2)),
         || drop(corners),
     );
     Ok(FemOperators {
-        stiffness: SparseColMat::new(s0, l_val),
-        mass: SparseColMat::new(s1, b_val),
-        lumped_mass: SparseColMat::new(s2, d_val),
-        lumped_diagonal,
+        stiffness: SparseColMat::new(s0, columns.l_val),
+        mass: SparseColMat::new(s1, columns.b_val),
+        lumped_mass: SparseColMat::new(s2, columns.d_val),
+        lumped_diagonal: columns.lumped_diagonal,
     })
 }
 
