@@ -19,7 +19,7 @@ use super::{check_output, load_usable, CliError, MeshArgs};
 use clap::{Args, Subcommand, ValueEnum};
 use retrieval_store::SqliteIndex;
 use shape_retrieval::{
-    BagDistance, DescriptorSpec, GlobalSignature, IndexEntry, IndexStore, JsonFile, RetrievalError, RetrievalIndex,
+    BagDistance, DescriptorSpec, GlobalSignature, IndexStore, JsonFile, RetrievalError, RetrievalIndex,
     RetrievalSettings, ShapeFeatures, Smoothing, VocabularyModel, VocabularyStore,
 };
 use std::io::Write;
@@ -369,13 +369,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             let meshes = load_all(files, path)?;
             let entries = meshes
                 .iter()
-                .map(|(name, mesh)| {
-                    let features = settings.features(name, mesh)?;
-                    Ok(IndexEntry {
-                        name: name.clone(),
-                        signature: settings.signature(&features)?,
-                    })
-                })
+                .map(|(name, mesh)| settings.describe(name, mesh))
                 .collect::<Result<Vec<_>, RetrievalError>>()?;
             store.append(&entries)?;
             writeln!(out, "added {} files to {}", entries.len(), path.display())?;
@@ -390,10 +384,9 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 let (settings, rows) = store.open()?;
                 stored_sizes(&settings)?;
                 let mesh = load_usable(input)?;
-                let features = settings.features(&input.mesh.display().to_string(), &mesh)?;
-                let signature = settings.signature(&features)?;
+                let query = settings.describe(&input.mesh.display().to_string(), &mesh)?;
                 store
-                    .search(&settings, &rows, &signature, *top)?
+                    .search(&settings, &rows, &query.signature, *top)?
                     .into_iter()
                     .map(|h| (h.distance, h.name))
                     .collect()
@@ -401,10 +394,9 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 let index = JsonFile::new(path).load_index()?;
                 stored_sizes(&index)?;
                 let mesh = load_usable(input)?;
-                let features = index.features(&input.mesh.display().to_string(), &mesh)?;
-                let signature = index.signature(&features)?;
+                let query = index.describe(&input.mesh.display().to_string(), &mesh)?;
                 index
-                    .rank(&signature)?
+                    .rank(&query.signature)?
                     .iter()
                     .take(*top)
                     .map(|r| (r.distance, index.entries()[r.entry].name.clone()))

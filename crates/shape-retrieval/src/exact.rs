@@ -132,7 +132,7 @@ pub enum HksSource {
         /// The Weyl-law estimate at this time (what [`HksMethod::Auto`] compares with `tol`).
         estimate: f64,
     },
-    /// The exact diagonal, with the probing's relative tail.
+    /// The exact diagonal, with the probing's relative tail (0 for selected inversion).
     Exact {
         /// `DiagonalInfo::relative_tail` of the probes.
         relative_tail: f64,

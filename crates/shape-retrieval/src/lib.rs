@@ -10,7 +10,7 @@
 //!
 //! * [`hks`]: heat kernel signature in the kernel-value and matrix-diagonal conventions,
 //!   scaled and scale-normalized variants;
-//! * [`exact`]: the HKS without eigen truncation (the kernel's diagonal by probing) and the
+//! * [`exact`]: the HKS without eigen truncation (the kernel's diagonal by selected inversion) and the
 //!   per-time choice between it and the truncated sum ([`HksMethod`], default auto);
 //! * [`sihks`]: the scale-invariant HKS of Bronstein & Kokkinos;
 //! * [`kmeans`](mod@kmeans), [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;

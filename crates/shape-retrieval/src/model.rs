@@ -1048,6 +1048,19 @@ impl RetrievalIndex {
         })
     }
 
+    /// The entry of a mesh with the index's settings: [`Self::features`] (one eigensolve) and
+    /// [`Self::signature`] — what an append stores and a query compares.
+    ///
+    /// # Errors
+    /// Those of [`Self::features`] and [`Self::signature`].
+    pub fn describe(&self, name: &str, mesh: &TriMesh) -> Result<IndexEntry, RetrievalError> {
+        let features = self.features(name, mesh)?;
+        Ok(IndexEntry {
+            name: name.to_string(),
+            signature: self.signature(&features)?,
+        })
+    }
+
     /// Adds a described shape.
     ///
     /// # Errors

@@ -17,7 +17,7 @@
 //! (E_16 ≈ 2e−16) that is rounding level relative to `H_t(i, i) ≥ 1/area`. The c0 term
 //! `c0 M⁻¹` (|c0| = E_n) is omitted, as in [`crate::RationalFactors::apply_resolvent`].
 
-use crate::backend::direct::pow2_scale;
+use crate::backend::direct::shift_scale;
 use crate::backend::Pole;
 use crate::ldlt::{LdltFactor, LdltSymbolic};
 use crate::solver::check_time;
@@ -77,7 +77,7 @@ impl SelectedInversion {
             .into_par_iter()
             .map(|pole| -> Result<Vec<f64>, SolveError> {
                 // Factor c·(tL − zM) (c a power of two, exact): its inverse is Z/c.
-                let scale = pow2_scale(pair, t, pole.z);
+                let scale = shift_scale(pair, t, pole.z);
                 let values: Vec<_> = pair.shifted_values(t, pole.z).into_iter().map(|v| v * scale).collect();
                 let factor = LdltFactor::new(&self.symbolic, &values).map_err(|_| pole.singular(t))?;
                 let z = factor.selected_inverse();

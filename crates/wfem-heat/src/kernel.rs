@@ -239,7 +239,8 @@ pub struct DiagonalSeries {
     pub times: Vec<f64>,
     /// n × T: column l is the diagonal at `times[l]`.
     pub values: Mat<f64>,
-    /// How the probes were chosen; `relative_tail` bounds the probing error of each entry
+    /// How the probes were chosen (none for selected inversion: columns 0, tail 0);
+    /// `relative_tail` bounds the probing error of each entry
     /// relative to the entry (at the largest t; smaller t decay faster).
     pub info: DiagonalInfo,
     /// The kernel evaluations' own error estimates per t (see [`TimeSeries`]).

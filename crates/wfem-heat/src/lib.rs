@@ -18,7 +18,8 @@
 //! * [`approx`] — feature points and the feature-driven approximation f = f_glob + f_loc
 //!   (Sect. 4.2).
 //! * [`scale`] — λ_max and the scale-invariant kernel (Sect. 5).
-//! * [`diagonal`] — diagonals of kernel matrices by probing.
+//! * [`diagonal`] — how diagonals of kernel matrices are computed: selected inversion (the
+//!   default, exact at every t), probing, unit columns.
 //!
 //! The heat kernel *signature* (HKS) is a shape descriptor and is defined once, in the
 //! `shape-retrieval` crate, on top of [`HeatKernel::apply_kernel_matrix`] and [`Eigenbasis`].

@@ -10,7 +10,7 @@ use mesh_fem::TriMesh;
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use retrieval_store::SqliteIndex;
-use shape_retrieval::{IndexEntry, IndexStore, JsonFile, RetrievalIndex, RetrievalSettings, VocabularyStore};
+use shape_retrieval::{IndexStore, JsonFile, RetrievalIndex, RetrievalSettings, VocabularyStore};
 use std::path::PathBuf;
 
 /// Rust side of `wfem.RetrievalIndex`.
@@ -98,14 +98,8 @@ impl PyRetrievalIndex {
             let settings = index.open()?.0;
             let entries = read_all(&paths)?
                 .iter()
-                .map(|(name, mesh)| {
-                    let features = settings.features(name, mesh)?;
-                    Ok(IndexEntry {
-                        name: name.clone(),
-                        signature: settings.signature(&features)?,
-                    })
-                })
-                .collect::<Result<Vec<_>, Error>>()?;
+                .map(|(name, mesh)| settings.describe(name, mesh))
+                .collect::<Result<Vec<_>, _>>()?;
             index.append(&entries)?;
             Ok(entries.len())
         })
@@ -125,10 +119,9 @@ impl PyRetrievalIndex {
         run(py, move |_| {
             let index = SqliteIndex::new(&path);
             let (settings, store) = index.open()?;
-            let features = settings.features("query", &mesh)?;
-            let signature = settings.signature(&features)?;
+            let query = settings.describe("query", &mesh)?;
             Ok(index
-                .search(&settings, &store, &signature, k)?
+                .search(&settings, &store, &query.signature, k)?
                 .into_iter()
                 .map(|h| (h.name, h.distance))
                 .collect())

@@ -47,8 +47,9 @@ pub(crate) struct DirectSolve {
     terms: Vec<Term>,
 }
 
-/// The power of two 2⁻ᵉ with 2ᵉ ≈ the largest |diagonal entry| of `tL − zM`.
-pub(crate) fn pow2_scale(pair: &OperatorPair, t: f64, z: c64) -> f64 {
+/// The power of two 2⁻ᵉ with 2ᵉ ≈ the largest |diagonal entry| of `tL − zM`
+/// ([`crate::pow2_scale`]).
+pub(crate) fn shift_scale(pair: &OperatorPair, t: f64, z: c64) -> f64 {
     let l = pair.diagonal(1.0, 0.0);
     let m = pair.diagonal(0.0, 1.0);
     let big = l
@@ -56,13 +57,7 @@ pub(crate) fn pow2_scale(pair: &OperatorPair, t: f64, z: c64) -> f64 {
         .zip(&m)
         .map(|(&l, &m)| c64::new(t * l - z.re * m, -z.im * m).norm())
         .fold(0.0f64, f64::max);
-    if big > 0.0 && big.is_finite() {
-        // 2^−round(log2 big), clamped to the normal exponent range.
-        let e = big.log2().round().clamp(-1000.0, 1000.0) as i32;
-        2f64.powi(-e)
-    } else {
-        1.0
-    }
+    crate::pow2_scale(big).0
 }
 
 /// Factors every pole at t (in parallel): complex poles with `complex` (given the scaled
@@ -78,7 +73,7 @@ pub(crate) fn factor_all(
     let terms = poles
         .par_iter()
         .map(|&pole| {
-            let scale = pow2_scale(pair, t, pole.z);
+            let scale = shift_scale(pair, t, pole.z);
             let factor = if pole.real {
                 let a = pair.combination(scale * t, -scale * pole.z.re);
                 Factor::Real(cholesky.factor_sequential(a.as_ref()).map_err(|_| pole.singular(t))?)
