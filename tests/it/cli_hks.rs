@@ -81,7 +81,7 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
     )
     .unwrap();
     let times = [0.001, 0.01, 0.1, 1.0];
-    for (kernel, mass) in [("wfem", &ops.mass), ("lumped", &ops.lumped_mass)] {
+    for (kernel, mass) in [("wfem", &ops.mass), ("lumped", &ops.lumped_mass())] {
         let dense = Eigenbasis::dense(&ops.stiffness, mass).unwrap();
         let truncated = reference(&dense, 30, &times);
         let full = reference(&dense, n, &times);

@@ -139,7 +139,8 @@ pub(crate) fn mul_pow2(mut x: f64, mut n: i32) -> f64 {
 }
 
 /// The edge vectors `[p₁−p₀, p₂−p₁, p₀−p₂]` of a triangle multiplied by the power of two
-/// 2⁻ᵏ that brings their largest component into [1, 2), together with k.
+/// 2⁻ᵏ that brings their largest component into [1, 2), together with k; k = 0 (no scaling)
+/// when that component is already between 1e−60 and 1e60, where scaling changes nothing.
 ///
 /// Multiplying by a power of two is exact, so dot products, cross products and norms of the
 /// scaled edges are the unscaled ones times 2⁻²ᵏ exactly, with neither overflow (edges beyond
@@ -152,6 +153,13 @@ pub(crate) fn scaled_edges(p: [[f64; 3]; 3]) -> Option<([[f64; 3]; 3], i32)> {
     let m = edges.iter().flatten().fold(0.0f64, |m, c| m.max(c.abs()));
     if !m.is_finite() || m == 0.0 || edges.iter().flatten().any(|c| !c.is_finite()) {
         return None;
+    }
+    // Between 1e-60 and 1e60 everything computed from the edges, up to the fourth powers in
+    // the squared norm of a cross product, stays in the normal range (only terms more than
+    // 2⁻²⁰⁰ below the leading ones could become subnormal), so the scaled computation would
+    // give the same bits: k = 0.
+    if (1e-60..1e60).contains(&m) {
+        return Some((edges, 0));
     }
     // Binary exponent of m (subnormals first lifted by 2⁶⁴).
     let k = if m >= f64::MIN_POSITIVE {
@@ -168,13 +176,52 @@ pub(crate) fn neg(a: [f64; 3]) -> [f64; 3] {
     [-a[0], -a[1], -a[2]]
 }
 
+/// A triangle measured on its exactly scaled edges ([`scaled_edges`]): everything the
+/// degeneracy test, the area and the cotangents need, computed once.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ScaledTriangle {
+    /// `[p₁−p₀, p₂−p₁, p₀−p₂] · 2⁻ᵏ`.
+    pub(crate) edges: [[f64; 3]; 3],
+    /// The power of two k.
+    pub(crate) k: i32,
+    /// `‖(p₁−p₀) × (p₂−p₀)‖ · 2⁻²ᵏ`, twice the scaled area.
+    pub(crate) double_area: f64,
+}
+
+impl ScaledTriangle {
+    /// `None` if an edge is not finite or all three edges are zero.
+    #[inline]
+    pub(crate) fn new(p: [[f64; 3]; 3]) -> Option<Self> {
+        let (edges, k) = scaled_edges(p)?;
+        // p₂ − p₀ = −(p₀ − p₂) exactly.
+        let double_area = norm(cross(edges[0], neg(edges[2])));
+        Some(Self { edges, k, double_area })
+    }
+
+    /// The area |T| (exact scaling back; overflows only if the area does).
+    #[inline]
+    pub(crate) fn area(&self) -> f64 {
+        0.5 * mul_pow2(self.double_area, 2 * self.k)
+    }
+
+    /// The cotangent of the angle at each corner, `(e₁·e₂)/‖e₁×e₂‖` with the two edges leaving
+    /// the corner; ‖e₁×e₂‖ is twice the area at every corner, and the common value keeps the
+    /// three cotangents consistent. Scale invariant.
+    #[inline]
+    pub(crate) fn cotangents(&self) -> [f64; 3] {
+        let [d01, d12, d20] = self.edges;
+        // The two edges leaving each corner: p_{k+1} − p_k and p_{k+2} − p_k.
+        [(d01, neg(d20)), (d12, neg(d01)), (d20, neg(d12))].map(|(e1, e2)| dot(e1, e2) / self.double_area)
+    }
+}
+
 /// Area of a triangle, computed on exactly scaled edges ([`scaled_edges`]) so that it neither
 /// overflows nor underflows unless the area itself does; 0 for coincident corners, +∞ for
 /// non-finite edges.
 #[inline]
 pub(crate) fn triangle_area(p: [[f64; 3]; 3]) -> f64 {
-    match scaled_edges(p) {
-        Some(([d01, _, d20], k)) => 0.5 * mul_pow2(norm(cross(d01, neg(d20))), 2 * k),
+    match ScaledTriangle::new(p) {
+        Some(t) => t.area(),
         None if p[0] == p[1] && p[1] == p[2] => 0.0,
         None => f64::INFINITY,
     }

@@ -13,12 +13,13 @@
 //! On open meshes the boundary terms vanish: this is the natural (Neumann) boundary
 //! condition. Assembly is per face, so non-manifold meshes assemble too.
 //!
-//! All three matrices share one sparsity pattern (vertex–edge graph plus the diagonal; D
-//! stores explicit zeros off the diagonal), so one symbolic factorization serves L, B, D and
-//! every shifted matrix `tL − zB`. Assembly is O(#faces): a counting sort of the half-edges
-//! by column, then a parallel (rayon) merge per column.
+//! L and B share one sparsity pattern (vertex–edge graph plus the diagonal), and D is stored
+//! as its diagonal ([`FemOperators::lumped_mass`] puts it on that pattern), so one symbolic
+//! factorization serves L, B, D and every shifted matrix `tL − zB`. Assembly is O(#faces):
+//! the elements in parallel over faces, a counting sort of the faces around each vertex, then
+//! a parallel (rayon) merge per column.
 
-use crate::mesh::{cross, dot, mul_pow2, neg, norm, scaled_edges};
+use crate::mesh::{dot, mul_pow2, neg, ScaledTriangle};
 use crate::{MeshError, TriMesh};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use rayon::prelude::*;
@@ -42,16 +43,21 @@ pub struct AssemblyParams {
     pub lumped: LumpedMassKind,
 }
 
-/// The FEM operators of a mesh, all n × n on one shared sparsity pattern.
+/// The FEM operators of a mesh, all n × n on one shared sparsity pattern (the vertex–edge
+/// graph plus the diagonal).
+///
+/// L and B are stored; the lumped mass D is diagonal and kept as [`Self::lumped_diagonal`],
+/// with [`Self::lumped_mass`] building it on the shared pattern when a solver wants one
+/// symbolic factorization for L, B and D (as [`Self::identity_mass`] does for B = I).
 #[derive(Clone, Debug)]
 pub struct FemOperators {
     /// Cotangent stiffness L: symmetric positive semidefinite, positive diagonal, `L·1 = 0`.
     pub stiffness: SparseColMat<usize, f64>,
-    /// Consistent (Galerkin) mass B: symmetric positive definite, `1ᵀB1 = area`.
+    /// Consistent (Galerkin) mass B: symmetric positive definite, `1ᵀB1 = area`; same pattern
+    /// as L.
     pub mass: SparseColMat<usize, f64>,
-    /// Lumped mass D on the same pattern (off-diagonal entries are explicit zeros).
-    pub lumped_mass: SparseColMat<usize, f64>,
-    /// The diagonal of D as a vector.
+    /// The diagonal of the lumped mass D (paper Eq. (7); barycentric or mixed Voronoi areas,
+    /// [`LumpedMassKind`]).
     pub lumped_diagonal: Vec<f64>,
 }
 
@@ -66,101 +72,91 @@ impl FemOperators {
         self.mass.val().iter().sum()
     }
 
+    /// The lumped mass D as a matrix on the shared pattern: [`Self::lumped_diagonal`] on the
+    /// diagonal, explicit zeros elsewhere. Built on each call (O(nnz)).
+    pub fn lumped_mass(&self) -> SparseColMat<usize, f64> {
+        self.diagonal_on_pattern(|j| self.lumped_diagonal[j])
+    }
+
     /// The identity matrix on the shared pattern (the mass of the "linear FEM" kernel, B = I).
-    #[allow(clippy::expect_used)]
     pub fn identity_mass(&self) -> SparseColMat<usize, f64> {
+        self.diagonal_on_pattern(|_| 1.0)
+    }
+
+    /// A diagonal matrix on the shared pattern (explicit zeros off the diagonal).
+    #[allow(clippy::expect_used)]
+    fn diagonal_on_pattern(&self, diagonal: impl Fn(usize) -> f64) -> SparseColMat<usize, f64> {
         let sym = self.stiffness.symbolic();
         let mut val = vec![0.0; sym.row_idx().len()];
         for j in 0..sym.ncols() {
             for p in sym.col_range(j) {
                 if sym.row_idx()[p] == j {
-                    val[p] = 1.0;
+                    val[p] = diagonal(j);
                 }
             }
         }
         SparseColMat::new(
             // invariant: cloning an existing valid pattern can only fail to allocate.
-            self.stiffness.symbolic().to_owned().expect("clone of a valid pattern"),
+            sym.to_owned().expect("clone of a valid pattern"),
             val,
         )
     }
 }
 
-/// Per-face geometry: area and the cotangent of the angle at each corner.
-///
-/// Computed on the edges scaled by an exact power of two ([`crate::mesh::scaled_edges`]), so
-/// the cotangents are scale invariant and nothing overflows for huge or tiny (but valid)
-/// triangles; the area is scaled back exactly. NaN for coincident corners or non-finite
-/// edges (such faces are degenerate and never assembled).
-#[inline]
-fn face_cotangents(p: [[f64; 3]; 3]) -> (f64, [f64; 3]) {
-    let Some(([d01, d12, d20], k)) = scaled_edges(p) else {
-        return (f64::NAN, [f64::NAN; 3]);
-    };
-    // The two edges leaving each corner: p_{k+1} − p_k and p_{k+2} − p_k.
-    let legs = [(d01, neg(d20)), (d12, neg(d01)), (d20, neg(d12))];
-    let double_area = norm(cross(legs[0].0, legs[0].1));
-    let mut cots = [0.0; 3];
-    for (cot, (e1, e2)) in cots.iter_mut().zip(legs) {
-        // cot θ = cos/sin = (e1·e2)/‖e1×e2‖, and ‖e1×e2‖ is twice the area for every corner;
-        // using the common value keeps the three cotangents consistent.
-        *cot = dot(e1, e2) / double_area;
-    }
-    (0.5 * mul_pow2(double_area, 2 * k), cots)
-}
-
 /// The element of one face (paper Eq. (3)): its area |T| (the consistent mass puts |T|/6 on
-/// each vertex and |T|/12 on each edge, the barycentric lumped mass |T|/3 on each vertex), the
-/// cotangent of each corner's angle (the stiffness puts −½ cot on the opposite edge) and, for
-/// the Voronoi lumped mass, each corner's mixed Voronoi area. `None` for a degenerate face
-/// (the test is shared with `validate`, so a mesh validates as usable iff it assembles).
-#[derive(Clone, Copy)]
+/// each vertex and |T|/12 on each edge, the barycentric lumped mass |T|/3 on each vertex) and
+/// the cotangent of each corner's angle (the stiffness puts −½ cot on the opposite edge).
+///
+/// Computed on the edges scaled by an exact power of two ([`ScaledTriangle`]), so the
+/// cotangents are scale invariant and nothing overflows for huge or tiny (but valid)
+/// triangles; the area is scaled back exactly.
+#[derive(Clone, Copy, Default)]
 struct FaceElement {
     area: f64,
     cots: [f64; 3],
-    voronoi: [f64; 3],
 }
 
-fn face_element(p: [[f64; 3]; 3], voronoi: bool) -> Option<FaceElement> {
-    let (area, cots) = face_cotangents(p);
-    if crate::validate::is_degenerate_triangle(p) || cots.iter().any(|c| !c.is_finite()) {
+/// The element of a face, or `None` for a degenerate face (the test is shared with
+/// `validate`, so a mesh validates as usable iff it assembles); with the mixed Voronoi area of
+/// each corner when asked.
+#[inline]
+fn face_element(p: [[f64; 3]; 3], voronoi: bool) -> Option<(FaceElement, [f64; 3])> {
+    let t = ScaledTriangle::new(p)?;
+    if crate::validate::is_degenerate_scaled(&t) {
         return None;
     }
-    let voronoi = if voronoi {
-        voronoi_corner_areas(p, (area, cots))
+    let element = FaceElement {
+        area: t.area(),
+        cots: t.cotangents(),
+    };
+    if element.cots.iter().any(|c| !c.is_finite()) {
+        return None;
+    }
+    let masses = if voronoi {
+        voronoi_corner_areas(&t, element)
     } else {
         [0.0; 3]
     };
-    Some(FaceElement { area, cots, voronoi })
+    Some((element, masses))
 }
 
-/// Columns per parallel work item of [`assemble`]: large enough to amortise the task and
-/// slice bookkeeping, small enough to balance the load on a few cores.
+/// Faces per parallel work item of the element pass, and columns per work item of the merge:
+/// large enough to amortise the task and slice bookkeeping, small enough to balance the load
+/// on a few cores.
+const FACES_PER_CHUNK: usize = 8192;
 const COLUMNS_PER_CHUNK: usize = 2048;
-
-/// What one corner of a face contributes to the column of its vertex j: the two half-edges
-/// (j, i) to the other corners, with their stiffness values, and the face area.
-#[derive(Clone, Copy, Default)]
-struct CornerEntries {
-    /// The other two vertices of the face.
-    rows: [u32; 2],
-    /// `−½ cot` of the angle opposite each of the two edges.
-    stiffness: [f64; 2],
-    /// Face area |T|.
-    area: f64,
-}
 
 /// Assembles the stiffness L, the consistent mass B and the lumped mass D of `mesh`
 /// (paper, Eq. (3) and Eq. (7)).
 ///
-/// Runs in O(#faces) time and memory, in parallel (rayon):
-/// 1. a counting sort of the 3·#faces corners by vertex: in parallel over vertex ranges,
-///    every face's area and cotangents are computed and each corner's two half-edges are
-///    written to its vertex's segment, in face order (all later reads are sequential);
-/// 2. per column j, sort the half-edges of j by row (stably, so face order is kept) and
-///    merge duplicates: a first pass only counts the distinct rows to lay out the column
-///    pointers, the second writes the entries of L, B and D directly into their final
-///    arrays (each of the three matrices owns a copy of the shared pattern).
+/// Runs in O(#faces) time and memory, in parallel (rayon), in three passes:
+/// 1. every face's element (area and cotangents, measured once) in parallel over faces;
+/// 2. the faces around each vertex, in face order (a counting sort of the corners by vertex,
+///    4 bytes per corner);
+/// 3. per column j, the half-edges of the faces around j sorted by row (stably, so face order
+///    is kept) and merged: a first pass only counts the distinct rows to lay out the column
+///    pointers, the second writes the entries of L, B and D directly into their final arrays
+///    (each of the three matrices owns a copy of the shared pattern).
 ///
 /// Contributions to an entry are summed in face order on both sides of the diagonal, so L
 /// and B are exactly symmetric, even on non-manifold meshes.
@@ -173,11 +169,30 @@ struct CornerEntries {
 ///   singular); drop such vertices first with [`crate::validate::repair`].
 /// * [`MeshError::DegenerateMesh`] if the total area Σ|T| overflows (coordinates beyond
 ///   ~1e154): B and D would hold infinities; scale the mesh down first.
+/// * [`MeshError::Invalid`] for a mesh of 2³² faces or more.
 pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
     let n = mesh.n_vertices();
     let faces = mesh.faces();
+    if u32::try_from(faces.len()).is_err() {
+        return Err(MeshError::Invalid {
+            reason: format!("{} faces: assembly indexes faces with 32 bits", faces.len()),
+        });
+    }
+    let voronoi = params.lumped == LumpedMassKind::Voronoi;
 
-    // 1a. Column segments: corners[first[j]..first[j + 1]] belong to vertex j.
+    // 1. Elements.
+    let (elements, corner_mass) = face_elements(mesh, voronoi).map_err(|f| MeshError::DegenerateFace {
+        face: f,
+        vertices: faces[f],
+    })?;
+    // Every entry of B and D is a partial sum of the face areas, so a finite total keeps them
+    // all finite (L is scale free). Same areas, same order as `TriMesh::area` and `validate`.
+    let total_area: f64 = elements.iter().map(|e| e.area).sum();
+    if !total_area.is_finite() {
+        return Err(MeshError::DegenerateMesh { area: total_area });
+    }
+
+    // 2. The faces around each vertex: around[first[j]..first[j + 1]] for vertex j.
     let mut first = vec![0usize; n + 1];
     for face in faces {
         for &v in face {
@@ -187,58 +202,146 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
     for j in 0..n {
         first[j + 1] += first[j];
     }
-
-    let voronoi = params.lumped == LumpedMassKind::Voronoi;
-    let (corners, corner_mass) = scatter_corners(mesh, &first, voronoi).map_err(|f| MeshError::DegenerateFace {
-        face: f,
-        vertices: faces[f],
-    })?;
     if let Some(v) = (0..n).find(|&j| first[j + 1] == first[j]) {
         return Err(MeshError::UnreferencedVertex { vertex: v });
     }
-    // Every entry of B and D is a partial sum of the face areas, so a finite total keeps them
-    // all finite (L is scale free). Same test, same order as `validate`.
-    let total_area = mesh.area();
-    if !total_area.is_finite() {
-        return Err(MeshError::DegenerateMesh { area: total_area });
-    }
+    let around = faces_around_vertices(faces, &first);
 
-    let columns = merge_columns(&first, &corners, &corner_mass, voronoi);
+    // 3. Columns.
+    let columns = merge_columns(faces, &first, &around, &elements, &corner_mass);
 
-    // faer checks that every column's rows are sorted and in range (O(nnz) each); the three
-    // checks run in parallel, and meanwhile the corner records are freed (unmapping 32 bytes
-    // per corner takes a while too).
-    let [r0, r1, r2] = columns.rows;
+    // faer checks once that every column's rows are sorted and in range (O(nnz)); B gets a
+    // copy of the checked pattern (each matrix owns one). Meanwhile the per-face records are
+    // freed.
     let col_ptr = columns.col_ptr;
     let pattern = |row_idx: Vec<usize>| SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx);
-    let (((s0, s1), s2), ()) = rayon::join(
-        || rayon::join(|| rayon::join(|| pattern(r0), || pattern(r1)), || pattern(r2)),
-        || drop(corners),
+    let [l_rows, b_rows] = columns.row_idx;
+    let ((stiffness_pattern, mass_pattern), ()) = rayon::join(
+        || rayon::join(|| pattern(l_rows), || pattern(b_rows)),
+        || drop((elements, corner_mass, around)),
     );
     Ok(FemOperators {
-        stiffness: SparseColMat::new(s0, columns.l_val),
-        mass: SparseColMat::new(s1, columns.b_val),
-        lumped_mass: SparseColMat::new(s2, columns.d_val),
+        stiffness: SparseColMat::new(stiffness_pattern, columns.l_val),
+        mass: SparseColMat::new(mass_pattern, columns.b_val),
         lumped_diagonal: columns.lumped_diagonal,
     })
 }
 
-/// The three matrices as column arrays on one pattern (three copies of the row indices, one
-/// per matrix) and the lumped diagonal.
+/// Step 1 of [`assemble`]: the element of every face and, for the Voronoi lumped mass, the
+/// mixed Voronoi area of each corner (empty otherwise), in parallel over faces; the first
+/// degenerate face (in face order) as the error.
+fn face_elements(mesh: &TriMesh, voronoi: bool) -> Result<(Vec<FaceElement>, Vec<[f64; 3]>), usize> {
+    let n_faces = mesh.n_faces();
+    let mut elements = vec![FaceElement::default(); n_faces];
+    let mut corner_mass = vec![[0.0f64; 3]; if voronoi { n_faces } else { 0 }];
+    let mass_chunk = if voronoi { FACES_PER_CHUNK } else { 1 };
+    let mut mass_chunks: Vec<&mut [[f64; 3]]> = corner_mass.chunks_mut(mass_chunk).collect();
+    mass_chunks.resize_with(n_faces.div_ceil(FACES_PER_CHUNK), Default::default);
+    let degenerate = elements
+        .par_chunks_mut(FACES_PER_CHUNK)
+        .zip(mass_chunks)
+        .enumerate()
+        .map(|(c, (out, masses))| {
+            let start = c * FACES_PER_CHUNK;
+            let mut degenerate = None;
+            for (i, e) in out.iter_mut().enumerate() {
+                match face_element(mesh.corners(start + i), voronoi) {
+                    Some((element, m)) => {
+                        *e = element;
+                        if voronoi {
+                            masses[i] = m;
+                        }
+                    }
+                    None => {
+                        degenerate.get_or_insert(start + i);
+                    }
+                }
+            }
+            degenerate
+        })
+        .reduce(|| None, |a, b| a.into_iter().chain(b).min());
+    match degenerate {
+        Some(f) => Err(f),
+        None => Ok((elements, corner_mass)),
+    }
+}
+
+/// Step 2 of [`assemble`]: the faces around every vertex j in the segment
+/// `first[j]..first[j + 1]`, in face order, in parallel over vertex ranges of about equal
+/// corner counts (one per thread): each range scans all faces (cheap, sequential) and records
+/// the corners it owns, so every task writes only its own slice.
+fn faces_around_vertices(faces: &[[u32; 3]], first: &[usize]) -> Vec<u32> {
+    let n = first.len() - 1;
+    let n_corners = first[n];
+    let n_ranges = rayon::current_num_threads().clamp(1, n);
+    let vertex_bounds: Vec<usize> = (0..=n_ranges)
+        .map(|r| {
+            let target = n_corners * r / n_ranges;
+            first.partition_point(|&c| c < target).min(n)
+        })
+        .collect();
+    let corner_bounds: Vec<usize> = vertex_bounds[1..].iter().map(|&v| first[v]).collect();
+    let mut around = vec![0u32; n_corners];
+    split_at_bounds(&mut around, &corner_bounds)
+        .into_par_iter()
+        .zip(vertex_bounds.par_windows(2))
+        .for_each(|(out, range)| {
+            let (v0, v1) = (range[0], range[1]);
+            let base = first[v0];
+            let mut cursor: Vec<usize> = first[v0..v1].iter().map(|&c| c - base).collect();
+            for (f, face) in faces.iter().enumerate() {
+                for &v in face {
+                    let v = v as usize;
+                    if (v0..v1).contains(&v) {
+                        let c = &mut cursor[v - v0];
+                        // `assemble` checked that face indices fit in 32 bits.
+                        out[*c] = f as u32;
+                        *c += 1;
+                    }
+                }
+            }
+        });
+    around
+}
+
+/// L and B as column arrays on one pattern, and the lumped diagonal.
 struct Columns {
     col_ptr: Vec<usize>,
-    rows: [Vec<usize>; 3],
+    /// The row indices, once for L and once for B (each matrix owns a copy).
+    row_idx: [Vec<usize>; 2],
     l_val: Vec<f64>,
     b_val: Vec<f64>,
-    d_val: Vec<f64>,
     lumped_diagonal: Vec<f64>,
 }
 
-/// Step 2 of [`assemble`]: per column j, the half-edges of j's corners merged by row (stably,
-/// in face order) into the entries of L, B and D, in parallel over chunks of columns.
-fn merge_columns(first: &[usize], corners: &[CornerEntries], corner_mass: &[f64], voronoi: bool) -> Columns {
+/// The half-edges (j, i) of face `f` at its corner j, with their stiffness values: the edge
+/// to each other corner is opposite the third one, `L_ij = −½ cot`.
+#[inline]
+fn corner_half_edges(face: [u32; 3], j: usize, cots: [f64; 3]) -> (usize, [(u32, f64); 2]) {
+    // A face names three distinct vertices (a repeated one makes it degenerate).
+    let k = if face[0] as usize == j {
+        0
+    } else if face[1] as usize == j {
+        1
+    } else {
+        2
+    };
+    let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+    (k, [(face[k1], -0.5 * cots[k2]), (face[k2], -0.5 * cots[k1])])
+}
+
+/// Step 3 of [`assemble`]: per column j, the half-edges of the faces around j merged by row
+/// (stably, in face order) into the entries of L, B and D, in parallel over chunks of columns.
+fn merge_columns(
+    faces: &[[u32; 3]],
+    first: &[usize],
+    around: &[u32],
+    elements: &[FaceElement],
+    corner_mass: &[[f64; 3]],
+) -> Columns {
     let n = first.len() - 1;
-    // 2a. Count the distinct rows of each column, then lay out the column pointers.
+    let voronoi = !corner_mass.is_empty();
+    // 3a. Count the distinct rows of each column, then lay out the column pointers.
     let chunks: Vec<(usize, usize)> = (0..n)
         .step_by(COLUMNS_PER_CHUNK)
         .map(|c| (c, (c + COLUMNS_PER_CHUNK).min(n)))
@@ -252,10 +355,14 @@ fn merge_columns(first: &[usize], corners: &[CornerEntries], corner_mass: &[f64]
             for (jj, count) in out.iter_mut().enumerate() {
                 let j = col_start + jj;
                 rows.clear();
-                rows.extend(corners[first[j]..first[j + 1]].iter().flat_map(|c| c.rows));
-                rows.sort_unstable();
-                // Distinct off-diagonal rows plus the diagonal.
-                *count = 1 + rows.len() - rows.windows(2).filter(|w| w[0] == w[1]).count();
+                for &f in &around[first[j]..first[j + 1]] {
+                    for &v in &faces[f as usize] {
+                        if v as usize != j && !rows.contains(&v) {
+                            rows.push(v);
+                        }
+                    }
+                }
+                *count = 1 + rows.len();
             }
         });
     for j in 0..n {
@@ -263,82 +370,75 @@ fn merge_columns(first: &[usize], corners: &[CornerEntries], corner_mass: &[f64]
     }
     let nnz = col_ptr[n];
 
-    // 2b. Write the merged entries of L, B, D and the three copies of the row indices into
+    // 3b. Write the merged entries of L, B, D and the three copies of the row indices into
     //     disjoint per-chunk slices of the final arrays, in parallel.
-    let mut rows = [vec![0usize; nnz], vec![0usize; nnz], vec![0usize; nnz]];
+    let mut row_idx = [vec![0usize; nnz], vec![0usize; nnz]];
     let mut l_val = vec![0.0f64; nnz];
     let mut b_val = vec![0.0f64; nnz];
-    let mut d_val = vec![0.0f64; nnz];
     let mut lumped_diagonal = vec![0.0f64; n];
     {
         let bounds: Vec<usize> = chunks.iter().map(|&(_, end)| col_ptr[end]).collect();
-        let [r0, r1, r2] = &mut rows;
-        let work: Vec<_> = split_at_bounds(r0, &bounds)
+        let [l_rows, b_rows] = &mut row_idx;
+        let work: Vec<_> = split_at_bounds(l_rows, &bounds)
             .into_iter()
-            .zip(split_at_bounds(r1, &bounds))
-            .zip(split_at_bounds(r2, &bounds))
+            .zip(split_at_bounds(b_rows, &bounds))
             .zip(split_at_bounds(&mut l_val, &bounds))
             .zip(split_at_bounds(&mut b_val, &bounds))
-            .zip(split_at_bounds(&mut d_val, &bounds))
             .zip(lumped_diagonal.chunks_mut(COLUMNS_PER_CHUNK))
             .zip(&chunks)
             .collect();
         work.into_par_iter()
-            .for_each(|(((((((r0, r1), r2), l), b), d), diag), &(col_start, col_end))| {
+            .for_each(|(((((l_rows, b_rows), l), b), diag), &(col_start, col_end))| {
                 // Half-edges (row i, L value, B value) of column j.
                 let mut buf: Vec<(u32, f64, f64)> = Vec::new();
                 let base = col_ptr[col_start];
                 for j in col_start..col_end {
-                    let segment = first[j]..first[j + 1];
                     buf.clear();
                     let mut d_jj = 0.0;
-                    for c in &corners[segment.clone()] {
+                    for &f in &around[first[j]..first[j + 1]] {
+                        let f = f as usize;
+                        let e = elements[f];
+                        let (k, half_edges) = corner_half_edges(faces[f], j, e.cots);
                         // B_ij = Σ|T|/12 over the faces of edge ij.
-                        let b = c.area / 12.0;
-                        buf.push((c.rows[0], c.stiffness[0], b));
-                        buf.push((c.rows[1], c.stiffness[1], b));
-                        d_jj += c.area / 3.0;
-                    }
-                    if voronoi {
-                        d_jj = corner_mass[segment].iter().sum();
-                    }
-                    // Stable: equal rows stay in face order, the same order as on the other
-                    // side of the diagonal, so the merged sums are bitwise symmetric.
-                    buf.sort_by_key(|e| e.0);
-                    diag[j - col_start] = d_jj;
-                    // Merge duplicates (an interior edge appears once per incident face).
-                    let mut w = 0;
-                    for r in 0..buf.len() {
-                        if w > 0 && buf[w - 1].0 == buf[r].0 {
-                            buf[w - 1].1 += buf[r].1;
-                            buf[w - 1].2 += buf[r].2;
-                        } else {
-                            buf[w] = buf[r];
-                            w += 1;
+                        let b = e.area / 12.0;
+                        // Merge duplicates as they come (an interior edge appears once per
+                        // incident face), so each entry is summed in face order, the same
+                        // order as on the other side of the diagonal: L and B come out
+                        // bitwise symmetric.
+                        for (i, lv) in half_edges {
+                            match buf.iter_mut().find(|e| e.0 == i) {
+                                Some(e) => {
+                                    e.1 += lv;
+                                    e.2 += b;
+                                }
+                                None => buf.push((i, lv, b)),
+                            }
                         }
+                        d_jj += if voronoi { corner_mass[f][k] } else { e.area / 3.0 };
                     }
-                    let merged = &buf[..w];
+                    // The rows are distinct now.
+                    buf.sort_unstable_by_key(|e| e.0);
+                    diag[j - col_start] = d_jj;
+                    let merged = &buf[..];
                     let l_diag = -merged.iter().map(|e| e.1).sum::<f64>();
                     // Each incident face puts |T|/12 on two edges at j, so the off-diagonal
                     // sum of column j of B is Σ_{T∋j}|T|/6 = B_jj.
                     let b_diag = merged.iter().map(|e| e.2).sum::<f64>();
                     let split = merged.partition_point(|e| (e.0 as usize) < j);
                     let mut p = col_ptr[j] - base;
-                    let mut put = |i: usize, lv: f64, bv: f64, dv: f64| {
-                        r0[p] = i;
-                        r1[p] = i;
-                        r2[p] = i;
+                    let mut put = |i: usize, lv: f64, bv: f64| {
+                        l_rows[p] = i;
+                        b_rows[p] = i;
                         l[p] = lv;
                         b[p] = bv;
-                        d[p] = dv;
                         p += 1;
                     };
                     for e in &merged[..split] {
-                        put(e.0 as usize, e.1, e.2, 0.0);
+                        put(e.0 as usize, e.1, e.2);
                     }
-                    put(j, l_diag, b_diag, d_jj);
+                    put(j, l_diag, b_diag);
                     for e in &merged[split..] {
-                        put(e.0 as usize, e.1, e.2, 0.0);
+                        put(e.0 as usize, e.1, e.2);
                     }
                 }
             });
@@ -346,89 +446,10 @@ fn merge_columns(first: &[usize], corners: &[CornerEntries], corner_mass: &[f64]
 
     Columns {
         col_ptr,
-        rows,
+        row_idx,
         l_val,
         b_val,
-        d_val,
         lumped_diagonal,
-    }
-}
-
-/// Step 1b of [`assemble`]: the corners of every face, sorted by vertex into the column
-/// segments `first[j]..first[j + 1]` (in face order within a segment), with the Voronoi
-/// corner masses when asked; the first degenerate face (in face order) as the error.
-fn scatter_corners(mesh: &TriMesh, first: &[usize], voronoi: bool) -> Result<(Vec<CornerEntries>, Vec<f64>), usize> {
-    let n = mesh.n_vertices();
-    let faces = mesh.faces();
-    let n_corners = first[n];
-    // 1b. Scatter, in parallel over vertex ranges of about equal corner counts (one per
-    //     thread): each range scans all faces (cheap, sequential) and handles the corners it
-    //     owns, so every task writes only its own slice without locks or `unsafe`. A face is
-    //     measured once per range it touches, so at most three times.
-    let n_ranges = rayon::current_num_threads().clamp(1, n);
-    let vertex_bounds: Vec<usize> = (0..=n_ranges)
-        .map(|r| {
-            let target = n_corners * r / n_ranges;
-            first.partition_point(|&c| c < target).min(n)
-        })
-        .collect();
-    let mut corners = vec![CornerEntries::default(); n_corners];
-    let mut corner_mass = vec![0.0f64; if voronoi { n_corners } else { 0 }];
-    let corner_bounds: Vec<usize> = vertex_bounds[1..].iter().map(|&v| first[v]).collect();
-    let mass_bounds: Vec<usize> = if voronoi {
-        corner_bounds.clone()
-    } else {
-        vec![0; n_ranges]
-    };
-    let degenerate: Option<usize> = split_at_bounds(&mut corners, &corner_bounds)
-        .into_iter()
-        .zip(split_at_bounds(&mut corner_mass, &mass_bounds))
-        .zip(vertex_bounds.windows(2))
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .map(|((out, mass_out), range)| {
-            let (v0, v1) = (range[0], range[1]);
-            let base = first[v0];
-            let mut cursor: Vec<usize> = first[v0..v1].iter().map(|&c| c - base).collect();
-            let mut degenerate = None;
-            for (f, face) in faces.iter().enumerate() {
-                if !face.iter().any(|&v| (v0..v1).contains(&(v as usize))) {
-                    continue;
-                }
-                let Some(FaceElement {
-                    area,
-                    cots,
-                    voronoi: masses,
-                }) = face_element(mesh.corners(f), voronoi)
-                else {
-                    degenerate.get_or_insert(f);
-                    continue;
-                };
-                for k in 0..3 {
-                    let v = face[k] as usize;
-                    if !(v0..v1).contains(&v) {
-                        continue;
-                    }
-                    let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
-                    let c = &mut cursor[v - v0];
-                    // Edge v–face[k1] is opposite corner k2, edge v–face[k2] opposite k1.
-                    out[*c] = CornerEntries {
-                        rows: [face[k1], face[k2]],
-                        stiffness: [-0.5 * cots[k2], -0.5 * cots[k1]],
-                        area,
-                    };
-                    if voronoi {
-                        mass_out[*c] = masses[k];
-                    }
-                    *c += 1;
-                }
-            }
-            degenerate
-        })
-        .reduce(|| None, |a, b| a.into_iter().chain(b).min());
-    match degenerate {
-        Some(f) => Err(f),
-        None => Ok((corners, corner_mass)),
     }
 }
 
@@ -452,10 +473,8 @@ fn split_at_bounds<'a, T>(mut v: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [
 ///
 /// Squared edge lengths are taken on exactly scaled edges ([`crate::mesh::scaled_edges`]) and
 /// scaled back, so they do not overflow for huge triangles whose areas are finite.
-fn voronoi_corner_areas(p: [[f64; 3]; 3], (area, cots): (f64, [f64; 3])) -> [f64; 3] {
-    let Some(([d01, d12, d20], scale)) = scaled_edges(p) else {
-        return [f64::NAN; 3];
-    };
+fn voronoi_corner_areas(t: &ScaledTriangle, FaceElement { area, cots }: FaceElement) -> [f64; 3] {
+    let ([d01, d12, d20], scale) = (t.edges, t.k);
     let legs = [(d01, neg(d20)), (d12, neg(d01)), (d20, neg(d12))];
     let obtuse = (0..3).find(|&k| cots[k] < 0.0);
     let mut out = [0.0; 3];

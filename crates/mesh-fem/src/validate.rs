@@ -21,7 +21,7 @@
 //! [`repair`] applies only the repairs the caller turns on in [`RepairOptions`] and returns a
 //! [`RepairReport`] that says exactly what changed (index maps for vertices and faces).
 
-use crate::mesh::{cross, dot, mul_pow2, neg, norm, scaled_edges, sub};
+use crate::mesh::{cross, dot, mul_pow2, neg, norm, scaled_edges, sub, ScaledTriangle};
 use crate::topology::{Topology, NONE};
 use crate::vec3::bbox_diagonal;
 use crate::{MeshError, TriMesh};
@@ -59,13 +59,18 @@ pub const DEGENERATE_AREA_RATIO: f64 = 1e-14;
 /// This is the one test used by both [`validate`] and [`crate::assemble`], so the two agree.
 #[inline]
 pub fn is_degenerate_triangle(corners: [[f64; 3]; 3]) -> bool {
-    let Some(([e0, e1, e2], k)) = scaled_edges(corners) else {
-        return true; // coincident corners, or an edge that is not finite
-    };
+    // None: coincident corners, or an edge that is not finite.
+    ScaledTriangle::new(corners).is_none_or(|t| is_degenerate_scaled(&t))
+}
+
+/// [`is_degenerate_triangle`] on an already measured triangle (assembly measures each face
+/// once for this test, its area and its cotangents).
+#[inline]
+pub(crate) fn is_degenerate_scaled(t: &ScaledTriangle) -> bool {
+    let [e0, e1, e2] = t.edges;
     let longest_sq = dot(e0, e0).max(dot(e1, e1)).max(dot(e2, e2));
-    // c − a = −(a − c) exactly.
-    let area = 0.5 * norm(cross(e0, neg(e2)));
-    let true_area = mul_pow2(area, 2 * k);
+    let area = 0.5 * t.double_area;
+    let true_area = mul_pow2(area, 2 * t.k);
     !(area > DEGENERATE_AREA_RATIO * longest_sq && true_area >= f64::MIN_POSITIVE)
 }
 

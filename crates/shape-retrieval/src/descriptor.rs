@@ -243,8 +243,10 @@ impl ShapeDescriptors {
     pub fn eigenbasis(&mut self, lumped: bool) -> Result<&Eigenbasis, RetrievalError> {
         let k = self.params.eigenpairs.min(self.operators.n());
         let ops = &self.operators;
+        let lumped_mass;
         let (slot, mass) = if lumped {
-            (&mut self.lumped, &ops.lumped_mass)
+            lumped_mass = ops.lumped_mass();
+            (&mut self.lumped, &lumped_mass)
         } else {
             (&mut self.wfem, &ops.mass)
         };

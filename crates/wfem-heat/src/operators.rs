@@ -111,13 +111,16 @@ impl Operators {
     /// # Errors
     /// As [`Self::from_matrices`].
     pub fn new(fem: &FemOperators, kind: KernelKind) -> Result<Self, HeatError> {
-        let identity;
+        let diagonal;
         let mass = match kind {
             KernelKind::Wfem => &fem.mass,
-            KernelKind::Lumped => &fem.lumped_mass,
+            KernelKind::Lumped => {
+                diagonal = fem.lumped_mass();
+                &diagonal
+            }
             KernelKind::Linear => {
-                identity = fem.identity_mass();
-                &identity
+                diagonal = fem.identity_mass();
+                &diagonal
             }
         };
         let mut ops = Self::from_matrices(fem.stiffness.as_ref(), mass.as_ref())?;

@@ -143,7 +143,7 @@ pub fn operators<'py>(
     Ok((
         sparse_out(py, fem.stiffness.as_ref()),
         sparse_out(py, fem.mass.as_ref()),
-        sparse_out(py, fem.lumped_mass.as_ref()),
+        sparse_out(py, fem.lumped_mass().as_ref()),
     ))
 }
 

@@ -44,7 +44,7 @@ fn libigl_reference_files_read_and_match_assembly() {
         for (kind, ours) in [
             ("stiffness", &ops.stiffness),
             ("mass", &ops.mass),
-            ("lumped_mass", &ops.lumped_mass),
+            ("lumped_mass", &ops.lumped_mass()),
         ] {
             let m = read_matrix_market(reference.join(format!("{name}_{kind}.mtx"))).unwrap();
             assert_eq!((m.nrows(), m.ncols()), (n, n), "{name} {kind}");

@@ -103,7 +103,7 @@ fn stiffness_and_mass_are_symmetric() {
         // diagonal, so the symmetry is exact, not just up to rounding.
         assert_eq!(asymmetry(&o.stiffness), 0.0, "{name}: L not symmetric");
         assert_eq!(asymmetry(&o.mass), 0.0, "{name}: B not symmetric");
-        assert_eq!(asymmetry(&o.lumped_mass), 0.0, "{name}: D not symmetric");
+        assert_eq!(asymmetry(&o.lumped_mass()), 0.0, "{name}: D not symmetric");
     }
 }
 
@@ -129,7 +129,7 @@ fn masses_sum_to_the_area() {
         let area = mesh.area();
         let o = ops(&mesh);
         let b_total: f64 = o.mass.val().iter().sum();
-        let d_total: f64 = o.lumped_mass.val().iter().sum();
+        let d_total: f64 = o.lumped_mass().val().iter().sum();
         let d_diag_total: f64 = o.lumped_diagonal.iter().sum();
         let v_total: f64 = voronoi_ops(&mesh).lumped_diagonal.iter().sum();
         for (what, total) in [
@@ -160,7 +160,7 @@ fn lumped_mass_is_row_sum_of_mass() {
             );
         }
         // D is diagonal: off-diagonal stored values are explicit zeros.
-        for (i, j, v) in entries(&o.lumped_mass) {
+        for (i, j, v) in entries(&o.lumped_mass()) {
             let expected = if i == j { o.lumped_diagonal[i] } else { 0.0 };
             assert_eq!(v, expected, "{name}: D[{i},{j}]");
         }
@@ -172,7 +172,7 @@ fn operators_share_one_sorted_pattern() {
     for (name, mesh) in test_meshes() {
         for o in [ops(&mesh), voronoi_ops(&mesh)] {
             let s = o.stiffness.symbolic();
-            for m in [&o.mass, &o.lumped_mass] {
+            for m in [&o.mass, &o.lumped_mass()] {
                 assert_eq!(s.col_ptr(), m.symbolic().col_ptr(), "{name}");
                 assert_eq!(s.row_idx(), m.symbolic().row_idx(), "{name}");
             }
@@ -380,7 +380,7 @@ fn assembly_is_equivariant_under_vertex_and_face_permutations() {
         for (what, x, y) in [
             ("L", &a.stiffness, &b.stiffness),
             ("B", &a.mass, &b.mass),
-            ("D", &a.lumped_mass, &b.lumped_mass),
+            ("D", &a.lumped_mass(), &b.lumped_mass()),
         ] {
             let y = entry_map(y);
             assert_eq!(x.val().len(), y.len(), "{what}: pattern size");
@@ -412,7 +412,11 @@ fn assembly_is_bitwise_independent_of_the_thread_count() {
         );
         assert_eq!(o.stiffness.val(), reference.stiffness.val(), "{threads} threads: L");
         assert_eq!(o.mass.val(), reference.mass.val(), "{threads} threads: B");
-        assert_eq!(o.lumped_mass.val(), reference.lumped_mass.val(), "{threads} threads: D");
+        assert_eq!(
+            o.lumped_mass().val(),
+            reference.lumped_mass().val(),
+            "{threads} threads: D"
+        );
         assert_eq!(o.lumped_diagonal, reference.lumped_diagonal, "{threads} threads");
     }
 }
@@ -440,8 +444,44 @@ fn scale_covariance() {
             };
             cmp("L", base.stiffness.val(), scaled.stiffness.val(), 1.0);
             cmp("B", base.mass.val(), scaled.mass.val(), a2);
-            cmp("D", base.lumped_mass.val(), scaled.lumped_mass.val(), a2);
+            cmp("D", base.lumped_mass().val(), scaled.lumped_mass().val(), a2);
             cmp("diag D", &base.lumped_diagonal, &scaled.lumped_diagonal, a2);
+        }
+    }
+}
+
+/// Scaling by an exact power of two 2ᵏ changes nothing but the exponents: L is bitwise the
+/// same and B, D are bitwise 4ᵏ times the unscaled ones, for k on both sides of the range where
+/// the element code skips its own power-of-two scaling (edges between 1e−60 and 1e60), up to
+/// edges of 1e±100 and areas far beyond what an unscaled cross product could hold.
+#[test]
+fn power_of_two_scaling_is_bitwise_exact() {
+    let mesh = irregular_sphere(2, 5.6);
+    let base = ops(&mesh);
+    for k in [-330, -230, -205, -195, -100, 100, 195, 205, 230, 330] {
+        let s = 2f64.powi(k);
+        let scaled = ops(&mesh.scaled(s).unwrap());
+        assert_eq!(scaled.stiffness.val(), base.stiffness.val(), "k = {k}: L");
+        let b: Vec<f64> = base.mass.val().iter().map(|v| v * s * s).collect();
+        assert_eq!(scaled.mass.val(), &b[..], "k = {k}: B");
+        let d: Vec<f64> = base.lumped_diagonal.iter().map(|v| v * s * s).collect();
+        assert_eq!(scaled.lumped_diagonal, d, "k = {k}: D");
+    }
+}
+
+/// `lumped_mass()` is D on the shared pattern: the lumped diagonal on the diagonal, explicit
+/// zeros elsewhere; `identity_mass()` the same with ones.
+#[test]
+fn lumped_and_identity_mass_sit_on_the_shared_pattern() {
+    let o = ops(&irregular_sphere(2, 5.6));
+    for (m, diagonal) in [
+        (o.lumped_mass(), o.lumped_diagonal.clone()),
+        (o.identity_mass(), vec![1.0; o.n()]),
+    ] {
+        assert_eq!(m.symbolic().col_ptr(), o.stiffness.symbolic().col_ptr());
+        assert_eq!(m.symbolic().row_idx(), o.stiffness.symbolic().row_idx());
+        for (i, j, v) in entries(&m) {
+            assert_eq!(v, if i == j { diagonal[i] } else { 0.0 }, "({i}, {j})");
         }
     }
 }
@@ -493,7 +533,7 @@ fn unit_square_two_triangles_by_hand() {
         [q,          f64::NAN,   q,          1.0 / 12.0],
     ];
     let expected_d = [1.0 / 3.0, 1.0 / 6.0, 1.0 / 3.0, 1.0 / 6.0];
-    let (l, b, d) = (entry_map(&o.stiffness), entry_map(&o.mass), entry_map(&o.lumped_mass));
+    let (l, b, d) = (entry_map(&o.stiffness), entry_map(&o.mass), entry_map(&o.lumped_mass()));
     assert_eq!(l.len(), 14, "4 diagonal + 2·5 edge entries");
     for i in 0..4 {
         for j in 0..4 {
@@ -714,7 +754,7 @@ fn operators_match_libigl_entry_by_entry() {
         for (what, ours, file) in [
             ("stiffness", &o.stiffness, "stiffness"),
             ("mass", &o.mass, "mass"),
-            ("lumped mass", &o.lumped_mass, "lumped_mass"),
+            ("lumped mass", &o.lumped_mass(), "lumped_mass"),
         ] {
             let (n, reference) = read_mtx(&dir.join(format!("{name}_{file}.mtx")));
             assert_eq!(n, o.n(), "{name}: size");
@@ -750,7 +790,7 @@ fn sig10(x: f64) -> String {
 #[test]
 fn snapshot_grid_3x3_operators() {
     let o = ops(&grid(3, 3));
-    let d = entry_map(&o.lumped_mass);
+    let d = entry_map(&o.lumped_mass());
     let b = entry_map(&o.mass);
     let mut out = String::from("row col L B D\n");
     for (i, j, l) in entries(&o.stiffness) {

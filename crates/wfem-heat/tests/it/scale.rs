@@ -9,7 +9,7 @@ use wfem_heat::{Eigenbasis, HeatError, HeatKernel, HeatParams, KernelKind, Metho
 fn mass_of(ops: &mesh_fem::FemOperators, kind: KernelKind) -> faer::sparse::SparseColMat<usize, f64> {
     match kind {
         KernelKind::Wfem => ops.mass.clone(),
-        KernelKind::Lumped => ops.lumped_mass.clone(),
+        KernelKind::Lumped => ops.lumped_mass(),
         KernelKind::Linear => ops.identity_mass(),
     }
 }

@@ -8,7 +8,7 @@ use wfem_heat::{EigenParams, Eigenbasis, HeatKernel, HeatParams, KernelKind, Met
 fn mass_of(ops: &mesh_fem::FemOperators, kind: KernelKind) -> faer::sparse::SparseColMat<usize, f64> {
     match kind {
         KernelKind::Wfem => ops.mass.clone(),
-        KernelKind::Lumped => ops.lumped_mass.clone(),
+        KernelKind::Lumped => ops.lumped_mass(),
         KernelKind::Linear => ops.identity_mass(),
     }
 }
