@@ -254,7 +254,7 @@ pub fn operators(args: &OperatorsArgs, out: &mut dyn Write) -> Result<(), CliErr
     })?;
     writeln!(
         out,
-        "wrote {}/{{stiffness,mass,lumped_mass}}.mtx ({} × {}, {} nonzeros each){}",
+        "wrote {}/{{stiffness,mass,lumped_mass}}.mtx ({} × {}; L and B {} nonzeros, D diagonal){}",
         args.out.display(),
         ops.n(),
         ops.n(),

@@ -25,6 +25,8 @@
 use crate::io::AtomicSet;
 use crate::{FemOperators, MeshError};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
+use rayon::prelude::*;
+use std::io::Write;
 use std::path::Path;
 
 fn io_err(path: &Path, source: std::io::Error) -> MeshError {
@@ -80,7 +82,7 @@ fn stage_matrix_market(
     if symmetric {
         check_symmetric(path, matrix.nrows(), matrix.ncols(), &entries)?;
     }
-    let kept: Vec<&(usize, usize, f64)> = entries.iter().filter(|&&(i, j, _)| !symmetric || i >= j).collect();
+    let kept: Vec<(usize, usize, f64)> = entries.into_iter().filter(|&(i, j, _)| !symmetric || i >= j).collect();
     set.stage(path, |w| {
         writeln!(
             w,
@@ -89,13 +91,30 @@ fn stage_matrix_market(
         )?;
         writeln!(w, "% written by mesh-fem {}", env!("CARGO_PKG_VERSION"))?;
         writeln!(w, "{} {} {}", matrix.nrows(), matrix.ncols(), kept.len())?;
-        for &&(i, j, v) in &kept {
-            // {:.16e} prints 17 significant digits: enough to round-trip every f64.
-            writeln!(w, "{} {} {:.16e}", i + 1, j + 1, v)?;
+        // The lines are formatted in parallel, a bounded batch at a time, and written in order.
+        for batch in kept.chunks(LINES_PER_BATCH) {
+            let texts: Vec<Vec<u8>> = batch
+                .par_chunks(LINES_PER_TASK)
+                .map(|lines| {
+                    let mut text = Vec::with_capacity(lines.len() * 40);
+                    for &(i, j, v) in lines {
+                        // `{:e}` prints the shortest decimal that reads back as the same f64.
+                        let _ = writeln!(text, "{} {} {:e}", i + 1, j + 1, v);
+                    }
+                    text
+                })
+                .collect();
+            for text in &texts {
+                w.write_all(text)?;
+            }
         }
         Ok(())
     })
 }
+
+/// Lines formatted per parallel task, and per batch held in memory, by the Matrix Market writer.
+const LINES_PER_TASK: usize = 1 << 14;
+const LINES_PER_BATCH: usize = 1 << 20;
 
 /// All stored entries `(row, col, value)`, by column then row (duplicates, if a matrix has
 /// any, are summed).
@@ -136,8 +155,20 @@ fn check_symmetric(path: &Path, nrows: usize, ncols: usize, entries: &[(usize, u
     // Keys (col, row) of the entries and of the transposed entries, both sorted; walking them
     // together compares a_ij with a_ji (a missing entry counts as zero).
     let a: Vec<((usize, usize), f64)> = entries.iter().map(|&(i, j, v)| ((j, i), v)).collect();
-    let mut b: Vec<((usize, usize), f64)> = entries.iter().map(|&(i, j, v)| ((i, j), v)).collect();
-    b.sort_by_key(|e| e.0);
+    // The transposed keys sorted by (row, col): a counting sort by row, stable, so the columns
+    // stay increasing within a row (the entries come by column).
+    let mut first = vec![0usize; nrows + 1];
+    for &(i, _, _) in entries {
+        first[i + 1] += 1;
+    }
+    for r in 0..nrows {
+        first[r + 1] += first[r];
+    }
+    let mut b: Vec<((usize, usize), f64)> = vec![((0, 0), 0.0); entries.len()];
+    for &(i, j, v) in entries {
+        b[first[i]] = ((i, j), v);
+        first[i] += 1;
+    }
     let (mut p, mut q) = (0, 0);
     while p < a.len() || q < b.len() {
         use std::cmp::Ordering::*;
