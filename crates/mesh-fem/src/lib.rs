@@ -7,8 +7,9 @@
 //! * [`validate`](mod@validate): a [`validate::ValidationReport`] naming every problem, and explicit repairs.
 //! * [`vec3`]: the 3-vector helpers and bounding box every crate uses.
 //! * [`stats`](mod@stats): counts, topology (Euler characteristic, genus, boundary loops) and geometry.
-//! * [`mtx`]: Matrix Market reading and writing (atomic, 17 digits) and `nalgebra-sparse`
+//! * [`mtx`]: Matrix Market reading and writing (atomic, shortest round-trip decimals) and `nalgebra-sparse`
 //!   conversions.
+//! * [`filter`]: geometric filters (removal of isolated spikes).
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
 //! * [`operators`]: the cotangent stiffness L, the consistent mass B and the lumped mass D of
 //!   the paper's Eq. (3) and Eq. (7), assembled in parallel into faer sparse matrices.
@@ -28,6 +29,7 @@ mod mesh;
 mod topology;
 
 pub mod corpus;
+pub mod filter;
 pub mod generate;
 pub mod io;
 pub mod morse;

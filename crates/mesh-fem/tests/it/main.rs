@@ -4,6 +4,7 @@
 mod minimal_reader;
 
 mod corpus;
+mod filter;
 mod generate;
 mod io_obj_oracle;
 mod io_readers;

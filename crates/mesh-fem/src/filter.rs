@@ -1,0 +1,231 @@
+//! Geometric filters that change vertex positions, never the connectivity.
+//!
+//! * [`despike`]: finds isolated spikes (impulsive "shot" noise: single vertices pulled far off
+//!   the surface) and puts them back, as the harmonic fill of their neighbours.
+
+use crate::{MeshError, TriMesh};
+
+/// Default threshold of [`despike`]: a vertex is a spike when it lies more than this many local
+/// edge lengths away from the centroid of its neighbours. On smooth surfaces the distance is a
+/// small fraction of an edge (about κh²/2 for curvature κ and edge length h). On the 71 TOSCA
+/// shapes (5K vertices) at most 3 vertices of a shape exceed 3 (the sharpest single-vertex
+/// tips), while 86–100 % of the spikes of the synthetic shot noise (±5 mean edge lengths
+/// along the normal) do.
+pub const DEFAULT_SPIKE_THRESHOLD: f64 = 3.0;
+
+/// Jacobi sweeps of the harmonic fill of the spikes.
+const FILL_SWEEPS: usize = 20;
+
+/// The result of [`despike`].
+#[derive(Clone, Debug)]
+pub struct Despiked {
+    /// The mesh with the spikes put back (same faces, same vertex order).
+    pub mesh: TriMesh,
+    /// The vertices that were moved, increasing.
+    pub moved: Vec<usize>,
+}
+
+/// Finds the spikes of a mesh and puts them back.
+///
+/// For each interior vertex i (its link is closed: every neighbour is shared by two of its
+/// faces), over the corners of i (one per incident face), with `(a, b)` the edge of that face
+/// opposite i: the centroid `c_i` is the mean of the edge midpoints `(x_a + x_b)/2` (the mean
+/// of the neighbours) and the local edge length `h_i` the median of `‖x_a − x_b‖`. Neither
+/// depends on `x_i`, so a spike does not hide itself by stretching its own edges, and the
+/// median keeps a neighbouring spike's stretched edges from inflating `h_i`. Vertex i is a
+/// spike when `r_i = ‖x_i − c_i‖ / h_i > threshold` and at most one of its neighbours has
+/// `r_j > r_i / 2`: shot noise pulls single vertices at random, so at most a pair of them
+/// touch, while a vertex with several such neighbours belongs to a thin protrusion of the
+/// shape itself (a tip made of several vertices) and is kept. (A spike raises its
+/// neighbours' r by about 1/valence of its own.) Boundary vertices are never moved.
+///
+/// The spikes are then replaced by the harmonic fill of their neighbours (Jacobi sweeps of
+/// `x_i ← c_i` over the spikes only, so an adjacent pair settles together); every other vertex
+/// keeps its position bit for bit. A mesh without spikes comes back unchanged.
+///
+/// # Errors
+/// [`MeshError::Invalid`] for a threshold that is not finite and positive.
+pub fn despike(mesh: &TriMesh, threshold: f64) -> Result<Despiked, MeshError> {
+    if !(threshold.is_finite() && threshold > 0.0) {
+        return Err(MeshError::Invalid {
+            reason: format!("the spike threshold must be finite and positive, got {threshold}"),
+        });
+    }
+    let links = Links::new(mesh.faces(), mesh.n_vertices());
+    let mut positions = mesh.positions().to_vec();
+    // ‖x_i − c_i‖ / h_i on interior vertices, 0 elsewhere.
+    let ratio: Vec<f64> = (0..links.n())
+        .map(|i| {
+            let h = links.median_length(i, &positions);
+            if links.is_interior(i) && h > 0.0 {
+                crate::vec3::norm(crate::vec3::sub(positions[i], links.centroid(i, &positions))) / h
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let moved: Vec<usize> = (0..links.n())
+        .filter(|&i| ratio[i] > threshold && links.neighbours(i).filter(|&j| ratio[j] > 0.5 * ratio[i]).count() <= 1)
+        .collect();
+    if moved.is_empty() {
+        return Ok(Despiked {
+            mesh: mesh.clone(),
+            moved,
+        });
+    }
+    for _ in 0..FILL_SWEEPS {
+        let centroids: Vec<[f64; 3]> = moved.iter().map(|&i| links.centroid(i, &positions)).collect();
+        for (&i, c) in moved.iter().zip(centroids) {
+            positions[i] = c;
+        }
+    }
+    Ok(Despiked {
+        mesh: TriMesh::new(positions, mesh.faces().to_vec())?,
+        moved,
+    })
+}
+
+/// The link of every vertex: for each corner of the vertex, the two other vertices of the face
+/// (the edge opposite the corner), in face order.
+struct Links {
+    first: Vec<usize>,
+    edges: Vec<[u32; 2]>,
+}
+
+impl Links {
+    fn new(faces: &[[u32; 3]], n: usize) -> Self {
+        let mut first = vec![0usize; n + 1];
+        for face in faces {
+            for &v in face {
+                first[v as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            first[i + 1] += first[i];
+        }
+        let mut cursor = first.clone();
+        let mut edges = vec![[0u32; 2]; first[n]];
+        for face in faces {
+            for k in 0..3 {
+                let i = face[k] as usize;
+                edges[cursor[i]] = [face[(k + 1) % 3], face[(k + 2) % 3]];
+                cursor[i] += 1;
+            }
+        }
+        Self { first, edges }
+    }
+
+    fn n(&self) -> usize {
+        self.first.len() - 1
+    }
+
+    fn of(&self, i: usize) -> &[[u32; 2]] {
+        &self.edges[self.first[i]..self.first[i + 1]]
+    }
+
+    /// The neighbours of i, each once per link edge end (twice for an interior vertex).
+    fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        self.of(i)
+            .iter()
+            .flatten()
+            .map(|&v| v as usize)
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+    }
+
+    /// Whether every neighbour of i ends exactly two of its link edges (a closed link).
+    fn is_interior(&self, i: usize) -> bool {
+        let link = self.of(i);
+        !link.is_empty()
+            && link
+                .iter()
+                .flatten()
+                .all(|v| link.iter().flatten().filter(|&w| w == v).count() == 2)
+    }
+
+    /// The mean midpoint of the link edges (the origin for a vertex in no face).
+    fn centroid(&self, i: usize, positions: &[[f64; 3]]) -> [f64; 3] {
+        let link = self.of(i);
+        let mut sum = [0.0f64; 3];
+        for &[a, b] in link {
+            let (pa, pb) = (positions[a as usize], positions[b as usize]);
+            for k in 0..3 {
+                sum[k] += 0.5 * (pa[k] + pb[k]);
+            }
+        }
+        if link.is_empty() {
+            return sum;
+        }
+        sum.map(|s| s / link.len() as f64)
+    }
+
+    /// The median length of the link edges (zero for a vertex in no face).
+    fn median_length(&self, i: usize, positions: &[[f64; 3]]) -> f64 {
+        let mut l: Vec<f64> = self
+            .of(i)
+            .iter()
+            .map(|&[a, b]| crate::vec3::norm(crate::vec3::sub(positions[a as usize], positions[b as usize])))
+            .collect();
+        if l.is_empty() {
+            return 0.0;
+        }
+        l.sort_unstable_by(f64::total_cmp);
+        let m = l.len() / 2;
+        if l.len() % 2 == 1 {
+            l[m]
+        } else {
+            0.5 * (l[m - 1] + l[m])
+        }
+    }
+}
+
+/// How rough a surface is at the scale of its edges, independently of its curvature and
+/// resolution: with `s_i = (x_i − c_i)·n_i / h_i` the signed height of an interior vertex above
+/// the centroid of its neighbours along the unit area-weighted vertex normal, in local edge
+/// lengths (`c_i`, `h_i` as in [`despike`]), the median over interior vertices of
+/// `|s_i − mean_j s_j|` (j the interior neighbours of i). Curvature makes the heights large but
+/// smooth (a sphere has nearly the same height at every vertex, whatever its resolution), so
+/// they cancel; noise makes them random from vertex to vertex. Scale invariant. About 0.03–0.08
+/// on the TOSCA shapes of 5K vertices, 0.17 and 0.4 under additive noise of 0.1 and 0.5 mean
+/// edge lengths. 0 when no vertex qualifies (a mesh that is all boundary).
+pub fn roughness(mesh: &TriMesh) -> f64 {
+    let links = Links::new(mesh.faces(), mesh.n_vertices());
+    let p = mesh.positions();
+    let mut normals = vec![[0.0f64; 3]; mesh.n_vertices()];
+    for f in mesh.faces() {
+        let [a, b, c] = f.map(|v| p[v as usize]);
+        // |T|-weighted: the cross product is twice the area along the face normal.
+        let n = crate::vec3::cross(crate::vec3::sub(b, a), crate::vec3::sub(c, a));
+        for &v in f {
+            for (s, x) in normals[v as usize].iter_mut().zip(n) {
+                *s += x;
+            }
+        }
+    }
+    let heights: Vec<Option<f64>> = (0..links.n())
+        .map(|i| {
+            let h = links.median_length(i, p);
+            let length = crate::vec3::norm(normals[i]);
+            if !(links.is_interior(i) && h > 0.0 && length > 0.0) {
+                return None;
+            }
+            let d = crate::vec3::sub(p[i], links.centroid(i, p));
+            Some(crate::vec3::dot(d, normals[i]) / length / h).filter(|s| s.is_finite())
+        })
+        .collect();
+    let mut variation: Vec<f64> = (0..links.n())
+        .filter_map(|i| {
+            let s = heights[i]?;
+            let around: Vec<f64> = links.neighbours(i).filter_map(|j| heights[j]).collect();
+            if around.is_empty() {
+                return None;
+            }
+            Some((s - around.iter().sum::<f64>() / around.len() as f64).abs())
+        })
+        .collect();
+    if variation.is_empty() {
+        return 0.0;
+    }
+    variation.sort_unstable_by(f64::total_cmp);
+    variation[variation.len() / 2]
+}
