@@ -352,9 +352,54 @@ fn retrieval_sqlite_index_ranks_like_json_and_takes_appends() {
 }
 
 #[test]
+fn retrieval_cleaning_is_selectable_and_checked() {
+    // `--despike off --denoise 0.2` are recorded as such; bad values are usage errors that say
+    // what the flag takes.
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    for (name, mesh) in [
+        ("bumpy.off", mesh_fem::generate::bumpy(2)),
+        ("torus.off", mesh_fem::generate::torus(1.0, 0.4, 20, 10)),
+    ] {
+        let p = dir.path().join(name);
+        mesh_fem::io::write_mesh(&p, &mesh).unwrap();
+        files.push(p.to_str().unwrap().to_string());
+    }
+    let vocab = dir.path().join("vocab.json");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["retrieval", "vocab", "--words", "4"];
+        args.extend(files.iter().map(|s| s.as_str()));
+        args.extend(["--out", vocab.to_str().unwrap()]);
+        args.extend(extra);
+        wfem(&args)
+    };
+    let o = run(&["--despike", "off", "--denoise", "0.2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&vocab).unwrap()).unwrap();
+    // Written as null (a missing field would read as the default, on).
+    assert!(v["descriptor"]["despiking"].is_null(), "{}", v["descriptor"]);
+    assert_eq!(v["descriptor"]["denoising"], serde_json::json!({"roughness": 0.2}));
+    for (flag, value) in [
+        ("--despike", "-1"),
+        ("--despike", "nan"),
+        ("--denoise", "0"),
+        ("--denoise", "no"),
+    ] {
+        let o = run(&[&format!("{flag}={value}")]);
+        assert!(!o.status.success(), "{flag} {value}");
+        assert!(
+            stderr(&o).contains("positive number or `off`"),
+            "{flag} {value}: {}",
+            stderr(&o)
+        );
+    }
+}
+
+#[test]
 fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     // `vocab` and `build` with no option write the documented defaults (issue #13): SI-HKS of the
-    // wFEM kernel, area time unit, τ ∈ [−12, 1] step 1/8, α = 2, K = 5, k = 100, z-scored,
+    // wFEM kernel, area time unit, τ ∈ [−12, 1] step 1/8, α = 2, K = 5, k = 100, isolated
+    // spikes put back (threshold 3), rough shapes denoised to roughness 0.1, z-scored,
     // 48 words, soft assignment, area weights, χ², no fusion; `build --vocab` reuses the
     // vocabulary as it was written.
     let dir = tempfile::tempdir().unwrap();
@@ -384,7 +429,9 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
         serde_json::json!({
             "eigenpairs": 100,
             "descriptor": {"kind": "si-hks", "alpha": 2.0, "tau_min": -12.0, "tau_max": 1.0,
-                           "tau_step": 0.125, "frequencies": 5}
+                           "tau_step": 0.125, "frequencies": 5},
+            "despiking": {"threshold": 3.0},
+            "denoising": {"roughness": 0.1}
         })
     );
     assert_eq!(v["training"]["words"], 48);

@@ -57,9 +57,9 @@ pub use hks::{
 };
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
 pub use model::{
-    BagSettings, DescriptorSettings, DescriptorSpec, GlobalSignature, IndexEntry, Ranked, RetrievalIndex,
-    RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams, VertexWeights,
-    VocabularyModel,
+    BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, IndexEntry, Ranked,
+    RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams,
+    VertexWeights, VocabularyModel,
 };
 pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
 pub use sihks::{scale_invariant_hks, SihksParams, TimeUnit};

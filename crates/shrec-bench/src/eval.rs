@@ -174,6 +174,8 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
                 eigenpairs: k,
                 descriptor,
                 smoothing: None,
+                despiking: None,
+                denoising: None,
             },
             training: TrainingParams {
                 standardize: false,
@@ -244,6 +246,24 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
             "DHK3 (old CLI)",
             "the CLI before issue #13: DHK3 at 6 times in units of 1/λ_max, L1, no z-scoring",
             shape_google(DescriptorSpec::dhk3_default()),
+        ),
+        (
+            "no cleaning",
+            "default without spike removal and denoising (the default before they existed)",
+            variant(&|s| {
+                s.descriptor.despiking = None;
+                s.descriptor.denoising = None;
+            }),
+        ),
+        (
+            "no denoising",
+            "default with spike removal only",
+            variant(&|s| s.descriptor.denoising = None),
+        ),
+        (
+            "no spike removal",
+            "default with denoising only",
+            variant(&|s| s.descriptor.despiking = None),
         ),
         (
             "no z-scoring",
@@ -488,8 +508,13 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
                     .is_none_or(|c| classes.contains(&c) && strengths.contains(&f.strength))
         })
         .collect();
+    // Tables 3–4 describe the shapes as they are (no cleaning); the retrieval methods prepare
+    // them as their settings say (below).
     let plain = DescriptorSettings {
         eigenpairs: k,
+        despiking: None,
+        denoising: None,
+        smoothing: None,
         ..Default::default()
     };
     let mut shapes = protocol::load_shapes(files.clone(), &plain, &opts.cache)?;
@@ -543,32 +568,71 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
         .filter(|f| subset == Subset::Default || nulls_wanted.contains(&f.family))
         .collect();
     let clean_families: Vec<String> = clean_files.iter().map(|f| f.family.clone()).collect();
-    let mut clean = protocol::load_shapes(clean_files, &plain, &opts.cache)?;
-    let mut outside = match subset {
+    let clean = protocol::load_shapes(clean_files.clone(), &plain, &opts.cache)?;
+    let outside = match subset {
         Subset::Default => protocol::load_shapes(protocol::outside_files(&meshes_dir)?, &plain, &opts.cache)?,
         Subset::Small => Vec::new(),
     };
-    let mut retrieval = Vec::new();
-    for m in methods(subset, k, &hks_times) {
-        eprintln!("shrec-eval: retrieval with {}", m.name);
-        retrieval.push(run_method(
-            &m,
-            &mut shapes,
-            &files,
-            &nulls,
-            &mut clean,
-            &clean_families,
-            &mut outside,
-            opts,
-        )?);
+    // Methods that prepare the shapes alike (spike removal, denoising, smoothing) share one
+    // set of prepared shapes and eigenbases; one set is held at a time, the plain one first.
+    let methods = methods(subset, k, &hks_times);
+    let preparation = |m: &Method| DescriptorSettings {
+        eigenpairs: k,
+        despiking: m.settings.descriptor.despiking,
+        denoising: m.settings.descriptor.denoising,
+        smoothing: m.settings.descriptor.smoothing,
+        ..plain.clone()
+    };
+    let mut groups: Vec<DescriptorSettings> = vec![plain.clone()];
+    for m in &methods {
+        let p = preparation(m);
+        if !groups.contains(&p) {
+            groups.push(p);
+        }
     }
+    let n_clean = clean.len();
+    let n_outside = outside.len();
+    let mut reports: Vec<Option<MethodReport>> = methods.iter().map(|_| None).collect();
+    let mut sets = Some((shapes, clean, outside));
+    for group in &groups {
+        let (mut g_shapes, mut g_clean, mut g_outside) = match sets.take() {
+            Some(plain_sets) if *group == plain => plain_sets,
+            _ => (
+                protocol::load_shapes(files.clone(), group, &opts.cache)?,
+                protocol::load_shapes(clean_files.clone(), group, &opts.cache)?,
+                match subset {
+                    Subset::Default => {
+                        protocol::load_shapes(protocol::outside_files(&meshes_dir)?, group, &opts.cache)?
+                    }
+                    Subset::Small => Vec::new(),
+                },
+            ),
+        };
+        for (i, m) in methods.iter().enumerate() {
+            if preparation(m) != *group {
+                continue;
+            }
+            eprintln!("shrec-eval: retrieval with {}", m.name);
+            reports[i] = Some(run_method(
+                m,
+                &mut g_shapes,
+                &files,
+                &nulls,
+                &mut g_clean,
+                &clean_families,
+                &mut g_outside,
+                opts,
+            )?);
+        }
+    }
+    let retrieval: Vec<MethodReport> = reports.into_iter().flatten().collect();
     let n_features = |d: usize| mean(&analysed.iter().map(|a| a.features[d].len() as f64).collect::<Vec<_>>());
     Ok(EvalReport {
         subset: subset.name().into(),
         n_null: nulls.len(),
         n_transformed: files.len() - nulls.len(),
-        n_clean: clean.len(),
-        n_outside: outside.len(),
+        n_clean,
+        n_outside,
         eigenpairs: k,
         mean_features: [n_features(0).unwrap_or(0.0), n_features(1).unwrap_or(0.0)],
         repeatability: repeatability_rows,

@@ -249,25 +249,27 @@ impl EigenCache {
         })
     }
 
-    fn entry(&self, file: &Path, settings: &DescriptorSettings, lumped: bool) -> Option<PathBuf> {
+    /// The cache file of a prepared shape: keyed by the mesh the eigenbasis is computed on
+    /// (positions and faces after every preprocessing step, bit for bit), k and the mass, so a
+    /// change of the preprocessing or of its code can never return a stale basis.
+    fn entry(&self, shape: &ShapeDescriptors, settings: &DescriptorSettings, lumped: bool) -> Option<PathBuf> {
         let dir = self.dir.as_ref()?;
-        let meta = std::fs::metadata(file).ok()?;
-        let smoothing = settings.smoothing.map(|s| s.time.to_bits());
-        let key = format!(
-            "{}|{}|{lumped}|{}|{:?}",
-            file.display(),
-            settings.eigenpairs,
-            meta.len(),
-            meta.modified().ok()
-        );
-        // Keys of unsmoothed shapes are those of the first cache format.
-        let key = match smoothing {
-            Some(bits) => format!("{key}|smoothing {bits:x}"),
-            None => key,
-        };
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-        for b in key.bytes() {
-            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01B3);
+        let mut eat = |bytes: &[u8]| {
+            for &b in bytes {
+                h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01B3);
+            }
+        };
+        eat(format!("v2|{}|{lumped}|", settings.eigenpairs).as_bytes());
+        for p in shape.mesh().positions() {
+            for c in p {
+                eat(&c.to_bits().to_le_bytes());
+            }
+        }
+        for f in shape.mesh().faces() {
+            for v in f {
+                eat(&v.to_le_bytes());
+            }
         }
         Some(dir.join(format!("{h:016x}.eig")))
     }
@@ -315,7 +317,7 @@ impl EigenCache {
         lumped: bool,
         settings: &DescriptorSettings,
     ) -> Result<(), BenchError> {
-        let entry = self.entry(file, settings, lumped);
+        let entry = self.entry(shape, settings, lumped);
         if let Some(basis) = entry.as_deref().and_then(Self::read) {
             if shape.set_eigenbasis(lumped, basis).is_ok() {
                 return Ok(());

@@ -32,8 +32,9 @@ fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
 
 #[pymethods]
 impl PyRetrievalIndex {
-    /// Indexes mesh files with the default recipe (SI-HKS in area units, z-scored, 48 words,
-    /// soft assignment, area weights, χ²) into a new SQLite file; `vocabulary`: a vocabulary
+    /// Indexes mesh files with the default recipe (spikes put back and rough shapes denoised,
+    /// SI-HKS in area units, z-scored, 48 words, soft assignment, area weights, χ²) into a new
+    /// SQLite file; `vocabulary`: a vocabulary
     /// file of `wfem retrieval vocab` to reuse instead of training on these shapes.
     #[staticmethod]
     #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0))]

@@ -9,9 +9,9 @@ use faer::Mat;
 use mesh_fem::generate::{grid, icosphere};
 use mesh_fem::TriMesh;
 use shape_retrieval::{
-    Assignment, BagDistance, DescriptorSettings, DescriptorSpec, GlobalSignature, IndexEntry, RetrievalError,
-    RetrievalIndex, ShapeFeatures, ShapeSignature, Smoothing, TrainingParams, VertexWeights, Vocabulary,
-    VocabularyModel,
+    Assignment, BagDistance, Denoising, DescriptorSettings, DescriptorSpec, GlobalSignature, IndexEntry,
+    RetrievalError, RetrievalIndex, ShapeFeatures, ShapeSignature, Smoothing, TrainingParams, VertexWeights,
+    Vocabulary, VocabularyModel,
 };
 
 fn small_index() -> RetrievalIndex {
@@ -270,6 +270,60 @@ fn smoothing_is_the_heat_kernel_applied_to_the_coordinates() {
     }
     assert!(matches!(
         Smoothing { time: 0.0 }.apply(&sphere),
+        Err(RetrievalError::InvalidParameter { .. })
+    ));
+}
+
+/// The mesh with every vertex moved by N(0, σ²I₃) (deterministic).
+fn noisy(mesh: &TriMesh, sigma: f64) -> TriMesh {
+    let mut rng = wfem_heat::rng::SplitMix64::new(11);
+    let p = mesh
+        .positions()
+        .iter()
+        .map(|p| p.map(|c| c + sigma * rng.next_normal()))
+        .collect();
+    TriMesh::new(p, mesh.faces().to_vec()).unwrap()
+}
+
+#[test]
+fn denoising_leaves_smooth_shapes_alone_and_smooths_noisy_ones_back() {
+    use mesh_fem::filter::roughness;
+    let sphere = icosphere(4);
+    let target = Denoising::default();
+    // A smooth shape (roughness ≈ 0: a sphere's heights are the same at every vertex) is
+    // returned as it is.
+    assert!(roughness(&sphere) < target.roughness);
+    assert_eq!(target.apply(&sphere).unwrap(), sphere);
+    // Noise of 0.4 mean edge lengths: smoothed to the target (not beyond), and closer to the
+    // clean sphere than the noisy copy (K_t shrinks the unit sphere only by e^{−2t}, t ≪ 1).
+    let h = 4.0 * std::f64::consts::PI.sqrt() / (sphere.n_faces() as f64).sqrt(); // ≈ mean edge
+    let rough = noisy(&sphere, 0.4 * h);
+    assert!(roughness(&rough) > 2.0 * target.roughness);
+    let smoothed = target.apply(&rough).unwrap();
+    assert!(roughness(&smoothed) <= target.roughness, "{}", roughness(&smoothed));
+    let error = |m: &TriMesh| -> f64 {
+        m.positions()
+            .iter()
+            .zip(sphere.positions())
+            .map(|(p, q)| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt())
+            .sum::<f64>()
+            / m.n_vertices() as f64
+    };
+    assert!(
+        error(&smoothed) < 0.75 * error(&rough),
+        "{} vs {}",
+        error(&smoothed),
+        error(&rough)
+    );
+    // Scale invariant: the same relative result on a copy ×1000.
+    let big = target.apply(&rough.scaled(1e3).unwrap()).unwrap();
+    for (p, q) in big.positions().iter().zip(smoothed.positions()) {
+        for k in 0..3 {
+            assert!((p[k] / 1e3 - q[k]).abs() < 1e-9, "{} vs {}", p[k] / 1e3, q[k]);
+        }
+    }
+    assert!(matches!(
+        Denoising { roughness: 0.0 }.apply(&sphere),
         Err(RetrievalError::InvalidParameter { .. })
     ));
 }
