@@ -266,6 +266,22 @@ impl Smoothing {
     /// smoothed positions do not form a valid mesh.
     pub fn apply(&self, mesh: &TriMesh) -> Result<TriMesh, RetrievalError> {
         check::positive("smoothing time", self.time)?;
+        EmbeddingFlow::new(mesh)?.at(self.time)
+    }
+}
+
+/// The heat flow of a mesh's embedding: `K_t x` for the three coordinate functions, `t = c·A`,
+/// by the fast exact path of the wFEM kernel (one factorization per time). Shared by
+/// [`Smoothing`] and [`Denoising`].
+struct EmbeddingFlow<'m> {
+    mesh: &'m TriMesh,
+    kernel: wfem_heat::HeatKernel,
+    area: f64,
+    x: Mat<f64>,
+}
+
+impl<'m> EmbeddingFlow<'m> {
+    fn new(mesh: &'m TriMesh) -> Result<Self, RetrievalError> {
         let ops = mesh_fem::assemble(mesh, &mesh_fem::AssemblyParams::default())?;
         let area: f64 = crate::bof::vertex_areas(ops.mass.as_ref()).iter().sum();
         let kernel = wfem_heat::HeatKernel::new(
@@ -277,9 +293,14 @@ impl Smoothing {
         )?;
         let p = mesh.positions();
         let x = Mat::from_fn(p.len(), 3, |i, j| p[i][j]);
-        let y = kernel.apply_many(x.as_ref(), self.time * area)?;
-        let positions = (0..p.len()).map(|i| [y[(i, 0)], y[(i, 1)], y[(i, 2)]]).collect();
-        Ok(TriMesh::new(positions, mesh.faces().to_vec())?)
+        Ok(Self { mesh, kernel, area, x })
+    }
+
+    /// The mesh with positions `K_t x`, `t = c·A`, and the same faces.
+    fn at(&self, c: f64) -> Result<TriMesh, RetrievalError> {
+        let y = self.kernel.apply_many(self.x.as_ref(), c * self.area)?;
+        let positions = (0..y.nrows()).map(|i| [y[(i, 0)], y[(i, 1)], y[(i, 2)]]).collect();
+        Ok(TriMesh::new(positions, self.mesh.faces().to_vec())?)
     }
 }
 
@@ -343,22 +364,10 @@ impl Denoising {
         if mesh_fem::filter::roughness(mesh) <= self.roughness {
             return Ok(mesh.clone());
         }
-        let ops = mesh_fem::assemble(mesh, &mesh_fem::AssemblyParams::default())?;
-        let area: f64 = crate::bof::vertex_areas(ops.mass.as_ref()).iter().sum();
-        let kernel = wfem_heat::HeatKernel::new(
-            &ops,
-            wfem_heat::HeatParams {
-                kernel: wfem_heat::KernelKind::Wfem,
-                method: wfem_heat::Method::Fast(Default::default()),
-            },
-        )?;
-        let p = mesh.positions();
-        let x = Mat::from_fn(p.len(), 3, |i, j| p[i][j]);
+        let flow = EmbeddingFlow::new(mesh)?;
         let mut c = DENOISING_FIRST_TIME;
         loop {
-            let y = kernel.apply_many(x.as_ref(), c * area)?;
-            let positions = (0..p.len()).map(|i| [y[(i, 0)], y[(i, 1)], y[(i, 2)]]).collect();
-            let smoothed = TriMesh::new(positions, mesh.faces().to_vec())?;
+            let smoothed = flow.at(c)?;
             if c >= DENOISING_LAST_TIME || mesh_fem::filter::roughness(&smoothed) <= self.roughness {
                 return Ok(smoothed);
             }
