@@ -56,6 +56,7 @@ pub use hks::{
     TimeSampling,
 };
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
+pub use model::DEFAULT_TARGET_ROUGHNESS;
 pub use model::{
     BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, IndexEntry, Ranked,
     RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams,

@@ -1275,6 +1275,9 @@ impl RetrievalIndex {
             .as_ref()
             .map_or(&settings.descriptor, |v| &v.descriptor)
             .clone();
+        // The parameters are checked before any mesh is read, so a bad one is reported as
+        // such and not as the failure of the first mesh.
+        descriptor.validate()?;
         settings.bags.validate(descriptor.eigenpairs)?;
         let features = ShapeFeatures::compute_many(meshes, &descriptor, &settings.bags)?;
         let vocabulary = match vocabulary {

@@ -34,10 +34,14 @@ fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
 impl PyRetrievalIndex {
     /// Indexes mesh files with the default recipe (spikes put back and rough shapes denoised,
     /// SI-HKS in area units, z-scored, 48 words, soft assignment, area weights, χ²) into a new
-    /// SQLite file; `vocabulary`: a vocabulary
-    /// file of `wfem retrieval vocab` to reuse instead of training on these shapes.
+    /// SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
+    /// of training on these shapes (its descriptor settings, cleaning included, are used);
+    /// `despike` / `denoise`: the spike threshold and the target roughness, `None` for off.
     #[staticmethod]
-    #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0))]
+    #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0,
+        despike=Some(mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD),
+        denoise=Some(shape_retrieval::DEFAULT_TARGET_ROUGHNESS)))]
+    #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
         paths: Vec<PathBuf>,
@@ -45,6 +49,8 @@ impl PyRetrievalIndex {
         vocabulary: Option<PathBuf>,
         words: Option<usize>,
         seed: u64,
+        despike: Option<f64>,
+        denoise: Option<f64>,
     ) -> PyResult<Self> {
         let path = out.clone();
         run(py, move |_| {
@@ -53,6 +59,8 @@ impl PyRetrievalIndex {
                 settings.training.words = w;
             }
             settings.training.seed = seed;
+            settings.descriptor.despiking = despike.map(|threshold| shape_retrieval::Despiking { threshold });
+            settings.descriptor.denoising = denoise.map(|roughness| shape_retrieval::Denoising { roughness });
             let vocabulary = vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?;
             let meshes = read_all(&paths)?;
             let index = RetrievalIndex::build(&meshes, &settings, vocabulary)?;

@@ -22,6 +22,8 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DENSE_MAX_VERTICES", wfem_heat::DENSE_MAX_VERTICES)?;
     m.add("DEFAULT_DEGREE", shifted_solve::DEFAULT_DEGREE)?;
+    m.add("DEFAULT_SPIKE_THRESHOLD", mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD)?;
+    m.add("DEFAULT_TARGET_ROUGHNESS", shape_retrieval::DEFAULT_TARGET_ROUGHNESS)?;
     m.add("SHIPPED_DEGREES", shifted_solve::SHIPPED_DEGREES.to_vec())?;
     mesh::register(m)?;
     heat::register(m)?;

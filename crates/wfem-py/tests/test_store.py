@@ -142,3 +142,18 @@ def test_retrieval_index_on_meshes(tmp_path):
     assert len(index) == 6
     with pytest.raises(wfem.WfemError):
         wfem.RetrievalIndex.open(tmp_path / "m0_1.0.off")
+
+
+def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
+    paths = index_meshes(tmp_path)[:3]
+    default = wfem.RetrievalIndex.build(paths, tmp_path / "a.sqlite", words=4)
+    descriptor = default.settings["vocabulary"]["descriptor"]
+    assert descriptor["despiking"] == {"threshold": 3.0}
+    assert descriptor["denoising"] == {"roughness": 0.1}
+    off = wfem.RetrievalIndex.build(paths, tmp_path / "b.sqlite", words=4, despike=None, denoise=0.2)
+    descriptor = off.settings["vocabulary"]["descriptor"]
+    assert descriptor["despiking"] is None and descriptor["denoising"] == {"roughness": 0.2}
+    for bad in ({"despike": -1.0}, {"despike": float("nan")}, {"denoise": 0.0}):
+        with pytest.raises(wfem.InvalidInputError, match="spike threshold|target roughness"):
+            wfem.RetrievalIndex.build(paths, tmp_path / "c.sqlite", words=4, **bad)
+    assert not (tmp_path / "c.sqlite").exists()

@@ -331,12 +331,21 @@ class RetrievalIndex:
         vocabulary: str | os.PathLike[str] | None = None,
         words: int | None = None,
         seed: int = 0,
+        despike: float | None = _wfem.DEFAULT_SPIKE_THRESHOLD,
+        denoise: float | None = _wfem.DEFAULT_TARGET_ROUGHNESS,
     ) -> "RetrievalIndex":
         """Indexes mesh files with the default recipe into a new file ``out`` (replaced
-        atomically if it exists)."""
+        atomically if it exists).
+
+        Every shape is cleaned first: a vertex farther than ``despike`` local edge lengths from
+        the centroid of its neighbours (an isolated spike) is put back, and a shape rougher
+        than ``denoise`` edge lengths is smoothed by the heat kernel until it is not (clean
+        shapes are left as they are); ``None`` turns a step off. Both are recorded in the
+        index, so queries are cleaned the same way. With ``vocabulary``, its own settings are
+        used instead."""
         ps = [os.fspath(p) for p in paths]
         voc = None if vocabulary is None else os.fspath(vocabulary)
-        return cls(_wfem.RetrievalIndex.build(ps, os.fspath(out), voc, words, seed))
+        return cls(_wfem.RetrievalIndex.build(ps, os.fspath(out), voc, words, seed, despike, denoise))
 
     @classmethod
     def open(cls, path: str | os.PathLike[str]) -> "RetrievalIndex":

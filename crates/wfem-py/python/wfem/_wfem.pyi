@@ -18,6 +18,8 @@ _Path = str | PathLike[str]
 __version__: str
 DENSE_MAX_VERTICES: int
 DEFAULT_DEGREE: int
+DEFAULT_SPIKE_THRESHOLD: float
+DEFAULT_TARGET_ROUGHNESS: float
 SHIPPED_DEGREES: list[int]
 
 # meshes
@@ -273,7 +275,13 @@ class IndexStore:
 class RetrievalIndex:
     @staticmethod
     def build(
-        paths: list[str], out: str, vocabulary: str | None = None, words: int | None = None, seed: int = 0
+        paths: list[str],
+        out: str,
+        vocabulary: str | None = None,
+        words: int | None = None,
+        seed: int = 0,
+        despike: float | None = ...,
+        denoise: float | None = ...,
     ) -> RetrievalIndex: ...
     @staticmethod
     def open(path: str) -> RetrievalIndex: ...
