@@ -332,6 +332,11 @@ impl Default for Despiking {
 /// unchanged. Additive noise raises the roughness of every vertex, so a noisy copy of a shape
 /// is smoothed back towards the clean one, while clean shapes keep all their detail (a fixed
 /// smoothing time for every shape costs the clean ones their small scales).
+///
+/// Measured on the corpus: every TOSCA pose, the SHREC'07 animals and the classic models of
+/// 1K–50K vertices are below 0.1 and left alone; very coarse meshes, where the curvature changes
+/// from one edge to the next, can read as rough (0.13 and 0.16 on a 313-vertex fox and a
+/// 502-vertex knight) and get a mild smoothing — turn denoising off for such a collection.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Denoising {
