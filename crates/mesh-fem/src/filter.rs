@@ -2,6 +2,8 @@
 //!
 //! * [`despike`]: finds isolated spikes (impulsive "shot" noise: single vertices pulled far off
 //!   the surface) and puts them back, as the harmonic fill of their neighbours.
+//! * [`roughness`]: how rough a surface is at the scale of its edges, curvature and resolution
+//!   aside (what decides whether shape retrieval denoises a shape).
 
 use crate::{MeshError, TriMesh};
 
