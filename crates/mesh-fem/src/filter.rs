@@ -96,15 +96,7 @@ struct Links {
 
 impl Links {
     fn new(faces: &[[u32; 3]], n: usize) -> Self {
-        let mut first = vec![0usize; n + 1];
-        for face in faces {
-            for &v in face {
-                first[v as usize + 1] += 1;
-            }
-        }
-        for i in 0..n {
-            first[i + 1] += first[i];
-        }
+        let first = crate::topology::corner_offsets(faces, n);
         let mut cursor = first.clone();
         let mut edges = vec![[0u32; 2]; first[n]];
         for face in faces {
@@ -125,14 +117,12 @@ impl Links {
         &self.edges[self.first[i]..self.first[i + 1]]
     }
 
-    /// The neighbours of i, each once per link edge end (twice for an interior vertex).
-    fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
-        self.of(i)
-            .iter()
-            .flatten()
-            .map(|&v| v as usize)
-            .collect::<std::collections::BTreeSet<_>>()
-            .into_iter()
+    /// The neighbours of i, each once, increasing.
+    fn neighbours(&self, i: usize) -> impl Iterator<Item = usize> {
+        let mut v: Vec<usize> = self.of(i).iter().flatten().map(|&v| v as usize).collect();
+        v.sort_unstable();
+        v.dedup();
+        v.into_iter()
     }
 
     /// Whether every neighbour of i ends exactly two of its link edges (a closed link).

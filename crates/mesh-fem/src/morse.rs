@@ -361,15 +361,7 @@ struct VertexFaces {
 impl VertexFaces {
     fn new(mesh: &TriMesh) -> Self {
         let n = mesh.n_vertices();
-        let mut offsets = vec![0usize; n + 1];
-        for face in mesh.faces() {
-            for &v in face {
-                offsets[v as usize + 1] += 1;
-            }
-        }
-        for i in 0..n {
-            offsets[i + 1] += offsets[i];
-        }
+        let offsets = crate::topology::corner_offsets(mesh.faces(), n);
         let mut next = offsets.clone();
         let mut faces = vec![0u32; offsets[n]];
         for (fi, face) in mesh.faces().iter().enumerate() {

@@ -193,15 +193,7 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
     }
 
     // 2. The faces around each vertex: around[first[j]..first[j + 1]] for vertex j.
-    let mut first = vec![0usize; n + 1];
-    for face in faces {
-        for &v in face {
-            first[v as usize + 1] += 1;
-        }
-    }
-    for j in 0..n {
-        first[j + 1] += first[j];
-    }
+    let first = crate::topology::corner_offsets(faces, n);
     if let Some(v) = (0..n).find(|&j| first[j + 1] == first[j]) {
         return Err(MeshError::UnreferencedVertex { vertex: v });
     }

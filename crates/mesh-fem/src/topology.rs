@@ -23,6 +23,23 @@ use rayon::prelude::*;
 /// Marker for "no index".
 pub(crate) const NONE: u32 = u32::MAX;
 
+/// The first slot of each vertex when the 3F corners are sorted by vertex (counting sort):
+/// vertex v owns `offsets[v]..offsets[v + 1]`, one slot per corner at v (a face that repeats v
+/// counts twice); `offsets[n]` is the number of corners. Shared by every per-vertex CSR of the
+/// crate (assembly, spike removal, Morse analysis).
+pub(crate) fn corner_offsets(faces: &[[u32; 3]], n: usize) -> Vec<usize> {
+    let mut offsets = vec![0usize; n + 1];
+    for face in faces {
+        for &v in face {
+            offsets[v as usize + 1] += 1;
+        }
+    }
+    for i in 0..n {
+        offsets[i + 1] += offsets[i];
+    }
+    offsets
+}
+
 /// Disjoint sets with union by size and path halving.
 pub(crate) struct UnionFind {
     parent: Vec<u32>,

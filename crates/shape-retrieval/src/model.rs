@@ -453,32 +453,19 @@ impl DescriptorSettings {
     /// [`RetrievalError::Mesh`] if assembly fails, and those of [`Self::validate`].
     pub fn shape(&self, mesh: &TriMesh) -> Result<ShapeDescriptors, RetrievalError> {
         self.validate()?;
-        let despiked;
-        let mesh = match &self.despiking {
-            Some(d) => {
-                despiked = mesh_fem::filter::despike(mesh, d.threshold)?.mesh;
-                &despiked
-            }
-            None => mesh,
-        };
-        let denoised;
-        let mesh = match &self.denoising {
-            Some(d) => {
-                denoised = d.apply(mesh)?;
-                &denoised
-            }
-            None => mesh,
-        };
-        let smoothed;
-        let mesh = match &self.smoothing {
-            Some(s) => {
-                smoothed = s.apply(mesh)?;
-                &smoothed
-            }
-            None => mesh,
-        };
+        // The cleaning steps, in order; each one that is on replaces the mesh.
+        let mut mesh = std::borrow::Cow::Borrowed(mesh);
+        if let Some(d) = &self.despiking {
+            mesh = std::borrow::Cow::Owned(mesh_fem::filter::despike(&mesh, d.threshold)?.mesh);
+        }
+        if let Some(d) = &self.denoising {
+            mesh = std::borrow::Cow::Owned(d.apply(&mesh)?);
+        }
+        if let Some(s) = &self.smoothing {
+            mesh = std::borrow::Cow::Owned(s.apply(&mesh)?);
+        }
         ShapeDescriptors::new(
-            mesh,
+            &mesh,
             &DescriptorParams {
                 eigenpairs: self.eigenpairs,
                 ..Default::default()
