@@ -1,0 +1,472 @@
+//! Hole filling: closes the small boundary loops of a mesh with smooth patches.
+//!
+//! * [`boundary_loops`]: the boundary loops, as vertex cycles in the orientation of the faces.
+//! * [`fill_holes`]: closes every simple loop up to a given perimeter with a patch of new
+//!   vertices appended after the old ones (the old vertices and faces are kept as they are).
+//!
+//! Shape retrieval uses it so that holes punched into a closed surface (scanner drop-outs,
+//! the `microholes` and `holes` classes of SHREC'10) do not put reflecting boundaries where
+//! the shape has none: the heat kernel of the filled surface is close to that of the intact
+//! one, while that of the holed surface sees every rim.
+
+use crate::{MeshError, TriMesh};
+use std::collections::HashMap;
+
+/// Default largest perimeter of a hole that [`fill_holes`] closes, in units of `√A` (A the
+/// area of the mesh). A hole left by the loss of one vertex and its ring on a mesh of n
+/// vertices has a perimeter of about `8√(A/n)`, 0.1 `√A` at 5K vertices; the cut through a
+/// TOSCA limb or torso is 0.2–3 `√A` (the `holes` class of `cargo xtask shrec` at strength 5),
+/// clusters of merged micro holes up to 2.9 `√A` once split at their touching vertices. A flat
+/// open patch never qualifies: by the isoperimetric inequality its rim is at least
+/// `2√π ≈ 3.54` `√A`.
+pub const DEFAULT_MAX_HOLE_PERIMETER: f64 = 3.0;
+
+/// Gauss–Seidel sweeps per ring of the harmonic placement of a patch's inner vertices.
+const SWEEPS_PER_RING: usize = 40;
+
+/// Most rings of one patch: keeps a patch to at most 16 m vertices and 40·32 sweeps (a hole of
+/// 10⁴ rim vertices is closed in about a second), at the price of triangles stretched along
+/// the radius on rims of more than 200 vertices.
+const MAX_RINGS: usize = 32;
+
+/// One boundary loop: its vertices in order, such that each `(v[i], v[i+1])` is an edge of
+/// exactly one face, traversed in that face's orientation.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BoundaryLoop {
+    /// The loop's vertices (a vertex may repeat where two boundary wedges meet).
+    pub vertices: Vec<u32>,
+}
+
+impl BoundaryLoop {
+    /// The sum of the loop's edge lengths.
+    pub fn perimeter(&self, positions: &[[f64; 3]]) -> f64 {
+        let v = &self.vertices;
+        (0..v.len())
+            .map(|i| {
+                let a = positions[v[i] as usize];
+                let b = positions[v[(i + 1) % v.len()] as usize];
+                crate::vec3::norm(crate::vec3::sub(b, a))
+            })
+            .sum()
+    }
+
+    /// Whether no vertex repeats (the loop bounds a disk that can be filled).
+    pub fn is_simple(&self) -> bool {
+        let mut v = self.vertices.clone();
+        v.sort_unstable();
+        v.windows(2).all(|w| w[0] != w[1])
+    }
+}
+
+/// The boundary loops of a mesh: the edges used by exactly one face, chained head to tail in
+/// the orientation of their faces. Edges used by three or more faces are not boundary. Where
+/// several boundary edges leave one vertex, the chain takes them in a fixed order, so every
+/// boundary edge lies on exactly one loop. Loops come in the order of their smallest edge.
+pub fn boundary_loops(mesh: &TriMesh) -> Vec<BoundaryLoop> {
+    let mut count: HashMap<(u32, u32), u32> = HashMap::new();
+    for f in mesh.faces() {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    // Boundary half-edges a → b in face orientation, grouped by tail a.
+    let mut half: Vec<(u32, u32)> = Vec::new();
+    for f in mesh.faces() {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            if count[&(a.min(b), a.max(b))] == 1 {
+                half.push((a, b));
+            }
+        }
+    }
+    half.sort_unstable();
+    let mut used = vec![false; half.len()];
+    let first_from = |v: u32, used: &[bool]| -> Option<usize> {
+        let start = half.partition_point(|&(a, _)| a < v);
+        (start..half.len()).take_while(|&i| half[i].0 == v).find(|&i| !used[i])
+    };
+    let mut loops = Vec::new();
+    for s in 0..half.len() {
+        if used[s] {
+            continue;
+        }
+        let mut vertices = Vec::new();
+        let mut e = s;
+        loop {
+            used[e] = true;
+            vertices.push(half[e].0);
+            let head = half[e].1;
+            if head == half[s].0 {
+                break;
+            }
+            match first_from(head, &used) {
+                Some(next) => e = next,
+                // Cannot happen on a boundary where every vertex has as many boundary edges in
+                // as out (always true for an edge-manifold mesh); an open chain is kept as is.
+                None => break,
+            }
+        }
+        loops.push(BoundaryLoop { vertices });
+    }
+    loops
+}
+
+/// The result of [`fill_holes`].
+#[derive(Clone, Debug)]
+pub struct FilledHoles {
+    /// The mesh with its holes closed: the old vertices first, in their order and at their
+    /// positions, then the patches' vertices; the old faces first, then the patches' faces.
+    pub mesh: TriMesh,
+    /// The number of old vertices (the patches' vertices are `original_vertices..`).
+    pub original_vertices: usize,
+    /// The number of holes closed.
+    pub filled: usize,
+}
+
+/// Closes every simple boundary loop of perimeter at most `max_perimeter · √A` (A the area of
+/// the mesh) with a patch of concentric rings.
+///
+/// A loop of m vertices gets `R = round(m / 2π)` rings (about one edge length apart, as on a
+/// disk of that perimeter; at most 32): ring k has `round(m (R − k)/R)` vertices (at
+/// least 3), consecutive rings are zipped by their angular parameter, and the innermost ring
+/// is fanned to a centre vertex. The new vertices start on the cone from the loop's centroid
+/// and are then placed harmonically (Gauss–Seidel on the uniform Laplacian, the loop fixed),
+/// which gives a smooth, nearly flat cap. A patch that would have a degenerate triangle is
+/// dropped and its hole left open. A loop through a vertex twice (holes touching at a vertex)
+/// is split there into simple loops, closed one by one; if that would leave the mesh
+/// non-manifold where it was not, such loops stay open. A mesh without holes comes back
+/// unchanged.
+///
+/// # Errors
+/// [`MeshError::Invalid`] for a `max_perimeter` that is negative or not finite.
+pub fn fill_holes(mesh: &TriMesh, max_perimeter: f64) -> Result<FilledHoles, MeshError> {
+    if !(max_perimeter.is_finite() && max_perimeter >= 0.0) {
+        return Err(MeshError::Invalid {
+            reason: format!("the largest hole perimeter must be finite and non-negative, got {max_perimeter}"),
+        });
+    }
+    let limit = max_perimeter * mesh.area().sqrt();
+    let holes: Vec<Vec<u32>> = boundary_loops(mesh)
+        .iter()
+        .flat_map(|l| simple_cycles(&l.vertices))
+        .filter(|c| c.len() >= 3)
+        .collect();
+    let usable_before = crate::validate(mesh).is_usable();
+    let mut filled = fill(mesh, &holes, limit)?;
+    // Two holes meeting at a vertex are closed one by one; should the vertex still come out
+    // non-manifold, only the holes whose rims pass through no vertex twice are closed.
+    if usable_before && filled.filled > 0 && !crate::validate(&filled.mesh).is_usable() {
+        let simple: Vec<Vec<u32>> = boundary_loops(mesh)
+            .into_iter()
+            .filter(|l| l.vertices.len() >= 3 && l.is_simple())
+            .map(|l| l.vertices)
+            .collect();
+        filled = fill(mesh, &simple, limit)?;
+        if !crate::validate(&filled.mesh).is_usable() {
+            filled = fill(mesh, &[], limit)?;
+        }
+    }
+    Ok(filled)
+}
+
+fn fill(mesh: &TriMesh, holes: &[Vec<u32>], limit: f64) -> Result<FilledHoles, MeshError> {
+    let n = mesh.n_vertices();
+    let mut positions = mesh.positions().to_vec();
+    let mut faces = mesh.faces().to_vec();
+    let mut filled = 0;
+    for hole in holes {
+        let perimeter = BoundaryLoop { vertices: hole.clone() }.perimeter(&positions);
+        if perimeter > limit {
+            continue;
+        }
+        if let Some((p, f)) = patch(hole, &positions) {
+            let base = positions.len() as u32;
+            positions.extend(p);
+            faces.extend(
+                f.into_iter()
+                    .map(|t| t.map(|v| if v >= PATCH { base + (v - PATCH) } else { v })),
+            );
+            filled += 1;
+        }
+    }
+    Ok(FilledHoles {
+        mesh: TriMesh::new(positions, faces)?,
+        original_vertices: n,
+        filled,
+    })
+}
+
+/// Splits a closed vertex walk into simple cycles, in order: where a vertex comes back, the
+/// cycle since its last visit is cut out (two holes touching at a vertex become two loops).
+fn simple_cycles(walk: &[u32]) -> Vec<Vec<u32>> {
+    let mut cycles = Vec::new();
+    let mut stack: Vec<u32> = Vec::new();
+    let mut at: HashMap<u32, usize> = HashMap::new();
+    for &v in walk.iter().chain(walk.first()) {
+        if let Some(&i) = at.get(&v) {
+            let cycle = stack.split_off(i + 1);
+            let mut c = vec![v];
+            c.extend(cycle);
+            for u in &c[1..] {
+                at.remove(u);
+            }
+            if c.len() > 1 {
+                cycles.push(c);
+            }
+        } else {
+            at.insert(v, stack.len());
+            stack.push(v);
+        }
+    }
+    cycles
+}
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// Patch-local vertex ids start here (loop vertices keep their mesh ids, which are < n ≤ u32::MAX/2
+/// on any mesh that fits in memory).
+const PATCH: u32 = u32::MAX / 2;
+
+/// The patch of one loop: the new positions and the faces (new vertices numbered from PATCH),
+/// or `None` if a triangle would be degenerate.
+#[allow(clippy::type_complexity)]
+fn patch(loop_: &[u32], positions: &[[f64; 3]]) -> Option<(Vec<[f64; 3]>, Vec<[u32; 3]>)> {
+    let m = loop_.len();
+    let rings = ((m as f64 / std::f64::consts::TAU).round() as usize).clamp(1, MAX_RINGS);
+    let outer: Vec<[f64; 3]> = loop_.iter().map(|&v| positions[v as usize]).collect();
+    let centre = outer.iter().fold([0.0; 3], |s, p| add(s, *p)).map(|c| c / m as f64);
+    // Point of the loop at angular parameter u ∈ [0, 1) (linear along the vertex index).
+    let on_loop = |u: f64| {
+        let x = u * m as f64;
+        let i = (x.floor() as usize).min(m - 1);
+        let s = x - i as f64;
+        let (a, b) = (outer[i], outer[(i + 1) % m]);
+        [0, 1, 2].map(|k| a[k] + s * (b[k] - a[k]))
+    };
+    let mut new_positions: Vec<[f64; 3]> = Vec::new();
+    let mut faces: Vec<[u32; 3]> = Vec::new();
+    let mut neighbours: Vec<Vec<u32>> = Vec::new();
+    // The ring being zipped, as vertex ids (loop ids first, PATCH-based ids after).
+    let mut ring: Vec<u32> = loop_.to_vec();
+    let add_vertex = |p: [f64; 3], new_positions: &mut Vec<[f64; 3]>, neighbours: &mut Vec<Vec<u32>>| {
+        new_positions.push(p);
+        neighbours.push(Vec::new());
+        PATCH + (new_positions.len() - 1) as u32
+    };
+    for k in 1..rings {
+        let q = ((m as f64 * (rings - k) as f64 / rings as f64).round() as usize).max(3);
+        let f = (rings - k) as f64 / rings as f64;
+        let inner: Vec<u32> = (0..q)
+            .map(|j| {
+                let p = on_loop(j as f64 / q as f64);
+                add_vertex(
+                    [0, 1, 2].map(|c| centre[c] + f * (p[c] - centre[c])),
+                    &mut new_positions,
+                    &mut neighbours,
+                )
+            })
+            .collect();
+        zip(&ring, &inner, &mut faces);
+        ring = inner;
+    }
+    let c = add_vertex(centre, &mut new_positions, &mut neighbours);
+    let r = ring.len();
+    for j in 0..r {
+        faces.push([ring[(j + 1) % r], ring[j], c]);
+    }
+    // Harmonic placement of the new vertices (uniform weights, loop fixed).
+    for t in &faces {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            for (x, y) in [(a, b), (b, a)] {
+                if x >= PATCH && !neighbours[(x - PATCH) as usize].contains(&y) {
+                    neighbours[(x - PATCH) as usize].push(y);
+                }
+            }
+        }
+    }
+    let at = |v: u32, new_positions: &[[f64; 3]]| {
+        if v >= PATCH {
+            new_positions[(v - PATCH) as usize]
+        } else {
+            positions[v as usize]
+        }
+    };
+    for _ in 0..SWEEPS_PER_RING * rings {
+        for i in 0..new_positions.len() {
+            let s = neighbours[i]
+                .iter()
+                .fold([0.0; 3], |s, &v| add(s, at(v, &new_positions)));
+            new_positions[i] = s.map(|x| x / neighbours[i].len() as f64);
+        }
+    }
+    // Reject a patch with a (nearly) degenerate triangle.
+    let h = outer
+        .iter()
+        .enumerate()
+        .map(|(i, a)| crate::vec3::norm(crate::vec3::sub(outer[(i + 1) % m], *a)))
+        .sum::<f64>()
+        / m as f64;
+    let ok = faces.iter().all(|t| {
+        let [a, b, c] = t.map(|v| at(v, &new_positions));
+        let area2 = crate::vec3::norm(crate::vec3::cross(crate::vec3::sub(b, a), crate::vec3::sub(c, a)));
+        area2.is_finite() && area2 > 1e-10 * h * h
+    });
+    ok.then_some((new_positions, faces))
+}
+
+/// Triangulates the band between an outer ring (traversed in the loop's direction, its edges
+/// used reversed by the band) and an inner ring of the same angular direction, advancing
+/// whichever ring's next vertex comes first in angle.
+fn zip(outer: &[u32], inner: &[u32], faces: &mut Vec<[u32; 3]>) {
+    let (p, q) = (outer.len(), inner.len());
+    let (mut i, mut j) = (0usize, 0usize);
+    while i < p || j < q {
+        let advance_outer = j == q || (i < p && (i + 1) as f64 / p as f64 <= (j + 1) as f64 / q as f64);
+        if advance_outer {
+            faces.push([outer[(i + 1) % p], outer[i % p], inner[j % q]]);
+            i += 1;
+        } else {
+            faces.push([inner[(j + 1) % q], outer[i % p], inner[j % q]]);
+            j += 1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate;
+
+    fn is_closed(mesh: &TriMesh) -> bool {
+        boundary_loops(mesh).is_empty()
+    }
+
+    /// The mesh of the faces that `keep` accepts, without unreferenced vertices.
+    fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> TriMesh {
+        let mut id = vec![u32::MAX; mesh.n_vertices()];
+        let mut positions = Vec::new();
+        let faces = mesh
+            .faces()
+            .iter()
+            .filter(|f| keep(f))
+            .map(|f| {
+                f.map(|v| {
+                    if id[v as usize] == u32::MAX {
+                        id[v as usize] = positions.len() as u32;
+                        positions.push(mesh.positions()[v as usize]);
+                    }
+                    id[v as usize]
+                })
+            })
+            .collect();
+        TriMesh::new(positions, faces).unwrap()
+    }
+
+    /// The icosphere with the faces around `seeds` removed (one hole per seed).
+    fn punched(seeds: &[u32]) -> TriMesh {
+        submesh(&generate::icosphere(3), |f| !f.iter().any(|v| seeds.contains(v)))
+    }
+
+    #[test]
+    fn walks_split_into_simple_cycles() {
+        assert_eq!(simple_cycles(&[1, 2, 3]), vec![vec![1, 2, 3]]);
+        // Two triangles touching at vertex 1.
+        assert_eq!(simple_cycles(&[1, 2, 3, 1, 4, 5]), vec![vec![1, 2, 3], vec![1, 4, 5]]);
+        assert_eq!(simple_cycles(&[2, 3, 1, 4, 5, 1]), vec![vec![1, 4, 5], vec![2, 3, 1]]);
+    }
+
+    #[test]
+    fn holes_touching_at_a_vertex_are_both_closed() {
+        // Remove the stars of two vertices a, c with exactly one common neighbour v: the two
+        // holes touch at v, whose boundary walk passes through it twice.
+        let sphere = generate::icosphere(3);
+        let mut nb = vec![std::collections::BTreeSet::new(); sphere.n_vertices()];
+        for f in sphere.faces() {
+            for k in 0..3 {
+                nb[f[k] as usize].insert(f[(k + 1) % 3]);
+                nb[f[(k + 1) % 3] as usize].insert(f[k]);
+            }
+        }
+        let a = 20u32;
+        let c = (0..sphere.n_vertices() as u32)
+            .find(|&c| {
+                c != a && !nb[a as usize].contains(&c) && nb[a as usize].intersection(&nb[c as usize]).count() == 1
+            })
+            .unwrap();
+        let mesh = submesh(&sphere, |t| !t.contains(&a) && !t.contains(&c));
+        assert!(boundary_loops(&mesh).iter().any(|l| !l.is_simple()) || boundary_loops(&mesh).len() == 2);
+        let shared = boundary_loops(&mesh).iter().map(|l| l.vertices.len()).sum::<usize>();
+        assert_eq!(shared, 12, "two 6-vertex rims");
+        let out = fill_holes(&mesh, DEFAULT_MAX_HOLE_PERIMETER).unwrap();
+        assert_eq!(out.filled, 2);
+        let report = crate::validate(&out.mesh);
+        assert!(report.is_usable(), "{report:?}");
+        assert!(is_closed(&out.mesh), "{:?}", boundary_loops(&out.mesh));
+        assert_eq!(crate::stats(&out.mesh).genus, Some(0));
+    }
+
+    #[test]
+    fn loops_of_a_punched_sphere() {
+        let mesh = punched(&[0, 40]);
+        let loops = boundary_loops(&mesh);
+        assert_eq!(loops.len(), 2);
+        for l in &loops {
+            assert!(l.is_simple());
+            assert!(l.vertices.len() == 5 || l.vertices.len() == 6);
+        }
+        assert!(is_closed(&generate::icosphere(2)));
+    }
+
+    #[test]
+    fn filling_closes_the_holes_and_keeps_the_old_mesh() {
+        let mesh = punched(&[0, 40, 100]);
+        let out = fill_holes(&mesh, DEFAULT_MAX_HOLE_PERIMETER).unwrap();
+        assert_eq!(out.filled, 3);
+        assert_eq!(out.original_vertices, mesh.n_vertices());
+        assert!(is_closed(&out.mesh));
+        assert_eq!(&out.mesh.positions()[..mesh.n_vertices()], mesh.positions());
+        assert_eq!(&out.mesh.faces()[..mesh.n_faces()], mesh.faces());
+        let report = crate::validate(&out.mesh);
+        assert!(report.is_usable(), "{report:?}");
+        // Euler characteristic 2 again: a closed orientable sphere.
+        let stats = crate::stats(&out.mesh);
+        assert_eq!(stats.n_boundary_loops, 0);
+        assert_eq!(stats.genus, Some(0));
+        // The area comes back to within the curvature of the missing caps.
+        let full = generate::icosphere(3).area();
+        assert!(
+            (out.mesh.area() - full).abs() < 0.01 * full,
+            "{} vs {full}",
+            out.mesh.area()
+        );
+    }
+
+    #[test]
+    fn a_large_hole_gets_rings_and_its_perimeter_limit_is_respected() {
+        // Remove a polar cap: all vertices with z > 0.7 (a loop of many vertices).
+        let sphere = generate::icosphere(4);
+        let p = sphere.positions();
+        let mesh = submesh(&sphere, |f| !f.iter().any(|&v| p[v as usize][2] > 0.7));
+        let loops = boundary_loops(&mesh);
+        assert_eq!(loops.len(), 1);
+        let perimeter = loops[0].perimeter(mesh.positions()) / mesh.area().sqrt();
+        let out = fill_holes(&mesh, perimeter * 1.01).unwrap();
+        assert_eq!(out.filled, 1);
+        assert!(is_closed(&out.mesh));
+        assert!(out.mesh.n_vertices() - mesh.n_vertices() > loops[0].vertices.len());
+        let r = crate::validate(&out.mesh);
+        assert!(r.is_usable(), "{r:?}");
+        // Harmonic cap of a planar-ish loop: the new vertices stay near the plane z ≈ 0.7.
+        for x in &out.mesh.positions()[mesh.n_vertices()..] {
+            assert!((x[2] - 0.71).abs() < 0.05, "{x:?}");
+        }
+        let none = fill_holes(&mesh, perimeter * 0.99).unwrap();
+        assert_eq!(none.filled, 0);
+        assert_eq!(none.mesh.n_vertices(), mesh.n_vertices());
+        assert!(fill_holes(&mesh, f64::NAN).is_err());
+        assert!(fill_holes(&mesh, -1.0).is_err());
+    }
+}
