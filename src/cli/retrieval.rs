@@ -21,8 +21,9 @@ use super::{check_output, load_usable, CliError, MeshArgs};
 use clap::{Args, Subcommand, ValueEnum};
 use retrieval_store::SqliteIndex;
 use shape_retrieval::{
-    BagDistance, Denoising, DescriptorSpec, Despiking, GlobalSignature, IndexStore, JsonFile, RetrievalError,
-    RetrievalIndex, RetrievalSettings, ShapeFeatures, Smoothing, VocabularyModel, VocabularyStore,
+    BagDistance, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexStore, JsonFile,
+    RetrievalError, RetrievalIndex, RetrievalSettings, ShapeFeatures, Smoothing, VertexWeights, VocabularyModel,
+    VocabularyStore,
 };
 use std::io::Write;
 use std::path::PathBuf;
@@ -69,7 +70,7 @@ pub enum RetrievalAction {
         /// Reuse a vocabulary from `wfem retrieval vocab` (its descriptor settings are used).
         /// Without it, the vocabulary is trained on the indexed meshes themselves, which is
         /// optimistic when those same meshes are then used to measure retrieval.
-        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "denoise", "words", "seed", "no_zscore"])]
+        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
         vocab: Option<PathBuf>,
         #[command(flatten)]
         #[allow(missing_docs)]
@@ -147,13 +148,18 @@ pub struct DescriptorArgs {
     /// neighbours is put back (default 3; `off` to keep spikes).
     #[arg(long, value_name = "T|off")]
     pub despike: Option<String>,
+    /// Hole filling: every hole whose rim is at most P·√area is closed by a smooth patch
+    /// before the shape is described; the patch is not itself described (default 3; `off` to
+    /// describe open shapes as they are).
+    #[arg(long, value_name = "P|off")]
+    pub fill_holes: Option<String>,
     /// Denoising: shapes rougher than R (in edge lengths) are smoothed by the heat kernel until
     /// they are not (default 0.1; `off` to keep every shape as it is).
     #[arg(long, value_name = "R|off")]
     pub denoise: Option<String>,
 }
 
-/// `--despike`/`--denoise`: a positive number, or `off`.
+/// `--despike`/`--fill-holes`/`--denoise`/`--area-cap`: a positive number, or `off`.
 fn number_or_off(flag: &str, text: &Option<String>) -> Result<Option<Option<f64>>, CliError> {
     let Some(text) = text else { return Ok(None) };
     if text == "off" {
@@ -196,6 +202,10 @@ pub struct BagArgs {
     /// Distance between bags.
     #[arg(long, value_enum, default_value = "chi2")]
     pub distance: DistanceArg,
+    /// Vertex weights: areas capped at C times their median (default 3), so that a few
+    /// inflated vertex areas (spikes, slivers) cannot dominate a bag; `off` for plain areas.
+    #[arg(long, value_name = "C|off")]
+    pub area_cap: Option<String>,
     /// Fuse with the Shape-DNA ln(λ_i·A), i = 1…M, at weight W: `M:W` (e.g. `20:0.5`).
     #[arg(long)]
     pub fusion: Option<String>,
@@ -211,6 +221,9 @@ impl DescriptorArgs {
         settings.descriptor.smoothing = self.smoothing.map(|time| Smoothing { time });
         if let Some(v) = number_or_off("--despike", &self.despike)? {
             settings.descriptor.despiking = v.map(|threshold| Despiking { threshold });
+        }
+        if let Some(v) = number_or_off("--fill-holes", &self.fill_holes)? {
+            settings.descriptor.hole_filling = v.map(|max_perimeter| HoleFilling { max_perimeter });
         }
         if let Some(v) = number_or_off("--denoise", &self.denoise)? {
             settings.descriptor.denoising = v.map(|roughness| Denoising { roughness });
@@ -284,6 +297,9 @@ impl BagArgs {
             DistanceArg::Chi2 => BagDistance::ChiSquared,
             DistanceArg::L1 => BagDistance::L1,
         };
+        if let Some(v) = number_or_off("--area-cap", &self.area_cap)? {
+            settings.bags.weights = v.map_or(VertexWeights::Area, |factor| VertexWeights::CappedArea { factor });
+        }
         settings.bags.global = match &self.fusion {
             None => None,
             Some(text) => {

@@ -353,8 +353,8 @@ fn retrieval_sqlite_index_ranks_like_json_and_takes_appends() {
 
 #[test]
 fn retrieval_cleaning_is_selectable_and_checked() {
-    // `--despike off --denoise 0.2` are recorded as such; bad values are usage errors that say
-    // what the flag takes.
+    // `--despike off --fill-holes 1.5 --denoise 0.2` are recorded as such; bad values are usage
+    // errors that say what the flag takes.
     let dir = tempfile::tempdir().unwrap();
     let mut files = Vec::new();
     for (name, mesh) in [
@@ -373,17 +373,27 @@ fn retrieval_cleaning_is_selectable_and_checked() {
         args.extend(extra);
         wfem(&args)
     };
-    let o = run(&["--despike", "off", "--denoise", "0.2"]);
+    let o = run(&["--despike", "off", "--fill-holes", "1.5", "--denoise", "0.2"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&vocab).unwrap()).unwrap();
     // Written as null (a missing field would read as the default, on).
     assert!(v["descriptor"]["despiking"].is_null(), "{}", v["descriptor"]);
     assert_eq!(v["descriptor"]["denoising"], serde_json::json!({"roughness": 0.2}));
+    assert_eq!(
+        v["descriptor"]["hole_filling"],
+        serde_json::json!({"max_perimeter": 1.5})
+    );
+    let o = run(&["--fill-holes", "off"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&vocab).unwrap()).unwrap();
+    assert!(v["descriptor"]["hole_filling"].is_null(), "{}", v["descriptor"]);
     for (flag, value) in [
         ("--despike", "-1"),
         ("--despike", "nan"),
         ("--denoise", "0"),
         ("--denoise", "no"),
+        ("--fill-holes", "-2"),
+        ("--fill-holes", "inf"),
     ] {
         let o = run(&[&format!("{flag}={value}")]);
         assert!(!o.status.success(), "{flag} {value}");
@@ -399,8 +409,8 @@ fn retrieval_cleaning_is_selectable_and_checked() {
 fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     // `vocab` and `build` with no option write the documented defaults (issue #13): SI-HKS of the
     // wFEM kernel, area time unit, τ ∈ [−12, 1] step 1/8, α = 2, K = 5, k = 100, isolated
-    // spikes put back (threshold 3), rough shapes denoised to roughness 0.1, z-scored,
-    // 48 words, soft assignment, area weights, χ², no fusion; `build --vocab` reuses the
+    // spikes put back (threshold 3), holes up to 3√A closed, rough shapes denoised to roughness
+    // 0.1, z-scored, 48 words, soft assignment, areas capped at 3 medians, χ², no fusion; `build --vocab` reuses the
     // vocabulary as it was written.
     let dir = tempfile::tempdir().unwrap();
     let mut files = Vec::new();
@@ -431,7 +441,8 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
             "descriptor": {"kind": "si-hks", "alpha": 2.0, "tau_min": -12.0, "tau_max": 1.0,
                            "tau_step": 0.125, "frequencies": 5},
             "despiking": {"threshold": 3.0},
-            "denoising": {"roughness": 0.1}
+            "denoising": {"roughness": 0.1},
+            "hole_filling": {"max_perimeter": 3.0}
         })
     );
     assert_eq!(v["training"]["words"], 48);
@@ -459,7 +470,7 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     assert_eq!(i["vocabulary"]["training"], v["training"]);
     assert_eq!(
         i["bags"],
-        serde_json::json!({"weights": {"kind": "area"}, "assignment": "normalized",
+        serde_json::json!({"weights": {"kind": "capped-area", "factor": 3.0}, "assignment": "normalized",
                            "distance": "chi-squared", "global": null})
     );
     assert_eq!(i["entries"].as_array().unwrap().len(), 3);
@@ -472,6 +483,29 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
             .collect();
         assert_eq!(bag.len(), 48);
         assert!((bag.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+    // `--area-cap off`: plain vertex areas; a cap that is not a positive number is refused.
+    for (cap, expected) in [
+        ("off", Some(serde_json::json!({"kind": "area"}))),
+        ("2.5", Some(serde_json::json!({"kind": "capped-area", "factor": 2.5}))),
+        ("0", None),
+        ("nan", None),
+    ] {
+        let plain = dir.path().join("plain.json");
+        let mut args = vec!["retrieval", "build"];
+        args.extend(files.iter().map(|s| s.as_str()));
+        args.extend(["--out", plain.to_str().unwrap(), "--area-cap", cap]);
+        let o = wfem(&args);
+        match expected {
+            Some(weights) => {
+                assert!(o.status.success(), "{}", stderr(&o));
+                assert_eq!(read(&plain)["bags"]["weights"], weights);
+            }
+            None => {
+                assert!(!o.status.success());
+                assert!(stderr(&o).contains("positive number or `off`"), "{}", stderr(&o));
+            }
+        }
     }
 
     // build --vocab: the stored vocabulary verbatim, the chosen distance recorded.

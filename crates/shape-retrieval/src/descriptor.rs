@@ -131,6 +131,7 @@ pub struct ShapeDescriptors {
     params: DescriptorParams,
     wfem: Option<Eigenbasis>,
     lumped: Option<Eigenbasis>,
+    described: usize,
 }
 
 impl ShapeDescriptors {
@@ -188,7 +189,31 @@ impl ShapeDescriptors {
             params: params.clone(),
             wfem: None,
             lumped: None,
+            described: mesh.n_vertices(),
         })
+    }
+
+    /// Marks the vertices from `m` on as added (e.g. the patches of filled holes): they take
+    /// part in the operators but are not described ([`Self::described_vertices`]).
+    ///
+    /// # Errors
+    /// [`RetrievalError::DimensionMismatch`] if `m` is zero or more than the vertex count.
+    pub fn described_only(mut self, m: usize) -> Result<Self, RetrievalError> {
+        if m == 0 || m > self.mesh.n_vertices() {
+            return Err(RetrievalError::DimensionMismatch {
+                what: "described vertices vs vertices",
+                expected: self.mesh.n_vertices(),
+                actual: m,
+            });
+        }
+        self.described = m;
+        Ok(self)
+    }
+
+    /// The number of vertices that are the shape's own (the first ones); the rest were added
+    /// by hole filling. Equal to the vertex count unless [`Self::described_only`] said otherwise.
+    pub fn described_vertices(&self) -> usize {
+        self.described
     }
 
     /// Replaces the HKS times of later [`Self::dense`] calls, keeping the eigenbases (e.g. to

@@ -56,12 +56,12 @@ pub use hks::{
     TimeSampling,
 };
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
-pub use model::DEFAULT_TARGET_ROUGHNESS;
 pub use model::{
-    BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, IndexEntry, Ranked,
-    RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams,
+    BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexEntry,
+    Ranked, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams,
     VertexWeights, VocabularyModel,
 };
+pub use model::{DEFAULT_AREA_CAP, DEFAULT_TARGET_ROUGHNESS};
 pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
 pub use sihks::{scale_invariant_hks, SihksParams, TimeUnit};
 pub use standardize::Standardizer;

@@ -176,6 +176,7 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
                 smoothing: None,
                 despiking: None,
                 denoising: None,
+                hole_filling: None,
             },
             training: TrainingParams {
                 standardize: false,
@@ -248,22 +249,41 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
             shape_google(DescriptorSpec::dhk3_default()),
         ),
         (
+            "previous default",
+            "the default before hole filling and capped areas: spike removal and denoising, area weights",
+            variant(&|s| {
+                s.descriptor.hole_filling = None;
+                s.bags.weights = VertexWeights::Area;
+            }),
+        ),
+        (
             "no cleaning",
-            "default without spike removal and denoising (the default before they existed)",
+            "default without spike removal, hole filling and denoising",
             variant(&|s| {
                 s.descriptor.despiking = None;
+                s.descriptor.hole_filling = None;
                 s.descriptor.denoising = None;
             }),
         ),
         (
+            "no hole filling",
+            "default without hole filling",
+            variant(&|s| s.descriptor.hole_filling = None),
+        ),
+        (
             "no denoising",
-            "default with spike removal only",
+            "default without denoising",
             variant(&|s| s.descriptor.denoising = None),
         ),
         (
             "no spike removal",
-            "default with denoising only",
+            "default without spike removal",
             variant(&|s| s.descriptor.despiking = None),
+        ),
+        (
+            "area weights",
+            "default with plain (uncapped) area weights",
+            variant(&|s| s.bags.weights = VertexWeights::Area),
         ),
         (
             "no z-scoring",
@@ -286,9 +306,9 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
             }),
         ),
         (
-            "capped areas (×3)",
-            "vertex weights min(a_i, 3·median a)",
-            variant(&|s| s.bags.weights = VertexWeights::CappedArea { factor: 3.0 }),
+            "64 words",
+            "default with a vocabulary of 64 words",
+            variant(&|s| s.training.words = 64),
         ),
         (
             "boundary damping (3 hops)",
@@ -515,6 +535,7 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
         despiking: None,
         denoising: None,
         smoothing: None,
+        hole_filling: None,
         ..Default::default()
     };
     let mut shapes = protocol::load_shapes(files.clone(), &plain, &opts.cache)?;
@@ -581,6 +602,7 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
         despiking: m.settings.descriptor.despiking,
         denoising: m.settings.descriptor.denoising,
         smoothing: m.settings.descriptor.smoothing,
+        hole_filling: m.settings.descriptor.hole_filling,
         ..plain.clone()
     };
     let mut groups: Vec<DescriptorSettings> = vec![plain.clone()];

@@ -32,14 +32,17 @@ fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
 
 #[pymethods]
 impl PyRetrievalIndex {
-    /// Indexes mesh files with the default recipe (spikes put back and rough shapes denoised,
-    /// SI-HKS in area units, z-scored, 48 words, soft assignment, area weights, χ²) into a new
+    /// Indexes mesh files with the default recipe (spikes put back, holes closed, rough shapes
+    /// denoised, SI-HKS in area units, z-scored, 48 words, soft assignment, capped area
+    /// weights, χ²) into a new
     /// SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
     /// of training on these shapes (its descriptor settings, cleaning included, are used);
-    /// `despike` / `denoise`: the spike threshold and the target roughness, `None` for off.
+    /// `despike` / `fill_holes` / `denoise`: the spike threshold, the largest hole perimeter
+    /// (in √area) and the target roughness, `None` for off.
     #[staticmethod]
     #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0,
         despike=Some(mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD),
+        fill_holes=Some(mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER),
         denoise=Some(shape_retrieval::DEFAULT_TARGET_ROUGHNESS)))]
     #[allow(clippy::too_many_arguments)]
     fn build(
@@ -50,6 +53,7 @@ impl PyRetrievalIndex {
         words: Option<usize>,
         seed: u64,
         despike: Option<f64>,
+        fill_holes: Option<f64>,
         denoise: Option<f64>,
     ) -> PyResult<Self> {
         let path = out.clone();
@@ -60,6 +64,8 @@ impl PyRetrievalIndex {
             }
             settings.training.seed = seed;
             settings.descriptor.despiking = despike.map(|threshold| shape_retrieval::Despiking { threshold });
+            settings.descriptor.hole_filling =
+                fill_holes.map(|max_perimeter| shape_retrieval::HoleFilling { max_perimeter });
             settings.descriptor.denoising = denoise.map(|roughness| shape_retrieval::Denoising { roughness });
             let vocabulary = vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?;
             let meshes = read_all(&paths)?;

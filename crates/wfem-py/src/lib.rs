@@ -23,6 +23,10 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DENSE_MAX_VERTICES", wfem_heat::DENSE_MAX_VERTICES)?;
     m.add("DEFAULT_DEGREE", shifted_solve::DEFAULT_DEGREE)?;
     m.add("DEFAULT_SPIKE_THRESHOLD", mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD)?;
+    m.add(
+        "DEFAULT_MAX_HOLE_PERIMETER",
+        mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER,
+    )?;
     m.add("DEFAULT_TARGET_ROUGHNESS", shape_retrieval::DEFAULT_TARGET_ROUGHNESS)?;
     m.add("SHIPPED_DEGREES", shifted_solve::SHIPPED_DEGREES.to_vec())?;
     mesh::register(m)?;

@@ -150,10 +150,23 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
     descriptor = default.settings["vocabulary"]["descriptor"]
     assert descriptor["despiking"] == {"threshold": 3.0}
     assert descriptor["denoising"] == {"roughness": 0.1}
-    off = wfem.RetrievalIndex.build(paths, tmp_path / "b.sqlite", words=4, despike=None, denoise=0.2)
+    assert descriptor["hole_filling"] == {"max_perimeter": wfem._wfem.DEFAULT_MAX_HOLE_PERIMETER} == {"max_perimeter": 3.0}
+    assert default.settings["bags"]["weights"] == {"kind": "capped-area", "factor": 3.0}
+    off = wfem.RetrievalIndex.build(
+        paths, tmp_path / "b.sqlite", words=4, despike=None, fill_holes=None, denoise=0.2
+    )
     descriptor = off.settings["vocabulary"]["descriptor"]
     assert descriptor["despiking"] is None and descriptor["denoising"] == {"roughness": 0.2}
-    for bad in ({"despike": -1.0}, {"despike": float("nan")}, {"denoise": 0.0}):
-        with pytest.raises(wfem.InvalidInputError, match="spike threshold|target roughness"):
+    assert descriptor["hole_filling"] is None
+    for bad in (
+        {"despike": -1.0},
+        {"despike": float("nan")},
+        {"denoise": 0.0},
+        {"fill_holes": -1.0},
+        {"fill_holes": float("inf")},
+    ):
+        with pytest.raises(
+            wfem.InvalidInputError, match="spike threshold|target roughness|largest hole perimeter"
+        ):
             wfem.RetrievalIndex.build(paths, tmp_path / "c.sqlite", words=4, **bad)
     assert not (tmp_path / "c.sqlite").exists()

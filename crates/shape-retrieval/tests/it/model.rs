@@ -474,3 +474,79 @@ fn stored_parts_are_validated() {
     };
     assert!(matches!(index.rank(&q), Err(RetrievalError::DimensionMismatch { .. })));
 }
+
+/// `mesh` without the faces touching `seeds` (nor the then unreferenced vertices), and for each
+/// remaining vertex its index in `mesh`.
+fn punched(mesh: &TriMesh, seeds: &[u32]) -> (TriMesh, Vec<usize>) {
+    let mut id = vec![u32::MAX; mesh.n_vertices()];
+    let mut kept = Vec::new();
+    let faces = mesh
+        .faces()
+        .iter()
+        .filter(|f| !f.iter().any(|v| seeds.contains(v)))
+        .map(|f| {
+            f.map(|v| {
+                if id[v as usize] == u32::MAX {
+                    id[v as usize] = kept.len() as u32;
+                    kept.push(v as usize);
+                }
+                id[v as usize]
+            })
+        })
+        .collect();
+    let positions = kept.iter().map(|&v| mesh.positions()[v]).collect();
+    (TriMesh::new(positions, faces).unwrap(), kept)
+}
+
+#[test]
+fn hole_filling_brings_a_holed_shape_back_to_the_intact_one() {
+    let intact = mesh_fem::generate::bumpy(3);
+    let (holed, kept) = punched(&intact, &[5, 120, 300, 444, 600]);
+    let filled = DescriptorSettings {
+        eigenpairs: 30,
+        ..Default::default()
+    };
+    assert!(filled.hole_filling.is_some(), "on by default");
+    let open = DescriptorSettings {
+        hole_filling: None,
+        ..filled.clone()
+    };
+    let bags = shape_retrieval::BagSettings::default();
+    let reference = ShapeFeatures::compute("intact", &intact, &filled, &bags).unwrap();
+    // A closed shape is described alike with and without hole filling.
+    let reference_open = ShapeFeatures::compute("intact", &intact, &open, &bags).unwrap();
+    assert_eq!(reference.descriptors, reference_open.descriptors);
+    // Only the shape's own vertices are described, with the filling or without.
+    let with = ShapeFeatures::compute("filled", &holed, &filled, &bags).unwrap();
+    let without = ShapeFeatures::compute("open", &holed, &open, &bags).unwrap();
+    for f in [&with, &without] {
+        assert_eq!(f.descriptors.nrows(), holed.n_vertices());
+        assert_eq!(f.weights.len(), holed.n_vertices());
+    }
+    // Relative descriptor error at corresponding vertices, against the intact shape.
+    let error = |f: &ShapeFeatures| -> f64 {
+        let (mut num, mut den) = (0.0, 0.0);
+        for (i, &v) in kept.iter().enumerate() {
+            for j in 0..f.descriptors.ncols() {
+                num += (f.descriptors[(i, j)] - reference.descriptors[(v, j)]).powi(2);
+                den += reference.descriptors[(v, j)].powi(2);
+            }
+        }
+        (num / den).sqrt()
+    };
+    let (e_with, e_without) = (error(&with), error(&without));
+    assert!(e_with < 0.5 * e_without, "filled {e_with} vs open {e_without}");
+    for bad in [-1.0, f64::NAN, f64::INFINITY] {
+        let settings = DescriptorSettings {
+            hole_filling: Some(shape_retrieval::HoleFilling { max_perimeter: bad }),
+            ..filled.clone()
+        };
+        assert!(matches!(
+            ShapeFeatures::compute("x", &holed, &settings, &bags),
+            Err(RetrievalError::InvalidParameter {
+                name: "largest hole perimeter",
+                ..
+            })
+        ));
+    }
+}

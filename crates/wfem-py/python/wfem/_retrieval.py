@@ -332,20 +332,23 @@ class RetrievalIndex:
         words: int | None = None,
         seed: int = 0,
         despike: float | None = _wfem.DEFAULT_SPIKE_THRESHOLD,
+        fill_holes: float | None = _wfem.DEFAULT_MAX_HOLE_PERIMETER,
         denoise: float | None = _wfem.DEFAULT_TARGET_ROUGHNESS,
     ) -> "RetrievalIndex":
         """Indexes mesh files with the default recipe into a new file ``out`` (replaced
         atomically if it exists).
 
         Every shape is cleaned first: a vertex farther than ``despike`` local edge lengths from
-        the centroid of its neighbours (an isolated spike) is put back, and a shape rougher
+        the centroid of its neighbours (an isolated spike) is put back, every hole whose rim
+        is at most ``fill_holes`` times the square root of the area is closed by a smooth
+        patch (which is not itself described), and a shape rougher
         than ``denoise`` edge lengths is smoothed by the heat kernel until it is not (clean
         shapes are left as they are); ``None`` turns a step off. Both are recorded in the
         index, so queries are cleaned the same way. With ``vocabulary``, its own settings are
         used instead."""
         ps = [os.fspath(p) for p in paths]
         voc = None if vocabulary is None else os.fspath(vocabulary)
-        return cls(_wfem.RetrievalIndex.build(ps, os.fspath(out), voc, words, seed, despike, denoise))
+        return cls(_wfem.RetrievalIndex.build(ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise))
 
     @classmethod
     def open(cls, path: str | os.PathLike[str]) -> "RetrievalIndex":

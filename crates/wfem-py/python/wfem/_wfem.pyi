@@ -19,6 +19,7 @@ __version__: str
 DENSE_MAX_VERTICES: int
 DEFAULT_DEGREE: int
 DEFAULT_SPIKE_THRESHOLD: float
+DEFAULT_MAX_HOLE_PERIMETER: float
 DEFAULT_TARGET_ROUGHNESS: float
 SHIPPED_DEGREES: list[int]
 
@@ -281,6 +282,7 @@ class RetrievalIndex:
         words: int | None = None,
         seed: int = 0,
         despike: float | None = ...,
+        fill_holes: float | None = ...,
         denoise: float | None = ...,
     ) -> RetrievalIndex: ...
     @staticmethod
