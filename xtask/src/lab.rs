@@ -12,9 +12,33 @@ use std::path::Path;
 pub struct Variant {
     /// Its name.
     pub name: String,
-    /// Its settings (partial JSON; missing fields take the defaults).
-    #[serde(default)]
+    /// Its settings (partial JSON laid over the defaults' JSON: a missing field takes the
+    /// default, even one that a settings file read on its own would take as off).
+    #[serde(default, deserialize_with = "over_defaults")]
     pub settings: RetrievalSettings,
+}
+
+fn over_defaults<'de, D: serde::Deserializer<'de>>(d: D) -> Result<RetrievalSettings, D::Error> {
+    fn merge(base: &mut serde_json::Value, patch: serde_json::Value) {
+        match (base, patch) {
+            // A tagged variant ("kind") replaces the default as a whole.
+            (serde_json::Value::Object(b), serde_json::Value::Object(p)) if !p.contains_key("kind") => {
+                for (k, v) in p {
+                    match b.get_mut(&k) {
+                        Some(slot) => merge(slot, v),
+                        None => {
+                            b.insert(k, v);
+                        }
+                    }
+                }
+            }
+            (slot, v) => *slot = v,
+        }
+    }
+    let patch: serde_json::Value = serde::Deserialize::deserialize(d)?;
+    let mut base = serde_json::to_value(RetrievalSettings::default()).map_err(serde::de::Error::custom)?;
+    merge(&mut base, patch);
+    serde_json::from_value(base).map_err(serde::de::Error::custom)
 }
 
 fn f3(v: [f64; 5]) -> String {

@@ -1,6 +1,22 @@
 //! Small 3-vector helpers, the one copy of them in the workspace (mesh-fem's assembly and
 //! validation, the renderer and the SHREC'10 synthesis use these).
 
+/// a + b.
+#[inline]
+pub fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// `a + s (b − a)`: the point at parameter s on the segment from a to b.
+#[inline]
+pub fn lerp(a: [f64; 3], b: [f64; 3], s: f64) -> [f64; 3] {
+    [
+        a[0] + s * (b[0] - a[0]),
+        a[1] + s * (b[1] - a[1]),
+        a[2] + s * (b[2] - a[2]),
+    ]
+}
+
 /// a − b.
 #[inline]
 pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

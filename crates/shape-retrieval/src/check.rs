@@ -56,16 +56,3 @@ pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), RetrievalEr
         })
     }
 }
-
-/// `value` must be finite and ≥ 0.
-pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<(), RetrievalError> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(())
-    } else {
-        Err(RetrievalError::InvalidParameter {
-            name,
-            value,
-            reason: "must be finite and non-negative",
-        })
-    }
-}

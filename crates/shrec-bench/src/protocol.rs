@@ -403,12 +403,7 @@ pub fn features(
                 Some(g) => g.compute(&mut s.shape).map_err(wrap)?,
                 None => Vec::new(),
             };
-            Ok(ShapeFeatures {
-                name: s.file.name.clone(),
-                descriptors,
-                weights,
-                global,
-            })
+            ShapeFeatures::new(&s.file.name, &s.shape, descriptors, weights, global).map_err(wrap)
         })
         .collect()
 }

@@ -163,6 +163,7 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
         {"despike": float("nan")},
         {"denoise": 0.0},
         {"fill_holes": -1.0},
+        {"fill_holes": 0.0},
         {"fill_holes": float("inf")},
     ):
         with pytest.raises(

@@ -478,24 +478,24 @@ fn stored_parts_are_validated() {
 /// `mesh` without the faces touching `seeds` (nor the then unreferenced vertices), and for each
 /// remaining vertex its index in `mesh`.
 fn punched(mesh: &TriMesh, seeds: &[u32]) -> (TriMesh, Vec<usize>) {
-    let mut id = vec![u32::MAX; mesh.n_vertices()];
-    let mut kept = Vec::new();
     let faces = mesh
         .faces()
         .iter()
+        .copied()
         .filter(|f| !f.iter().any(|v| seeds.contains(v)))
-        .map(|f| {
-            f.map(|v| {
-                if id[v as usize] == u32::MAX {
-                    id[v as usize] = kept.len() as u32;
-                    kept.push(v as usize);
-                }
-                id[v as usize]
-            })
-        })
         .collect();
-    let positions = kept.iter().map(|&v| mesh.positions()[v]).collect();
-    (TriMesh::new(positions, faces).unwrap(), kept)
+    let opts = mesh_fem::RepairOptions {
+        drop_unreferenced_vertices: true,
+        ..Default::default()
+    };
+    let (holed, report) = mesh_fem::repair(&TriMesh::new(mesh.positions().to_vec(), faces).unwrap(), &opts).unwrap();
+    let mut kept = vec![0; holed.n_vertices()];
+    for (old, new) in report.vertex_map.iter().enumerate() {
+        if let Some(new) = new {
+            kept[*new as usize] = old;
+        }
+    }
+    (holed, kept)
 }
 
 #[test]
@@ -536,7 +536,7 @@ fn hole_filling_brings_a_holed_shape_back_to_the_intact_one() {
     };
     let (e_with, e_without) = (error(&with), error(&without));
     assert!(e_with < 0.5 * e_without, "filled {e_with} vs open {e_without}");
-    for bad in [-1.0, f64::NAN, f64::INFINITY] {
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         let settings = DescriptorSettings {
             hole_filling: Some(shape_retrieval::HoleFilling { max_perimeter: bad }),
             ..filled.clone()
@@ -549,4 +549,57 @@ fn hole_filling_brings_a_holed_shape_back_to_the_intact_one() {
             })
         ));
     }
+}
+
+#[test]
+fn a_file_without_hole_filling_reads_as_off_and_a_new_one_records_it() {
+    // Files written before hole filling existed hold bags of unfilled shapes: reading them
+    // must not turn the filling on for their queries.
+    let old = r#"{"eigenpairs": 50, "despiking": {"threshold": 3.0}}"#;
+    let settings: DescriptorSettings = serde_json::from_str(old).unwrap();
+    assert_eq!(settings.hole_filling, None);
+    assert_eq!(settings.despiking, DescriptorSettings::default().despiking);
+    let written = serde_json::to_value(DescriptorSettings::default()).unwrap();
+    assert_eq!(written["hole_filling"], serde_json::json!({"max_perimeter": 3.0}));
+    let back: DescriptorSettings = serde_json::from_value(written).unwrap();
+    assert_eq!(back, DescriptorSettings::default());
+}
+
+#[test]
+fn features_from_parts_keep_the_own_vertices_and_check_sizes() {
+    let mesh = mesh_fem::generate::bumpy(2);
+    let settings = DescriptorSettings {
+        eigenpairs: 10,
+        ..Default::default()
+    };
+    let shape = settings.shape(&mesh).unwrap().described_only(5).unwrap();
+    let n = mesh.n_vertices();
+    let descriptors = Mat::from_fn(n, 2, |i, j| (i * 2 + j) as f64);
+    let f = ShapeFeatures::new("x", &shape, descriptors.clone(), vec![1.0; 5], Vec::new()).unwrap();
+    assert_eq!(f.descriptors, descriptors.subrows(0, 5).to_owned());
+    assert!(matches!(
+        ShapeFeatures::new("x", &shape, descriptors.clone(), vec![1.0; n], Vec::new()),
+        Err(RetrievalError::DimensionMismatch { .. })
+    ));
+    assert!(matches!(
+        ShapeFeatures::new(
+            "x",
+            &shape,
+            descriptors.subrows(0, 7).to_owned(),
+            vec![1.0; 5],
+            Vec::new()
+        ),
+        Err(RetrievalError::DimensionMismatch { .. })
+    ));
+    // The weights cover the own vertices only.
+    assert_eq!(
+        shape_retrieval::BagSettings::default()
+            .weights
+            .compute(&shape)
+            .unwrap()
+            .len(),
+        5
+    );
+    assert!(settings.shape(&mesh).unwrap().described_only(0).is_err());
+    assert!(settings.shape(&mesh).unwrap().described_only(n + 1).is_err());
 }

@@ -312,7 +312,8 @@ class RetrievalIndex:
 
     The default recipe (paper Sect. 5, beyond Shape Google): SI-HKS of the wFEM kernel with
     times in units of the surface area (exactly scale invariant), z-scored dimensions, 48 words,
-    soft assignment, area-weighted bags, χ² distance. Training the vocabulary on the indexed
+    soft assignment, bags weighted by vertex areas capped at 3 medians, χ² distance, after
+    spikes are put back, noisy shapes denoised and holes closed (see ``build``). Training the vocabulary on the indexed
     shapes themselves is optimistic when the same shapes are then used to measure retrieval:
     train one on other shapes with ``wfem retrieval vocab`` and pass it as ``vocabulary``.
     Adding shapes appends in one transaction (nothing is rebuilt); a query is one descriptor
@@ -343,7 +344,7 @@ class RetrievalIndex:
         is at most ``fill_holes`` times the square root of the area is closed by a smooth
         patch (which is not itself described), and a shape rougher
         than ``denoise`` edge lengths is smoothed by the heat kernel until it is not (clean
-        shapes are left as they are); ``None`` turns a step off. Both are recorded in the
+        shapes are left as they are); ``None`` turns a step off. All three are recorded in the
         index, so queries are cleaned the same way. With ``vocabulary``, its own settings are
         used instead."""
         ps = [os.fspath(p) for p in paths]
