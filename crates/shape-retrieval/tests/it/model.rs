@@ -603,3 +603,27 @@ fn features_from_parts_keep_the_own_vertices_and_check_sizes() {
     assert!(settings.shape(&mesh).unwrap().described_only(0).is_err());
     assert!(settings.shape(&mesh).unwrap().described_only(n + 1).is_err());
 }
+
+#[test]
+fn snapshot_of_default_descriptors_on_a_holed_shape() {
+    // The bumpy sphere with four holes, described with the defaults (holes closed, their
+    // patches not described): a change of the hole-filling default shows up in review.
+    let (holed, _) = punched(&mesh_fem::generate::bumpy(2), &[3, 50, 90, 140]);
+    let settings = small_settings();
+    let filled = mesh_fem::holes::fill_holes(&holed, mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER).unwrap();
+    let f = ShapeFeatures::compute("holed", &holed, &settings.descriptor, &settings.bags).unwrap();
+    let mut out = format!(
+        "{} holes closed, {} patch vertices; {} × {}\n",
+        filled.filled,
+        filled.mesh.n_vertices() - filled.original_vertices,
+        f.descriptors.nrows(),
+        f.descriptors.ncols()
+    );
+    for i in (0..f.descriptors.nrows()).step_by(25) {
+        let row: Vec<String> = (0..f.descriptors.ncols())
+            .map(|j| sig(f.descriptors[(i, j)], 4))
+            .collect();
+        out += &format!("v{i:03}: {} | w {}\n", row.join(" "), sig(f.weights[i], 3));
+    }
+    insta::assert_snapshot!("default_descriptor_holed_bumpy2_k30", out);
+}
