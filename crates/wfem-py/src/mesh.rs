@@ -118,6 +118,29 @@ pub fn repair_mesh<'py>(
     Ok((mesh_out(py, &fixed), value.to_string()))
 }
 
+/// `fill_holes(V, F, max_perimeter) -> (V', F', holes closed)`: the old vertices and faces
+/// first, unchanged, then the patches' (`mesh_fem::holes::fill_holes`).
+#[pyfunction]
+#[pyo3(signature = (v, f, max_perimeter=mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER))]
+pub fn fill_holes<'py>(
+    py: Python<'py>,
+    v: PyReadonlyArray2<'py, f64>,
+    f: PyReadonlyArray2<'py, i64>,
+    max_perimeter: f64,
+) -> PyResult<(MeshArrays<'py>, usize)> {
+    let mesh = mesh_in(py, &v, &f)?;
+    let out = run(py, move |_| {
+        if !(max_perimeter.is_finite() && max_perimeter > 0.0) {
+            return Err(Error::Invalid(
+                "InvalidParameter",
+                format!("max_perimeter must be finite and positive, got {max_perimeter}"),
+            ));
+        }
+        mesh_fem::holes::fill_holes(&mesh, max_perimeter).map_err(Error::from)
+    })?;
+    Ok((mesh_out(py, &out.mesh), out.filled))
+}
+
 /// `mesh_stats(V, F) -> JSON`.
 #[pyfunction]
 pub fn mesh_stats(py: Python<'_>, v: PyReadonlyArray2<'_, f64>, f: PyReadonlyArray2<'_, i64>) -> PyResult<String> {
@@ -250,6 +273,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(validate_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(repair_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(fill_holes, m)?)?;
     m.add_function(wrap_pyfunction!(mesh_stats, m)?)?;
     m.add_function(wrap_pyfunction!(operators, m)?)?;
     m.add_function(wrap_pyfunction!(icosphere, m)?)?;

@@ -214,3 +214,25 @@ def test_no_nan_from_extreme_but_valid_input():
     assert np.isfinite(g).all()
     K2 = wfem.HeatKernel(V * 1e6, F)
     assert np.isfinite(K2.apply(V[:, 0], 1e10)).all()
+
+
+def test_fill_holes_closes_a_punched_sphere_and_checks_its_bound():
+    V, F = wfem.generate.icosphere(3)
+    keep = ~np.isin(F, [0, 40]).any(axis=1)
+    V1, F1, report = wfem.repair(V, F[keep], drop_unreferenced_vertices=True)
+    assert wfem.mesh_stats(V1, F1)["n_boundary_loops"] == 2
+    V2, F2, closed = wfem.fill_holes(V1, F1)
+    assert closed == 2
+    np.testing.assert_array_equal(V2[: len(V1)], V1)
+    np.testing.assert_array_equal(F2[: len(F1)], F1)
+    stats = wfem.mesh_stats(V2, F2)
+    assert stats["n_boundary_loops"] == 0 and stats["genus"] == 0
+    def area(V, F):
+        return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1).sum()
+
+    assert abs(area(V2, F2) - area(V, F)) < 0.01 * area(V, F)
+    # Nothing to do on a closed mesh; a bound that is not a positive number is refused.
+    assert wfem.fill_holes(V, F)[2] == 0
+    for bad in (0.0, -1.0, np.nan, np.inf):
+        with pytest.raises(wfem.InvalidInputError):
+            wfem.fill_holes(V1, F1, max_perimeter=bad)

@@ -39,7 +39,17 @@ from ._errors import (
     WfemError,
 )
 from ._heat import KERNELS, METHODS, DiffusionDistance, HeatKernel
-from ._mesh import RepairReport, ValidationReport, extrema, mesh_stats, operators, read_mesh, repair, validate
+from ._mesh import (
+    RepairReport,
+    ValidationReport,
+    extrema,
+    fill_holes,
+    mesh_stats,
+    operators,
+    read_mesh,
+    repair,
+    validate,
+)
 from ._retrieval import (
     DESCRIPTORS,
     Hit,
@@ -69,6 +79,7 @@ __all__ = [
     "read_mesh",
     "validate",
     "repair",
+    "fill_holes",
     "mesh_stats",
     "operators",
     "extrema",

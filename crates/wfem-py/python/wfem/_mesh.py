@@ -138,6 +138,23 @@ def repair(
     return v2, f2, RepairReport(**json.loads(r))
 
 
+def fill_holes(
+    V: Any, F: Any = None, *, max_perimeter: float = _wfem.DEFAULT_MAX_HOLE_PERIMETER
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Closes every hole whose rim is at most ``max_perimeter × √area`` long with a smooth
+    patch (concentric rings placed harmonically, the rim fixed) — what retrieval does before it
+    describes a shape. Rims of holes that touch at a vertex are closed one by one; a flat open
+    patch (rim ≥ 3.54 √area) is never closed at the default bound of 3.
+
+    Returns:
+        ``(V', F', holes_closed)``: ``V'[:len(V)]`` and ``F'[:len(F)]`` are the inputs
+        unchanged, the patches' vertices and faces follow; the inputs are not modified.
+    """
+    v, f = as_mesh(V, F)
+    (v2, f2), filled = _wfem.fill_holes(v, f, max_perimeter)
+    return v2, f2, int(filled)
+
+
 def mesh_stats(V: Any, F: Any = None) -> dict[str, Any]:
     """Counts, topology (Euler characteristic, genus, boundary loops, components) and geometry
     (area, edge lengths, angles) of a mesh."""
