@@ -11,12 +11,12 @@
 //! The defaults are [`shape_retrieval::RetrievalSettings::default`]: isolated spikes put back,
 //! rough (noisy) shapes smoothed by the heat kernel down to a roughness of 0.1 edge lengths and
 //! holes with rims up to 3√A closed by smooth patches that are not themselves described (clean,
-//! closed shapes are left as they are), then SI-HKS with times
-//! `t = A·2^τ`, τ ∈ [−12, 1] (A = surface area; exactly scale invariant), 5 Fourier magnitudes,
-//! k = 100, z-scored, 48 words, soft assignment, vertex areas capped at 3 medians, χ² distance. TOSCA-76 (76 shapes,
-//! leave-one-out, `cargo xtask tosca-eval`): mAP 0.997 with the vocabulary trained on the 76
-//! (optimistic), 0.998 with one trained on 54 other shapes. Everything is recorded in the vocabulary and index files (JSON, see
-//! [`shape_retrieval::store`]).
+//! closed shapes are left as they are), then SI-HKS with times `t = A·2^τ`, τ ∈ [−12, 1]
+//! (A = surface area; exactly scale invariant), 5 Fourier magnitudes, k = 100, z-scored,
+//! 48 words, soft assignment, vertex areas capped at 3 medians, χ² distance. TOSCA-76 (76
+//! shapes, leave-one-out, `cargo xtask tosca-eval`): mAP 0.997 with the vocabulary trained on
+//! the 76 (optimistic), 0.998 with one trained on 54 other shapes. Everything is recorded in
+//! the vocabulary and index files (JSON, see [`shape_retrieval::store`]).
 
 use super::{check_output, load_usable, CliError, MeshArgs};
 use clap::{Args, Subcommand, ValueEnum};

@@ -132,11 +132,11 @@ pub struct FilledHoles {
 /// is fanned to a centre vertex. The new vertices start on the cone from the loop's centroid
 /// and are then placed harmonically (Gauss–Seidel on the uniform Laplacian, the loop fixed),
 /// which gives a smooth, nearly flat cap. A patch that would have a degenerate triangle is
-/// dropped and its hole left open (a fold on a very twisted rim is not detected). A rim through a vertex twice (holes touching at a vertex) is split
-/// there into simple loops, closed one by one; should that leave more non-manifold edges and
-/// vertices than the mesh had, only the simple rims are closed. Chains of boundary edges that
-/// do not close (inconsistently oriented faces) are left open. A mesh without holes comes back
-/// unchanged.
+/// dropped and its hole left open (a fold on a very twisted rim is not detected). A rim
+/// through a vertex twice (holes touching at a vertex) is split there into simple loops,
+/// closed one by one; should that leave more non-manifold edges and vertices than the mesh
+/// had, only the simple rims are closed. Chains of boundary edges that do not close
+/// (inconsistently oriented faces) are left open. A mesh without holes comes back unchanged.
 ///
 /// # Errors
 /// [`MeshError::Invalid`] for a `max_perimeter` that is negative or not finite.
@@ -153,13 +153,18 @@ pub fn fill_holes(mesh: &TriMesh, max_perimeter: f64) -> Result<FilledHoles, Mes
         .flat_map(|l| simple_cycles(&l.vertices))
         .filter(|c| c.len() >= 3)
         .collect();
+    // The connectivity alone (not a whole validation), and only once something was filled:
+    // retrieval calls this on every shape, most of them closed.
     let non_manifold = |m: &TriMesh| {
-        let c = crate::validate(m).counts;
-        c.non_manifold_edges + c.non_manifold_vertices
+        let t = crate::topology::Topology::new(m.n_vertices(), m.faces());
+        t.non_manifold_edges.len() + t.non_manifold_vertices.len()
     };
-    let before = non_manifold(mesh);
     let filled = fill(mesh, &holes, limit)?;
-    if filled.filled == 0 || non_manifold(&filled.mesh) <= before {
+    if filled.filled == 0 {
+        return Ok(filled);
+    }
+    let before = non_manifold(mesh);
+    if non_manifold(&filled.mesh) <= before {
         return Ok(filled);
     }
     // Closing the split rims of touching holes left a vertex or edge non-manifold that was
@@ -311,16 +316,10 @@ fn patch(loop_: &[u32], positions: &[[f64; 3]]) -> Option<(Vec<[f64; 3]>, Vec<[u
     // cut through a curved surface is far from planar, and a test against the rim's vector
     // area rejected most of the cuts of the SHREC'10 `holes` class (measured), whose harmonic
     // caps assemble and describe well.
-    let h = outer
-        .iter()
-        .enumerate()
-        .map(|(i, a)| norm(sub(outer[(i + 1) % m], *a)))
-        .sum::<f64>()
-        / m as f64;
+    let h = rim_perimeter(loop_, positions) / m as f64;
     let ok = faces.iter().all(|t| {
         let [a, b, c] = t.map(|v| at(v, &new_positions));
-        let normal = cross(sub(b, a), sub(c, a));
-        let area2 = norm(normal);
+        let area2 = norm(cross(sub(b, a), sub(c, a)));
         area2.is_finite() && area2 > 1e-10 * h * h
     });
     ok.then_some((new_positions, faces))

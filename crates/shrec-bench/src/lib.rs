@@ -24,3 +24,20 @@ pub mod synth;
 pub mod transform;
 
 pub use error::BenchError;
+
+/// FNV-1a, 64 bit: the one hash of the crate (random-stream seeds, eigenbasis cache keys).
+/// Feed bytes with [`Fnv1a::eat`]; the value is `.0`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Fnv1a(pub(crate) u64);
+
+impl Fnv1a {
+    pub(crate) fn new() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+
+    pub(crate) fn eat(&mut self, bytes: impl IntoIterator<Item = u8>) {
+        for b in bytes {
+            self.0 = (self.0 ^ b as u64).wrapping_mul(0x0000_0100_0000_01B3);
+        }
+    }
+}

@@ -254,24 +254,19 @@ impl EigenCache {
     /// change of the preprocessing or of its code can never return a stale basis.
     fn entry(&self, shape: &ShapeDescriptors, settings: &DescriptorSettings, lumped: bool) -> Option<PathBuf> {
         let dir = self.dir.as_ref()?;
-        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-        let mut eat = |bytes: &[u8]| {
-            for &b in bytes {
-                h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01B3);
-            }
-        };
-        eat(format!("v2|{}|{lumped}|", settings.eigenpairs).as_bytes());
+        let mut h = crate::Fnv1a::new();
+        h.eat(format!("v2|{}|{lumped}|", settings.eigenpairs).bytes());
         for p in shape.mesh().positions() {
             for c in p {
-                eat(&c.to_bits().to_le_bytes());
+                h.eat(c.to_bits().to_le_bytes());
             }
         }
         for f in shape.mesh().faces() {
             for v in f {
-                eat(&v.to_le_bytes());
+                h.eat(v.to_le_bytes());
             }
         }
-        Some(dir.join(format!("{h:016x}.eig")))
+        Some(dir.join(format!("{:016x}.eig", h.0)))
     }
 
     fn read(path: &Path) -> Option<Eigenbasis> {

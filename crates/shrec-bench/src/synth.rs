@@ -43,12 +43,9 @@ use wfem_heat::rng::SplitMix64;
 /// The seed of the random stream of one (shape, class): FNV-1a of the names mixed into the
 /// global seed. The strength is deliberately left out (see the module documentation).
 pub fn stream_seed(seed: u64, shape: &str, class: Class) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in shape.bytes().chain([0u8]).chain(class.name().bytes()) {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01B3);
-    }
-    SplitMix64::new(seed ^ h).next_u64()
+    let mut h = crate::Fnv1a::new();
+    h.eat(shape.bytes().chain([0u8]).chain(class.name().bytes()));
+    SplitMix64::new(seed ^ h.0).next_u64()
 }
 
 /// A SHREC'10 transformation class.

@@ -32,10 +32,9 @@ fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
 
 #[pymethods]
 impl PyRetrievalIndex {
-    /// Indexes mesh files with the default recipe (spikes put back, holes closed, rough shapes
-    /// denoised, SI-HKS in area units, z-scored, 48 words, soft assignment, capped area
-    /// weights, χ²) into a new
-    /// SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
+    /// Indexes mesh files with the default recipe (spikes put back, rough shapes denoised,
+    /// holes closed, SI-HKS in area units, z-scored, 48 words, soft assignment, capped area
+    /// weights, χ²) into a new SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
     /// of training on these shapes (its descriptor settings, cleaning included, are used);
     /// `despike` / `fill_holes` / `denoise`: the spike threshold, the largest hole perimeter
     /// (in √area) and the target roughness, `None` for off.

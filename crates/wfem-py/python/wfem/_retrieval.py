@@ -313,7 +313,8 @@ class RetrievalIndex:
     The default recipe (paper Sect. 5, beyond Shape Google): SI-HKS of the wFEM kernel with
     times in units of the surface area (exactly scale invariant), z-scored dimensions, 48 words,
     soft assignment, bags weighted by vertex areas capped at 3 medians, χ² distance, after
-    spikes are put back, noisy shapes denoised and holes closed (see ``build``). Training the vocabulary on the indexed
+    spikes are put back, noisy shapes denoised and holes closed, in that order (see
+    ``build``). Training the vocabulary on the indexed
     shapes themselves is optimistic when the same shapes are then used to measure retrieval:
     train one on other shapes with ``wfem retrieval vocab`` and pass it as ``vocabulary``.
     Adding shapes appends in one transaction (nothing is rebuilt); a query is one descriptor
