@@ -77,8 +77,10 @@ fn load_all(files: &[PathBuf], opts: &LoadOptions) -> Vec<Outcome> {
 #[test]
 fn every_corpus_file_loads_or_gives_its_expected_error() {
     let root = meshes_dir().unwrap();
-    let (shrec11, files): (Vec<PathBuf>, Vec<PathBuf>) =
-        all_mesh_files().unwrap().into_iter().partition(|p| rel(p, &root).starts_with(SHREC11));
+    let (shrec11, files): (Vec<PathBuf>, Vec<PathBuf>) = all_mesh_files()
+        .unwrap()
+        .into_iter()
+        .partition(|p| rel(p, &root).starts_with(SHREC11));
     assert_eq!(files.len(), CORPUS_FILES, "corpus at {}", root.display());
     check_shrec11(&root, &shrec11);
     let names: Vec<String> = files.iter().map(|p| rel(p, &root)).collect();
@@ -174,7 +176,11 @@ fn check_shrec11(root: &Path, files: &[PathBuf]) {
         let name = rel(path, root);
         assert!(listed.contains(&name), "{name} is not in labels.csv");
         let (mesh, _) = outcome.unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert!((250..=252).contains(&mesh.n_vertices()), "{name}: {} vertices", mesh.n_vertices());
+        assert!(
+            (250..=252).contains(&mesh.n_vertices()),
+            "{name}: {} vertices",
+            mesh.n_vertices()
+        );
         assert_eq!(mesh.n_faces(), 500, "{name}");
     }
 }
