@@ -20,6 +20,9 @@ pub struct DistanceArgs {
     /// Diffusion time t > 0.
     #[arg(long = "t", allow_negative_numbers = true)]
     pub t: f64,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub time_unit: super::times::TimeUnitArgs,
     /// The vertex i (numbered as in the file) whose distances d_t(i, ·) to every vertex are
     /// computed.
     #[arg(long)]
@@ -52,6 +55,8 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
         .check(Some(std::slice::from_ref(&suffix)), 1, &[&args.input.mesh])?;
     let input = read_usable(&args.input)?;
     let i = input.vertex("--from", args.from)?;
+    let times = args.time_unit.resolve("--t", &input.mesh, &[args.t])?;
+    let t = times.absolute[0];
     let ops = progress::run("assembling L, B, D", || {
         assemble(&input.mesh, &AssemblyParams::default())
     })?;
@@ -64,24 +69,28 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
         },
         input.mesh.n_vertices(),
     )?;
+    // The diffusion distance is made of kernel values at 2t (its time at infinity is half).
+    let doubling = if kind == DistanceKind::Diffusion { 2.0 } else { 1.0 };
+    times.warn(kernel.operators(), &input.mesh, doubling)?;
     let dd = progress::run(format!("preparing the {} distance (t = {label})", kind.name()), || {
-        DiffusionDistance::new(&kernel, kind, args.t, &DistanceParams::default())
+        DiffusionDistance::new(&kernel, kind, t, &DistanceParams::default())
     })?;
     let row = progress::run(format!("distances from vertex {}", args.from), || dd.row(i as usize))?;
     let column = Column {
         name: format!("{name}_distance_t={label}"),
         suffix,
         title: format!(
-            "{}: {} distance from vertex {}, t = {label} ({})",
+            "{}: {} distance from vertex {}, t = {label}{} ({})",
             input.name,
             kind.name(),
             args.from,
+            times.suffix(),
             match &method {
                 Method::Rational { degree, .. } => format!("{}, degree {degree}", method.name()),
                 m => m.name().to_string(),
             }
         ),
-        t: Some(args.t),
+        t: Some(t),
         values: row,
     };
     let mut meta = serde_json::Map::new();
@@ -89,6 +98,7 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("kind".into(), json!(kind.name()));
     meta.insert("from_vertex".into(), json!(args.from));
+    meta.insert("time_unit".into(), times.meta());
     if let Some(info) = dd.diagonal_info() {
         meta.insert(
             "diagonal".into(),

@@ -112,6 +112,9 @@ pub struct HeatArgs {
     /// Diffusion time(s) t > 0; several values give one output field each.
     #[arg(long = "t", required = true, num_args = 1.., allow_negative_numbers = true)]
     pub t: Vec<f64>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub time_unit: super::times::TimeUnitArgs,
     /// Diffuse the unit impulse e_i at this vertex (numbered as in the file; the canonical
     /// basis function K_t e_i).
     #[arg(long, conflicts_with = "field")]
@@ -229,6 +232,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
     }
 
     let input = read_usable(&args.input)?;
+    let times = args.time_unit.resolve("--t", &input.mesh, &args.t)?;
     let n = input.mesh.n_vertices();
     let (f, what, source) = match (&args.source, &args.field) {
         (Some(i), _) => {
@@ -264,12 +268,13 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         },
         n,
     )?;
+    times.warn(kernel.operators(), &input.mesh, 1.0)?;
     // The exact reference of an approximate method, built on first use.
     let mut reference: Option<HeatKernel> = None;
     let mut errors = Vec::new();
     let mut columns = Vec::with_capacity(args.t.len());
     let bar = progress::bar(args.t.len(), "K_t");
-    for ((&t, label), suffix) in args.t.iter().zip(&labels).zip(&suffixes) {
+    for ((&t, label), suffix) in times.absolute.iter().zip(&labels).zip(&suffixes) {
         bar.set_detail(&format!("t = {label}"));
         let g = apply_scaled(&kernel, &f, t)?;
         if let Some((vertex, &value)) = g.iter().enumerate().find(|(_, v)| !v.is_finite()) {
@@ -297,8 +302,9 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
             name: format!("t={label}"),
             suffix: suffix.clone(),
             title: format!(
-                "{}: {what}, t = {label} ({} mass, {})",
+                "{}: {what}, t = {label}{} ({} mass, {})",
                 input.name,
+                times.suffix(),
                 mass.name(),
                 method.name()
             ),
@@ -314,6 +320,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("mass".into(), json!(mass.name()));
     meta.insert("method".into(), method_meta(&method));
+    meta.insert("time_unit".into(), times.meta());
     match (&args.source, &args.field) {
         (Some(i), _) => meta.insert("source_vertex".into(), json!(i)),
         (_, f) => meta.insert("field".into(), json!(f.as_ref().map(|p| p.display().to_string()))),

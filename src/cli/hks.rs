@@ -20,6 +20,9 @@ pub struct HksArgs {
     /// Diffusion times t > 0 (in the mesh's units); one output column each (at most 1000).
     #[arg(long, num_args = 1.., allow_negative_numbers = true, conflicts_with = "num_times")]
     pub times: Vec<f64>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub time_unit: super::times::TimeUnitArgs,
     /// Number T of automatic times, log-spaced in [4 ln10/λ_k, 4 ln10/λ_2] (default 16, at
     /// most 1000).
     #[arg(long, alias = "scales")]
@@ -126,13 +129,20 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         count,
         n,
     )?;
+    let times = args.time_unit.resolve("--times", &input.mesh, &args.times)?;
+    if !args.times.is_empty() {
+        let fem = progress::run("assembling L, B, D", || {
+            mesh_fem::assemble(&input.mesh, &mesh_fem::AssemblyParams::for_mass(mass))
+        })?;
+        times.warn(&wfem_heat::Operators::new(&fem, mass)?, &input.mesh, 1.0)?;
+    }
     let params = MeshHksParams {
         mass,
         method: args.method,
         times: if args.times.is_empty() {
             TimeSampling::Auto { num_times: count }
         } else {
-            TimeSampling::Explicit(args.times.clone())
+            TimeSampling::Explicit(times.absolute.clone())
         },
         eigenpairs: k,
         ..Default::default()
@@ -141,7 +151,12 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let result = mesh_hks(&input.mesh, &params, None, &mut |s| steps.start(s));
     steps.finish();
     let hks = result.map_err(retrieval)?;
-    let labels = short_labels(&hks.times);
+    // Given times keep their labels (in their unit); automatic ones are in the mesh's units.
+    let (labels, unit) = if args.times.is_empty() {
+        (short_labels(&hks.times), "")
+    } else {
+        (short_labels(&times.given), times.suffix())
+    };
     let columns: Vec<Column> = labels
         .iter()
         .enumerate()
@@ -149,7 +164,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
             name: format!("hks_t{label}"),
             suffix: format!("t{label}"),
             title: format!(
-                "{}: HKS, t = {label} ({} mass, {})",
+                "{}: HKS, t = {label}{unit} ({} mass, {})",
                 input.name,
                 mass.name(),
                 match hks.sources[j] {
@@ -171,6 +186,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("mass".into(), json!(mass.name()));
     meta.insert("method".into(), json!(args.method.name()));
+    meta.insert("time_unit".into(), times.meta());
     if hks.eigenvalues.is_some() {
         meta.insert("eigenpairs".into(), json!(k));
     }

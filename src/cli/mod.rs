@@ -18,6 +18,7 @@ mod input;
 pub mod limits;
 pub mod output;
 pub mod progress;
+pub mod times;
 pub use distance::{distance, DistanceArgs};
 pub mod hks;
 pub mod retrieval;

@@ -544,3 +544,96 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     ]);
     assert!(!o.status.success());
 }
+
+/// Issue #25: `heat` and `hks` read their times in a unit of the mesh (`--time-unit`), record
+/// it, and warn past the time at infinity in the unit the times were given in.
+#[test]
+fn time_units_and_warnings_of_heat_and_hks() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh_path = dir.path().join("small.off");
+    let mesh = mesh_fem::generate::icosphere(2).with_area(0.057).unwrap();
+    mesh_fem::io::write_mesh(&mesh_path, &mesh).unwrap();
+    let m = mesh_path.to_str().unwrap();
+    let stats = mesh_fem::stats(&mesh);
+    let edge2 = stats.mean_edge_length * stats.mean_edge_length;
+    let run = |args: &[&str]| {
+        let o = crate::common::wfem(args);
+        assert!(o.status.success(), "{}", crate::common::stderr(&o));
+        crate::common::stderr(&o)
+    };
+    let json = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join(name)).unwrap()).unwrap()
+    };
+    let h = dir.path().join("h.npy");
+    let err = run(&[
+        "heat",
+        m,
+        "--t",
+        "10",
+        "2",
+        "--time-unit",
+        "edge",
+        "--source",
+        "3",
+        "-o",
+        h.to_str().unwrap(),
+    ]);
+    assert!(!err.contains("warning"), "{err}");
+    let side = json("h.json");
+    assert_eq!(side["time_unit"]["name"], "edge");
+    assert!((side["times"][0].as_f64().unwrap() - 10.0 * edge2).abs() <= 1e-12 * edge2);
+    assert!((side["times"][1].as_f64().unwrap() - 2.0 * edge2).abs() <= 1e-12 * edge2);
+    // The same heat in absolute units: equal values.
+    let h2 = dir.path().join("h2.npy");
+    run(&[
+        "heat",
+        m,
+        "--t",
+        &(10.0 * edge2).to_string(),
+        &(2.0 * edge2).to_string(),
+        "--source",
+        "3",
+        "-o",
+        h2.to_str().unwrap(),
+    ]);
+    let (a, b) = (
+        crate::common::read_npy(&h).unwrap().1,
+        crate::common::read_npy(&h2).unwrap().1,
+    );
+    assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() <= 1e-12));
+    assert_eq!(json("h2.json")["time_unit"]["name"], "absolute");
+    // Past infinity, in area units (the heat equation's one τ = 100 for every scaling).
+    let err = run(&[
+        "heat",
+        m,
+        "--t",
+        "100",
+        "--time-unit",
+        "area",
+        "--source",
+        "3",
+        "-o",
+        h.to_str().unwrap(),
+    ]);
+    assert!(
+        err.contains("--t: t = 1e2 is past the time at infinity") && err.contains("(--time-unit area)"),
+        "{err}"
+    );
+    let k = dir.path().join("k.npy");
+    let err = run(&[
+        "hks",
+        m,
+        "--times",
+        "10",
+        "1e-3",
+        "--time-unit",
+        "area",
+        "-o",
+        k.to_str().unwrap(),
+    ]);
+    assert!(err.contains("--times: t = 1e1 is past the time at infinity"), "{err}");
+    assert_eq!(err.matches("warning").count(), 1, "{err}");
+    let side = json("k.json");
+    assert_eq!(side["time_unit"]["given"], serde_json::json!([10.0, 1e-3]));
+    assert!((side["times"][1].as_f64().unwrap() - 1e-3 * mesh.area()).abs() <= 1e-15);
+}

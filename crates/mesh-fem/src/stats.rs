@@ -66,6 +66,26 @@ pub struct MeshStats {
     pub is_closed: bool,
 }
 
+/// The mean length of the distinct undirected edges of `mesh` (0 without edges), as in
+/// [`MeshStats::mean_edge_length`]; O(F log F).
+pub fn mean_edge_length(mesh: &TriMesh) -> f64 {
+    let topo = Topology::new(mesh.n_vertices(), mesh.faces());
+    mean_length(&topo, mesh.positions())
+}
+
+fn mean_length(topo: &Topology, positions: &[[f64; 3]]) -> f64 {
+    let total: f64 = topo
+        .edges
+        .par_iter()
+        .map(|&[a, b]| norm(sub(positions[a as usize], positions[b as usize])))
+        .sum();
+    if topo.edges.is_empty() {
+        0.0
+    } else {
+        total / topo.edges.len() as f64
+    }
+}
+
 /// Computes the [`MeshStats`] of `mesh` in O(F log F).
 ///
 /// ```
@@ -85,11 +105,6 @@ pub fn stats(mesh: &TriMesh) -> MeshStats {
     let genus =
         (topo.n_components == 1 && is_manifold && is_orientable && (2 - chi - b) % 2 == 0).then_some((2 - chi - b) / 2);
 
-    let total_length: f64 = topo
-        .edges
-        .par_iter()
-        .map(|&[a, b]| norm(sub(positions[a as usize], positions[b as usize])))
-        .sum();
     let (min_angle, max_angle) = (0..mesh.n_faces())
         .into_par_iter()
         .map(|f| {
@@ -125,11 +140,7 @@ pub fn stats(mesh: &TriMesh) -> MeshStats {
         genus,
         area: mesh.area(),
         bbox_diagonal: bbox_diagonal(positions),
-        mean_edge_length: if n_edges > 0 {
-            total_length / n_edges as f64
-        } else {
-            0.0
-        },
+        mean_edge_length: mean_length(&topo, positions),
         min_angle_deg: min_angle.to_degrees(),
         max_angle_deg: max_angle.to_degrees(),
         is_manifold,

@@ -139,6 +139,9 @@ pub enum RetrievalError {
     /// A time window in units of the surface area was asked for, and the area is not known.
     #[error("the time window is in units of the surface area: call Spectrum::with_area")]
     AreaRequired,
+    /// A time unit of the mean edge length was asked for where only a spectrum is known.
+    #[error("the times are in units of the mean edge length squared, which a spectrum does not know: use the area or an absolute unit")]
+    EdgeLengthRequired,
     /// A vocabulary or index (built here or read from storage) is inconsistent.
     #[error("invalid {what}: {reason}")]
     InvalidModel {

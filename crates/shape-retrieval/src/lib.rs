@@ -65,6 +65,6 @@ pub use model::{
 };
 pub use model::{DEFAULT_AREA_CAP, DEFAULT_TARGET_ROUGHNESS};
 pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
-pub use sihks::{scale_invariant_hks, SihksParams, TimeUnit};
+pub use sihks::{scale_invariant_hks, MeshLengths, SihksParams, TimeUnit};
 pub use standardize::Standardizer;
 pub use store::{index_from_settings, index_settings, IndexStore, JsonFile, VocabularyStore};

@@ -71,7 +71,12 @@ impl Default for SihksParams {
     }
 }
 
-/// The unit t₀ of the SI-HKS times `t = t₀ α^τ`.
+/// A unit of diffusion time, `t = c·unit`: the mesh's own squared length units, its surface
+/// area A = 1ᵀB1 (exactly scale invariant: the paper's Sect. 5 scale covariance
+/// `K_t(βM) = K_{β⁻²t}(M)` with A ↦ β²A), or its mean edge length squared ℓ̄² (potpourri3d's
+/// convention). For the SI-HKS it is the unit t₀ of the times `t = t₀ α^τ`; for the command
+/// line's and Python's times (`--time-unit`, `time_unit=`) a time τ given in the unit is
+/// `t = τ·unit`, i.e. [`TimeUnit::with_factor`]`(τ)` resolved on the mesh.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum TimeUnit {
@@ -80,13 +85,70 @@ pub enum TimeUnit {
     Absolute(f64),
     /// t₀ = c·A with A = 1ᵀB1 the surface area: exactly scale invariant (see the module docs).
     Area(f64),
+    /// t₀ = c·ℓ̄² with ℓ̄ the mean length of the distinct edges (potpourri3d's time
+    /// coefficient; depends on the sampling as well as on the scale).
+    Edge(f64),
+}
+
+impl Default for TimeUnit {
+    /// Times in the mesh's units, as given.
+    fn default() -> Self {
+        TimeUnit::Absolute(1.0)
+    }
+}
+
+wfem_choice::registry! {
+    TimeUnit as "time unit" {
+        TimeUnit::Absolute(_) = TimeUnit::Absolute(1.0) => "absolute":
+            "times in the mesh's squared length units, as given (default)",
+        TimeUnit::Area(_) = TimeUnit::Area(1.0) => "area":
+            "times in units of the surface area A: t = τ·A, the same τ on any scaling of a shape",
+        TimeUnit::Edge(_) = TimeUnit::Edge(1.0) => "edge" ["mean-edge-length"]:
+            "times in units of the mean edge length squared: t = τ·ℓ̄² (potpourri3d's convention)",
+    }
+}
+
+/// The lengths of a mesh that a [`TimeUnit`] refers to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshLengths {
+    /// The surface area A (Σ|T| = 1ᵀB1).
+    pub area: f64,
+    /// The mean length ℓ̄ of the distinct edges (as `wfem info` prints it).
+    pub mean_edge_length: f64,
+}
+
+impl MeshLengths {
+    /// The area and mean edge length of `mesh`.
+    pub fn of(mesh: &mesh_fem::TriMesh) -> Self {
+        Self {
+            area: mesh.area(),
+            mean_edge_length: mesh_fem::stats::mean_edge_length(mesh),
+        }
+    }
 }
 
 impl TimeUnit {
+    /// The factor c of the unit.
+    pub fn factor(self) -> f64 {
+        match self {
+            TimeUnit::Absolute(c) | TimeUnit::Area(c) | TimeUnit::Edge(c) => c,
+        }
+    }
+
+    /// The same unit with the factor c.
+    pub fn with_factor(self, c: f64) -> Self {
+        match self {
+            TimeUnit::Absolute(_) => TimeUnit::Absolute(c),
+            TimeUnit::Area(_) => TimeUnit::Area(c),
+            TimeUnit::Edge(_) => TimeUnit::Edge(c),
+        }
+    }
+
     /// t₀ for a surface of the given area.
     ///
     /// # Errors
     /// [`RetrievalError::AreaRequired`] for [`TimeUnit::Area`] without an area,
+    /// [`RetrievalError::EdgeLengthRequired`] for [`TimeUnit::Edge`] (a spectrum knows no edge),
     /// [`RetrievalError::InvalidParameter`] for a non-positive factor or area.
     pub fn resolve(self, area: Option<f64>) -> Result<f64, RetrievalError> {
         match self {
@@ -100,6 +162,22 @@ impl TimeUnit {
                 check::positive("area", area)?;
                 Ok(c * area)
             }
+            TimeUnit::Edge(_) => Err(RetrievalError::EdgeLengthRequired),
+        }
+    }
+
+    /// `c·1`, `c·A` or `c·ℓ̄²` on a mesh of these lengths.
+    ///
+    /// # Errors
+    /// [`RetrievalError::InvalidParameter`] for a non-positive factor, area or edge length.
+    pub fn on(self, lengths: &MeshLengths) -> Result<f64, RetrievalError> {
+        match self {
+            TimeUnit::Edge(c) => {
+                check::positive("time_unit (edge factor)", c)?;
+                check::positive("mean edge length", lengths.mean_edge_length)?;
+                Ok(c * lengths.mean_edge_length * lengths.mean_edge_length)
+            }
+            unit => unit.resolve(Some(lengths.area)),
         }
     }
 }

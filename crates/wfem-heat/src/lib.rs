@@ -18,6 +18,7 @@
 //! * [`approx`] — feature points and the feature-driven approximation f = f_glob + f_loc
 //!   (Sect. 4.2).
 //! * [`scale`] — λ_max and the scale-invariant kernel (Sect. 5).
+//! * [`times`] — [`times::TimeScales`]: which diffusion times mean something on a mesh.
 //! * [`diagonal`] — how diagonals of kernel matrices are computed: selected inversion (the
 //!   default, exact at every t), probing, unit columns.
 //!
@@ -59,6 +60,7 @@ mod operators;
 pub mod rkhs;
 pub mod scale;
 pub mod spectral;
+pub mod times;
 
 pub use distance::{DiffusionDistance, DistanceKind, DistanceParams};
 pub use error::HeatError;

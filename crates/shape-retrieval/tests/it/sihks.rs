@@ -280,3 +280,33 @@ fn snapshot_sihks_area_unit_on_bumpy() {
     }
     insta::assert_snapshot!("sihks_area_unit_bumpy2", out);
 }
+
+/// The time units of the command line and Python (`--time-unit`, `time_unit=`) on a right
+/// isosceles triangle: A = 1/2, edges 1, 1, √2.
+#[test]
+fn time_units_on_a_mesh() {
+    use shape_retrieval::MeshLengths;
+    use wfem_choice::Choice;
+    let mesh =
+        mesh_fem::TriMesh::new(vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();
+    let lengths = MeshLengths::of(&mesh);
+    let mean = (2.0 + 2f64.sqrt()) / 3.0;
+    assert_eq!(lengths.area, 0.5);
+    assert!((lengths.mean_edge_length - mean).abs() < 1e-15);
+    assert_eq!(TimeUnit::Absolute(5.0).on(&lengths).unwrap(), 5.0);
+    assert_eq!(TimeUnit::Area(2.0).on(&lengths).unwrap(), 1.0);
+    assert!((TimeUnit::Edge(3.0).on(&lengths).unwrap() - 3.0 * mean * mean).abs() < 1e-14);
+    assert_eq!(TimeUnit::parse("edge").unwrap().with_factor(0.5), TimeUnit::Edge(0.5));
+    assert_eq!(TimeUnit::Area(4.0).factor(), 4.0);
+    assert_eq!(TimeUnit::default_name(), "absolute");
+    assert_eq!(TimeUnit::names().collect::<Vec<_>>(), ["absolute", "area", "edge"]);
+    assert!(matches!(
+        TimeUnit::Edge(0.0).on(&lengths),
+        Err(RetrievalError::InvalidParameter { .. })
+    ));
+    // A spectrum knows its area but no edge: the SI-HKS refuses the edge unit.
+    assert!(matches!(
+        TimeUnit::Edge(1.0).resolve(Some(1.0)),
+        Err(RetrievalError::EdgeLengthRequired)
+    ));
+}

@@ -17,3 +17,4 @@ mod properties;
 mod rational;
 mod scale;
 mod spectral;
+mod times;
