@@ -36,7 +36,8 @@ enum Command {
     Distance(cli::DistanceArgs),
     /// The demo: K_t e_i at four scales on a generated mesh, written to ./wfem-out/.
     Demo(cli::DemoArgs),
-    /// Heat kernel signature (n × T) of the wFEM or lumped kernel from its k smallest eigenpairs.
+    /// Heat kernel signature h(i, t) (n × T) of the wFEM or a lumped kernel: exact at the given
+    /// or automatic times (selected inversion), or the truncated spectral sum (--method).
     Hks(cli::hks::HksArgs),
     /// Shape retrieval with bags of features: `build` an index, `query` it with a mesh.
     Retrieval(cli::retrieval::RetrievalArgs),

@@ -25,7 +25,7 @@ pub struct DistanceArgs {
     pub time_unit: super::times::TimeUnitArgs,
     /// The vertex i (numbered as in the file) whose distances d_t(i, ·) to every vertex are
     /// computed.
-    #[arg(long)]
+    #[arg(long, value_parser = super::input::vertex_index, allow_negative_numbers = true)]
     pub from: u32,
     /// Which distance.
     #[arg(long, value_parser = choice::<DistanceKind>(), default_value = DistanceKind::default_name())]

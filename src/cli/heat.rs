@@ -117,7 +117,7 @@ pub struct HeatArgs {
     pub time_unit: super::times::TimeUnitArgs,
     /// Diffuse the unit impulse e_i at this vertex (numbered as in the file; the canonical
     /// basis function K_t e_i).
-    #[arg(long, conflicts_with = "field")]
+    #[arg(long, conflicts_with = "field", value_parser = super::input::vertex_index, allow_negative_numbers = true)]
     pub source: Option<u32>,
     /// Diffuse this per-vertex field (.npy or .csv, one value per vertex).
     #[arg(long, value_parser = super::input::field_path)]
@@ -215,7 +215,15 @@ pub(crate) fn prepare_kernel(ops: &FemOperators, params: HeatParams, n: usize) -
         Method::Rational { degree, .. } => format!("symbolic analysis (rational, degree {degree})"),
         _ => "symbolic analysis".to_string(),
     };
-    Ok(progress::run(label, || HeatKernel::new(ops, params))?)
+    progress::run(label, || HeatKernel::new(ops, params)).map_err(|e| match e {
+        wfem_heat::HeatError::TooLargeForDense { n_vertices, limit } => CliError::Usage(format!(
+            "--method {} is limited to {limit} vertices (O(n³) time, 3 dense n × n matrices) and this mesh has \
+             {n_vertices}: use --method {} (exact, sparse)",
+            Method::Dense.name(),
+            Method::fast().name()
+        )),
+        other => CliError::Heat(other),
+    })
 }
 
 /// `wfem heat`: K_t e_i or K_t f for one or several t.

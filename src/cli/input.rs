@@ -69,6 +69,26 @@ pub fn repair_flags(args: &MeshArgs) -> String {
     format!("--repair {}", names.join(","))
 }
 
+/// `n file`/`n files`: a count with its noun in the right number.
+pub fn count_of(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
+/// Parses a vertex index (`--source`, `--from`; clap value parser): a negative number gets a
+/// message saying what the value is (vertices are numbered from 0 as in the file), not
+/// clap's hint to escape it as an argument.
+pub fn vertex_index(text: &str) -> Result<u32, String> {
+    match text.trim().parse::<i64>() {
+        Ok(i) if (0..=i64::from(u32::MAX)).contains(&i) => Ok(i as u32),
+        Ok(i) if i < 0 => Err(format!(
+            "{i} is not a vertex: vertices are numbered 0, 1, 2, … as in the file"
+        )),
+        _ => Err(format!(
+            "{text:?} is not a vertex index (a whole number ≥ 0, as in the file)"
+        )),
+    }
+}
+
 /// Parses a `--field` path (clap value parser): its extension must name a field format that
 /// can be read (`.npy` or `.csv`), so a wrong file is refused before any work.
 pub fn field_path(text: &str) -> Result<PathBuf, String> {
@@ -212,6 +232,12 @@ fn file_vertex_of_row(report: &RepairReport, n: usize) -> Vec<usize> {
 /// Reading, repair and validation errors.
 pub fn read_input(args: &MeshArgs) -> Result<Input, CliError> {
     let opts = args.repair_options()?;
+    if args.mesh.is_dir() {
+        return Err(CliError::Usage(format!(
+            "{} is a directory, not a mesh file: give one .obj, .ply, .off or .stl file",
+            args.mesh.display()
+        )));
+    }
     let name = args
         .mesh
         .file_name()
@@ -270,8 +296,30 @@ fn report_repair(args: &MeshArgs, before: &TriMesh, after: &TriMesh, report: &Re
 /// Those of [`read_input`]; the first fatal problem of [`mesh_fem::validate`].
 pub fn read_usable(args: &MeshArgs) -> Result<Input, CliError> {
     let input = read_input(args)?;
-    progress::run("validating", || mesh_fem::validate(&input.mesh).into_result())?;
+    let report = progress::run("validating", || mesh_fem::validate(&input.mesh).into_result())?;
+    say_warnings(&input.name, &report);
     Ok(input)
+}
+
+/// The warnings of `wfem info` about a usable mesh, once per kind and one line each, with the
+/// `--repair` that applies (non-manifold edges and vertices, components, duplicate faces,
+/// orientation; an open mesh is a note: its natural boundary conditions are a fact, not a
+/// defect).
+fn say_warnings(name: &str, report: &mesh_fem::ValidationReport) {
+    let summary = with_flags(&report.summary());
+    for line in summary.lines().skip(1) {
+        let Some(text) = line.trim().strip_prefix("warning: ") else {
+            continue;
+        };
+        let boundary = report
+            .warnings()
+            .find(|p| matches!(p, mesh_fem::Problem::Boundary { .. }));
+        if boundary.is_some_and(|p| text.starts_with(&with_flags(&p.to_string()))) {
+            progress::note(&format!("{name}: {text}"));
+        } else {
+            progress::warn(&format!("{name}: {text}"));
+        }
+    }
 }
 
 /// Loads and validates a mesh; a mesh with a fatal problem is refused with the error naming it.

@@ -362,8 +362,8 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             index_file(path).save_index(&index)?;
             writeln!(
                 out,
-                "indexed {} files ({} of {} words, {} distance) with {from} into {}",
-                index.entries().len(),
+                "indexed {} ({} of {} words, {} distance) with {from} into {}",
+                super::input::count_of(index.entries().len(), "file", "files"),
                 index.vocabulary().descriptor().descriptor.kind().label(),
                 index.vocabulary().vocabulary().size(),
                 index.bags().distance.name(),

@@ -92,7 +92,7 @@ impl Times {
     /// # Errors
     /// A failure of the eigenvalue λ₂ (computed only for a time near the time at infinity).
     pub fn warn(&self, ops: &Operators, mesh: &TriMesh, doubling: f64) -> Result<(), CliError> {
-        let scales = TimeScales::new(ops, mesh.positions())?;
+        let scales = TimeScales::new(ops, Some(mesh.positions()))?;
         let mut said = [false; 2];
         for &t in &self.absolute {
             if let Some(w) = scales.check(doubling * t)?.map(|w| w.in_unit(doubling)) {

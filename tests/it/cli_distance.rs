@@ -114,7 +114,7 @@ fn meaningless_times_are_warned_and_units_recorded() {
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
-        err.contains("warning: --t: t = 1e-1 is past the time at infinity"),
+        err.contains("warning: --t: t = 0.1 is past the time at infinity"),
         "{err}"
     );
     assert!(err.contains("sensible times for this mesh are about"), "{err}");

@@ -530,6 +530,23 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     assert_eq!(r["vocabulary"], v);
     assert_eq!(r["bags"]["distance"], "l1");
     assert_eq!(r["entries"].as_array().unwrap().len(), 2);
+    // One file is "1 file" (issue #25).
+    let one = dir.path().join("one.json");
+    let o = wfem(&[
+        "retrieval",
+        "build",
+        files[0].as_str(),
+        "--out",
+        one.to_str().unwrap(),
+        "--vocab",
+        vocab.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("indexed 1 file ("),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
     // Descriptor options conflict with --vocab (the vocabulary fixes them).
     let o = wfem(&[
         "retrieval",
@@ -616,7 +633,7 @@ fn time_units_and_warnings_of_heat_and_hks() {
         h.to_str().unwrap(),
     ]);
     assert!(
-        err.contains("--t: t = 1e2 is past the time at infinity") && err.contains("(--time-unit area)"),
+        err.contains("--t: t = 100 is past the time at infinity") && err.contains("(--time-unit area)"),
         "{err}"
     );
     let k = dir.path().join("k.npy");
@@ -631,7 +648,7 @@ fn time_units_and_warnings_of_heat_and_hks() {
         "-o",
         k.to_str().unwrap(),
     ]);
-    assert!(err.contains("--times: t = 1e1 is past the time at infinity"), "{err}");
+    assert!(err.contains("--times: t = 10 is past the time at infinity"), "{err}");
     assert_eq!(err.matches("warning").count(), 1, "{err}");
     let side = json("k.json");
     assert_eq!(side["time_unit"]["given"], serde_json::json!([10.0, 1e-3]));

@@ -6,6 +6,7 @@ mod cli;
 mod cli_approx;
 mod cli_atomic;
 mod cli_distance;
+mod cli_first_hour;
 mod cli_hks;
 mod cli_issue16;
 mod common;

@@ -37,8 +37,8 @@ const MAX_COMPONENTS: usize = 64;
 
 /// The time scales of one kernel (its L and M) on one mesh; see the module docs.
 #[derive(Debug)]
-pub struct TimeScales<'a> {
-    ops: &'a Operators,
+pub struct TimeScales {
+    ops: Operators,
     mean: f64,
     bound: f64,
     first: OnceLock<Option<f64>>,
@@ -117,34 +117,42 @@ impl fmt::Display for TimeWarning {
     }
 }
 
-/// `x` with 3 significant digits and no trailing zeros (`1.75e-5`, `0.1` → `1e-1`).
+/// `x` with 3 significant digits and no trailing zeros: plain from 0.001 to 9990 (`0.1`,
+/// `1.75`, `100`), else in exponent form (`1.75e-5`).
 fn short(x: f64) -> String {
     let text = format!("{x:.2e}");
-    match text.split_once('e') {
-        Some((mantissa, exponent)) if mantissa.contains('.') => {
-            format!("{}e{exponent}", mantissa.trim_end_matches('0').trim_end_matches('.'))
-        }
-        _ => text,
+    let Some((mantissa, exponent)) = text.split_once('e') else {
+        return text;
+    };
+    match (exponent.parse::<i32>(), text.parse::<f64>()) {
+        (Ok(e), Ok(rounded)) if (-3..=3).contains(&e) => format!("{rounded}"),
+        _ => format!("{}e{exponent}", mantissa.trim_end_matches('0').trim_end_matches('.')),
     }
 }
 
-impl<'a> TimeScales<'a> {
-    /// The scales of `ops` on a mesh with these vertex positions (one per row of L).
+impl TimeScales {
+    /// The scales of `ops` (a shared copy is kept) on a mesh with these vertex positions (one
+    /// per row of L). Without positions (operators given directly) there is no bound of λ₂,
+    /// which is then computed for the first time that is not negligible.
     ///
     /// # Errors
     /// [`HeatError::LengthMismatch`] if `positions` does not have one row per vertex.
-    pub fn new(ops: &'a Operators, positions: &[[f64; 3]]) -> Result<Self, HeatError> {
+    pub fn new(ops: &Operators, positions: Option<&[[f64; 3]]>) -> Result<Self, HeatError> {
         let n = ops.n();
-        if positions.len() != n {
-            return Err(HeatError::LengthMismatch {
-                expected: n,
-                found: positions.len(),
-            });
-        }
+        let bound = match positions {
+            Some(p) if p.len() != n => {
+                return Err(HeatError::LengthMismatch {
+                    expected: n,
+                    found: p.len(),
+                })
+            }
+            Some(p) => coordinate_bound(ops, p),
+            None => f64::INFINITY,
+        };
         Ok(Self {
-            ops,
+            ops: ops.clone(),
             mean: ops.mean_rayleigh_quotient(),
-            bound: coordinate_bound(ops, positions),
+            bound,
             first: OnceLock::new(),
         })
     }
@@ -184,7 +192,7 @@ impl<'a> TimeScales<'a> {
             block_size: 4,
             ..EigenParams::default()
         };
-        let basis = Eigenbasis::partial_of(self.ops, c + 1, &params)?;
+        let basis = Eigenbasis::partial_of(&self.ops, c + 1, &params)?;
         let floor = 1e-8 * self.mean;
         Ok(basis.values.iter().copied().find(|&l| l > floor))
     }
@@ -195,15 +203,21 @@ impl<'a> TimeScales<'a> {
     /// As [`Self::first_nonzero`].
     pub fn sensible(&self) -> Result<(f64, f64), HeatError> {
         let first = self.first_nonzero()?.unwrap_or(self.bound);
+        let first = if first.is_finite() { first } else { self.mean };
         Ok((1.0 / self.mean, 4.0 * std::f64::consts::LN_10 / first))
     }
 
     /// The warning for the time `t`, if its result carries no information (see the module
-    /// docs); λ₂ is computed only when `t` is within reach of the time at infinity.
+    /// docs); λ₂ is computed only when `t` is within reach of the time at infinity. `None` for
+    /// a value that is not a time (≤ 0, NaN, ∞), which the kernel refuses.
     ///
     /// # Errors
     /// As [`Self::first_nonzero`].
     pub fn check(&self, t: f64) -> Result<Option<TimeWarning>, HeatError> {
+        if !(t.is_finite() && t > 0.0) {
+            // Not a time: the kernel refuses it (HeatError::InvalidTime).
+            return Ok(None);
+        }
         let settled = (1.0 / SETTLED).ln();
         if t * self.mean <= SETTLED {
             return Ok(Some(TimeWarning::Negligible {

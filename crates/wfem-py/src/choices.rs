@@ -76,6 +76,7 @@ registries! {
     "detector" => shape_retrieval::FeatureDetector,
     "bag_distance" => shape_retrieval::BagDistance,
     "metric" => retrieval_store::Metric,
+    "time_unit" => shape_retrieval::TimeUnit,
 }
 
 /// Registers `choices` and `canonical`.

@@ -10,12 +10,14 @@ use mesh_fem::{assemble, AssemblyParams, TriMesh};
 use numpy::{PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use shape_retrieval::{MeshLengths, TimeUnit};
 use shifted_solve::Backend;
 use std::sync::Arc;
 use wfem_choice::Choice;
 use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
 use wfem_heat::rkhs::{heat_inner_product, inverse_cg, InverseParams};
 use wfem_heat::scale::{largest_eigenvalue, LargestEigenParams};
+use wfem_heat::times::TimeScales;
 use wfem_heat::{HeatError, HeatKernel, HeatParams, Mass, Method, MethodOptions, Operators};
 
 /// The method of a name and its options (`degree`, `backend` for the rational method; `k` for
@@ -78,6 +80,8 @@ type Series<'py> = (Bound<'py, PyArray3<f64>>, Vec<Option<f64>>);
 pub struct PyHeatKernel {
     pub kernel: HeatKernel,
     pub mesh: Option<Arc<TriMesh>>,
+    /// Which times mean something on this kernel (built on first use; issue #25).
+    pub scales: std::sync::OnceLock<TimeScales>,
 }
 
 #[pymethods]
@@ -104,6 +108,7 @@ impl PyHeatKernel {
             Ok(Self {
                 kernel,
                 mesh: Some(Arc::new(mesh)),
+                scales: Default::default(),
             })
         })
     }
@@ -128,6 +133,7 @@ impl PyHeatKernel {
             Ok(Self {
                 kernel: HeatKernel::with_operators(&ops, method)?,
                 mesh: None,
+                scales: Default::default(),
             })
         })
     }
@@ -136,6 +142,83 @@ impl PyHeatKernel {
     #[getter]
     fn n(&self) -> usize {
         self.kernel.n()
+    }
+
+    /// The value on this kernel's mesh of one unit of time (`time_unit=`): 1, the area
+    /// A = 1ᵀM1 or the mean edge length squared (needs the mesh).
+    #[pyo3(signature = (name=None))]
+    fn time_unit_value(&self, py: Python<'_>, name: Option<&str>) -> PyResult<f64> {
+        let unit: TimeUnit = choices::parse(py, "time_unit", name)?;
+        let lengths = match (unit, &self.mesh) {
+            (TimeUnit::Absolute(_), _) => return Ok(1.0),
+            (TimeUnit::Edge(_), Some(mesh)) => MeshLengths::of(mesh),
+            (TimeUnit::Edge(_), None) => {
+                return Err(invalid_param(
+                    py,
+                    "time_unit",
+                    format!(
+                        "{:?} needs the mesh (a kernel of given operators has no edges)",
+                        unit.name()
+                    ),
+                ))
+            }
+            (_, _) => MeshLengths {
+                area: self.kernel.operators().total_mass(),
+                mean_edge_length: 0.0,
+            },
+        };
+        unit.on(&lengths).map_err(|e| invalid_param(py, "time_unit", e))
+    }
+
+    /// The warnings (texts) for the times (in the mesh's units) whose result carries no
+    /// information: of `K_t f`, or of the diffusion distance of `distance_kind` (the diffusion
+    /// distance is made of kernel values at 2t); the texts give the times divided by `unit`
+    /// and name `unit_name`.
+    #[pyo3(signature = (times, unit, unit_name, distance_kind=None))]
+    fn time_warnings(
+        &self,
+        py: Python<'_>,
+        times: Vec<f64>,
+        unit: f64,
+        unit_name: &str,
+        distance_kind: Option<&str>,
+    ) -> PyResult<Vec<String>> {
+        let doubling = match distance_kind {
+            None => 1.0,
+            Some(kind) => match choices::parse::<DistanceKind>(py, "kind", Some(kind))? {
+                DistanceKind::Diffusion => 2.0,
+                _ => 1.0,
+            },
+        };
+        let scales = match self.scales.get() {
+            Some(s) => s,
+            None => {
+                let positions = self.mesh.as_ref().map(|m| m.positions());
+                let built =
+                    TimeScales::new(self.kernel.operators(), positions).map_err(|e| crate::errors::heat(py, &e))?;
+                self.scales.get_or_init(|| built)
+            }
+        };
+        let suffix = if unit_name == TimeUnit::default_name() {
+            String::new()
+        } else {
+            format!(" (time_unit='{unit_name}')")
+        };
+        let mut out: Vec<String> = Vec::new();
+        let mut said = [false; 2];
+        for t in times {
+            let found = py
+                .detach(|| scales.check(doubling * t))
+                .map_err(|e| crate::errors::heat(py, &e))?;
+            if let Some(w) = found.map(|w| w.in_unit(doubling * unit)) {
+                let kind = matches!(w, wfem_heat::times::TimeWarning::PastInfinity { .. }) as usize;
+                if !said[kind] {
+                    said[kind] = true;
+                    out.push(format!("{w}{suffix}"));
+                }
+            }
+        }
+        Ok(out)
     }
 
     /// The method's short name.
@@ -468,6 +551,24 @@ impl PyHeatKernel {
     }
 }
 
+/// The value of one unit of time (`time_unit=`) on the mesh (V, F): 1, A or ℓ̄².
+#[pyfunction]
+#[pyo3(signature = (v, f, name=None))]
+pub fn mesh_time_unit(
+    py: Python<'_>,
+    v: PyReadonlyArray2<'_, f64>,
+    f: PyReadonlyArray2<'_, i64>,
+    name: Option<&str>,
+) -> PyResult<f64> {
+    let unit: TimeUnit = choices::parse(py, "time_unit", name)?;
+    if matches!(unit, TimeUnit::Absolute(_)) {
+        return Ok(1.0);
+    }
+    let mesh = mesh_in(py, &v, &f)?;
+    unit.on(&MeshLengths::of(&mesh))
+        .map_err(|e| invalid_param(py, "time_unit", e))
+}
+
 /// Rust side of `wfem.DiffusionDistance`.
 #[pyclass(name = "DiffusionDistance", module = "wfem._wfem", frozen)]
 pub struct PyDiffusionDistance {
@@ -537,5 +638,6 @@ fn diagonal_method(py: Python<'_>, name: Option<&str>, tol: f64) -> PyResult<wfe
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyHeatKernel>()?;
     m.add_class::<PyDiffusionDistance>()?;
+    m.add_function(wrap_pyfunction!(mesh_time_unit, m)?)?;
     Ok(())
 }

@@ -35,7 +35,7 @@ fn first_nonzero_eigenvalue_and_its_bound_against_the_dense_spectrum() {
     let sphere = generate::irregular_sphere(3, 5.6);
     for mesh in [torus.clone(), sphere.clone(), two_components(&sphere, 2.0)] {
         let ops = context(&mesh);
-        let scales = TimeScales::new(&ops, mesh.positions()).unwrap();
+        let scales = TimeScales::new(&ops, Some(mesh.positions())).unwrap();
         let exact = dense_first_nonzero(&ops);
         let first = scales.first_nonzero().unwrap().unwrap();
         assert!((first - exact).abs() <= 1e-6 * exact, "λ₂ {first} vs dense {exact}");
@@ -54,7 +54,7 @@ fn warnings_say_what_the_kernel_does() {
     let fem = assemble(&mesh, &AssemblyParams::default()).unwrap();
     let kernel = HeatKernel::new(&fem, HeatParams::default()).unwrap();
     let ops = kernel.operators();
-    let scales = TimeScales::new(ops, mesh.positions()).unwrap();
+    let scales = TimeScales::new(ops, Some(mesh.positions())).unwrap();
     let n = mesh.n_vertices();
     let e = unit(n, 5);
     let spread = |g: &[f64]| {
@@ -88,6 +88,14 @@ fn warnings_say_what_the_kernel_does() {
     let g = kernel.apply(&e, tiny).unwrap();
     assert!(max_abs_diff(&g, &e) <= 10.0 * SETTLED);
     assert_eq!(scales.check(1e3 * tiny).unwrap(), None);
+    // Values that are not times are left to the kernel, which refuses them.
+    for bad in [0.0, -1.0, f64::INFINITY, f64::NAN] {
+        assert_eq!(scales.check(bad).unwrap(), None);
+    }
+    // Without positions (operators given directly) the same answers, λ₂ computed directly.
+    let bare = TimeScales::new(ops, None).unwrap();
+    assert_eq!(bare.check(0.1).unwrap(), warning);
+    assert_eq!(bare.check(0.5 * infinity).unwrap(), None);
     let g = kernel.apply(&e, 1e4 * tiny).unwrap();
     assert!(max_abs_diff(&g, &e) > 100.0 * SETTLED);
 }
@@ -101,14 +109,14 @@ fn warnings_in_a_unit_and_their_text() {
     };
     let area = w.in_unit(0.057);
     assert_eq!(area.sensible(), (1e-6 / 0.057, 0.02 / 0.057));
-    insta::assert_snapshot!(area.to_string(), @"t = 1.7543859649122808e0 is past the time at infinity of this mesh (8.77e-1): the heat has spread to its mean to 1e-12, so the result is constant; sensible times for this mesh are about 1.75e-5 to 3.51e-1");
+    insta::assert_snapshot!(area.to_string(), @"t = 1.75 is past the time at infinity of this mesh (0.877): the heat has spread to its mean to 1e-12, so the result is constant; sensible times for this mesh are about 1.75e-5 to 0.351");
 }
 
 #[test]
 fn positions_of_another_mesh_are_refused() {
     let mesh = generate::icosphere(2);
     let ops = context(&mesh);
-    let err = TimeScales::new(&ops, &mesh.positions()[1..]).unwrap_err();
+    let err = TimeScales::new(&ops, Some(&mesh.positions()[1..])).unwrap_err();
     assert!(matches!(err, HeatError::LengthMismatch { .. }), "{err}");
 }
 

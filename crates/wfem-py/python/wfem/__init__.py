@@ -36,6 +36,7 @@ from ._errors import (
     RetrievalError,
     SolverError,
     StoreError,
+    TimeWarning,
     WfemError,
 )
 from ._choices import choices
@@ -129,6 +130,7 @@ __all__ = [
     "IllConditionedError",
     "StoreError",
     "InternalError",
+    "TimeWarning",
     "DENSE_MAX_VERTICES",
     "__version__",
 ]

@@ -99,3 +99,11 @@ class StoreError(WfemError, OSError):
 
 class InternalError(WfemError, RuntimeError):
     """A bug in wfem (a Rust panic caught at the boundary); please report it."""
+
+
+class TimeWarning(UserWarning):
+    """A diffusion time whose result carries no information on this mesh: so small that
+    ``K_t f`` equals f to 1e−12, or past the time at infinity (the heat has spread to its mean,
+    a constant result). The message names the sensible range of times for the mesh, in the
+    ``time_unit`` the times were given in. Silence it with
+    ``warnings.simplefilter("ignore", wfem.TimeWarning)``."""

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
 from . import _choices, _wfem
+from ._errors import TimeWarning
 from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, to_csc
 
 __all__ = ["HeatKernel", "DiffusionDistance", "METHODS", "MASSES"]
@@ -149,7 +151,18 @@ class HeatKernel:
         """``M @ 1`` (n,)."""
         return np.asarray(self._k.vertex_areas())
 
-    def apply(self, f: Any, t: Any) -> np.ndarray:
+    def _times(self, times: list[float], time_unit: str | None, distance: str | None = None) -> list[float]:
+        """The times in the mesh's units (``t = τ·unit``), after a :class:`TimeWarning` for
+        those whose result (K_t f, or the distance of kind ``distance``) carries no information."""
+        unit = float(self._k.time_unit_value(time_unit))
+        absolute = [x * unit for x in times]
+        name = _choices.canonical("time_unit", time_unit) if time_unit is not None else _choices.default("time_unit")
+        kind = None if distance is None else (distance or _choices.default("distance"))
+        for text in self._k.time_warnings(absolute, unit, name, kind):
+            warnings.warn(text, TimeWarning, stacklevel=3)
+        return absolute
+
+    def apply(self, f: Any, t: Any, *, time_unit: str | None = None) -> np.ndarray:
         """``K_t f = exp(−t M⁻¹L) f`` (paper, Eq. (6)).
 
         Args:
@@ -157,6 +170,11 @@ class HeatKernel:
             t: a positive time, or a 1-D array of times (each t is factored once for all
                 columns, at the method's full accuracy; :meth:`apply_times` shares one
                 factorization between the times).
+            time_unit: the unit of t: ``"absolute"`` (default; the mesh's squared length
+                units), ``"area"`` (t = τ·A, the same τ on any scaling of the shape) or
+                ``"edge"`` (t = τ·ℓ̄², ℓ̄ the mean edge length: potpourri3d's convention).
+                A time so small that K_t f = f, or past the time at infinity (a constant
+                result), gives a :class:`TimeWarning` naming the sensible range.
 
         Returns:
             Shape of ``f`` for a scalar t; ``(T,) + f.shape`` for T times (``out[j] = K_{t_j} f``).
@@ -171,6 +189,7 @@ class HeatKernel:
         """
         a = as_float_array(f, "f", (1, 2))
         times, scalar = as_times(t)
+        times = self._times(times, time_unit)
         m = a.reshape(a.shape[0], -1) if a.ndim == 2 else a.reshape(-1, 1)
         out = self._k.apply(m, times)  # (T, n, k)
         out = out.reshape((len(times),) + a.shape)
@@ -281,6 +300,7 @@ class HeatKernel:
         block: int = 64,
         diagonal: str | None = None,
         diagonal_tol: float = 1e-10,
+        time_unit: str | None = None,
     ) -> "DiffusionDistance":
         """Diffusion distances at time t through this kernel (paper, Sect. 3, Eq. (18)).
 
@@ -293,9 +313,11 @@ class HeatKernel:
         (``diagonal="selected-inversion"``, default; exact at every t, about a second at 50K
         vertices; the mass-weighted Gram matrix is probed instead), probing
         (``diagonal="probing"``, relative tail ``diagonal_tol``) or n unit columns
-        (``diagonal="columns"``).
+        (``diagonal="columns"``). ``time_unit`` reads t as in :meth:`apply` (with the same
+        :class:`TimeWarning`; the diffusion distance is made of kernel values at 2t).
         """
-        return DiffusionDistance(self._k.distance(float(t), kind, block, diagonal, diagonal_tol))
+        (t_abs,) = self._times([float(t)], time_unit, kind or "")
+        return DiffusionDistance(self._k.distance(t_abs, kind, block, diagonal, diagonal_tol))
 
     def feature_approximation(
         self,

@@ -171,6 +171,7 @@ def hks(
     return_times: bool = False,
     exact: bool = False,
     kernel: str | None = None,
+    time_unit: str | None = None,
 ) -> Any:
     """The heat kernel signature h(i, t) at every vertex and time, shape (n, T): the same
     computation as ``wfem hks`` (one library routine).
@@ -198,7 +199,9 @@ def hks(
             at the smaller times where it is not; ``"exact"``: the exact diagonal at every time
             (no eigenpairs with explicit ``times``); ``"spectral"``: the truncated sum only
             (pyFM's HKS). ``scaled`` and ``normalization`` keep the spectral sum.
-        return_times: also return the times used.
+        return_times: also return the times used (in the mesh's units).
+        time_unit: the unit of ``times``: ``"absolute"`` (default), ``"area"`` (t = τ·A) or
+            ``"edge"`` (t = τ·ℓ̄², potpourri3d's convention); see :meth:`HeatKernel.apply`.
         exact, kernel: older spellings of ``method="exact"`` and ``mass=`` (DeprecationWarning).
 
     Returns:
@@ -212,6 +215,9 @@ def hks(
     mass = _choices.mass_of(mass, kernel, None)
     v, f = as_mesh(V, F)
     t = None if times is None else [float(x) for x in as_vector(np.atleast_1d(times), "times")]
+    if t is not None and time_unit is not None:
+        unit = float(_wfem.mesh_time_unit(v, f, time_unit))
+        t = [x * unit for x in t]
     values, used, _, _ = _wfem.mesh_hks(
         v, f, t, num_times, k, mass, method, convention, scaled, normalization, None if basis is None else basis._b
     )
