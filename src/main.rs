@@ -68,6 +68,10 @@ fn main() -> ExitCode {
         // A reader that stopped early (`wfem approx … | head`) is not an error: the outputs
         // are written before the report is printed.
         Err(cli::CliError::Stdout(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        Err(e @ cli::CliError::Refused { .. }) => {
+            cli::progress::stderr_line(&format!("wfem: {e}"));
+            ExitCode::from(cli::EXIT_REFUSED)
+        }
         Err(e) => {
             cli::progress::stderr_line(&format!("wfem: error: {e}"));
             ExitCode::FAILURE

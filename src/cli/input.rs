@@ -301,6 +301,17 @@ pub fn read_usable(args: &MeshArgs) -> Result<Input, CliError> {
     Ok(input)
 }
 
+/// [`load_usable`] without the mesh's warnings (the shapes of a collection: one line per
+/// open scan would bury the report).
+///
+/// # Errors
+/// Those of [`read_input`]; the first fatal problem of [`mesh_fem::validate`].
+pub fn load_usable_quietly(args: &MeshArgs) -> Result<TriMesh, CliError> {
+    let input = read_input(args)?;
+    mesh_fem::validate(&input.mesh).into_result()?;
+    Ok(input.mesh)
+}
+
 /// The warnings of `wfem info` about a usable mesh, once per kind and one line each, with the
 /// `--repair` that applies (non-manifold edges and vertices, components, duplicate faces,
 /// orientation; an open mesh is a note: its natural boundary conditions are a fact, not a

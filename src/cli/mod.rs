@@ -99,10 +99,28 @@ pub enum CliError {
         /// max|g − g_exact| / max|g_exact|.
         error: f64,
     },
+    /// A collection was used without some of its files (each reported on standard error):
+    /// exit status [`EXIT_REFUSED`].
+    #[error(
+        "{refused} of {total} files were refused (listed above); {done} from the other {} — pass --strict to refuse the whole collection instead",
+        total - refused
+    )]
+    Refused {
+        /// Files refused.
+        refused: usize,
+        /// Files given.
+        total: usize,
+        /// What was done with the others ("the index was built").
+        done: String,
+    },
     /// Writing to the terminal failed.
     #[error("cannot write to standard output: {0}")]
     Stdout(#[from] std::io::Error),
 }
+
+/// The exit status of a collection command that used only some of its files
+/// ([`CliError::Refused`]): the outputs are written, but not from every file given.
+pub const EXIT_REFUSED: u8 = 3;
 
 /// `--mass`: which heat kernel, named by its mass matrix M (mesh_fem's [`Mass`] registry).
 #[derive(Args, Clone, Debug)]

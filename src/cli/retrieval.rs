@@ -57,6 +57,9 @@ pub enum RetrievalAction {
         #[command(flatten)]
         #[allow(missing_docs)]
         training: TrainingArgs,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        strict: StrictArg,
     },
     /// Index meshes: describe them, train a vocabulary on them (or reuse `--vocab`), store every bag.
     ///
@@ -85,6 +88,9 @@ pub enum RetrievalAction {
         #[command(flatten)]
         #[allow(missing_docs)]
         bags: BagArgs,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        strict: StrictArg,
     },
     /// Add meshes to a SQLite index (their bags use the stored vocabulary; nothing is rebuilt).
     Add {
@@ -93,6 +99,9 @@ pub enum RetrievalAction {
         /// Mesh files to add (names must be new to the index).
         #[arg(required = true, num_args = 1..)]
         files: Vec<PathBuf>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        strict: StrictArg,
     },
     /// Rank the indexed meshes by distance to a query mesh.
     Query {
@@ -105,6 +114,107 @@ pub enum RetrievalAction {
         #[arg(long, default_value_t = 5)]
         top: usize,
     },
+}
+
+/// `--strict`: all-or-nothing over a collection.
+#[derive(Args, Clone, Copy, Debug, Default)]
+pub struct StrictArg {
+    /// Refuse the whole collection when one file cannot be read or described. Without it,
+    /// every usable file is used, each refused one is reported (file and reason) at the end,
+    /// and the exit status is 3.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+/// Files of a collection that could not be used, with why.
+#[derive(Debug, Default)]
+struct Refused {
+    files: Vec<(String, String)>,
+    strict: bool,
+}
+
+impl Refused {
+    fn new(strict: StrictArg) -> Self {
+        Self {
+            files: Vec::new(),
+            strict: strict.strict,
+        }
+    }
+
+    /// Keeps the value, or (not strict) records the file as refused; strict: the error.
+    fn keep<T>(&mut self, name: &str, result: Result<T, CliError>) -> Result<Option<T>, CliError> {
+        match result {
+            Ok(value) => Ok(Some(value)),
+            Err(e) if !self.strict => {
+                self.files.push((name.to_string(), e.to_string()));
+                Ok(None)
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Nothing usable left: the error names every refused file.
+    fn check_some(&self, left: usize, total: usize) -> Result<(), CliError> {
+        if left > 0 {
+            return Ok(());
+        }
+        let reasons: Vec<String> = self.files.iter().map(|(f, why)| format!("{f}: {why}")).collect();
+        Err(CliError::Usage(format!(
+            "none of the {total} files could be used: {}",
+            reasons.join("; ")
+        )))
+    }
+
+    /// After the outputs are written: each refused file on standard error, then
+    /// [`CliError::Refused`] (exit status 3) if there was one.
+    fn report(&self, total: usize, done: &str) -> Result<(), CliError> {
+        if self.files.is_empty() {
+            return Ok(());
+        }
+        for (file, why) in &self.files {
+            super::progress::warn(&format!("refused {file}: {why}"));
+        }
+        Err(CliError::Refused {
+            refused: self.files.len(),
+            total,
+            done: done.to_string(),
+        })
+    }
+}
+
+/// Describes every mesh (in parallel, a bar per shape); a shape that cannot be described is
+/// refused (or, strict, the error).
+fn describe_all(
+    meshes: &[(String, mesh_fem::TriMesh)],
+    descriptor: &shape_retrieval::DescriptorSettings,
+    bags: &shape_retrieval::BagSettings,
+    refused: &mut Refused,
+) -> Result<Vec<ShapeFeatures>, CliError> {
+    use rayon::prelude::*;
+    descriptor.validate()?;
+    bags.validate(descriptor.eigenpairs)?;
+    let bar = super::progress::bar(meshes.len(), "describing shapes");
+    let results: Vec<Result<ShapeFeatures, RetrievalError>> = meshes
+        .par_iter()
+        .map(|(name, mesh)| {
+            let features = ShapeFeatures::compute(name, mesh, descriptor, bags);
+            bar.inc(name);
+            features
+        })
+        .collect();
+    bar.done();
+    let mut kept = Vec::with_capacity(meshes.len());
+    for ((name, _), result) in meshes.iter().zip(results) {
+        let result = result.map_err(|e| {
+            CliError::from(RetrievalError::Shape {
+                name: name.clone(),
+                source: Box::new(e),
+            })
+        });
+        kept.extend(refused.keep(name, result)?);
+    }
+    refused.check_some(kept.len(), meshes.len())?;
+    Ok(kept)
 }
 
 /// Descriptor options (recorded in the vocabulary).
@@ -285,20 +395,26 @@ impl BagArgs {
 
 /// Loads and validates every file (in order, with a progress bar), refusing an output path
 /// among them.
-fn load_all(files: &[PathBuf], out: &std::path::Path) -> Result<Vec<(String, mesh_fem::TriMesh)>, CliError> {
+fn load_all(
+    files: &[PathBuf],
+    out: &std::path::Path,
+    refused: &mut Refused,
+) -> Result<Vec<(String, mesh_fem::TriMesh)>, CliError> {
     for f in files {
         check_output(f, out)?;
     }
     let bar = super::progress::bar(files.len(), "reading shapes");
-    let meshes = files
-        .iter()
-        .map(|f| {
-            let mesh = load_usable(&MeshArgs::new(f.clone()));
-            bar.inc(&f.display().to_string());
-            Ok((f.display().to_string(), mesh?))
-        })
-        .collect::<Result<Vec<_>, CliError>>()?;
+    let mut meshes = Vec::with_capacity(files.len());
+    for f in files {
+        let name = f.display().to_string();
+        let mesh = super::input::load_usable_quietly(&MeshArgs::new(f.clone()));
+        bar.inc(&name);
+        if let Some(mesh) = refused.keep(&name, mesh)? {
+            meshes.push((name, mesh));
+        }
+    }
     bar.done();
+    refused.check_some(meshes.len(), files.len())?;
     Ok(meshes)
 }
 
@@ -310,24 +426,27 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             out: path,
             descriptor,
             training,
+            strict,
         } => {
             let mut settings = RetrievalSettings::default();
             super::limits::retrieval_sizes(descriptor.eigs, training.words)?;
             descriptor.apply(&mut settings)?;
             training.apply(&mut settings);
-            let meshes = load_all(files, path)?;
-            let features = ShapeFeatures::compute_many(&meshes, &settings.descriptor, &settings.bags)?;
+            let mut refused = Refused::new(*strict);
+            let meshes = load_all(files, path, &mut refused)?;
+            let features = describe_all(&meshes, &settings.descriptor, &settings.bags, &mut refused)?;
             let vocabulary = VocabularyModel::train(&settings.descriptor, &settings.training, &features)?;
             JsonFile::new(path).save_vocabulary(&vocabulary)?;
             writeln!(
                 out,
-                "trained {} words of {} on {} shapes ({} descriptors) into {}",
+                "trained {} words of {} on {} ({} descriptors) into {}",
                 vocabulary.vocabulary().size(),
                 settings.descriptor.descriptor.kind().label(),
-                meshes.len(),
+                super::input::count_of(features.len(), "shape", "shapes"),
                 vocabulary.info().descriptors,
                 path.display()
             )?;
+            refused.report(files.len(), "the vocabulary was trained")?;
         }
         RetrievalAction::Build {
             files,
@@ -336,6 +455,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             descriptor,
             training,
             bags,
+            strict,
         } => {
             let mut settings = RetrievalSettings::default();
             bags.apply(&mut settings)?;
@@ -357,8 +477,21 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 Some(v) => format!("the vocabulary of {}", v.display()),
                 None => "a vocabulary trained on these shapes (optimistic if they are also the test set)".into(),
             };
-            let meshes = load_all(files, path)?;
-            let index = RetrievalIndex::build(&meshes, &settings, vocabulary)?;
+            let mut refused = Refused::new(*strict);
+            let meshes = load_all(files, path, &mut refused)?;
+            // RetrievalIndex::build, shape by shape: a bar per shape, refused shapes left out.
+            let descriptor = vocabulary.as_ref().map_or(&settings.descriptor, |v| v.descriptor());
+            let features = describe_all(&meshes, descriptor, &settings.bags, &mut refused)?;
+            let vocabulary = match vocabulary {
+                Some(v) => v,
+                None => super::progress::run("training the vocabulary", || {
+                    VocabularyModel::train(&settings.descriptor, &settings.training, &features)
+                })?,
+            };
+            let mut index = RetrievalIndex::new(vocabulary, settings.bags.clone())?;
+            for f in &features {
+                index.insert(f)?;
+            }
             index_file(path).save_index(&index)?;
             writeln!(
                 out,
@@ -369,8 +502,13 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 index.bags().distance.name(),
                 path.display()
             )?;
+            refused.report(files.len(), "the index was built")?;
         }
-        RetrievalAction::Add { index: path, files } => {
+        RetrievalAction::Add {
+            index: path,
+            files,
+            strict,
+        } => {
             if !is_sqlite(path)? {
                 return Err(CliError::Usage(format!(
                     "{} is a JSON index, which is written whole: add needs a SQLite index (build with --out INDEX.sqlite)",
@@ -380,13 +518,25 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             let store = SqliteIndex::new(path);
             let (settings, _) = store.open()?;
             stored_sizes(&settings)?;
-            let meshes = load_all(files, path)?;
-            let entries = meshes
-                .iter()
-                .map(|(name, mesh)| settings.describe(name, mesh))
-                .collect::<Result<Vec<_>, RetrievalError>>()?;
+            let mut refused = Refused::new(*strict);
+            let meshes = load_all(files, path, &mut refused)?;
+            let bar = super::progress::bar(meshes.len(), "describing shapes");
+            let mut entries = Vec::with_capacity(meshes.len());
+            for (name, mesh) in &meshes {
+                let entry = settings.describe(name, mesh).map_err(CliError::from);
+                bar.inc(name);
+                entries.extend(refused.keep(name, entry)?);
+            }
+            bar.done();
+            refused.check_some(entries.len(), files.len())?;
             store.append(&entries)?;
-            writeln!(out, "added {} files to {}", entries.len(), path.display())?;
+            writeln!(
+                out,
+                "added {} to {}",
+                super::input::count_of(entries.len(), "file", "files"),
+                path.display()
+            )?;
+            refused.report(files.len(), "the others were added")?;
         }
         RetrievalAction::Query {
             index: path,
@@ -398,7 +548,9 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 let (settings, rows) = store.open()?;
                 stored_sizes(&settings)?;
                 let mesh = load_usable(input)?;
-                let query = settings.describe(&input.mesh.display().to_string(), &mesh)?;
+                let query = super::progress::run("describing the query", || {
+                    settings.describe(&input.mesh.display().to_string(), &mesh)
+                })?;
                 store
                     .search(&settings, &rows, &query.signature, *top)?
                     .into_iter()
@@ -408,7 +560,9 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 let index = JsonFile::new(path).load_index()?;
                 stored_sizes(&index)?;
                 let mesh = load_usable(input)?;
-                let query = index.describe(&input.mesh.display().to_string(), &mesh)?;
+                let query = super::progress::run("describing the query", || {
+                    index.describe(&input.mesh.display().to_string(), &mesh)
+                })?;
                 index
                     .rank(&query.signature)?
                     .iter()

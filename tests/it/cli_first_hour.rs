@@ -125,3 +125,123 @@ fn smaller_messages_say_what_is_wrong() {
     let help = String::from_utf8_lossy(&o.stdout);
     assert!(!help.contains("from its k smallest eigenpairs"), "{help}");
 }
+
+/// Issue #25: a collection with broken files still indexes; each refused file is named with
+/// its reason at the end and the exit status is 3; `--strict` keeps all-or-nothing.
+#[test]
+fn collections_tolerate_bad_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = [
+        write(dir.path(), "sphere.off", &mesh_fem::generate::icosphere(2)),
+        write(dir.path(), "torus.off", &mesh_fem::generate::torus(1.0, 0.4, 20, 10)),
+    ];
+    // A zero-area face (three collinear vertices), and a file that is not a mesh.
+    let broken = dir.path().join("broken.off");
+    std::fs::write(&broken, "OFF\n4 2 0\n0 0 0\n1 0 0\n2 0 0\n0 1 0\n3 0 1 2\n3 0 1 3\n").unwrap();
+    let garbage = dir.path().join("garbage.off");
+    std::fs::write(&garbage, "this is not a mesh\n").unwrap();
+    let bad = [
+        broken.to_str().unwrap().to_string(),
+        garbage.to_str().unwrap().to_string(),
+    ];
+    let index = dir.path().join("index.sqlite");
+    let mut args = vec![
+        "retrieval",
+        "build",
+        good[0].as_str(),
+        bad[0].as_str(),
+        good[1].as_str(),
+        bad[1].as_str(),
+    ];
+    args.extend(["--out", index.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+    let o = wfem(&args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("indexed 2 files"), "{err}");
+    assert!(
+        err.contains(&format!("refused {}: ", bad[0])) && err.contains("zero area"),
+        "{err}"
+    );
+    assert!(err.contains(&format!("refused {}: ", bad[1])), "{err}");
+    assert!(
+        err.contains("2 of 4 files were refused (listed above); the index was built from the other 2"),
+        "{err}"
+    );
+    assert!(index.exists());
+    // `add` with one good and one broken file: the good one is added.
+    let more = write(dir.path(), "bumpy.off", &mesh_fem::generate::bumpy(2));
+    let o = wfem(&[
+        "retrieval",
+        "add",
+        index.to_str().unwrap(),
+        bad[0].as_str(),
+        more.as_str(),
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("added 1 file to"),
+        "{}",
+        stderr(&o)
+    );
+    let o = wfem(&[
+        "retrieval",
+        "query",
+        index.to_str().unwrap(),
+        more.as_str(),
+        "--top",
+        "1",
+    ]);
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("bumpy.off"),
+        "{}",
+        stderr(&o)
+    );
+    // `--strict`: all or nothing, exit status 1, no output.
+    let strict = dir.path().join("strict.sqlite");
+    let o = wfem(&[
+        "retrieval",
+        "build",
+        good[0].as_str(),
+        bad[0].as_str(),
+        "--out",
+        strict.to_str().unwrap(),
+        "--strict",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!strict.exists());
+    // `vocab` too; and nothing usable at all is an error.
+    let vocab = dir.path().join("v.json");
+    let o = wfem(&[
+        "retrieval",
+        "vocab",
+        good[0].as_str(),
+        good[1].as_str(),
+        bad[1].as_str(),
+        "--out",
+        vocab.to_str().unwrap(),
+        "--eigs",
+        "30",
+        "--words",
+        "8",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("on 2 shapes"),
+        "{}",
+        stderr(&o)
+    );
+    let o = wfem(&[
+        "retrieval",
+        "vocab",
+        bad[0].as_str(),
+        bad[1].as_str(),
+        "--out",
+        vocab.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("none of the 2 files could be used"),
+        "{}",
+        stderr(&o)
+    );
+}
