@@ -153,9 +153,13 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let bar = progress::bar(DEMO_TIMES.len(), "rendering figures");
     for (t, (_, values)) in DEMO_TIMES.iter().zip(fields.iter().step_by(2)) {
         let path = args.out.join(format!("basis_t{}.png", short_label(*t)));
+        let impulse: Vec<f64> = (0..values.len())
+            .map(|i| f64::from(u8::from(i == anchor as usize)))
+            .collect();
         let title = format!(
-            "demo: wFEM K_t e_{anchor}, t = {t} (rational, {} vertices)",
-            mesh.n_vertices()
+            "demo: wFEM K_t e_{anchor}, t = {t} (rational, {} vertices){}",
+            mesh.n_vertices(),
+            super::heat::negative_note(&impulse, values)
         );
         let params = figure_params(&title, values, &[anchor as u32], views.clone());
         let png = render_png(&mesh, values, &params)?;

@@ -310,11 +310,12 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
             name: format!("t={label}"),
             suffix: suffix.clone(),
             title: format!(
-                "{}: {what}, t = {label}{} ({} mass, {})",
+                "{}: {what}, t = {label}{} ({} mass, {}){}",
                 input.name,
                 times.suffix(),
                 mass.name(),
-                method.name()
+                method.name(),
+                negative_note(&f, &g)
             ),
             t: Some(t),
             values: g,
@@ -352,6 +353,19 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
     Ok(())
 }
 
+/// The one-line note of a figure whose values dip below 0 for a non-negative input (beyond
+/// round-off: 1e−6 of the largest value): K_t is not positivity-preserving (the consistent
+/// mass B has positive off-diagonal entries, so exp(−tB⁻¹L) can have negative ones).
+pub(crate) fn negative_note(f: &[f64], g: &[f64]) -> String {
+    let max = g.iter().fold(0.0f64, |m, &x| m.max(x.abs()));
+    let min = g.iter().fold(0.0f64, |m, &x| m.min(x));
+    if f.iter().all(|&x| x >= 0.0) && min < -1e-6 * max {
+        format!("; min {min:.1e} < 0: this kernel is not positivity-preserving")
+    } else {
+        String::new()
+    }
+}
+
 /// Prints the estimated error of an approximate method and refuses it above
 /// [`INACCURATE_ABOVE`] unless `--allow-inaccurate`.
 fn check_accuracy(args: &HeatArgs, method: &Method, t: f64, label: &str, error: f64) -> Result<(), CliError> {
@@ -385,5 +399,21 @@ pub(crate) fn method_meta(method: &Method) -> serde_json::Value {
         }),
         Method::Spectral { k, .. } => json!({ "name": method.name(), "eigenpairs": k }),
         m => json!({ "name": m.name() }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::negative_note;
+
+    #[test]
+    fn negative_values_of_a_non_negative_input_get_a_note() {
+        assert_eq!(
+            negative_note(&[1.0, 0.0], &[0.5, -0.01]),
+            "; min -1.0e-2 < 0: this kernel is not positivity-preserving"
+        );
+        // Round-off below zero, or an input that is itself negative: no note.
+        assert_eq!(negative_note(&[1.0, 0.0], &[0.5, -1e-9]), "");
+        assert_eq!(negative_note(&[1.0, -1.0], &[0.5, -0.4]), "");
     }
 }

@@ -316,6 +316,46 @@ pub fn figure_params(title: &str, values: &[f64], highlight: &[u32], views: Vec<
     }
 }
 
+/// A view facing vertex `v` from outside: along its area-weighted normal, turned to point
+/// away from the centroid (orientation-independent), with the frame's up as screen-up where
+/// it can be. `None` for a vertex without faces.
+fn source_view(mesh: &TriMesh, v: u32, frame: &Frame) -> Option<View> {
+    use mesh_fem::vec3::{cross, dot, norm, sub};
+    let positions = mesh.positions();
+    let p = *positions.get(v as usize)?;
+    let mut normal = [0.0; 3];
+    for f in mesh.faces().iter().filter(|f| f.contains(&v)) {
+        let [a, b, c] = f.map(|i| positions[i as usize]);
+        let n = cross(sub(b, a), sub(c, a));
+        normal = [normal[0] + n[0], normal[1] + n[1], normal[2] + n[2]];
+    }
+    let n = positions.len() as f64;
+    let centroid = positions
+        .iter()
+        .fold([0.0; 3], |s, q| [s[0] + q[0] / n, s[1] + q[1] / n, s[2] + q[2] / n]);
+    let out = sub(p, centroid);
+    let mut d = if norm(normal) > 0.0 { normal } else { out };
+    if dot(d, out) < 0.0 {
+        d = d.map(|x| -x);
+    }
+    let length = norm(d);
+    if !(length > 0.0 && length.is_finite()) {
+        return None;
+    }
+    let d = d.map(|x| x / length);
+    // Screen-up: the frame's up without its part along d (the front where they are parallel).
+    let pick = if norm(cross(frame.up, d)) > 0.1 {
+        frame.up
+    } else {
+        frame.front
+    };
+    let k = dot(pick, d);
+    Some(View::new(
+        d,
+        [pick[0] - k * d[0], pick[1] - k * d[1], pick[2] - k * d[2]],
+    ))
+}
+
 /// Vertex colors of a field through Viridis over its range.
 pub fn colors_of(values: &[f64]) -> Vec<[u8; 3]> {
     let (lo, hi) = values
@@ -385,14 +425,27 @@ pub fn write_fields(
     match output.format {
         OutputFormat::Png => {
             let frame = how.render.frame(mesh);
-            if how.render.up == Up::Auto {
-                progress::note(&format!(
-                    "figures: up is {}, front {} (--up auto, from the extents of the mesh; --up x|y|z|-x|-y|-z overrides)",
-                    wfem_render::direction_label(frame.up),
-                    wfem_render::direction_label(frame.front)
-                ));
+            let mut views = View::standard_in(&frame);
+            // The last (oblique) view looks at the highlighted vertex, so it is seen at least once.
+            let source = how.highlight.first().and_then(|&v| source_view(mesh, v, &frame));
+            if let Some(view) = source {
+                views[3] = view;
             }
-            let views = View::standard_in(&frame);
+            let last = match (source, how.highlight.first()) {
+                (Some(_), Some(v)) => format!("facing vertex {v} (red dot)"),
+                _ => "oblique".to_string(),
+            };
+            progress::note(&format!(
+                "figures: up is {}; views from {} (the broadest side), {}, above, and {last}{}",
+                wfem_render::direction_label(frame.up),
+                wfem_render::direction_label(frame.front),
+                wfem_render::direction_label(frame.right),
+                if how.render.up == Up::Auto {
+                    " (--up auto, from the extents of the mesh; --up x|y|z|-x|-y|-z overrides)"
+                } else {
+                    ""
+                }
+            ));
             let bar = progress::bar(columns.len(), "rendering figures");
             for (column, target) in columns.iter().zip(&targets) {
                 bar.set_detail(&column.suffix);

@@ -69,12 +69,12 @@ impl TimeUnitArgs {
 }
 
 impl Times {
-    /// The unit's suffix in titles: `""`, `"·A"` or `"·ℓ̄²"`.
+    /// The unit's suffix in (ASCII) figure titles: `""`, `"*A"` or `"*edge^2"`.
     pub fn suffix(&self) -> &'static str {
         match self.unit {
             TimeUnit::Absolute(_) => "",
-            TimeUnit::Area(_) => "·A",
-            TimeUnit::Edge(_) => "·ℓ̄²",
+            TimeUnit::Area(_) => "*A",
+            TimeUnit::Edge(_) => "*edge^2",
         }
     }
 
