@@ -7,3 +7,4 @@ pub mod bench;
 pub mod lab;
 pub mod peers;
 pub mod test_all;
+pub mod wheel;

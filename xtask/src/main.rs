@@ -110,6 +110,9 @@ enum Cmd {
         #[arg(long)]
         peers_only: bool,
     },
+    /// The `wfem` Python wheel (abi3: one wheel for CPython >= 3.10; maturin, release profile)
+    /// into target/wheels: `pip install target/wheels/wfem-*.whl`.
+    Wheel,
     /// The whole test suite, Rust and Python (`cargo test-all`, README's test command):
     /// `cargo test --workspace --locked`, then the `wfem` Python package built into a venv
     /// under the target directory and its pytest suite.
@@ -280,6 +283,15 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 println!("wrote {}", peers::write(&report, &out)?.display());
             }
             println!("benchmark report finished in {:.0} s", start.elapsed().as_secs_f64());
+        }
+        Cmd::Wheel => {
+            let wheel = xtask::wheel::build()?;
+            println!("{}", wheel.display());
+            println!(
+                "install: pip install '{}' (extras: '{}[batch]')",
+                wheel.display(),
+                wheel.display()
+            );
         }
         Cmd::TestAll {
             python_only,

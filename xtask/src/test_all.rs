@@ -28,7 +28,7 @@ pub struct TestAllOptions {
 
 /// An error of a step, with what to do about it.
 #[derive(Debug)]
-pub struct StepError(String);
+pub struct StepError(pub String);
 
 impl std::fmt::Display for StepError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

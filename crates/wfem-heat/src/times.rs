@@ -132,8 +132,9 @@ fn short(x: f64) -> String {
 
 impl TimeScales {
     /// The scales of `ops` (a shared copy is kept) on a mesh with these vertex positions (one
-    /// per row of L). Without positions (operators given directly) there is no bound of λ₂,
-    /// which is then computed for the first time that is not negligible.
+    /// per row of L). Without positions (operators given directly) there is no bound of λ₂:
+    /// [`Self::check`] then warns about negligible times only (λ₂ would cost a factorization
+    /// on every such kernel), and [`Self::first_nonzero`] still computes it on demand.
     ///
     /// # Errors
     /// [`HeatError::LengthMismatch`] if `positions` does not have one row per vertex.
@@ -225,7 +226,7 @@ impl TimeScales {
                 sensible: self.sensible()?,
             }));
         }
-        if t * self.bound < settled {
+        if t * self.bound < settled || !self.bound.is_finite() {
             return Ok(None);
         }
         match self.first_nonzero()? {

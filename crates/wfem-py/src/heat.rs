@@ -81,7 +81,7 @@ pub struct PyHeatKernel {
     pub kernel: HeatKernel,
     pub mesh: Option<Arc<TriMesh>>,
     /// Which times mean something on this kernel (built on first use; issue #25).
-    pub scales: std::sync::OnceLock<TimeScales>,
+    pub scales: std::sync::OnceLock<Arc<TimeScales>>,
 }
 
 #[pymethods]
@@ -196,7 +196,7 @@ impl PyHeatKernel {
                 let positions = self.mesh.as_ref().map(|m| m.positions());
                 let built =
                     TimeScales::new(self.kernel.operators(), positions).map_err(|e| crate::errors::heat(py, &e))?;
-                self.scales.get_or_init(|| built)
+                self.scales.get_or_init(|| Arc::new(built))
             }
         };
         let suffix = if unit_name == TimeUnit::default_name() {
@@ -207,9 +207,9 @@ impl PyHeatKernel {
         let mut out: Vec<String> = Vec::new();
         let mut said = [false; 2];
         for t in times {
-            let found = py
-                .detach(|| scales.check(doubling * t))
-                .map_err(|e| crate::errors::heat(py, &e))?;
+            // λ₂ (near the time at infinity) is a sparse eigensolve: interruptible like any call.
+            let scales_t = scales.clone();
+            let found = run(py, move |_| Ok(scales_t.check(doubling * t)?))?;
             if let Some(w) = found.map(|w| w.in_unit(doubling * unit)) {
                 let kind = matches!(w, wfem_heat::times::TimeWarning::PastInfinity { .. }) as usize;
                 if !said[kind] {

@@ -92,10 +92,11 @@ fn warnings_say_what_the_kernel_does() {
     for bad in [0.0, -1.0, f64::INFINITY, f64::NAN] {
         assert_eq!(scales.check(bad).unwrap(), None);
     }
-    // Without positions (operators given directly) the same answers, λ₂ computed directly.
+    // Without positions (operators given directly): negligible times only, the same λ₂.
     let bare = TimeScales::new(ops, None).unwrap();
-    assert_eq!(bare.check(0.1).unwrap(), warning);
-    assert_eq!(bare.check(0.5 * infinity).unwrap(), None);
+    assert_eq!(bare.check(0.1).unwrap(), None);
+    assert!(matches!(bare.check(tiny).unwrap(), Some(TimeWarning::Negligible { .. })));
+    assert_eq!(bare.first_nonzero().unwrap(), scales.first_nonzero().unwrap());
     let g = kernel.apply(&e, 1e4 * tiny).unwrap();
     assert!(max_abs_diff(&g, &e) > 100.0 * SETTLED);
 }

@@ -16,11 +16,11 @@ retrieval".
 Quick start::
 
     import wfem
-    V, F = wfem.read_mesh("cat.off")
+    V, F = wfem.generate.bumpy(4)             # or wfem.read_mesh("/path/to/cat.off")
     L, B, D = wfem.operators(V, F)            # L = −igl.cotmatrix
     K = wfem.HeatKernel(V, F)                 # wFEM kernel, exact fast method
-    smooth = K.apply(V[:, 2], 1e-3 * B.sum()) # K_t f
-    h = wfem.hks(V, F, times=[1.0, 10.0])     # (n, 2)
+    smooth = K.apply(V[:, 2], 1e-3, time_unit="area")  # K_t f at t = 1e-3·area
+    h = wfem.hks(V, F, times=[1e-3, 1e-2], time_unit="area")  # (n, 2)
 """
 
 from __future__ import annotations

@@ -133,8 +133,24 @@ def _bag_task(path: str, options: dict[str, Any], vocabulary: dict[str, Any]) ->
         return _failure(path, e)
 
 
+def _require(module: str) -> Any:
+    """An optional dependency of wfem.batch, or an error that names it and the extra that
+    installs it (``pip install 'wfem[batch]'``)."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ModuleNotFoundError as e:
+        top = module.split(".")[0]
+        raise ModuleNotFoundError(
+            f"wfem.batch needs {top}, an optional dependency of wfem: pip install 'wfem[batch]' "
+            f"(or pip install {top})",
+            name=e.name,
+        ) from e
+
+
 def _schema(kind: str) -> Any:
-    import pyarrow as pa
+    pa = _require("pyarrow")
 
     fields = [
         ("path", pa.string()),
@@ -154,14 +170,14 @@ def _schema(kind: str) -> Any:
 
 
 def _table(rows: Sequence[dict[str, Any]], kind: str) -> Any:
-    import pyarrow as pa
+    pa = _require("pyarrow")
 
     schema = _schema(kind)
     return pa.Table.from_pylist([{name: row.get(name) for name in schema.names} for row in rows], schema=schema)
 
 
 def _write_atomic(table: Any, path: str) -> None:
-    import pyarrow.parquet as pq
+    pq = _require("pyarrow.parquet")
 
     tmp = os.path.join(os.path.dirname(path), f".{os.path.basename(path)}.{os.getpid()}.tmp")
     try:
@@ -183,7 +199,7 @@ def _run(
     executor: cf.Executor | None,
     shard_size: int,
 ) -> Any:
-    import pyarrow as pa
+    pa = _require("pyarrow")
 
     if shard_size < 1:
         from ._errors import InvalidInputError
@@ -276,8 +292,8 @@ def bags(
 def read(out_dir: str | os.PathLike[str]) -> Any:
     """The table written by :func:`descriptors` or :func:`bags` into ``out_dir`` (refuses an
     interrupted run: no ``manifest.json``)."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
+    pa = _require("pyarrow")
+    pq = _require("pyarrow.parquet")
 
     out = os.fspath(out_dir)
     manifest = os.path.join(out, "manifest.json")
