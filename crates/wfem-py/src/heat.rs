@@ -207,9 +207,9 @@ impl PyHeatKernel {
         let mut out: Vec<String> = Vec::new();
         let mut said = [false; 2];
         for t in times {
-            // λ₂ (near the time at infinity) is a sparse eigensolve: interruptible like any call.
-            let scales_t = scales.clone();
-            let found = run(py, move |_| Ok(scales_t.check(doubling * t)?))?;
+            let found = py
+                .detach(|| scales.check(doubling * t))
+                .map_err(|e| crate::errors::heat(py, &e))?;
             if let Some(w) = found.map(|w| w.in_unit(doubling * unit)) {
                 let kind = matches!(w, wfem_heat::times::TimeWarning::PastInfinity { .. }) as usize;
                 if !said[kind] {
