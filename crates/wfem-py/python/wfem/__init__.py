@@ -38,7 +38,15 @@ from ._errors import (
     StoreError,
     WfemError,
 )
-from ._heat import KERNELS, METHODS, DiffusionDistance, HeatKernel
+from ._heat import (
+    APPROX_COEFFICIENTS,
+    APPROX_SAMPLINGS,
+    KERNELS,
+    METHODS,
+    ApproximationWarning,
+    DiffusionDistance,
+    HeatKernel,
+)
 from ._mesh import (
     RepairReport,
     ValidationReport,
@@ -91,6 +99,9 @@ __all__ = [
     "DiffusionDistance",
     "METHODS",
     "KERNELS",
+    "APPROX_COEFFICIENTS",
+    "APPROX_SAMPLINGS",
+    "ApproximationWarning",
     # spectrum and signatures
     "Eigenbasis",
     "eigenbasis",

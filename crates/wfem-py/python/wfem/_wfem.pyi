@@ -22,6 +22,8 @@ DEFAULT_SPIKE_THRESHOLD: float
 DEFAULT_MAX_HOLE_PERIMETER: float
 DEFAULT_TARGET_ROUGHNESS: float
 SHIPPED_DEGREES: list[int]
+APPROX_COEFFICIENTS: list[str]
+APPROX_SAMPLINGS: list[str]
 
 # meshes
 def read_mesh(path: _Path, triangulate: bool = False) -> tuple[_Mesh, str]: ...
@@ -117,11 +119,12 @@ class HeatKernel:
     def feature_approximation(
         self,
         f: _F64,
-        k: int = 20,
-        scales: int = 10,
-        persistence: float = 0.1,
+        k: int | None = None,
+        scales: int | None = None,
+        persistence: float | None = None,
         absolute: bool = False,
-        interpolate: bool = False,
+        coefficients: str | None = None,
+        sampling: str | None = None,
     ) -> dict[str, Any]: ...
     def distance(
         self,
