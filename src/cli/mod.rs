@@ -11,6 +11,7 @@
 
 mod approx;
 mod demo;
+mod demo_approx;
 mod distance;
 mod heat;
 mod input;
