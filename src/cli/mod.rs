@@ -12,6 +12,7 @@
 mod approx;
 pub mod choice;
 mod demo;
+mod demo_approx;
 mod distance;
 mod heat;
 mod input;

@@ -236,9 +236,15 @@ fn demo_writes_ply_png_and_report() {
         .unwrap()
         .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "png"))
         .count();
-    assert_eq!(pngs, 4);
+    // Four K_t e_i figures, then f, f_glob, f_loc and f_glob at four persistences (Fig. 12–13).
+    assert_eq!(pngs, 4 + 7);
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| 0.25 |"), "{report}");
+    assert!(report.contains("## Feature-driven approximation"), "{report}");
+    assert!(
+        report.contains("![f_glob](approx_glob.png)") && report.contains("| 40 % |"),
+        "{report}"
+    );
 }
 
 /// `--backend` selects how the rational method solves its shifted systems; every backend gives

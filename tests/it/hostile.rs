@@ -847,11 +847,21 @@ fn approx_rows() -> Vec<Row> {
         ),
         // The least-squares global component overshoots a constant field of 1e308 by ≈2× at
         // the anchors (consistent-mass projection), beyond the largest double: a typed refusal
-        // saying so; the proportional rule (feature values) stays below |f| and is written.
+        // saying so; the proportional rule (feature values) stays below |f| and is written, and
+        // so is the anchored default (K_t of a constant is the constant, the anchors' residuals
+        // are 0).
         approx(
-            "--field {d}/big.csv --persistence 0.1 -o {o}/a.csv",
+            "--field {d}/big.csv --persistence 0.1 --coefficients least-squares -o {o}/a.csv",
             Typed(&["f_glob", "beyond the largest finite number"]),
         ),
+        approx("--field {d}/big.csv -o {o}/a.csv", ok(&[Csv("a.csv", N, 21)])),
+        // The library's defaults without options; --absolute needs a value.
+        approx("--field {d}/f.csv -o {o}/a.csv", ok(&[Csv("a.csv", N, 21)])),
+        approx(
+            "--field {d}/f.csv --absolute -o {o}/a.csv",
+            Typed(&["--absolute needs --persistence"]),
+        ),
+        approx("--field {d}/f.csv --coefficients magic -o {o}/a.csv", Clap),
         approx(
             "--field {d}/big.csv --persistence 0.1 --coefficients feature-values -o {o}/a.csv",
             ok(&[Csv("a.csv", N, 21)]),

@@ -3,6 +3,7 @@
 
 #![warn(missing_docs)]
 
+pub mod approx;
 pub mod bench;
 pub mod lab;
 pub mod peers;

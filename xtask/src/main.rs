@@ -110,6 +110,20 @@ enum Cmd {
         #[arg(long)]
         peers_only: bool,
     },
+    /// The feature-driven approximation f = f_glob + f_loc (paper Sect. 4.2, Fig. 12–13) on
+    /// real meshes, smooth and noisy maps, default beside the paper's formula; writes
+    /// docs/APPROX-RESULTS.md.
+    ApproxEval {
+        /// Mesh corpus folder.
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Report file (default: print to stdout).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Only the small cases (the ones the test suites use).
+        #[arg(long)]
+        small: bool,
+    },
     /// The whole test suite, Rust and Python (`cargo test-all`, README's test command):
     /// `cargo test --workspace --locked`, then the `wfem` Python package built into a venv
     /// under the target directory and its pytest suite.
@@ -280,6 +294,27 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 println!("wrote {}", peers::write(&report, &out)?.display());
             }
             println!("benchmark report finished in {:.0} s", start.elapsed().as_secs_f64());
+        }
+        Cmd::ApproxEval { meshes, out, small } => {
+            let meshes_dir = match meshes {
+                Some(d) => d,
+                None => mesh_fem::corpus::meshes_dir()?,
+            };
+            let cases: &[shrec_bench::approx_eval::ApproxCase] = if small {
+                &shrec_bench::approx_eval::SMALL_CASES
+            } else {
+                &shrec_bench::approx_eval::APPROX_CASES
+            };
+            let machine = xtask::bench::Machine::probe();
+            let start = std::time::Instant::now();
+            let mut results = Vec::new();
+            for case in cases {
+                let t0 = std::time::Instant::now();
+                results.push(shrec_bench::approx_eval::evaluate_case(&meshes_dir, case)?);
+                eprintln!("{}: {:.1} s", case.name, t0.elapsed().as_secs_f64());
+            }
+            let text = xtask::approx::markdown(&results, &machine, start.elapsed().as_secs_f64());
+            emit(&text, out)?;
         }
         Cmd::TestAll {
             python_only,

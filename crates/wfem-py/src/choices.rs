@@ -70,6 +70,7 @@ registries! {
     "diagonal" => wfem_heat::diagonal::DiagonalMethod,
     "distance" => wfem_heat::DistanceKind,
     "coefficients" => wfem_heat::approx::Coefficients,
+    "sampling" => wfem_heat::approx::ScaleSampling,
     "hks_method" => shape_retrieval::HksMethod,
     "normalization" => shape_retrieval::SpectrumNormalization,
     "descriptor" => shape_retrieval::Descriptor,

@@ -4,6 +4,7 @@
 mod common;
 
 mod algebra;
+mod approx;
 mod basis;
 mod diagonal;
 mod distance;

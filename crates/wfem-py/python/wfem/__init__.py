@@ -39,7 +39,16 @@ from ._errors import (
     WfemError,
 )
 from ._choices import choices
-from ._heat import KERNELS, MASSES, METHODS, DiffusionDistance, HeatKernel
+from ._heat import (
+    APPROX_COEFFICIENTS,
+    APPROX_SAMPLINGS,
+    KERNELS,
+    MASSES,
+    METHODS,
+    ApproximationWarning,
+    DiffusionDistance,
+    HeatKernel,
+)
 from ._mesh import (
     RepairReport,
     ValidationReport,
@@ -95,6 +104,9 @@ __all__ = [
     "MASSES",
     "KERNELS",
     "choices",
+    "APPROX_COEFFICIENTS",
+    "APPROX_SAMPLINGS",
+    "ApproximationWarning",
     # spectrum and signatures
     "Eigenbasis",
     "eigenbasis",

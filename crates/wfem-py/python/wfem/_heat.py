@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, Sequence
 
 import numpy as np
@@ -10,7 +11,15 @@ import scipy.sparse as sp
 from . import _choices, _wfem
 from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, to_csc
 
-__all__ = ["HeatKernel", "DiffusionDistance", "METHODS", "MASSES"]
+__all__ = [
+    "HeatKernel",
+    "DiffusionDistance",
+    "METHODS",
+    "MASSES",
+    "APPROX_COEFFICIENTS",
+    "APPROX_SAMPLINGS",
+    "ApproximationWarning",
+]
 
 #: Names accepted by ``method=`` (the library's registry; aliases are accepted too).
 METHODS = _choices.names("method")
@@ -18,6 +27,15 @@ METHODS = _choices.names("method")
 MASSES = _choices.names("mass")
 #: Older name of :data:`MASSES`.
 KERNELS = MASSES
+#: Names accepted by ``feature_approximation(coefficients=)``, default first (the library's registry).
+APPROX_COEFFICIENTS = _choices.names("coefficients")
+#: Names accepted by ``feature_approximation(sampling=)``, default first (the library's registry).
+APPROX_SAMPLINGS = _choices.names("sampling")
+
+
+class ApproximationWarning(UserWarning):
+    """:meth:`HeatKernel.feature_approximation` stays farther than 3 % of the range from f at
+    every scale; the message names the option to change."""
 
 
 class HeatKernel:
@@ -301,27 +319,45 @@ class HeatKernel:
         self,
         f: Any,
         *,
-        k: int = 20,
-        scales: int = 10,
-        persistence: float = 0.1,
+        k: int | None = None,
+        scales: int | None = None,
+        persistence: float | None = None,
         absolute: bool = False,
-        interpolate: bool = False,
+        coefficients: str | None = None,
+        sampling: str | None = None,
     ) -> dict[str, Any]:
         """The feature-driven approximation ``f = f_glob + f_loc`` (paper, Sect. 4.2, Fig. 12–13).
 
         The anchors A are the critical points of f with persistence ≥ ``persistence`` (relative
-        to the range of f, or absolute); for ``t_i = (i/10)/λ_k``, i = 1…``scales``,
-        ``f_glob = Σ_{i∈A} c_i K_t e_i`` with ``c_i = f(p_i)`` (the paper) or, with
-        ``interpolate=True``, such that f_glob interpolates f on A.
+        to the range of f, default 0.1; absolute with ``absolute=True``), most persistent
+        first. At ``scales`` times (default 10) sampled by ``sampling`` (one of
+        :data:`APPROX_SAMPLINGS`; default geometric from 1/λ_max, the mesh's resolution, to
+        1/λ_k, k = 20; ``"paper"``: t_i = (i/10)/λ_k) f splits into f_glob and
+        ``f_loc = f − f_glob``. ``coefficients`` is one of :data:`APPROX_COEFFICIENTS`; the
+        default, ``"anchored"``, is ``f_glob = K_t f + Σ_j c_j K_t e_(a_j)`` with f_glob = f at
+        every anchor resolved at t (the persistent features keep their values; within 2 % of
+        f at the finest scale on every mesh of docs/APPROX-RESULTS.md); ``"feature-values"``
+        is the paper's printed ``Σ f(a_j) K_t e_(a_j)`` (≈ 0 between sparse anchors);
+        ``"smooth"`` is ``K_t f`` for a noisy f whose extrema are noise.
 
-        Returns a dict: ``anchors``, ``lambda_k``, ``input_critical_points`` and ``scales``, a
-        list of dicts with ``t``, ``global_``, ``local``, ``linf_error``,
-        ``relative_linf_error``, ``critical_points``, ``significant_critical_points``.
-        Needs a kernel built from (V, F).
+        Returns a dict: ``coefficients`` and ``formula`` (the rule), ``sampling``, ``anchors``
+        and ``anchor_persistence``, ``threshold`` and ``range`` (units of f), ``lambda_k``,
+        ``lambda_max``, ``input_critical_points``, ``persistent_extrema``, ``warning`` (or
+        None) and ``scales``, a list of dicts with ``t``, ``global_``, ``local``, ``anchors``
+        and ``coefficients`` (f_glob's basis functions K_t e_a and their coefficients),
+        ``linf_error``, ``relative_linf_error``, ``anchor_error``, ``critical_points``,
+        ``significant_critical_points``, ``persistent_extrema``. When f_glob stays more than
+        3 % of the range from f at every scale, an :class:`ApproximationWarning` names the
+        option to change. Needs a kernel built from (V, F).
         """
-        return dict(
-            self._k.feature_approximation(as_vector(f, "f"), k, scales, persistence, absolute, interpolate)
+        out = dict(
+            self._k.feature_approximation(
+                as_vector(f, "f"), k, scales, persistence, absolute, coefficients, sampling
+            )
         )
+        if out["warning"] is not None:
+            warnings.warn(out["warning"], ApproximationWarning, stacklevel=2)
+        return out
 
 
 class DiffusionDistance:

@@ -122,11 +122,12 @@ class HeatKernel:
     def feature_approximation(
         self,
         f: _F64,
-        k: int = 20,
-        scales: int = 10,
-        persistence: float = 0.1,
+        k: int | None = None,
+        scales: int | None = None,
+        persistence: float | None = None,
         absolute: bool = False,
-        interpolate: bool = False,
+        coefficients: str | None = None,
+        sampling: str | None = None,
     ) -> dict[str, Any]: ...
     def distance(
         self,
