@@ -319,7 +319,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
     };
     let lumped = args.lumped.unwrap_or_default().kind();
     let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams { lumped })
+        assemble(&input.mesh, &AssemblyParams { lumped, ..Default::default() })
     })?;
     let backend = args.backend.unwrap_or_default();
     let kernel = prepare_kernel(

@@ -153,7 +153,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     };
     let lumped_mass = args.lumped.unwrap_or_default().kind();
     let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams { lumped: lumped_mass })
+        assemble(&input.mesh, &AssemblyParams { lumped: lumped_mass, ..Default::default() })
     })?;
     let mut shape = ShapeDescriptors::from_operators(&input.mesh, ops, &params).map_err(retrieval)?;
     let descriptor = match args.kernel {

@@ -246,7 +246,7 @@ pub fn operators(args: &OperatorsArgs, out: &mut dyn Write) -> Result<(), CliErr
     let input = read_usable(&args.input)?;
     let lumped = args.lumped.kind();
     let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams { lumped })
+        assemble(&input.mesh, &AssemblyParams { lumped, ..Default::default() })
     })?;
     output::create_out_dir(&args.out)?;
     progress::run("writing Matrix Market files", || {

@@ -198,4 +198,35 @@ pub enum MeshError {
         message: String,
     },
     // ---- end of variants added by the validate/stats/mtx work ----
+
+    // ---- variants added by the robust Laplacian and point-cloud work (branch `robust-points`) ----
+    /// A numeric parameter is out of its range.
+    #[error("parameter {name} = {value} is invalid: expected {expected}")]
+    InvalidParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// The allowed range, in words.
+        expected: &'static str,
+    },
+    /// The intrinsic triangulation became numerically degenerate (a triangle of zero or
+    /// non-finite area), e.g. with mollification turned off on a mesh with a flat face.
+    #[error("intrinsic triangle {triangle} has edge lengths {lengths:?}, not a valid triangle; use a mollification factor > 0")]
+    DegenerateIntrinsicTriangle {
+        /// Triangle of the intrinsic triangulation.
+        triangle: usize,
+        /// Its three edge lengths.
+        lengths: [f64; 3],
+    },
+    /// The intrinsic Delaunay flips did not finish within their bound (a safety net against
+    /// rounding cycles; not expected to happen).
+    #[error("intrinsic Delaunay flipping did not finish after {flips} flips on {n_edges} edges")]
+    FlipLimit {
+        /// Flips done.
+        flips: usize,
+        /// Edges of the triangulation.
+        n_edges: usize,
+    },
+    // ---- end of the robust Laplacian and point-cloud block ----
 }

@@ -14,6 +14,9 @@
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
 //! * [`operators`]: the cotangent stiffness L, the consistent mass B and the lumped mass D of
 //!   the paper's Eq. (3) and Eq. (7), assembled in parallel into faer sparse matrices.
+//! * [`laplacian`]: the registry of Laplacians ([`Laplacian`]: `cotan`, the default, or
+//!   `robust`); [`intrinsic`]: the robust one, the intrinsic Delaunay Laplacian of the tufted
+//!   cover (Sharp & Crane 2020) with B and D on the intrinsic triangulation.
 //!
 //! **Sign convention.** Throughout wfem the stiffness matrix L is symmetric positive
 //! semidefinite: positive diagonal, non-positive off-diagonal entries on well-shaped meshes,
@@ -33,7 +36,9 @@ pub mod corpus;
 pub mod filter;
 pub mod generate;
 pub mod holes;
+pub mod intrinsic;
 pub mod io;
+pub mod laplacian;
 pub mod morse;
 pub mod mtx;
 pub mod operators;
@@ -42,6 +47,8 @@ pub mod validate;
 pub mod vec3;
 
 pub use error::MeshError;
+pub use intrinsic::IntrinsicTriangulation;
+pub use laplacian::{Laplacian, RobustParams};
 pub use mesh::TriMesh;
 pub use mtx::{read_matrix_market, write_matrix_market, write_operators};
 pub use operators::{assemble, AssemblyParams, FemOperators, LumpedMassKind};

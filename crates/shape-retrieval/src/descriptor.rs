@@ -145,6 +145,7 @@ impl ShapeDescriptors {
             mesh,
             &AssemblyParams {
                 lumped: LumpedMassKind::Voronoi,
+                ..Default::default()
             },
         )?;
         Self::from_operators(mesh, operators, params)

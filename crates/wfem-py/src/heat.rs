@@ -125,7 +125,7 @@ impl PyHeatKernel {
         let method = method(py, method_name, degree, k, backend)?;
         let lumped = lumped_kind(py, lumped)?;
         run(py, move |_| {
-            let fem = assemble(&mesh, &AssemblyParams { lumped })?;
+            let fem = assemble(&mesh, &AssemblyParams { lumped, ..Default::default() })?;
             let kernel = HeatKernel::new(&fem, HeatParams { kernel: kind, method })?;
             Ok(Self {
                 kernel,

@@ -161,7 +161,7 @@ pub fn operators<'py>(
     let mesh = mesh_in(py, &v, &f)?;
     let lumped = lumped_kind(py, lumped)?;
     let fem = run(py, move |_| {
-        assemble(&mesh, &AssemblyParams { lumped }).map_err(Error::from)
+        assemble(&mesh, &AssemblyParams { lumped, ..Default::default() }).map_err(Error::from)
     })?;
     Ok((
         sparse_out(py, fem.stiffness.as_ref()),

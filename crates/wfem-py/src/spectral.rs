@@ -113,7 +113,7 @@ impl PyEigenbasis {
         let lumped = lumped_kind(py, lumped)?;
         let params = eigen_params(py, tol, block_size, max_dim, seed, shift, max_restarts)?;
         run(py, move |_| {
-            let fem = assemble(&mesh, &AssemblyParams { lumped })?;
+            let fem = assemble(&mesh, &AssemblyParams { lumped, ..Default::default() })?;
             let ops = Operators::new(&fem, kind)?;
             let basis = compute(&ops, k, &params)?;
             Ok(Self {

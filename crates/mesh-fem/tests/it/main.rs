@@ -13,5 +13,6 @@ mod io_writers;
 mod morse;
 mod mtx;
 mod operators;
+mod robust;
 mod stats;
 mod validate;
