@@ -17,6 +17,8 @@
 //! * [`laplacian`]: the registry of Laplacians ([`Laplacian`]: `cotan`, the default, or
 //!   `robust`); [`intrinsic`]: the robust one, the intrinsic Delaunay Laplacian of the tufted
 //!   cover (Sharp & Crane 2020) with B and D on the intrinsic triangulation.
+//! * [`cloud`]: point clouds ([`PointCloud`]) and their robust L, B, D from local
+//!   triangulations of the k nearest neighbours ([`assemble_cloud`]).
 //!
 //! **Sign convention.** Throughout wfem the stiffness matrix L is symmetric positive
 //! semidefinite: positive diagonal, non-positive off-diagonal entries on well-shaped meshes,
@@ -32,6 +34,7 @@ mod error;
 mod mesh;
 mod topology;
 
+pub mod cloud;
 pub mod corpus;
 pub mod filter;
 pub mod generate;
@@ -46,6 +49,7 @@ pub mod stats;
 pub mod validate;
 pub mod vec3;
 
+pub use cloud::{assemble_cloud, CloudOperators, CloudParams, CloudReport, PointCloud};
 pub use error::MeshError;
 pub use intrinsic::IntrinsicTriangulation;
 pub use laplacian::{Laplacian, RobustParams};

@@ -3,6 +3,7 @@
 
 mod minimal_reader;
 
+mod cloud;
 mod corpus;
 mod filter;
 mod generate;
