@@ -8,6 +8,7 @@ mod corpus;
 mod filter;
 mod generate;
 mod io_obj_oracle;
+mod io_points;
 mod io_readers;
 mod io_special_files;
 mod io_writers;
