@@ -5,6 +5,7 @@ mod common;
 
 mod algebra;
 mod basis;
+mod clouds;
 mod diagonal;
 mod distance;
 mod edge_cases;
