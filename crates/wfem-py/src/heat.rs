@@ -107,7 +107,7 @@ pub struct PyHeatKernel {
 #[pymethods]
 impl PyHeatKernel {
     #[staticmethod]
-    #[pyo3(signature = (v, f, kernel="wfem", method_name="fast", degree=None, k=None, backend=None, lumped="barycentric"))]
+    #[pyo3(signature = (v, f, kernel="wfem", method_name="fast", degree=None, k=None, backend=None, lumped="barycentric", laplacian=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_mesh(
         py: Python<'_>,
@@ -119,13 +119,15 @@ impl PyHeatKernel {
         k: Option<usize>,
         backend: Option<&str>,
         lumped: &str,
+        laplacian: Option<&str>,
     ) -> PyResult<Self> {
         let mesh = mesh_in(py, &v, &f)?;
         let kind = kernel_kind(py, kernel)?;
         let method = method(py, method_name, degree, k, backend)?;
         let lumped = lumped_kind(py, lumped)?;
+        let laplacian = crate::cloud::assembly_laplacian(py, laplacian, None)?;
         run(py, move |_| {
-            let fem = assemble(&mesh, &AssemblyParams { lumped, ..Default::default() })?;
+            let fem = assemble(&mesh, &AssemblyParams { lumped, laplacian })?;
             let kernel = HeatKernel::new(&fem, HeatParams { kernel: kind, method })?;
             Ok(Self {
                 kernel,

@@ -4,6 +4,7 @@
 //! Every long call runs without the GIL and can be interrupted with Ctrl-C (`run.rs`); every
 //! Rust error becomes an exception of `wfem._errors` keeping the culprit (`errors.rs`).
 
+mod cloud;
 mod convert;
 mod errors;
 mod heat;
@@ -30,6 +31,7 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DEFAULT_TARGET_ROUGHNESS", shape_retrieval::DEFAULT_TARGET_ROUGHNESS)?;
     m.add("SHIPPED_DEGREES", shifted_solve::SHIPPED_DEGREES.to_vec())?;
     mesh::register(m)?;
+    cloud::register(m)?;
     heat::register(m)?;
     spectral::register(m)?;
     retrieval::register(m)?;

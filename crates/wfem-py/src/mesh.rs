@@ -149,19 +149,23 @@ pub fn mesh_stats(py: Python<'_>, v: PyReadonlyArray2<'_, f64>, f: PyReadonlyArr
     json(py, &s)
 }
 
-/// `operators(V, F, lumped) -> (L, B, D)` as CSC arrays.
+/// `operators(V, F, lumped, laplacian=None, mollify_factor=None) -> (L, B, D)` as CSC arrays
+/// (`laplacian`: a name of `mesh_fem::Laplacian::NAMES`, `None` for the default).
 #[pyfunction]
-#[pyo3(signature = (v, f, lumped="barycentric"))]
+#[pyo3(signature = (v, f, lumped="barycentric", laplacian=None, mollify_factor=None))]
 pub fn operators<'py>(
     py: Python<'py>,
     v: PyReadonlyArray2<'py, f64>,
     f: PyReadonlyArray2<'py, i64>,
     lumped: &str,
+    laplacian: Option<&str>,
+    mollify_factor: Option<f64>,
 ) -> PyResult<(SparseOut<'py>, SparseOut<'py>, SparseOut<'py>)> {
     let mesh = mesh_in(py, &v, &f)?;
     let lumped = lumped_kind(py, lumped)?;
+    let laplacian = crate::cloud::assembly_laplacian(py, laplacian, mollify_factor)?;
     let fem = run(py, move |_| {
-        assemble(&mesh, &AssemblyParams { lumped, ..Default::default() }).map_err(Error::from)
+        assemble(&mesh, &AssemblyParams { lumped, laplacian }).map_err(Error::from)
     })?;
     Ok((
         sparse_out(py, fem.stiffness.as_ref()),

@@ -92,7 +92,7 @@ fn truncation<'py>(py: Python<'py>, r: &TruncationReport) -> PyResult<Bound<'py,
 #[pymethods]
 impl PyEigenbasis {
     #[staticmethod]
-    #[pyo3(signature = (v, f, k=None, kernel="wfem", lumped="barycentric", tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None, max_restarts=100))]
+    #[pyo3(signature = (v, f, k=None, kernel="wfem", lumped="barycentric", tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None, max_restarts=100, laplacian=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_mesh(
         py: Python<'_>,
@@ -107,13 +107,15 @@ impl PyEigenbasis {
         seed: u64,
         shift: Option<f64>,
         max_restarts: usize,
+        laplacian: Option<&str>,
     ) -> PyResult<Self> {
         let mesh = mesh_in(py, &v, &f)?;
         let kind = kernel_kind(py, kernel)?;
         let lumped = lumped_kind(py, lumped)?;
+        let laplacian = crate::cloud::assembly_laplacian(py, laplacian, None)?;
         let params = eigen_params(py, tol, block_size, max_dim, seed, shift, max_restarts)?;
         run(py, move |_| {
-            let fem = assemble(&mesh, &AssemblyParams { lumped, ..Default::default() })?;
+            let fem = assemble(&mesh, &AssemblyParams { lumped, laplacian })?;
             let ops = Operators::new(&fem, kind)?;
             let basis = compute(&ops, k, &params)?;
             Ok(Self {

@@ -38,6 +38,7 @@ from ._errors import (
     StoreError,
     WfemError,
 )
+from ._cloud import DEFAULT_NEIGHBORS, LAPLACIANS, cloud_operators, read_points
 from ._heat import KERNELS, METHODS, DiffusionDistance, HeatKernel
 from ._mesh import (
     RepairReport,
@@ -77,6 +78,10 @@ DENSE_MAX_VERTICES: int = _wfem.DENSE_MAX_VERTICES
 __all__ = [
     # meshes and operators
     "read_mesh",
+    "read_points",
+    "cloud_operators",
+    "LAPLACIANS",
+    "DEFAULT_NEIGHBORS",
     "validate",
     "repair",
     "fill_holes",

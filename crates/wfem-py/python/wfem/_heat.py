@@ -8,7 +8,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _wfem
-from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, to_csc
+from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, points_of, to_csc
 
 __all__ = ["HeatKernel", "DiffusionDistance", "METHODS", "KERNELS"]
 
@@ -43,7 +43,11 @@ class HeatKernel:
     * ``"taylor"`` (Eq. (9)) and ``"backward-euler"``: first-order steps, for comparison only.
 
     Args:
-        V, F: vertices (n, 3) and triangles (m, 3), or one object with ``.vertices``/``.faces``.
+        V, F: vertices (n, 3) and triangles (m, 3), or one object with ``.vertices``/``.faces``;
+            or a **point cloud** P (n, 3) without F (operators from the ``n_neighbors``
+            nearest neighbours, :func:`wfem.cloud_operators`).
+        laplacian: ``"cotan"`` (default for meshes) or ``"robust"`` (intrinsic Delaunay L of the
+            tufted cover; for non-manifold or degenerate meshes; names in ``wfem.LAPLACIANS``).
 
     Raises:
         MeshError: the mesh cannot be assembled (names the face or vertex).
@@ -69,9 +73,20 @@ class HeatKernel:
         k: int | None = None,
         backend: str | None = None,
         lumped: str = "barycentric",
+        laplacian: str | None = None,
+        n_neighbors: int | None = None,
     ) -> None:
+        P = points_of(V, F)
+        if P is not None:
+            from ._cloud import mass_of_kernel
+            from ._mesh import operators
+
+            L, B, D = operators(P, lumped=lumped, laplacian=laplacian, n_neighbors=n_neighbors)
+            M = mass_of_kernel(kernel, B, D)
+            self._k = _wfem.HeatKernel.from_operators(as_sparse(L, "L"), as_sparse(M, "M"), method, degree, k, backend)
+            return
         v, f = as_mesh(V, F)
-        self._k = _wfem.HeatKernel.from_mesh(v, f, kernel, method, degree, k, backend, lumped)
+        self._k = _wfem.HeatKernel.from_mesh(v, f, kernel, method, degree, k, backend, lumped, laplacian)
 
     @classmethod
     def from_operators(

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from . import _wfem
-from ._arrays import as_float_array, as_mesh, as_sparse, as_vector
+from ._arrays import as_float_array, as_mesh, as_sparse, as_vector, points_of
 
 __all__ = ["Eigenbasis", "eigenbasis", "hks", "sihks", "HKS_CONVENTIONS"]
 
@@ -140,15 +140,29 @@ def eigenbasis(
     seed: int = 0x5EED2010,
     shift: float | None = None,
     max_restarts: int = 100,
+    laplacian: str | None = None,
+    n_neighbors: int | None = None,
 ) -> Eigenbasis:
     """The k smallest eigenpairs of ``L x = λ M x`` on a mesh (paper, Eq. (4)), M = B for the
     wFEM kernel (D for ``"lumped"``, I for ``"linear"``); ``k=None`` gives all n (dense,
     n ≤ 5000). Shift-invert thick-restart block Lanczos with one sparse Cholesky of ``L − σM``:
     a basis of at most ``max_dim`` vectors (default max(2k, k + 4b) + b), restarted at most
     ``max_restarts`` times (then ``ConvergenceError`` carrying the converged pairs)."""
+    P = points_of(V, F)
+    if P is not None:
+        from ._cloud import mass_of_kernel
+        from ._mesh import operators
+
+        L, B, D = operators(P, lumped=lumped, laplacian=laplacian, n_neighbors=n_neighbors)
+        return Eigenbasis.from_operators(
+            L, mass_of_kernel(kernel, B, D), k, tol=tol, block_size=block_size, max_dim=max_dim,
+            seed=seed, shift=shift, max_restarts=max_restarts,
+        )
     v, f = as_mesh(V, F)
     return Eigenbasis(
-        _wfem.Eigenbasis.from_mesh(v, f, k, kernel, lumped, tol, block_size, max_dim, seed, shift, max_restarts)
+        _wfem.Eigenbasis.from_mesh(
+            v, f, k, kernel, lumped, tol, block_size, max_dim, seed, shift, max_restarts, laplacian
+        )
     )
 
 
@@ -167,8 +181,12 @@ def hks(
     method: str = "auto",
     exact: bool = False,
     return_times: bool = False,
+    laplacian: str | None = None,
 ) -> Any:
     """The heat kernel signature h(i, t) at every vertex and time, shape (n, T).
+
+    ``V, F`` is a mesh, or ``V`` alone a point cloud (n, 3) (operators from its 30 nearest
+    neighbours); ``laplacian="robust"`` uses the intrinsic Delaunay Laplacian on a mesh.
 
     From the k smallest eigenpairs of ``L x = λ B x`` (the wFEM kernel ``K_t = X D_t Xᵀ B``,
     paper Eq. (6), truncated as in Eq. (8)), in one of two conventions:
@@ -215,17 +233,17 @@ def hks(
                 name="exact",
             )
         ts = np.atleast_1d(np.asarray(times, dtype=np.float64))
-        values = HeatKernel(V, F, kernel=kernel).diagonal(ts, convention)
+        values = HeatKernel(V, F, kernel=kernel, laplacian=laplacian).diagonal(ts, convention)
         return (values, ts) if return_times else values
     if basis is None:
-        basis = eigenbasis(V, F, k, kernel=kernel)
+        basis = eigenbasis(V, F, k, kernel=kernel, laplacian=laplacian)
     values, used = basis.hks(
         times, num_times=num_times, convention=convention, scaled=scaled, normalization=normalization
     )
     if method == "auto" and not scaled and normalization is None:
         from ._heat import HeatKernel
 
-        K = HeatKernel(V, F, kernel=kernel)
+        K = HeatKernel(V, F, kernel=kernel, laplacian=laplacian)
         values, _ = K._k.hks_by_method(
             [float(x) for x in basis.values], values, [float(t) for t in used], convention, "auto"
         )

@@ -22,6 +22,9 @@ DEFAULT_SPIKE_THRESHOLD: float
 DEFAULT_MAX_HOLE_PERIMETER: float
 DEFAULT_TARGET_ROUGHNESS: float
 SHIPPED_DEGREES: list[int]
+LAPLACIANS: list[str]
+LAPLACIAN_HELP: list[tuple[str, str]]
+DEFAULT_NEIGHBORS: int
 
 # meshes
 def read_mesh(path: _Path, triangulate: bool = False) -> tuple[_Mesh, str]: ...
@@ -37,7 +40,19 @@ def repair_mesh(
 ) -> tuple[_Mesh, str]: ...
 def fill_holes(v: _F64, f: _I64, max_perimeter: float = ...) -> tuple[_Mesh, int]: ...
 def mesh_stats(v: _F64, f: _I64) -> str: ...
-def operators(v: _F64, f: _I64, lumped: str = "barycentric") -> tuple[_Sparse, _Sparse, _Sparse]: ...
+def operators(
+    v: _F64, f: _I64, lumped: str = "barycentric", laplacian: str | None = None, mollify_factor: float | None = None
+) -> tuple[_Sparse, _Sparse, _Sparse]: ...
+
+# point clouds
+def cloud_operators(
+    p: _F64,
+    normals: _F64 | None = None,
+    lumped: str = "barycentric",
+    n_neighbors: int = 30,
+    mollify_factor: float | None = None,
+) -> tuple[_Sparse, _Sparse, _Sparse, str]: ...
+def read_points(path: _Path) -> tuple[_F64, _F64 | None]: ...
 def extrema(v: _F64, f: _I64, field: _F64, persistence: float | None = None) -> list[int]: ...
 def icosphere(level: int) -> _Mesh: ...
 def uv_sphere(rings: int, segments: int) -> _Mesh: ...
@@ -59,6 +74,7 @@ class HeatKernel:
         k: int | None = None,
         backend: str | None = None,
         lumped: str = "barycentric",
+        laplacian: str | None = None,
     ) -> HeatKernel: ...
     @staticmethod
     def from_operators(
@@ -160,6 +176,7 @@ class Eigenbasis:
         seed: int = ...,
         shift: float | None = None,
         max_restarts: int = 100,
+        laplacian: str | None = None,
     ) -> Eigenbasis: ...
     @staticmethod
     def from_operators(
