@@ -4,7 +4,6 @@ use super::heat::{far_exponent, prepare_kernel, times_pow2};
 use super::output::{short_label, short_labels, write_fields, Column, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, KernelArg, MeshArgs, Output, OutputFormat};
 use clap::{Args, ValueEnum};
-use mesh_fem::{assemble, AssemblyParams};
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
@@ -123,9 +122,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         });
     }
     limits::columns("--scales", 1 + 2 * args.scales, n)?;
-    let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams::default())
-    })?;
+    let ops = progress::run("assembling L, B, D", || input.assemble(Default::default()))?;
     let kernel = prepare_kernel(
         &ops,
         HeatParams {

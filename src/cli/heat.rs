@@ -3,7 +3,7 @@
 use super::output::{short_labels, Column, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
 use clap::{Args, ValueEnum};
-use mesh_fem::{assemble, AssemblyParams, FemOperators};
+use mesh_fem::FemOperators;
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
@@ -318,9 +318,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         _ => 0,
     };
     let lumped = args.lumped.unwrap_or_default().kind();
-    let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams { lumped, ..Default::default() })
-    })?;
+    let ops = progress::run("assembling L, B, D", || input.assemble(lumped))?;
     let backend = args.backend.unwrap_or_default();
     let kernel = prepare_kernel(
         &ops,

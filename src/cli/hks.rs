@@ -3,7 +3,6 @@
 use super::output::{short_labels, write_fields, Column, OutputFormat, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
 use clap::{Args, ValueEnum};
-use mesh_fem::{assemble, AssemblyParams};
 use serde_json::json;
 use shape_retrieval::hks::{HksConvention, TimeSampling};
 use shape_retrieval::{Descriptor, DescriptorParams, HksMethod, HksSource, RetrievalError, ShapeDescriptors};
@@ -152,9 +151,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         ..Default::default()
     };
     let lumped_mass = args.lumped.unwrap_or_default().kind();
-    let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams { lumped: lumped_mass, ..Default::default() })
-    })?;
+    let ops = progress::run("assembling L, B, D", || input.assemble(lumped_mass))?;
     let mut shape = ShapeDescriptors::from_operators(&input.mesh, ops, &params).map_err(retrieval)?;
     let descriptor = match args.kernel {
         HksKernel::Wfem => Descriptor::Dhk2,

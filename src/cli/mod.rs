@@ -28,7 +28,7 @@ pub use input::{load_usable, read_input, read_usable, MeshArgs};
 pub use output::{Output, OutputFormat};
 
 use clap::{Args, ValueEnum};
-use mesh_fem::{assemble, AssemblyParams, LumpedMassKind, MeshError};
+use mesh_fem::{LumpedMassKind, MeshError};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use wfem_render::RenderError;
@@ -245,9 +245,7 @@ pub fn operators(args: &OperatorsArgs, out: &mut dyn Write) -> Result<(), CliErr
     output::check_out_dir(&args.out, &FILES, &[&args.input.mesh])?;
     let input = read_usable(&args.input)?;
     let lumped = args.lumped.kind();
-    let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams { lumped, ..Default::default() })
-    })?;
+    let ops = progress::run("assembling L, B, D", || input.assemble(lumped))?;
     output::create_out_dir(&args.out)?;
     progress::run("writing Matrix Market files", || {
         mesh_fem::mtx::write_operators(&args.out, &ops)
