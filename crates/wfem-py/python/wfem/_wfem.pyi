@@ -49,7 +49,7 @@ def cloud_operators(
     p: _F64,
     normals: _F64 | None = None,
     lumped: str = "barycentric",
-    n_neighbors: int = 30,
+    n_neighbors: int = ...,
     mollify_factor: float | None = None,
 ) -> tuple[_Sparse, _Sparse, _Sparse, str]: ...
 def read_points(path: _Path) -> tuple[_F64, _F64 | None]: ...
