@@ -23,7 +23,16 @@ fn heat_and_operators_read_a_point_cloud() {
     let dir = tempfile::tempdir().unwrap();
     let cloud = write_cloud(dir.path(), 800);
     let out = dir.path().join("k.npy");
-    let o = wfem(&["heat", cloud.to_str().unwrap(), "--t", "0.05", "--source", "3", "-o", out.to_str().unwrap()]);
+    let o = wfem(&[
+        "heat",
+        cloud.to_str().unwrap(),
+        "--t",
+        "0.05",
+        "--source",
+        "3",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("point cloud of 800 points"), "{}", stderr(&o));
     let (shape, values) = read_npy(&out).unwrap();
@@ -47,7 +56,16 @@ fn laplacian_flag_takes_the_library_names_and_non_manifold_meshes_are_warned() {
     .unwrap();
     let out = dir.path().join("k.npy");
     let args = |lap: Option<&str>| {
-        let mut a = vec!["heat", mesh.to_str().unwrap(), "--t", "0.01", "--source", "0", "-o", out.to_str().unwrap()];
+        let mut a = vec![
+            "heat",
+            mesh.to_str().unwrap(),
+            "--t",
+            "0.01",
+            "--source",
+            "0",
+            "-o",
+            out.to_str().unwrap(),
+        ];
         if let Some(l) = lap {
             a.extend(["--laplacian", l]);
         }
