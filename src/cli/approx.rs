@@ -5,7 +5,6 @@ use super::heat::{far_exponent, prepare_kernel, times_pow2};
 use super::output::{short_label, short_labels, write_fields, Column, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, MassArgs, MeshArgs, Output, OutputFormat};
 use clap::Args;
-use mesh_fem::{assemble, AssemblyParams};
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
@@ -149,9 +148,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     }
     limits::columns("--scales", 1 + 2 * args.scales, n)?;
     let mass = args.mass.mass()?;
-    let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams::for_mass(mass))
-    })?;
+    let ops = progress::run("assembling L, B, D", || input.assemble(mass.lumping()))?;
     let kernel = prepare_kernel(
         &ops,
         HeatParams {

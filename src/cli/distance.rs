@@ -5,7 +5,6 @@ use super::heat::{check_degree, prepare_kernel};
 use super::output::{short_label, write_fields, Column, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
 use clap::Args;
-use mesh_fem::{assemble, AssemblyParams};
 use serde_json::json;
 use std::io::Write;
 use wfem_choice::Choice;
@@ -52,9 +51,7 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
         .check(Some(std::slice::from_ref(&suffix)), 1, &[&args.input.mesh])?;
     let input = read_usable(&args.input)?;
     let i = input.vertex("--from", args.from)?;
-    let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams::default())
-    })?;
+    let ops = progress::run("assembling L, B, D", || input.assemble(Default::default()))?;
     let method = args.degree.map_or_else(Method::default, Method::rational);
     let kernel = prepare_kernel(
         &ops,

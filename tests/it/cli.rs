@@ -59,11 +59,17 @@ fn errors_print_one_line_and_exit_nonzero() {
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.starts_with("wfem: error:"), "{err}");
 
-    let unknown = dir.path().join("mesh.xyz");
+    let unknown = dir.path().join("mesh.abc");
     std::fs::write(&unknown, "1 2 3\n").unwrap();
     let o = wfem(&["info", unknown.to_str().unwrap()]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("unknown mesh format"), "{}", stderr(&o));
+    // .xyz is a point cloud (issue #27); one point is too few.
+    let cloud = dir.path().join("mesh.xyz");
+    std::fs::write(&cloud, "1 2 3\n").unwrap();
+    let o = wfem(&["info", cloud.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("at least 3"), "{}", stderr(&o));
 }
 
 #[test]

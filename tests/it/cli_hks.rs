@@ -77,6 +77,7 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
         &mesh,
         &AssemblyParams {
             lumping: Lumping::Voronoi,
+            ..Default::default()
         },
     )
     .unwrap();

@@ -5,6 +5,7 @@ mod bad_input;
 mod cli;
 mod cli_approx;
 mod cli_atomic;
+mod cli_clouds;
 mod cli_distance;
 mod cli_hks;
 mod cli_issue16;

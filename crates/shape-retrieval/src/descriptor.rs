@@ -179,6 +179,7 @@ impl ShapeDescriptors {
             mesh,
             &AssemblyParams {
                 lumping: Lumping::Voronoi,
+                ..Default::default()
             },
         )?;
         Self::from_operators(mesh, operators, params)

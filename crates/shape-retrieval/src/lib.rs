@@ -57,7 +57,7 @@ pub use hks::{
     DEFAULT_NUM_TIMES,
 };
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
-pub use mesh_hks::{mesh_hks, HksStep, MeshHks, MeshHksParams};
+pub use mesh_hks::{mesh_hks, operators_hks, HksStep, MeshHks, MeshHksParams};
 pub use model::{
     BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexEntry,
     Ranked, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams,

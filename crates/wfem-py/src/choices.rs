@@ -64,6 +64,7 @@ macro_rules! registries {
 registries! {
     "mass" => mesh_fem::Mass,
     "lumped_mass" => mesh_fem::Lumping,
+    "laplacian" => mesh_fem::Laplacian,
     "method" => wfem_heat::Method,
     "backend" => shifted_solve::Backend,
     "convention" => wfem_heat::KernelDiagonal,

@@ -83,7 +83,7 @@ pub struct PyHeatKernel {
 #[pymethods]
 impl PyHeatKernel {
     #[staticmethod]
-    #[pyo3(signature = (v, f, mass=None, method_name=None, degree=None, k=None, backend=None))]
+    #[pyo3(signature = (v, f, mass=None, method_name=None, degree=None, k=None, backend=None, laplacian=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_mesh(
         py: Python<'_>,
@@ -94,12 +94,18 @@ impl PyHeatKernel {
         degree: Option<usize>,
         k: Option<usize>,
         backend: Option<&str>,
+        laplacian: Option<&str>,
     ) -> PyResult<Self> {
         let mesh = mesh_in(py, &v, &f)?;
         let mass: Mass = choices::parse(py, "mass", mass)?;
         let method = method(py, method_name, degree, k, backend)?;
+        let laplacian = crate::cloud::assembly_laplacian(py, laplacian, None)?;
         run(py, move |_| {
-            let fem = assemble(&mesh, &AssemblyParams::for_mass(mass))?;
+            let assembly = AssemblyParams {
+                laplacian,
+                ..AssemblyParams::for_mass(mass)
+            };
+            let fem = assemble(&mesh, &assembly)?;
             let kernel = HeatKernel::new(&fem, HeatParams { mass, method })?;
             Ok(Self {
                 kernel,

@@ -5,6 +5,7 @@
 //! Rust error becomes an exception of `wfem._errors` keeping the culprit (`errors.rs`).
 
 mod choices;
+mod cloud;
 mod convert;
 mod errors;
 mod heat;
@@ -40,6 +41,7 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DEFAULT_NUM_TIMES", shape_retrieval::DEFAULT_NUM_TIMES)?;
     choices::register(m)?;
     mesh::register(m)?;
+    cloud::register(m)?;
     heat::register(m)?;
     spectral::register(m)?;
     retrieval::register(m)?;

@@ -6,6 +6,7 @@ mod common;
 mod algebra;
 mod approx;
 mod basis;
+mod clouds;
 mod diagonal;
 mod distance;
 mod edge_cases;

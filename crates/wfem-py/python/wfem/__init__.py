@@ -49,6 +49,7 @@ from ._heat import (
     DiffusionDistance,
     HeatKernel,
 )
+from ._cloud import DEFAULT_NEIGHBORS, LAPLACIANS, cloud_operators, read_points
 from ._mesh import (
     RepairReport,
     ValidationReport,
@@ -88,6 +89,10 @@ DENSE_MAX_VERTICES: int = _wfem.DENSE_MAX_VERTICES
 __all__ = [
     # meshes and operators
     "read_mesh",
+    "read_points",
+    "cloud_operators",
+    "LAPLACIANS",
+    "DEFAULT_NEIGHBORS",
     "validate",
     "repair",
     "fill_holes",

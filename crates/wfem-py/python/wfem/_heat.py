@@ -9,7 +9,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _choices, _wfem
-from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, to_csc
+from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, points_of, to_csc
 
 __all__ = [
     "HeatKernel",
@@ -64,7 +64,11 @@ class HeatKernel:
     * ``"taylor"`` (Eq. (9)) and ``"backward-euler"``: first-order steps, for comparison only.
 
     Args:
-        V, F: vertices (n, 3) and triangles (m, 3), or one object with ``.vertices``/``.faces``.
+        V, F: vertices (n, 3) and triangles (m, 3), or one object with ``.vertices``/``.faces``;
+            or a **point cloud** P (n, 3) without F (operators from the ``n_neighbors``
+            nearest neighbours, :func:`wfem.cloud_operators`).
+        laplacian: ``"cotan"`` (default for meshes) or ``"robust"`` (intrinsic Delaunay L of the
+            tufted cover; for non-manifold or degenerate meshes; names in ``wfem.LAPLACIANS``).
 
     ``kernel=`` and ``lumped=`` are the older spellings of ``mass=`` (DeprecationWarning).
 
@@ -93,10 +97,19 @@ class HeatKernel:
         backend: str | None = None,
         kernel: str | None = None,
         lumped: str | None = None,
+        laplacian: str | None = None,
+        n_neighbors: int | None = None,
     ) -> None:
-        v, f = as_mesh(V, F)
         mass = _choices.mass_of(mass, kernel, lumped)
-        self._k = _wfem.HeatKernel.from_mesh(v, f, mass, method, degree, k, backend)
+        P = points_of(V, F)
+        if P is not None:
+            from ._cloud import cloud_pencil
+
+            L, M = cloud_pencil(P, mass, laplacian=laplacian, n_neighbors=n_neighbors)
+            self._k = _wfem.HeatKernel.from_operators(as_sparse(L, "L"), as_sparse(M, "M"), method, degree, k, backend)
+            return
+        v, f = as_mesh(V, F)
+        self._k = _wfem.HeatKernel.from_mesh(v, f, mass, method, degree, k, backend, laplacian)
 
     @classmethod
     def from_operators(

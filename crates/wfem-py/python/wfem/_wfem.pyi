@@ -28,6 +28,7 @@ DEFAULT_NUM_TIMES: int
 # the registries of the library's choices
 def choices() -> dict[str, Any]: ...
 def canonical(argument: str, text: str) -> str: ...
+DEFAULT_NEIGHBORS: int
 
 # meshes
 def read_mesh(path: _Path, triangulate: bool = False) -> tuple[_Mesh, str]: ...
@@ -43,7 +44,25 @@ def repair_mesh(
 ) -> tuple[_Mesh, str]: ...
 def fill_holes(v: _F64, f: _I64, max_perimeter: float = ...) -> tuple[_Mesh, int]: ...
 def mesh_stats(v: _F64, f: _I64) -> str: ...
-def operators(v: _F64, f: _I64, lumped_mass: str | None = None) -> tuple[_Sparse, _Sparse, _Sparse]: ...
+def operators(
+    v: _F64,
+    f: _I64,
+    lumped_mass: str | None = None,
+    laplacian: str | None = None,
+    mollify_factor: float | None = None,
+) -> tuple[_Sparse, _Sparse, _Sparse]: ...
+
+# point clouds
+def cloud_operators(
+    p: _F64,
+    normals: _F64 | None = None,
+    lumped_mass: str | None = None,
+    n_neighbors: int = ...,
+    mollify_factor: float | None = None,
+    laplacian: str | None = None,
+) -> tuple[_Sparse, _Sparse, _Sparse, str]: ...
+def read_points(path: _Path) -> tuple[_F64, _F64 | None]: ...
+def mass_matrix(mass: str | None = None) -> tuple[str, str]: ...
 def extrema(v: _F64, f: _I64, field: _F64, persistence: float | None = None) -> list[int]: ...
 def icosphere(level: int) -> _Mesh: ...
 def uv_sphere(rings: int, segments: int) -> _Mesh: ...
@@ -64,6 +83,7 @@ class HeatKernel:
         degree: int | None = None,
         k: int | None = None,
         backend: str | None = None,
+        laplacian: str | None = None,
     ) -> HeatKernel: ...
     @staticmethod
     def from_operators(
@@ -165,6 +185,7 @@ class Eigenbasis:
         seed: int = ...,
         shift: float | None = None,
         max_restarts: int = 100,
+        laplacian: str | None = None,
     ) -> Eigenbasis: ...
     @staticmethod
     def from_operators(
@@ -211,7 +232,7 @@ class Eigenbasis:
     ) -> _F64: ...
 def mesh_hks(
     v: _F64,
-    f: _I64,
+    f: _I64 | None,
     times: list[float] | None = None,
     num_times: int | None = None,
     k: int = ...,
@@ -222,6 +243,8 @@ def mesh_hks(
     normalization: str | None = None,
     basis: Eigenbasis | None = None,
     tol: float = ...,
+    laplacian: str | None = None,
+    n_neighbors: int | None = None,
 ) -> tuple[_F64, list[float], list[tuple[str, float]], list[float] | None]: ...
 
 # retrieval
