@@ -15,13 +15,7 @@ use mesh_fem::{Lumping, Mass};
 use wfem_heat::{HeatKernel, HeatParams};
 
 /// min/max of K_t e_source, or the error's text.
-fn min_over_max(
-    mesh: &TriMesh,
-    laplacian: Laplacian,
-    mass: Mass,
-    source: usize,
-    t: f64,
-) -> Result<f64, String> {
+fn min_over_max(mesh: &TriMesh, laplacian: Laplacian, mass: Mass, source: usize, t: f64) -> Result<f64, String> {
     let params = AssemblyParams {
         laplacian,
         ..AssemblyParams::for_mass(mass)

@@ -2,8 +2,8 @@
 //! `read_points(path)`, and the `laplacian=` names, all taken from mesh-fem's types.
 
 use crate::choices;
-use crate::out::{sparse_out, SparseOut};
 use crate::errors::{invalid_param, Error};
+use crate::out::{sparse_out, SparseOut};
 use crate::run::run;
 use mesh_fem::io::load_points;
 use mesh_fem::{assemble_cloud, AssemblyParams, CloudParams, Laplacian, Lumping, PointCloud, RobustParams};

@@ -9,12 +9,12 @@
 //!   gives negative heat (beetle, camel gallop).
 
 use mesh_fem::io::{load, LoadOptions};
+use mesh_fem::Mass;
 use mesh_fem::{
     assemble, assemble_cloud, corpus, generate, AssemblyParams, CloudParams, Laplacian, PointCloud, RobustParams,
     TriMesh,
 };
 use wfem_heat::spectral::{EigenParams, Eigenbasis};
-use mesh_fem::Mass;
 use wfem_heat::{HeatKernel, HeatParams, Operators};
 
 /// SplitMix64 uniforms in (0, 1) (test-local; the library's generator lives in shifted-solve
