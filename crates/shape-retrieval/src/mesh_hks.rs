@@ -118,6 +118,12 @@ pub fn mesh_hks(
             reason: "must be at least 1",
         });
     }
+    params.times.check_size(mesh.n_vertices())?;
+    wfem_heat::limits::eigenpairs(
+        "eigenpairs",
+        params.eigenpairs.min(mesh.n_vertices().max(1)),
+        mesh.n_vertices().max(1),
+    )?;
     step(HksStep::Assembly);
     let fem = assemble(mesh, &AssemblyParams::for_mass(params.mass))?;
     let ops = Operators::new(&fem, params.mass)?;
