@@ -427,7 +427,6 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// semidefinite throughout wfem.
 fn check_symmetric(matrix: &'static str, a: SparseColMatRef<'_, usize, f64>, strict: bool) -> Result<(), HeatError> {
     let n = a.ncols();
-    let mut diagonal = vec![0.0f64; n];
     let mut entries: std::collections::HashMap<(usize, usize), f64> =
         std::collections::HashMap::with_capacity(a.compute_nnz());
     for j in 0..n {
@@ -441,12 +440,10 @@ fn check_symmetric(matrix: &'static str, a: SparseColMatRef<'_, usize, f64>, str
                     requirement: "finite",
                 });
             }
-            if i == j {
-                diagonal[j] += v;
-            }
             *entries.entry((i, j)).or_insert(0.0) += v;
         }
     }
+    let diagonal = |i: usize| entries.get(&(i, i)).copied().unwrap_or(0.0).max(0.0);
     let mut culprits: Vec<(&(usize, usize), &f64)> = entries.iter().filter(|((i, j), _)| i != j).collect();
     // The first culprit in (column, row) order, whatever the hash order.
     culprits.sort_by_key(|((i, j), _)| (*j, *i));
@@ -462,7 +459,7 @@ fn check_symmetric(matrix: &'static str, a: SparseColMatRef<'_, usize, f64>, str
             });
         }
         // √a_ii·√a_jj, not √(a_ii a_jj): no underflow at 1e−200 entries.
-        let bound = diagonal[i].max(0.0).sqrt() * diagonal[j].max(0.0).sqrt();
+        let bound = diagonal(i).sqrt() * diagonal(j).sqrt();
         let singular = strict && v != 0.0 && v.abs() >= bound * (1.0 - 1e-12);
         if v.abs() > bound * (1.0 + 1e-12) || singular {
             return Err(HeatError::InvalidOperatorEntry {
