@@ -235,3 +235,13 @@ def test_an_index_on_read_only_media_can_be_queried(tmp_path):
         timeout=TIMEOUT,
     )
     assert p.returncode == 0 and p.stdout.strip() == "refused", p.stderr
+
+
+def test_retrieval_index_file_errors_are_store_errors(tmp_path):
+    """README: RetrievalIndex raises StoreError for its file (missing, a directory, not an index)."""
+    import wfem
+
+    (tmp_path / "empty.sqlite").write_bytes(b"")
+    for p in [tmp_path / "missing.sqlite", tmp_path, tmp_path / "empty.sqlite"]:
+        with pytest.raises(wfem.StoreError):
+            wfem.RetrievalIndex.open(p)
