@@ -76,6 +76,9 @@ pub enum RetrievalAction {
         /// optimistic when those same meshes are then used to measure retrieval.
         #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
         vocab: Option<PathBuf>,
+        /// Replace `--out` if it exists (without it an existing index is never overwritten).
+        #[arg(long)]
+        force: bool,
         #[command(flatten)]
         #[allow(missing_docs)]
         descriptor: DescriptorArgs,
@@ -333,10 +336,13 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             files,
             out: path,
             vocab,
+            force,
             descriptor,
             training,
             bags,
         } => {
+            let inputs: Vec<&std::path::Path> = files.iter().chain(vocab).map(PathBuf::as_path).collect();
+            shape_retrieval::check_index_output(path, &inputs, *force)?;
             let mut settings = RetrievalSettings::default();
             bags.apply(&mut settings)?;
             let vocabulary = match vocab {
@@ -385,7 +391,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 .iter()
                 .map(|(name, mesh)| settings.describe(name, mesh))
                 .collect::<Result<Vec<_>, RetrievalError>>()?;
-            store.append(&entries)?;
+            store.append(&settings, &entries)?;
             writeln!(out, "added {} files to {}", entries.len(), path.display())?;
         }
         RetrievalAction::Query {
@@ -446,14 +452,39 @@ fn index_file(path: &std::path::Path) -> Box<dyn IndexStore> {
     }
 }
 
-/// Whether an existing index file is SQLite (by its 16-byte header), else JSON. Regular files
-/// only: a FIFO is refused, not waited on.
+/// Whether an existing index file is SQLite (by its 16-byte header) or JSON (a `.json` name
+/// or a document starting with `{`); anything else is refused here rather than parsed as JSON.
+/// Regular files only: a FIFO is refused, not waited on.
 fn is_sqlite(path: &std::path::Path) -> Result<bool, CliError> {
     use std::io::Read;
     let mut file = mesh_fem::io::open_regular_file(path)?;
     let mut head = [0u8; 16];
-    let n = file
-        .read(&mut head)
-        .map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
-    Ok(n == 16 && &head == b"SQLite format 3\0")
+    let mut n = 0;
+    while n < head.len() {
+        match file.read(&mut head[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) => return Err(CliError::Usage(format!("{}: {e}", path.display()))),
+        }
+    }
+    if n == 16 && &head == b"SQLite format 3\0" {
+        return Ok(true);
+    }
+    let json_name = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    let json_text = head[..n].iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'{');
+    if json_name || json_text {
+        return Ok(false);
+    }
+    Err(CliError::Usage(format!(
+        "{} is not a wfem index: {} (an index is an SQLite file or a JSON document written by `wfem retrieval build`)",
+        path.display(),
+        if n == 0 {
+            "the file is empty".to_string()
+        } else {
+            "neither SQLite nor JSON".to_string()
+        }
+    )))
 }

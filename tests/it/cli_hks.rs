@@ -499,7 +499,7 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
         let plain = dir.path().join("plain.json");
         let mut args = vec!["retrieval", "build"];
         args.extend(files.iter().map(|s| s.as_str()));
-        args.extend(["--out", plain.to_str().unwrap(), "--area-cap", cap]);
+        args.extend(["--out", plain.to_str().unwrap(), "--area-cap", cap, "--force"]);
         let o = wfem(&args);
         match expected {
             Some(weights) => {

@@ -1122,7 +1122,7 @@ fn retrieval_rows() -> Vec<Row> {
         ),
         row(
             "retrieval query {d}/f.csv {d}/sphere.off",
-            Typed(&["not a wfem-retrieval-index file"]),
+            Typed(&["is not a wfem index"]),
         ),
         row("retrieval bogus", Clap),
     ]

@@ -8,6 +8,7 @@ mod cli_atomic;
 mod cli_clouds;
 mod cli_distance;
 mod cli_hks;
+mod cli_index_safety;
 mod cli_issue16;
 mod common;
 mod fuzz_regressions;

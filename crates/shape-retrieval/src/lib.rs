@@ -33,8 +33,10 @@ pub mod exact;
 pub mod features;
 pub mod hks;
 pub mod kmeans;
+pub mod limits;
 pub mod mesh_hks;
 pub mod model;
+mod output;
 pub mod retrieval;
 pub mod sihks;
 pub mod standardize;
@@ -64,6 +66,7 @@ pub use model::{
     VertexWeights, VocabularyModel,
 };
 pub use model::{DEFAULT_AREA_CAP, DEFAULT_TARGET_ROUGHNESS};
+pub use output::check_index_output;
 pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
 pub use sihks::{scale_invariant_hks, SihksParams, TimeUnit};
 pub use standardize::Standardizer;

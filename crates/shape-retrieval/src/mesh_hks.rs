@@ -107,6 +107,7 @@ pub fn mesh_hks(
     step: &mut dyn FnMut(HksStep),
 ) -> Result<MeshHks, RetrievalError> {
     check_hks_params(params)?;
+    check_hks_sizes(params, mesh.n_vertices())?;
     step(HksStep::Assembly);
     let assembly = AssemblyParams {
         laplacian: params.laplacian,
@@ -129,6 +130,7 @@ pub fn operators_hks(
     step: &mut dyn FnMut(HksStep),
 ) -> Result<MeshHks, RetrievalError> {
     check_hks_params(params)?;
+    check_hks_sizes(params, fem.n())?;
     let spectral_only = params.scaled || params.normalization != SpectrumNormalization::None;
     let ops = Operators::new(fem, params.mass)?;
     let explicit = matches!(params.times, TimeSampling::Explicit(_));
@@ -270,5 +272,14 @@ fn check_hks_params(params: &MeshHksParams) -> Result<(), RetrievalError> {
             reason: "must be at least 1",
         });
     }
+    Ok(())
+}
+
+/// The sizes of [`mesh_hks`] on n vertices within the shared limits (the n × T output, the
+/// eigenpairs), checked before anything is allocated.
+fn check_hks_sizes(params: &MeshHksParams, n: usize) -> Result<(), RetrievalError> {
+    params.times.check_size(n)?;
+    let n = n.max(1);
+    wfem_heat::limits::eigenpairs("eigenpairs", params.eigenpairs.min(n), n)?;
     Ok(())
 }

@@ -37,12 +37,13 @@ impl PyRetrievalIndex {
     /// weights, χ²) into a new SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
     /// of training on these shapes (its descriptor settings, cleaning included, are used);
     /// `despike` / `fill_holes` / `denoise`: the spike threshold, the largest hole perimeter
-    /// (in √area) and the target roughness, `None` for off.
+    /// (in √area) and the target roughness, `None` for off; `overwrite`: replace an existing
+    /// `out` (never an input).
     #[staticmethod]
     #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0,
         despike=Some(mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD),
         fill_holes=Some(mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER),
-        denoise=Some(shape_retrieval::DEFAULT_TARGET_ROUGHNESS)))]
+        denoise=Some(shape_retrieval::DEFAULT_TARGET_ROUGHNESS), overwrite=false))]
     #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
@@ -54,9 +55,12 @@ impl PyRetrievalIndex {
         despike: Option<f64>,
         fill_holes: Option<f64>,
         denoise: Option<f64>,
+        overwrite: bool,
     ) -> PyResult<Self> {
         let path = out.clone();
         run(py, move |_| {
+            let inputs: Vec<&std::path::Path> = paths.iter().chain(&vocabulary).map(PathBuf::as_path).collect();
+            shape_retrieval::check_index_output(&out, &inputs, overwrite)?;
             let mut settings = RetrievalSettings::default();
             if let Some(w) = words {
                 settings.training.words = w;
@@ -67,6 +71,10 @@ impl PyRetrievalIndex {
                 fill_holes.map(|max_perimeter| shape_retrieval::HoleFilling { max_perimeter });
             settings.descriptor.denoising = denoise.map(|roughness| shape_retrieval::Denoising { roughness });
             let vocabulary = vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?;
+            match &vocabulary {
+                Some(v) => shape_retrieval::limits::check_sizes(v.descriptor().eigenpairs, v.vocabulary().size())?,
+                None => shape_retrieval::limits::check_sizes(settings.descriptor.eigenpairs, settings.training.words)?,
+            }
             let meshes = read_all(&paths)?;
             let index = RetrievalIndex::build(&meshes, &settings, vocabulary)?;
             SqliteIndex::new(&out).save_index(&index)?;
@@ -114,7 +122,7 @@ impl PyRetrievalIndex {
                 .iter()
                 .map(|(name, mesh)| settings.describe(name, mesh))
                 .collect::<Result<Vec<_>, _>>()?;
-            index.append(&entries)?;
+            index.append(&settings, &entries)?;
             Ok(entries.len())
         })
     }

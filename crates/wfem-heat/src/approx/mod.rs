@@ -414,7 +414,8 @@ impl FeatureApproximation {
 ///
 /// # Errors
 /// [`HeatError::LengthMismatch`]/[`HeatError::NonFiniteInput`] for a bad f;
-/// [`HeatError::InvalidParameter`] for k = 0, k > n, scales = 0 or a negative/NaN threshold;
+/// [`HeatError::InvalidParameter`] for k = 0, k > n, scales outside
+/// 1..=[`crate::limits::MAX_APPROX_SCALES`] or a negative/NaN threshold;
 /// [`HeatError::Mesh`] when the mesh and the kernel disagree or the mesh is not manifold
 /// (critical points); the eigensolver and kernel errors.
 pub fn feature_approximation(
@@ -431,12 +432,7 @@ pub fn feature_approximation(
         });
     }
     check::vector(f, n)?;
-    if params.scales == 0 {
-        return Err(HeatError::InvalidParameter {
-            name: "scales",
-            reason: "must be positive".into(),
-        });
-    }
+    crate::limits::count("scales", params.scales, 1, crate::limits::MAX_APPROX_SCALES)?;
     let threshold_ok = match params.persistence {
         Persistence::Relative(x) | Persistence::Absolute(x) => x.is_finite() && x >= 0.0,
     };

@@ -31,6 +31,7 @@ from ._errors import (
     IllConditionedError,
     InternalError,
     InvalidInputError,
+    InvalidTypeError,
     MeshError,
     MeshFileError,
     RetrievalError,
@@ -138,6 +139,7 @@ __all__ = [
     # errors
     "WfemError",
     "InvalidInputError",
+    "InvalidTypeError",
     "MeshError",
     "MeshFileError",
     "RetrievalError",
@@ -149,3 +151,10 @@ __all__ = [
     "DENSE_MAX_VERTICES",
     "__version__",
 ]
+
+# Every error out of the public API is a WfemError (bare OverflowError/TypeError of argument
+# conversions included): see _guard.py.
+from ._guard import guard_namespace as _guard_namespace  # noqa: E402
+
+_guard_namespace(globals(), __all__)
+_guard_namespace(vars(generate), generate.__all__)

@@ -13,6 +13,7 @@ import scipy.sparse as sp
 from . import _wfem
 from ._arrays import as_mesh, as_vector, points_of, to_csc
 from ._cloud import DEFAULT_NEIGHBORS
+from ._errors import MeshError
 
 __all__ = [
     "read_mesh",
@@ -71,7 +72,20 @@ def validate(V: Any, F: Any = None) -> ValidationReport:
     duplicate faces, inconsistent orientation, several components, boundaries.
     """
     v, f = as_mesh(V, F)
-    r = json.loads(_wfem.validate_mesh(v, f))
+    try:
+        r = json.loads(_wfem.validate_mesh(v, f))
+    except MeshError as e:
+        # A mesh that cannot even be represented (a NaN coordinate, a face index out of range)
+        # is reported like any other error, not raised: validate() answers "is it usable?".
+        problem = {"kind": e.kind, "severity": "Error", **e.details}
+        return ValidationReport(
+            n_vertices=int(v.shape[0]),
+            n_faces=int(f.shape[0]),
+            usable=False,
+            problems=[problem],
+            counts={e.kind: 1},
+            summary=f"not usable: {e}",
+        )
     return ValidationReport(
         n_vertices=r["n_vertices"],
         n_faces=r["n_faces"],

@@ -340,9 +340,12 @@ class RetrievalIndex:
         despike: float | None = _wfem.DEFAULT_SPIKE_THRESHOLD,
         fill_holes: float | None = _wfem.DEFAULT_MAX_HOLE_PERIMETER,
         denoise: float | None = _wfem.DEFAULT_TARGET_ROUGHNESS,
+        overwrite: bool = False,
     ) -> "RetrievalIndex":
-        """Indexes mesh files with the default recipe into a new file ``out`` (replaced
-        atomically if it exists).
+        """Indexes mesh files with the default recipe into a new file ``out``.
+
+        An existing ``out`` raises :class:`StoreError` unless ``overwrite=True`` (then it is
+        replaced atomically); ``out`` is never one of the inputs, a directory or a FIFO.
 
         Every shape is cleaned first: a vertex farther than ``despike`` local edge lengths from
         the centroid of its neighbours (an isolated spike) is put back, every hole whose rim
@@ -354,7 +357,7 @@ class RetrievalIndex:
         used instead."""
         ps = [os.fspath(p) for p in paths]
         voc = None if vocabulary is None else os.fspath(vocabulary)
-        return cls(_wfem.RetrievalIndex.build(ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise))
+        return cls(_wfem.RetrievalIndex.build(ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise, overwrite))
 
     @classmethod
     def open(cls, path: str | os.PathLike[str]) -> "RetrievalIndex":

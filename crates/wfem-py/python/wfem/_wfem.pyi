@@ -327,6 +327,7 @@ class RetrievalIndex:
         despike: float | None = ...,
         fill_holes: float | None = ...,
         denoise: float | None = ...,
+        overwrite: bool = ...,
     ) -> RetrievalIndex: ...
     @staticmethod
     def open(path: str) -> RetrievalIndex: ...
