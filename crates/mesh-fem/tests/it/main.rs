@@ -6,6 +6,7 @@ mod minimal_reader;
 mod corpus;
 mod filter;
 mod generate;
+mod handles;
 mod io_obj_oracle;
 mod io_readers;
 mod io_special_files;
