@@ -5,6 +5,8 @@
 //!   meshes and saves it;
 //! * `build` indexes meshes: it trains a vocabulary on them (optimistic when the same shapes
 //!   are then evaluated) or reuses one (`--vocab`), and stores every bag;
+//! * `eval` indexes labelled meshes and reports leave-one-out retrieval measures
+//!   ([`shape_retrieval::eval`]);
 //! * `query` ranks the indexed meshes by distance to a query mesh: one descriptor computation
 //!   and one scan of the index.
 //!
@@ -73,6 +75,44 @@ pub enum RetrievalAction {
         /// optimistic when those same meshes are then used to measure retrieval.
         #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
         vocab: Option<PathBuf>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        descriptor: DescriptorArgs,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        training: TrainingArgs,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        bags: BagArgs,
+    },
+    /// Evaluate retrieval on labelled meshes: index them, rank every shape against all the
+    /// others from its stored signature (leave-one-out) and report mAP, nearest neighbour, first
+    /// and second tier, E-measure and DCG, overall and per class, with the most confused
+    /// classes.
+    ///
+    /// Classes come from `--labels` (lines `file,class`, paths relative to the label file) or
+    /// from each path (`--class-from`). Without `--vocab` the vocabulary is trained on the
+    /// evaluated shapes themselves, which is optimistic: for an honest number train one on
+    /// other shapes with `wfem retrieval vocab` and pass it with `--vocab`.
+    Eval {
+        /// Mesh files (with `--labels`: only these of the label file; default all of them).
+        files: Vec<PathBuf>,
+        /// Label file: one `file,class` per line (an optional `file,class` header).
+        #[arg(long)]
+        labels: Option<PathBuf>,
+        /// Without `--labels`, a file's class is the folder holding it (`folder`, default) or
+        /// its name without extension and digits (`stem`: cat10.off → cat).
+        #[arg(long, conflicts_with = "labels", value_parser = clap::builder::PossibleValuesParser::new(shape_retrieval::eval::ClassRule::NAMES))]
+        class_from: Option<String>,
+        /// Reuse a vocabulary from `wfem retrieval vocab` (recommended: trained on other shapes).
+        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
+        vocab: Option<PathBuf>,
+        /// Also write the report (with every query) as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Also save the index (SQLite, or JSON for `.json`).
+        #[arg(long)]
+        index: Option<PathBuf>,
         #[command(flatten)]
         #[allow(missing_docs)]
         descriptor: DescriptorArgs,
@@ -227,7 +267,10 @@ impl DescriptorArgs {
             settings.descriptor.hole_filling = v.map(|max_perimeter| HoleFilling { max_perimeter });
         }
         if let Some(v) = number_or_off("--denoise", &self.denoise)? {
-            settings.descriptor.denoising = v.map(|roughness| Denoising { roughness });
+            settings.descriptor.denoising = v.map(|roughness| Denoising {
+                roughness,
+                ..Default::default()
+            });
         }
         let sihks_only = [
             ("--tau-min", self.tau_min.is_some()),
@@ -307,6 +350,7 @@ impl BagArgs {
                 let bad = || CliError::Usage(format!("--fusion {text:?}: expected M:W, e.g. 20:0.5"));
                 let (m, w) = text.split_once(':').ok_or_else(bad)?;
                 Some(GlobalSignature {
+                    kind: Default::default(),
                     eigenvalues: m.trim().parse().map_err(|_| bad())?,
                     weight: w.trim().parse().map_err(|_| bad())?,
                 })
@@ -318,9 +362,11 @@ impl BagArgs {
 
 /// Loads and validates every file (in order, with a progress bar), refusing an output path
 /// among them.
-fn load_all(files: &[PathBuf], out: &std::path::Path) -> Result<Vec<(String, mesh_fem::TriMesh)>, CliError> {
+fn load_all(files: &[PathBuf], outputs: &[&std::path::Path]) -> Result<Vec<(String, mesh_fem::TriMesh)>, CliError> {
     for f in files {
-        check_output(f, out)?;
+        for out in outputs {
+            check_output(f, out)?;
+        }
     }
     let bar = super::progress::bar(files.len(), "reading shapes");
     let meshes = files
@@ -348,7 +394,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             super::limits::retrieval_sizes(descriptor.eigs, training.words)?;
             descriptor.apply(&mut settings)?;
             training.apply(&mut settings);
-            let meshes = load_all(files, path)?;
+            let meshes = load_all(files, &[path])?;
             let features = ShapeFeatures::compute_many(&meshes, &settings.descriptor, &settings.bags)?;
             let vocabulary = VocabularyModel::train(&settings.descriptor, &settings.training, &features)?;
             JsonFile::new(path).save_vocabulary(&vocabulary)?;
@@ -370,27 +416,12 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             training,
             bags,
         } => {
-            let mut settings = RetrievalSettings::default();
-            bags.apply(&mut settings)?;
-            let vocabulary = match vocab {
-                Some(v) => {
-                    check_output(v, path)?;
-                    let vocabulary = JsonFile::new(v).load_vocabulary()?;
-                    super::limits::retrieval_sizes(vocabulary.descriptor().eigenpairs, vocabulary.vocabulary().size())?;
-                    Some(vocabulary)
-                }
-                None => {
-                    super::limits::retrieval_sizes(descriptor.eigs, training.words)?;
-                    descriptor.apply(&mut settings)?;
-                    training.apply(&mut settings);
-                    None
-                }
-            };
+            let (settings, vocabulary) = settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &[path])?;
             let from = match vocab {
                 Some(v) => format!("the vocabulary of {}", v.display()),
                 None => "a vocabulary trained on these shapes (optimistic if they are also the test set)".into(),
             };
-            let meshes = load_all(files, path)?;
+            let meshes = load_all(files, &[path])?;
             let index = RetrievalIndex::build(&meshes, &settings, vocabulary)?;
             index_file(path).save_index(&index)?;
             writeln!(
@@ -403,6 +434,34 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 path.display()
             )?;
         }
+        RetrievalAction::Eval {
+            files,
+            labels,
+            class_from,
+            vocab,
+            json,
+            index,
+            descriptor,
+            training,
+            bags,
+        } => {
+            let outputs: Vec<&std::path::Path> = json.iter().chain(index).map(PathBuf::as_path).collect();
+            let labelled = labelled_files(files, labels.as_deref(), class_from.as_deref())?;
+            let (settings, vocabulary) = settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &outputs)?;
+            let paths: Vec<PathBuf> = labelled.iter().map(|(f, _)| f.clone()).collect();
+            let meshes = load_all(&paths, &outputs)?;
+            let classes: Vec<String> = labelled.into_iter().map(|(_, c)| c).collect();
+            let run = shape_retrieval::eval::evaluate_collection(&meshes, &classes, &settings, vocabulary)?;
+            if let Some(p) = json {
+                let text = serde_json::to_string_pretty(&run.report)
+                    .map_err(|e| CliError::Usage(format!("{}: {e}", p.display())))?;
+                mesh_fem::io::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
+            }
+            if let Some(p) = index {
+                index_file(p).save_index(&run.index)?;
+            }
+            write!(out, "{}", run.report.to_text())?;
+        }
         RetrievalAction::Add { index: path, files } => {
             if !is_sqlite(path)? {
                 return Err(CliError::Usage(format!(
@@ -413,7 +472,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             let store = SqliteIndex::new(path);
             let (settings, _) = store.open()?;
             stored_sizes(&settings)?;
-            let meshes = load_all(files, path)?;
+            let meshes = load_all(files, &[path])?;
             let entries = meshes
                 .iter()
                 .map(|(name, mesh)| settings.describe(name, mesh))
@@ -455,6 +514,72 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// The settings of `build`/`eval` and the vocabulary to use: the one of `--vocab` (its
+/// descriptor settings win), or none (trained on the indexed shapes with the given options).
+fn settings_and_vocabulary(
+    vocab: Option<&std::path::Path>,
+    descriptor: &DescriptorArgs,
+    training: &TrainingArgs,
+    bags: &BagArgs,
+    outputs: &[&std::path::Path],
+) -> Result<(RetrievalSettings, Option<VocabularyModel>), CliError> {
+    let mut settings = RetrievalSettings::default();
+    bags.apply(&mut settings)?;
+    match vocab {
+        Some(v) => {
+            for out in outputs {
+                check_output(v, out)?;
+            }
+            let vocabulary = JsonFile::new(v).load_vocabulary()?;
+            super::limits::retrieval_sizes(vocabulary.descriptor().eigenpairs, vocabulary.vocabulary().size())?;
+            Ok((settings, Some(vocabulary)))
+        }
+        None => {
+            super::limits::retrieval_sizes(descriptor.eigs, training.words)?;
+            descriptor.apply(&mut settings)?;
+            training.apply(&mut settings);
+            Ok((settings, None))
+        }
+    }
+}
+
+/// The files of `eval` with their classes: from the label file (restricted to `files` if any
+/// are given) or from each path by the class rule.
+fn labelled_files(
+    files: &[PathBuf],
+    labels: Option<&std::path::Path>,
+    class_from: Option<&str>,
+) -> Result<Vec<(PathBuf, String)>, CliError> {
+    use shape_retrieval::eval::{read_label_file, ClassRule};
+    match labels {
+        Some(l) => {
+            let all = read_label_file(l)?;
+            if files.is_empty() {
+                return Ok(all);
+            }
+            files
+                .iter()
+                .map(|f| {
+                    all.iter()
+                        .find(|(g, _)| g == f || g.canonicalize().ok() == f.canonicalize().ok())
+                        .cloned()
+                        .ok_or_else(|| CliError::Usage(format!("{} is not in {}", f.display(), l.display())))
+                })
+                .collect()
+        }
+        None => {
+            if files.is_empty() {
+                return Err(CliError::Usage("give mesh files, or --labels with a label file".into()));
+            }
+            let rule = class_from.and_then(ClassRule::from_name).unwrap_or_default();
+            Ok(files
+                .iter()
+                .map(|f| rule.class_of(f).map(|c| (f.clone(), c)))
+                .collect::<Result<_, _>>()?)
+        }
+    }
 }
 
 /// The stored settings pass the same bounds as `build`'s options (a hand-edited k would

@@ -177,6 +177,7 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
                 despiking: None,
                 denoising: None,
                 hole_filling: None,
+                topology_repair: None,
             },
             training: TrainingParams {
                 standardize: false,
@@ -187,6 +188,7 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
                 assignment: Assignment::Normalized,
                 distance: BagDistance::L1,
                 global: None,
+                spatial: None,
             },
         })
     };
@@ -300,6 +302,7 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
             "default fused with ln(λ_i A), i = 1…20, weight 1",
             variant(&|s| {
                 s.bags.global = Some(GlobalSignature {
+                    kind: Default::default(),
                     eigenvalues: 20,
                     weight: 1.0,
                 })
@@ -536,6 +539,7 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
         denoising: None,
         smoothing: None,
         hole_filling: None,
+        topology_repair: None,
         ..Default::default()
     };
     let mut shapes = protocol::load_shapes(files.clone(), &plain, &opts.cache)?;
@@ -603,6 +607,7 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
         denoising: m.settings.descriptor.denoising,
         smoothing: m.settings.descriptor.smoothing,
         hole_filling: m.settings.descriptor.hole_filling,
+        topology_repair: m.settings.descriptor.topology_repair,
         ..plain.clone()
     };
     let mut groups: Vec<DescriptorSettings> = vec![plain.clone()];

@@ -65,7 +65,10 @@ impl PyRetrievalIndex {
             settings.descriptor.despiking = despike.map(|threshold| shape_retrieval::Despiking { threshold });
             settings.descriptor.hole_filling =
                 fill_holes.map(|max_perimeter| shape_retrieval::HoleFilling { max_perimeter });
-            settings.descriptor.denoising = denoise.map(|roughness| shape_retrieval::Denoising { roughness });
+            settings.descriptor.denoising = denoise.map(|roughness| shape_retrieval::Denoising {
+                roughness,
+                ..Default::default()
+            });
             let vocabulary = vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?;
             let meshes = read_all(&paths)?;
             let index = RetrievalIndex::build(&meshes, &settings, vocabulary)?;

@@ -200,6 +200,7 @@ fn kernel_assignment_matches_its_definition() {
 #[test]
 fn shape_dna_is_scale_invariant_and_its_distance_is_the_mean_log_gap() {
     let g = GlobalSignature {
+        kind: Default::default(),
         eigenvalues: 8,
         weight: 1.0,
     };
@@ -226,6 +227,7 @@ fn fused_distance_adds_the_weighted_shape_dna_gap() {
     let shapes = small_collection();
     let mut settings = small_settings();
     settings.bags.global = Some(GlobalSignature {
+        kind: Default::default(),
         eigenvalues: 10,
         weight: 0.5,
     });
@@ -323,7 +325,11 @@ fn denoising_leaves_smooth_shapes_alone_and_smooths_noisy_ones_back() {
         }
     }
     assert!(matches!(
-        Denoising { roughness: 0.0 }.apply(&sphere),
+        Denoising {
+            roughness: 0.0,
+            ..Default::default()
+        }
+        .apply(&sphere),
         Err(RetrievalError::InvalidParameter { .. })
     ));
 }
@@ -339,6 +345,7 @@ fn invalid_settings_and_inputs_are_typed_errors() {
     ));
     let mut settings = small_settings();
     settings.bags.global = Some(GlobalSignature {
+        kind: Default::default(),
         eigenvalues: 30,
         weight: 1.0,
     });
@@ -350,6 +357,7 @@ fn invalid_settings_and_inputs_are_typed_errors() {
         })
     ));
     settings.bags.global = Some(GlobalSignature {
+        kind: Default::default(),
         eigenvalues: 3,
         weight: f64::NAN,
     });
@@ -413,6 +421,7 @@ fn invalid_settings_and_inputs_are_typed_errors() {
     let two = TriMesh::new(positions, faces).unwrap();
     let mut settings = small_settings();
     settings.bags.global = Some(GlobalSignature {
+        kind: Default::default(),
         eigenvalues: 3,
         weight: 1.0,
     });
