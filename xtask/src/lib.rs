@@ -6,4 +6,5 @@
 pub mod bench;
 pub mod lab;
 pub mod peers;
+pub mod real_eval;
 pub mod test_all;

@@ -19,7 +19,9 @@
 
 mod error;
 pub mod eval;
+pub mod handles;
 pub mod protocol;
+pub mod real;
 pub mod synth;
 pub mod transform;
 

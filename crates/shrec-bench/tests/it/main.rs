@@ -4,3 +4,4 @@
 mod eval;
 mod synth;
 mod transform;
+mod handles;
