@@ -9,7 +9,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use mesh_fem::generate::icosphere;
-use mesh_fem::{assemble, AssemblyParams, LumpedMassKind};
+use mesh_fem::{assemble, AssemblyParams, Lumping};
 use std::hint::black_box;
 
 #[path = "common/levels.rs"]
@@ -30,7 +30,7 @@ fn bench_assembly(c: &mut Criterion) {
     let mut group = c.benchmark_group("assemble_LBD_voronoi");
     let mesh = icosphere(levels::levels().into_iter().max().unwrap_or(5));
     let params = AssemblyParams {
-        lumped: LumpedMassKind::Voronoi,
+        lumping: Lumping::Voronoi,
     };
     group.bench_with_input(BenchmarkId::new("icosphere", mesh.n_vertices()), &mesh, |b, mesh| {
         b.iter_with_large_drop(|| assemble(black_box(mesh), &params))

@@ -42,7 +42,7 @@ import time
 T_START = time.perf_counter()
 
 # CRAM-16 for exp(−x) ≈ c0 + 2 Re Σ_j c_j/(x − z_j), poles in the upper half plane
-# (docs NUMERICS §2.3; the same table as shifted_solve::RationalApprox::cram(16)).
+# (docs docs/NUMERICS.md §2.3; the same table as shifted_solve::RationalApprox::cram(16)).
 CRAM16_C0 = 2.1248537104952237488e-16
 CRAM16 = [
     ((-6.4161776990994341857, 1.1941223933701386699), (6.4500878025539644564e1, -2.2459440762652096092e2)),

@@ -1,40 +1,17 @@
 //! `wfem approx`: the feature-driven approximation f = f_glob + f_loc (paper, Sect. 4.2).
 
+use super::choice::choice;
 use super::heat::{far_exponent, prepare_kernel, times_pow2};
 use super::output::{short_label, short_labels, write_fields, Column, RenderArgs, Writing};
-use super::{limits, progress, read_usable, CliError, KernelArg, MeshArgs, Output, OutputFormat};
-use clap::{Args, ValueEnum};
+use super::{limits, progress, read_usable, CliError, MassArgs, MeshArgs, Output, OutputFormat};
+use clap::Args;
 use mesh_fem::{assemble, AssemblyParams};
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
+use wfem_choice::Choice;
 use wfem_heat::approx::{feature_approximation, ApproxParams, Coefficients, Persistence};
 use wfem_heat::{HeatParams, Method};
-
-/// Coefficients of the global component.
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum CoefficientsArg {
-    /// The best approximation of f in span{K_t e_i : i ∈ A} (M-orthogonal projection).
-    #[default]
-    LeastSquares,
-    /// The feature values averaged with heat-kernel weights: Σ f(p_i) K_t e_i / Σ K_t e_i.
-    Normalized,
-    /// The paper's literal f_glob = Σ_{i∈A} f(p_i) K_t e_i (small with sparse anchors).
-    FeatureValues,
-    /// Interpolate f on the anchors: Σ_{i∈A} c_i K_t e_i with f_glob(p_j) = f(p_j), j ∈ A.
-    Interpolate,
-}
-
-impl From<CoefficientsArg> for Coefficients {
-    fn from(c: CoefficientsArg) -> Self {
-        match c {
-            CoefficientsArg::Normalized => Coefficients::Normalized,
-            CoefficientsArg::LeastSquares => Coefficients::LeastSquares,
-            CoefficientsArg::FeatureValues => Coefficients::FeatureValues,
-            CoefficientsArg::Interpolate => Coefficients::Interpolate,
-        }
-    }
-}
 
 /// Arguments of `wfem approx`.
 #[derive(Args, Clone, Debug)]
@@ -60,11 +37,11 @@ pub struct ApproxArgs {
     #[arg(long)]
     pub k: Option<usize>,
     /// Coefficients of the global component.
-    #[arg(long, value_enum, default_value_t = CoefficientsArg::LeastSquares)]
-    pub coefficients: CoefficientsArg,
-    /// Kernel.
-    #[arg(long, value_enum, default_value_t = KernelArg::Wfem)]
-    pub kernel: KernelArg,
+    #[arg(long, value_parser = choice::<Coefficients>(), default_value = Coefficients::default_name())]
+    pub coefficients: Coefficients,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub mass: MassArgs,
     /// Output file: .ply, .npy (+ .json sidecar with the times) or .csv (f, then f_glob and
     /// f_loc at every scale, named with their t), or .png (one figure each for f, f_glob and
     /// f_loc at the coarsest scale, anchors highlighted).
@@ -123,13 +100,14 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         });
     }
     limits::columns("--scales", 1 + 2 * args.scales, n)?;
+    let mass = args.mass.mass()?;
     let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams::default())
+        assemble(&input.mesh, &AssemblyParams::for_mass(mass))
     })?;
     let kernel = prepare_kernel(
         &ops,
         HeatParams {
-            kernel: args.kernel.into(),
+            mass,
             method: Method::default(),
         },
         n,
@@ -145,7 +123,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         } else {
             Persistence::Relative(args.persistence)
         },
-        coefficients: args.coefficients.into(),
+        coefficients: args.coefficients,
         ..ApproxParams::default()
     };
     let mut approx = progress::run(format!("λ_{k}, anchors and {} scales", args.scales), || {
@@ -184,9 +162,9 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 format!("f_glob_t{label}"),
                 "glob",
                 format!(
-                    "f_glob of {field_name}, t = {label} ({} anchors, {} kernel)",
+                    "f_glob of {field_name}, t = {label} ({} anchors, {} mass)",
                     approx.anchors.len(),
-                    super::name_of(args.kernel)
+                    mass.name()
                 ),
                 Some(s.t),
                 &s.global,
@@ -225,7 +203,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     meta.insert("command".into(), json!("approx"));
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("field".into(), json!(args.field.display().to_string()));
-    meta.insert("kernel".into(), json!(super::name_of(args.kernel)));
+    meta.insert("mass".into(), json!(mass.name()));
     meta.insert("lambda_k".into(), json!({ "k": k, "value": approx.lambda_k }));
     meta.insert("anchors".into(), json!(approx.anchors));
     let how = Writing {

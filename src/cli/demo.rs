@@ -1,6 +1,6 @@
 //! `wfem demo`: what `cargo run --release` runs.
 
-use super::heat::{heat_params, prepare_kernel, relative_error, BackendArg, KernelArg, MethodArg};
+use super::heat::{prepare_kernel, relative_error};
 use super::output::{check_out_dir, colors_of, create_out_dir, figure_params, short_label};
 use super::{limits, progress, CliError};
 use clap::Args;
@@ -10,6 +10,8 @@ use std::fmt::Write as _;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
+use wfem_choice::Choice;
+use wfem_heat::{HeatParams, Method};
 use wfem_render::{render_png, Frame, View};
 
 /// Arguments of `wfem demo`.
@@ -93,16 +95,22 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
     e[anchor] = 1.0;
 
     let start = Instant::now();
-    let params = heat_params(KernelArg::Wfem, MethodArg::Rational, None, 0, BackendArg::Ldlt);
+    let params = HeatParams {
+        method: Method::rational(shifted_solve::DEFAULT_DEGREE),
+        ..Default::default()
+    };
     let rational = prepare_kernel(&ops, params, n)?;
     timed("rational: symbolic analysis", start);
 
     let start = Instant::now();
-    let params = heat_params(KernelArg::Wfem, MethodArg::Spectral, None, eigs, BackendArg::Ldlt);
+    let params = HeatParams {
+        method: Method::spectral(eigs),
+        ..Default::default()
+    };
     let spectral = prepare_kernel(&ops, params, n)?;
     timed(&format!("spectral: {eigs} eigenpairs"), start);
 
-    let params = heat_params(KernelArg::Wfem, MethodArg::Fast, None, 0, BackendArg::Ldlt);
+    let params = HeatParams::default();
     let fast = prepare_kernel(&ops, params, n)?;
 
     let mut fields: Vec<(String, Vec<f64>)> = Vec::new();
@@ -116,8 +124,8 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
         Ok((g, start.elapsed().as_secs_f64()))
     };
     for &t in &DEMO_TIMES {
-        let (g_rat, t_rat) = run("rational", &rational, t)?;
-        let (g_spec, t_spec) = run("spectral", &spectral, t)?;
+        let (g_rat, t_rat) = run(rational.method().name(), &rational, t)?;
+        let (g_spec, t_spec) = run(spectral.method().name(), &spectral, t)?;
         let (g_fast, t_fast) = run("fast path", &fast, t)?;
         rows.push((
             t,

@@ -1,36 +1,15 @@
 //! `wfem distance`: diffusion distances from one vertex to every vertex.
 
+use super::choice::choice;
 use super::heat::{check_degree, prepare_kernel};
 use super::output::{short_label, write_fields, Column, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use mesh_fem::{assemble, AssemblyParams};
 use serde_json::json;
 use std::io::Write;
+use wfem_choice::Choice;
 use wfem_heat::{DiffusionDistance, DistanceKind, DistanceParams, HeatParams, Method};
-
-/// Which diffusion distance.
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum DistanceKindArg {
-    /// The diffusion distance (Σ_k e^{−2λ_k t}(x_k(i) − x_k(j))²)^{1/2}, from H_{2t} = K_{2t}B⁻¹
-    /// (the paper's linear FEM diffusion distance): 0 at the source, growing with distance.
-    #[default]
-    #[value(alias = "linear")]
-    Diffusion,
-    /// The paper's wFEM distance ‖h_i − h_j‖_B, h_i = K_{t/2} e_i (Eq. (18b)), from S_t = B K_t:
-    /// weighted by the vertex areas twice, it follows the mesh's areas on irregular meshes.
-    #[value(alias = "wfem")]
-    MassWeighted,
-}
-
-impl From<DistanceKindArg> for DistanceKind {
-    fn from(k: DistanceKindArg) -> Self {
-        match k {
-            DistanceKindArg::Diffusion => DistanceKind::Diffusion,
-            DistanceKindArg::MassWeighted => DistanceKind::MassWeighted,
-        }
-    }
-}
 
 /// Arguments of `wfem distance`.
 #[derive(Args, Clone, Debug)]
@@ -46,8 +25,8 @@ pub struct DistanceArgs {
     #[arg(long)]
     pub from: u32,
     /// Which distance.
-    #[arg(long, value_enum, default_value_t = DistanceKindArg::Diffusion)]
-    pub kind: DistanceKindArg,
+    #[arg(long, value_parser = choice::<DistanceKind>(), default_value = DistanceKind::default_name())]
+    pub kind: DistanceKind,
     /// Use the paper's rational method of this degree (error ≈ 9.3^-degree) instead of the
     /// default fast exact path.
     #[arg(long)]
@@ -66,7 +45,7 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
     limits::time("--t", args.t)?;
     check_degree(args.degree)?;
     let label = short_label(args.t);
-    let kind: DistanceKind = args.kind.into();
+    let kind = args.kind;
     let name = kind.name().replace('-', "_");
     let suffix = format!("{}-distance-t{label}", kind.name());
     args.output
@@ -80,7 +59,7 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
     let kernel = prepare_kernel(
         &ops,
         HeatParams {
-            method,
+            method: method.clone(),
             ..Default::default()
         },
         input.mesh.n_vertices(),
@@ -97,8 +76,10 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
             input.name,
             kind.name(),
             args.from,
-            args.degree
-                .map_or("fast".to_string(), |d| format!("rational, degree {d}"))
+            match &method {
+                Method::Rational { degree, .. } => format!("{}, degree {degree}", method.name()),
+                m => m.name().to_string(),
+            }
         ),
         t: Some(args.t),
         values: row,
@@ -112,19 +93,13 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
         meta.insert(
             "diagonal".into(),
             match info.hops {
-                Some(hops) => json!({ "name": "probing", "columns": info.columns, "hops": hops, "relative_tail": info.relative_tail }),
-                None if info.columns == 0 => json!({ "name": "selected inversion" }),
-                None => json!({ "name": "exact columns", "columns": info.columns }),
+                Some(hops) => json!({ "name": info.method.name(), "columns": info.columns, "hops": hops, "relative_tail": info.relative_tail }),
+                None if info.columns == 0 => json!({ "name": info.method.name() }),
+                None => json!({ "name": info.method.name(), "columns": info.columns }),
             },
         );
     }
-    meta.insert(
-        "method".into(),
-        args.degree.map_or(
-            json!({ "name": "fast" }),
-            |d| json!({ "name": "rational", "degree": d }),
-        ),
-    );
+    meta.insert("method".into(), super::heat::method_meta(&method));
     let how = Writing {
         render: args.render,
         highlight: &[i],

@@ -1,119 +1,88 @@
 //! `wfem heat`: K_t e_i or K_t f for one or several diffusion times.
 
+use super::choice::choice;
 use super::output::{short_labels, Column, RenderArgs, Writing};
-use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
-use clap::{Args, ValueEnum};
+use super::{limits, progress, read_usable, CliError, MassArgs, MeshArgs, Output};
+use clap::Args;
 use mesh_fem::{assemble, AssemblyParams, FemOperators};
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
-use wfem_heat::{HeatKernel, HeatParams, KernelKind, Method};
+use wfem_choice::Choice;
+use wfem_heat::{HeatKernel, HeatParams, Method, MethodOptions};
 
-/// Which discrete heat kernel (paper, Table 1).
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum KernelArg {
-    /// wFEM: consistent mass B (Eq. (6)).
-    #[default]
-    Wfem,
-    /// Lumped: the diagonal mass D (Eq. (7)) chosen by --lumped (barycentric by default).
-    Lumped,
-    /// Linear FEM: B = I.
-    Linear,
+/// `--method` with its options (`--degree`, `--backend`, `--eigs`): the heat method of the
+/// library's registry ([`Method`]) with the options that apply to it.
+#[derive(Args, Clone, Debug)]
+pub struct MethodArgs {
+    /// How K_t f is evaluated. Approximate methods are checked against the exact fast path:
+    /// an error above 0.1 % of max|K_t f| is refused unless --allow-inaccurate.
+    /// [default: fast; rational when --degree or --backend is given]
+    #[arg(long = "method", value_parser = choice::<Method>())]
+    pub method: Option<Method>,
+    /// Degree of the rational approximation, --method rational only (error ≈ 9.3^-degree;
+    /// default 16).
+    #[arg(long)]
+    pub degree: Option<usize>,
+    /// Solver of the shifted systems, --method rational only [default: ldlt].
+    #[arg(long, value_parser = choice::<shifted_solve::Backend>())]
+    pub backend: Option<shifted_solve::Backend>,
+    /// Number of eigenpairs, --method spectral only (default min(200, n); at most n/10 on
+    /// meshes above 1000 vertices, where more cost more than --method dense or fast).
+    #[arg(long)]
+    pub eigs: Option<usize>,
 }
 
-impl From<KernelArg> for KernelKind {
-    fn from(k: KernelArg) -> Self {
-        match k {
-            KernelArg::Wfem => KernelKind::Wfem,
-            KernelArg::Lumped => KernelKind::Lumped,
-            KernelArg::Linear => KernelKind::Linear,
+impl MethodArgs {
+    fn options(&self, eigenpairs: Option<usize>) -> MethodOptions {
+        MethodOptions {
+            degree: self.degree,
+            backend: self.backend,
+            eigenpairs,
         }
     }
-}
 
-/// How K_t f is evaluated.
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum MethodArg {
-    /// Shift-and-invert rational Krylov with one real factorization (beyond the paper; exact
-    /// to ≈1e−12 and the quickest: the default).
-    #[default]
-    Fast,
-    /// Rational Chebyshev approximation, r shifted sparse solves (Eq. (11)–(13)): the paper's
-    /// method, for comparisons.
-    Rational,
-    /// Truncated spectral expansion with the smallest --eigs eigenpairs (Eq. (8)); inaccurate
-    /// for small t (checked, see --allow-inaccurate).
-    Spectral,
-    /// First-order Taylor step B g = (B − tL) f (Eq. (9)); inaccurate except for tiny t
-    /// (checked, see --allow-inaccurate).
-    Taylor,
-    /// One backward-Euler step (B + tL) g = B f; inaccurate except for tiny t (checked, see
-    /// --allow-inaccurate).
-    BackwardEuler,
-    /// Dense generalized eigendecomposition (n ≤ 5000 only; the exact reference).
-    Dense,
-}
-
-impl MethodArg {
-    /// The name on the command line.
-    pub fn name(self) -> String {
-        super::name_of(self)
-    }
-
-    /// Whether the method approximates K_t f only roughly (its error is then estimated).
-    fn approximate(self) -> bool {
-        matches!(self, Self::Spectral | Self::Taylor | Self::BackwardEuler)
-    }
-}
-
-/// How the shifted systems of the rational method are solved.
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum BackendArg {
-    /// Complex-symmetric sparse LDLᵀ, one factorization per pole.
-    #[default]
-    Ldlt,
-    /// Pivoted complex sparse LU, one factorization per pole.
-    Lu,
-    /// Preconditioned MINRES per pole (the paper's choice).
-    Minres,
-    /// All poles in one shift-and-invert Lanczos space: one real Cholesky per t.
-    Multishift,
-}
-
-impl From<BackendArg> for shifted_solve::Backend {
-    fn from(b: BackendArg) -> Self {
-        match b {
-            BackendArg::Ldlt => shifted_solve::Backend::DirectLdlt,
-            BackendArg::Lu => shifted_solve::Backend::DirectLu,
-            BackendArg::Minres => shifted_solve::Backend::Minres(Default::default()),
-            BackendArg::Multishift => shifted_solve::Backend::MultiShift(Default::default()),
+    /// The method as named: as given, else rational when a rational-only option (--degree,
+    /// --backend) is, else the default (the fast exact path), with the registry's options.
+    pub fn named(&self) -> Method {
+        match &self.method {
+            Some(m) => m.clone(),
+            None if self.options(None).names_rational() => Method::rational(shifted_solve::DEFAULT_DEGREE),
+            None => Method::default(),
         }
     }
+
+    /// Options that do not apply to the method are refused rather than silently ignored.
+    pub fn check(&self) -> Result<(), CliError> {
+        check_degree(self.degree)?;
+        self.named()
+            .with_options(&self.options(self.eigs))
+            .map(|_| ())
+            .map_err(option_error)
+    }
+
+    /// The method with the flags' options; `eigs` is the (checked) number of eigenpairs of the
+    /// spectral method.
+    pub fn resolve(&self, eigs: usize) -> Result<Method, CliError> {
+        let method = self.named();
+        let eigenpairs = matches!(method, Method::Spectral { .. }).then_some(eigs);
+        method.with_options(&self.options(eigenpairs)).map_err(option_error)
+    }
 }
 
-/// Builds the heat-kernel parameters for a method (`degree` and `backend` matter for the
-/// rational method only, `eigs` for the spectral one).
-pub(crate) fn heat_params(
-    kernel: KernelArg,
-    method: MethodArg,
-    degree: Option<usize>,
-    eigs: usize,
-    backend: BackendArg,
-) -> HeatParams {
-    let method = match method {
-        MethodArg::Rational => Method::Rational {
-            degree: degree.unwrap_or(shifted_solve::DEFAULT_DEGREE),
-            backend: backend.into(),
-        },
-        MethodArg::Spectral => Method::spectral(eigs),
-        MethodArg::Taylor => Method::Taylor,
-        MethodArg::BackwardEuler => Method::BackwardEuler,
-        MethodArg::Fast => Method::Fast(Default::default()),
-        MethodArg::Dense => Method::Dense,
-    };
-    HeatParams {
-        kernel: kernel.into(),
-        method,
+/// A method option that does not apply, named by its flag.
+fn option_error(e: wfem_heat::HeatError) -> CliError {
+    match e {
+        wfem_heat::HeatError::MisplacedOption { option, method, owner } => {
+            let flag = match option {
+                "eigenpairs" => "eigs",
+                other => other,
+            };
+            CliError::Usage(format!(
+                "--{flag} applies to --method {owner} only, not to --method {method}"
+            ))
+        }
+        other => CliError::Heat(other),
     }
 }
 
@@ -150,29 +119,12 @@ pub struct HeatArgs {
     /// Diffuse this per-vertex field (.npy or .csv, one value per vertex).
     #[arg(long, value_parser = super::input::field_path)]
     pub field: Option<PathBuf>,
-    /// Kernel.
-    #[arg(long, value_enum, default_value_t = KernelArg::Wfem)]
-    pub kernel: KernelArg,
-    /// Which lumped mass D, --kernel lumped only (default barycentric, the paper's Eq. (7)).
-    #[arg(long, value_enum)]
-    pub lumped: Option<super::LumpedArg>,
-    /// Method. Approximate methods (spectral, taylor, backward-euler) are checked against the
-    /// exact fast path: an error above 0.1 % of max|K_t f| is refused unless
-    /// --allow-inaccurate.
-    /// [default: fast; rational when --degree or --backend is given]
-    #[arg(long = "method", value_enum)]
-    pub method_arg: Option<MethodArg>,
-    /// Degree of the rational approximation, --method rational only (error ≈ 9.3^-degree;
-    /// default 16).
-    #[arg(long)]
-    pub degree: Option<usize>,
-    /// Solver of the shifted systems, --method rational only (default ldlt).
-    #[arg(long, value_enum)]
-    pub backend: Option<BackendArg>,
-    /// Number of eigenpairs, --method spectral only (default min(200, n); at most n/10 on
-    /// meshes above 1000 vertices, where more cost more than --method dense or fast).
-    #[arg(long)]
-    pub eigs: Option<usize>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub mass: MassArgs,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub method: MethodArgs,
     /// Write the result of an approximate method even when its estimated error is above
     /// 0.1 % (the estimate is printed and recorded in the .npy sidecar).
     #[arg(long)]
@@ -186,46 +138,27 @@ pub struct HeatArgs {
     pub render: RenderArgs,
 }
 
-impl HeatArgs {
-    /// The method: as given, else rational when a rational-only option (--degree, --backend)
-    /// is, else the fast exact path.
-    pub fn method(&self) -> MethodArg {
-        match self.method_arg {
-            Some(m) => m,
-            None if self.degree.is_some() || self.backend.is_some() => MethodArg::Rational,
-            None => MethodArg::Fast,
-        }
-    }
-}
-
 /// Options that do not apply to the method are refused rather than silently ignored.
 fn check_method_options(args: &HeatArgs) -> Result<(), CliError> {
-    let method = args.method();
-    let misplaced = |flag: &str, applies: &str| {
-        Err(CliError::Usage(format!(
-            "{flag} applies to {applies} only, not to --method {}",
-            method.name()
-        )))
-    };
-    if args.lumped.is_some() && args.kernel != KernelArg::Lumped {
+    args.method.check()?;
+    if args.allow_inaccurate && args.method.named().is_exact() {
         return Err(CliError::Usage(format!(
-            "--lumped applies to --kernel lumped only, not to --kernel {}",
-            super::name_of(args.kernel)
+            "--allow-inaccurate applies to the approximate methods only ({}), not to --method {}",
+            approximate_methods(),
+            args.method.named().name()
         )));
     }
-    if args.degree.is_some() && method != MethodArg::Rational {
-        return misplaced("--degree", "--method rational");
-    }
-    if args.backend.is_some() && method != MethodArg::Rational {
-        return misplaced("--backend", "--method rational");
-    }
-    if args.eigs.is_some() && method != MethodArg::Spectral {
-        return misplaced("--eigs", "--method spectral");
-    }
-    if args.allow_inaccurate && !method.approximate() {
-        return misplaced("--allow-inaccurate", "--method spectral, taylor and backward-euler");
-    }
-    check_degree(args.degree)
+    Ok(())
+}
+
+/// The names of the approximate methods (whose error is estimated), from the registry.
+fn approximate_methods() -> String {
+    Method::entries()
+        .iter()
+        .filter(|e| Method::from_canonical(e.name).is_some_and(|m| !m.is_exact()))
+        .map(|e| e.name)
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The power of two e with max|f|·2^−e ∈ [1, 2) when max|f| is far from 1 (beyond 2^±200),
@@ -313,18 +246,22 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         }
         (None, None) => return Err(CliError::Usage("give exactly one of --source I or --field FILE".into())),
     };
-    let eigs = match args.method() {
-        MethodArg::Spectral => limits::spectral_eigenpairs(args.eigs.unwrap_or(200.min(n)), n)?,
+    let mass = args.mass.mass()?;
+    let method = args.method.named();
+    let eigs = match &method {
+        Method::Spectral { k, .. } => limits::spectral_eigenpairs(args.method.eigs.unwrap_or((*k).min(n)), n)?,
         _ => 0,
     };
-    let lumped = args.lumped.unwrap_or_default().kind();
+    let method = args.method.resolve(eigs)?;
     let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams { lumped })
+        assemble(&input.mesh, &AssemblyParams::for_mass(mass))
     })?;
-    let backend = args.backend.unwrap_or_default();
     let kernel = prepare_kernel(
         &ops,
-        heat_params(args.kernel, args.method(), args.degree, eigs, backend),
+        HeatParams {
+            mass,
+            method: method.clone(),
+        },
         n,
     )?;
     // The exact reference of an approximate method, built on first use.
@@ -337,19 +274,22 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         let g = apply_scaled(&kernel, &f, t)?;
         if let Some((vertex, &value)) = g.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(CliError::NonFinite {
-                what: format!("K_t (--method {}, t = {label})", args.method().name()),
+                what: format!("K_t (--method {}, t = {label})", method.name()),
                 vertex,
                 value,
             });
         }
-        if args.method().approximate() {
+        if !method.is_exact() {
             if reference.is_none() {
-                let params = heat_params(args.kernel, MethodArg::Fast, None, 0, backend);
+                let params = HeatParams {
+                    mass,
+                    method: Method::fast(),
+                };
                 reference = Some(prepare_kernel(&ops, params, n)?);
             }
             if let Some(exact) = &reference {
                 let error = relative_error(&g, &apply_scaled(exact, &f, t)?);
-                check_accuracy(args, t, label, error)?;
+                check_accuracy(args, &method, t, label, error)?;
                 errors.push(error);
             }
         }
@@ -357,10 +297,10 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
             name: format!("t={label}"),
             suffix: suffix.clone(),
             title: format!(
-                "{}: {what}, t = {label} ({} kernel, {})",
+                "{}: {what}, t = {label} ({} mass, {})",
                 input.name,
-                super::name_of(args.kernel),
-                args.method().name()
+                mass.name(),
+                method.name()
             ),
             t: Some(t),
             values: g,
@@ -372,11 +312,8 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let mut meta = serde_json::Map::new();
     meta.insert("command".into(), json!("heat"));
     meta.insert("input".into(), input.meta(&args.input.mesh));
-    meta.insert("kernel".into(), json!(super::name_of(args.kernel)));
-    if args.kernel == KernelArg::Lumped {
-        meta.insert("lumped".into(), json!(super::name_of(args.lumped.unwrap_or_default())));
-    }
-    meta.insert("method".into(), method_meta(args, eigs));
+    meta.insert("mass".into(), json!(mass.name()));
+    meta.insert("method".into(), method_meta(&method));
     match (&args.source, &args.field) {
         (Some(i), _) => meta.insert("source_vertex".into(), json!(i)),
         (_, f) => meta.insert("field".into(), json!(f.as_ref().map(|p| p.display().to_string()))),
@@ -402,10 +339,11 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
 
 /// Prints the estimated error of an approximate method and refuses it above
 /// [`INACCURATE_ABOVE`] unless `--allow-inaccurate`.
-fn check_accuracy(args: &HeatArgs, t: f64, label: &str, error: f64) -> Result<(), CliError> {
+fn check_accuracy(args: &HeatArgs, method: &Method, t: f64, label: &str, error: f64) -> Result<(), CliError> {
     let text = format!(
-        "--method {} at t = {label}: estimated relative error {error:.1e} (max|g − g_exact| / max|g_exact| against --method fast)",
-        args.method().name()
+        "--method {} at t = {label}: estimated relative error {error:.1e} (max|g − g_exact| / max|g_exact| against --method {})",
+        method.name(),
+        Method::fast().name()
     );
     if error <= INACCURATE_ABOVE {
         progress::note(&text);
@@ -415,21 +353,22 @@ fn check_accuracy(args: &HeatArgs, t: f64, label: &str, error: f64) -> Result<()
         Ok(())
     } else {
         Err(CliError::Inaccurate {
-            method: args.method().name(),
+            method: method.name().to_string(),
             t,
             error,
         })
     }
 }
 
-fn method_meta(args: &HeatArgs, eigs: usize) -> serde_json::Value {
-    match args.method() {
-        MethodArg::Rational => json!({
-            "name": "rational",
-            "degree": args.degree.unwrap_or(shifted_solve::DEFAULT_DEGREE),
-            "backend": super::name_of(args.backend.unwrap_or_default()),
+/// The method's sidecar entry: its name and options.
+pub(crate) fn method_meta(method: &Method) -> serde_json::Value {
+    match method {
+        Method::Rational { degree, backend } => json!({
+            "name": method.name(),
+            "degree": degree,
+            "backend": backend.name(),
         }),
-        MethodArg::Spectral => json!({ "name": "spectral", "eigenpairs": eigs }),
+        Method::Spectral { k, .. } => json!({ "name": method.name(), "eigenpairs": k }),
         m => json!({ "name": m.name() }),
     }
 }

@@ -3,30 +3,11 @@
 
 use super::progress;
 use super::CliError;
-use clap::{Args, ValueEnum};
+use clap::Args;
 use mesh_fem::io::{load, read_field, LoadOptions, LoadReport};
-use mesh_fem::{repair, MeshError, RepairOptions, RepairReport, TriMesh};
+use mesh_fem::{repair, MeshError, RepairOptions, RepairReport, RepairStep, TriMesh};
 use std::path::{Path, PathBuf};
-
-/// A repair applied by `--repair` (mesh_fem::repair; each is reported on standard error).
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RepairArg {
-    /// Drop vertices that belong to no face (the original Stanford bunny has 1,113).
-    Unreferenced,
-    /// Merge vertices with identical coordinates (within --weld-tolerance): welds triangle
-    /// soups and STL-like files.
-    #[value(alias = "weld")]
-    DuplicateVertices,
-    /// Drop faces that repeat a vertex or have (numerically) zero area.
-    Degenerate,
-    /// Drop later copies of faces with the same three vertices.
-    DuplicateFaces,
-    /// Orient every orientable component consistently (L and B do not depend on it; the
-    /// normals of a written PLY do).
-    Orient,
-    /// All of the above.
-    All,
-}
+use wfem_choice::Choice;
 
 /// The mesh argument shared by every subcommand that reads a mesh.
 #[derive(Args, Clone, Debug, Default)]
@@ -39,8 +20,8 @@ pub struct MeshArgs {
     /// Repair the mesh before use: unreferenced, duplicate-vertices (alias weld), degenerate,
     /// duplicate-faces, orient or all (comma-separated or repeated). Each change is reported;
     /// per-vertex outputs then refer to the repaired mesh.
-    #[arg(long, value_enum, value_delimiter = ',', action = clap::ArgAction::Append)]
-    pub repair: Vec<RepairArg>,
+    #[arg(long, value_parser = super::choice::choice::<RepairStep>(), value_delimiter = ',', action = clap::ArgAction::Append)]
+    pub repair: Vec<RepairStep>,
     /// Distance below which --repair duplicate-vertices merges vertices, relative to the
     /// bounding-box diagonal (0: identical coordinates only).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
@@ -62,8 +43,8 @@ impl MeshArgs {
     /// [`CliError::OutOfRange`] for a negative or non-finite `--weld-tolerance`, or one given
     /// without `--repair duplicate-vertices`.
     pub fn repair_options(&self) -> Result<RepairOptions, CliError> {
-        let has = |r: RepairArg| self.repair.contains(&r) || self.repair.contains(&RepairArg::All);
-        let weld = has(RepairArg::DuplicateVertices);
+        let options = RepairStep::options(&self.repair, self.weld_tolerance);
+        let weld = options.merge_duplicate_vertices.is_some();
         if !(self.weld_tolerance.is_finite() && self.weld_tolerance >= 0.0) {
             return Err(CliError::OutOfRange {
                 flag: "--weld-tolerance",
@@ -73,36 +54,32 @@ impl MeshArgs {
             });
         }
         if self.weld_tolerance > 0.0 && !weld {
-            return Err(CliError::Usage(
-                "--weld-tolerance applies to --repair duplicate-vertices, which is not given".into(),
-            ));
+            return Err(CliError::Usage(format!(
+                "--weld-tolerance applies to --repair {}, which is not given",
+                RepairStep::DuplicateVertices.name()
+            )));
         }
-        Ok(RepairOptions {
-            merge_duplicate_vertices: weld.then_some(self.weld_tolerance),
-            drop_degenerate_faces: has(RepairArg::Degenerate),
-            drop_duplicate_faces: has(RepairArg::DuplicateFaces),
-            orient_faces: has(RepairArg::Orient),
-            drop_unreferenced_vertices: has(RepairArg::Unreferenced),
-        })
+        Ok(options)
     }
 }
 
 /// The `--repair` flags as given, for messages.
 pub fn repair_flags(args: &MeshArgs) -> String {
-    let names: Vec<String> = args.repair.iter().map(|r| super::name_of(*r)).collect();
+    let names: Vec<&str> = args.repair.iter().map(|r| r.name()).collect();
     format!("--repair {}", names.join(","))
 }
 
-/// Parses a `--field` path (clap value parser): its extension must be `.npy` or `.csv`, so a
-/// wrong file is refused before any work.
+/// Parses a `--field` path (clap value parser): its extension must name a field format that
+/// can be read (`.npy` or `.csv`), so a wrong file is refused before any work.
 pub fn field_path(text: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(text);
     let ext = super::output::extension(&path);
-    if ext == "npy" || ext == "csv" {
+    if mesh_fem::io::FieldFormat::from_extension(&ext).is_some_and(|f| f.readable()) {
         Ok(path)
     } else {
         Err(format!(
-            "cannot read {text:?} as a field: the format is chosen by the extension, .npy or .csv (one value per vertex)"
+            "cannot read {text:?} as a field: the format is chosen by the extension, {} (one value per vertex)",
+            mesh_fem::io::FieldFormat::readable_extensions()
         ))
     }
 }

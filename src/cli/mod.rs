@@ -10,6 +10,7 @@
 //! and `.png` (rendered figures).
 
 mod approx;
+pub mod choice;
 mod demo;
 mod distance;
 mod heat;
@@ -23,14 +24,15 @@ pub mod retrieval;
 
 pub use approx::{approx, ApproxArgs};
 pub use demo::{demo, DemoArgs};
-pub use heat::{heat, HeatArgs, KernelArg};
+pub use heat::{heat, HeatArgs};
 pub use input::{load_usable, read_input, read_usable, MeshArgs};
 pub use output::{Output, OutputFormat};
 
-use clap::{Args, ValueEnum};
-use mesh_fem::{assemble, AssemblyParams, LumpedMassKind, MeshError};
+use clap::Args;
+use mesh_fem::{assemble, AssemblyParams, Lumping, Mass, MeshError};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use wfem_choice::Choice;
 use wfem_render::RenderError;
 
 /// Failures of the CLI: printed as one line `wfem: error: …`.
@@ -101,12 +103,31 @@ pub enum CliError {
     Stdout(#[from] std::io::Error),
 }
 
-/// The command-line name of a value (`--kernel wfem` → "wfem").
-pub(crate) fn name_of<T: ValueEnum>(value: T) -> String {
-    value
-        .to_possible_value()
-        .map(|v| v.get_name().to_string())
-        .unwrap_or_default()
+/// `--mass`: which heat kernel, named by its mass matrix M (mesh_fem's [`Mass`] registry).
+#[derive(Args, Clone, Debug)]
+pub struct MassArgs {
+    /// The mass matrix M of the kernel K_t = exp(−t M⁻¹L) (paper, Table 1).
+    #[arg(long, alias = "kernel", value_parser = choice::choice::<Mass>(), default_value = Mass::default_name())]
+    pub mass: Mass,
+    /// Older spelling of a lumped mass (`--kernel lumped --lumped voronoi`); use --mass voronoi.
+    #[arg(long, hide = true, value_parser = choice::choice::<Lumping>())]
+    pub lumped: Option<Lumping>,
+}
+
+impl MassArgs {
+    /// The mass, with the older `--lumped` folded in.
+    pub fn mass(&self) -> Result<Mass, CliError> {
+        match self.lumped {
+            None => Ok(self.mass),
+            Some(lumping) => self.mass.with_lumping(lumping).ok_or_else(|| {
+                CliError::Usage(format!(
+                    "--lumped applies to a lumped --mass, not to --mass {} (use --mass {})",
+                    self.mass.name(),
+                    Mass::Lumped(lumping).name()
+                ))
+            }),
+        }
+    }
 }
 
 /// Checks one output file before any work (its folder exists and is writable, it is not a
@@ -204,26 +225,6 @@ pub fn info(args: &InfoArgs, out: &mut dyn Write) -> Result<(), CliError> {
 // ---------------------------------------------------------------------------------------------
 // wfem operators
 
-/// Which lumped mass to write.
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum LumpedArg {
-    /// One third of the incident triangle areas (paper, Eq. (7)).
-    #[default]
-    Barycentric,
-    /// Mixed Voronoi areas (Meyer et al. 2003).
-    Voronoi,
-}
-
-impl LumpedArg {
-    /// The mass it names.
-    pub fn kind(self) -> LumpedMassKind {
-        match self {
-            LumpedArg::Barycentric => LumpedMassKind::Barycentric,
-            LumpedArg::Voronoi => LumpedMassKind::Voronoi,
-        }
-    }
-}
-
 /// Arguments of `wfem operators`.
 #[derive(Args, Clone, Debug)]
 pub struct OperatorsArgs {
@@ -233,9 +234,9 @@ pub struct OperatorsArgs {
     /// Output directory (created if missing) for stiffness.mtx, mass.mtx and lumped_mass.mtx.
     #[arg(long)]
     pub out: PathBuf,
-    /// Lumped mass kind.
-    #[arg(long, value_enum, default_value_t = LumpedArg::Barycentric)]
-    pub lumped: LumpedArg,
+    /// Which lumped mass D to write in lumped_mass.mtx.
+    #[arg(long, value_parser = choice::choice::<Lumping>(), default_value = Lumping::default_name())]
+    pub lumped: Lumping,
 }
 
 /// `wfem operators`: writes `DIR/stiffness.mtx` (L, positive semidefinite), `DIR/mass.mtx` (B)
@@ -244,9 +245,9 @@ pub fn operators(args: &OperatorsArgs, out: &mut dyn Write) -> Result<(), CliErr
     const FILES: [&str; 3] = ["stiffness.mtx", "mass.mtx", "lumped_mass.mtx"];
     output::check_out_dir(&args.out, &FILES, &[&args.input.mesh])?;
     let input = read_usable(&args.input)?;
-    let lumped = args.lumped.kind();
+    let lumping = args.lumped;
     let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams { lumped })
+        assemble(&input.mesh, &AssemblyParams { lumping })
     })?;
     output::create_out_dir(&args.out)?;
     progress::run("writing Matrix Market files", || {

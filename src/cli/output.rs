@@ -3,12 +3,13 @@
 
 use super::progress;
 use super::CliError;
-use clap::{Args, ValueEnum};
+use clap::Args;
 use mesh_fem::io::{stage_field, AtomicSet, FieldFormat};
 use mesh_fem::TriMesh;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
-use wfem_render::{render_png, symmetric_range, Colormap, Frame, RenderParams, UpAxis, View};
+use wfem_choice::Choice;
+use wfem_render::{render_png, symmetric_range, Colormap, Frame, RenderParams, Up, View};
 
 /// The format of an output file, from its extension: a per-vertex field file or a rendered
 /// figure. Parsed once, when the arguments are parsed, so a wrong extension is refused before
@@ -21,6 +22,12 @@ pub enum OutputFormat {
     Png,
 }
 
+/// A file name in a folder, for checking the folder ([`check_folder`] looks at its parent).
+const PROBE: &str = "wfem-output";
+
+/// The extension of rendered figures.
+const PNG: &str = "png";
+
 /// An output path given on the command line, with its format.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Output {
@@ -31,8 +38,10 @@ pub struct Output {
 }
 
 impl Output {
-    /// The extensions `-o` accepts, as messages list them.
-    pub const EXTENSIONS: &'static str = ".ply, .npy, .csv, .png";
+    /// The extensions `-o` accepts, as messages list them: the field formats and `.png`.
+    pub fn extensions() -> String {
+        format!("{}, .{PNG}", FieldFormat::extensions())
+    }
 
     /// Parses an output path (clap value parser): the extension must name a format.
     pub fn parse(text: &str) -> Result<Self, String> {
@@ -40,11 +49,11 @@ impl Output {
         let ext = extension(&path);
         let format = match FieldFormat::from_extension(&ext) {
             Some(f) => OutputFormat::Field(f),
-            None if ext == "png" => OutputFormat::Png,
+            None if ext == PNG => OutputFormat::Png,
             None => {
                 return Err(format!(
                     "cannot write {text:?}: the output format is chosen by the extension, one of {}",
-                    Self::EXTENSIONS
+                    Self::extensions()
                 ))
             }
         };
@@ -201,7 +210,7 @@ pub fn check_targets(targets: &[PathBuf], inputs: &[&Path]) -> Result<(), CliErr
 pub fn check_out_dir(dir: &Path, files: &[&str], inputs: &[&Path]) -> Result<(), CliError> {
     match std::fs::metadata(dir) {
         Ok(m) if !m.is_dir() => return Err(output_error(dir, "it exists and is not a folder")),
-        Ok(_) => check_folder(&dir.join("x"))?,
+        Ok(_) => check_folder(&dir.join(PROBE))?,
         Err(_) => {
             let existing = dir
                 .ancestors()
@@ -219,7 +228,7 @@ pub fn check_out_dir(dir: &Path, files: &[&str], inputs: &[&Path]) -> Result<(),
                     format!("cannot create it: {} is not a folder", existing.display()),
                 ));
             }
-            check_folder(&existing.join("x"))?;
+            check_folder(&existing.join(PROBE))?;
         }
     }
     let targets: Vec<PathBuf> = files.iter().map(|f| dir.join(f)).collect();
@@ -274,65 +283,18 @@ pub fn short_label(value: f64) -> String {
 // ---------------------------------------------------------------------------------------------
 // Rendering options
 
-/// Which way is up in the figures.
-#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum UpArg {
-    /// From the extents of the mesh (its second moments along x, y, z): +z for a shape thin
-    /// along y (a person in a TOSCA-style z-up file) or thin along x and longer in y than in z
-    /// (a standing quadruped), +y otherwise; printed on stderr.
-    #[default]
-    Auto,
-    /// +x.
-    X,
-    /// +y (most OBJ/PLY scans: bunny, armadillo, spot).
-    Y,
-    /// +z (TOSCA, CAD).
-    Z,
-    /// −x.
-    #[value(name = "-x")]
-    NegX,
-    /// −y.
-    #[value(name = "-y")]
-    NegY,
-    /// −z.
-    #[value(name = "-z")]
-    NegZ,
-}
-
 /// Options of rendered figures (`-o x.png`).
 #[derive(Args, Clone, Copy, Debug, Default)]
 pub struct RenderArgs {
-    /// Up direction of the figures (.png): auto, x, y, z, -x, -y or -z.
-    #[arg(long, value_enum, default_value_t = UpArg::Auto, allow_hyphen_values = true)]
-    pub up: UpArg,
+    /// Up direction of the figures (.png).
+    #[arg(long, value_parser = super::choice::choice::<Up>(), default_value = Up::default_name(), allow_hyphen_values = true)]
+    pub up: Up,
 }
 
 impl RenderArgs {
     /// The frame (right, up, front) of the standard views for `mesh`.
     pub fn frame(&self, mesh: &TriMesh) -> Frame {
-        let axis = match self.up {
-            UpArg::Auto => return Frame::auto(mesh),
-            UpArg::X => UpAxis::X,
-            UpArg::Y => UpAxis::Y,
-            UpArg::Z => UpAxis::Z,
-            UpArg::NegX => UpAxis::NegX,
-            UpArg::NegY => UpAxis::NegY,
-            UpArg::NegZ => UpAxis::NegZ,
-        };
-        Frame::from_up(axis)
-    }
-}
-
-/// "+z", "−y", or the rounded vector for a direction off the axes.
-fn direction_name(v: [f64; 3]) -> String {
-    match v.map(|c| c.round() as i64) {
-        [1, 0, 0] if v[0] == 1.0 => "+x".into(),
-        [-1, 0, 0] if v[0] == -1.0 => "-x".into(),
-        [0, 1, 0] if v[1] == 1.0 => "+y".into(),
-        [0, -1, 0] if v[1] == -1.0 => "-y".into(),
-        [0, 0, 1] if v[2] == 1.0 => "+z".into(),
-        [0, 0, -1] if v[2] == -1.0 => "-z".into(),
-        _ => format!("({:.2}, {:.2}, {:.2})", v[0], v[1], v[2]),
+        self.up.frame(mesh)
     }
 }
 
@@ -423,11 +385,11 @@ pub fn write_fields(
     match output.format {
         OutputFormat::Png => {
             let frame = how.render.frame(mesh);
-            if how.render.up == UpArg::Auto {
+            if how.render.up == Up::Auto {
                 progress::note(&format!(
                     "figures: up is {}, front {} (--up auto, from the extents of the mesh; --up x|y|z|-x|-y|-z overrides)",
-                    direction_name(frame.up),
-                    direction_name(frame.front)
+                    wfem_render::direction_label(frame.up),
+                    wfem_render::direction_label(frame.front)
                 ));
             }
             let views = View::standard_in(&frame);

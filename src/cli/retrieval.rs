@@ -20,9 +20,11 @@
 //! the 76 (optimistic), 0.998 with one trained on 54 other shapes. Everything is recorded in
 //! the vocabulary and index files (JSON, see [`shape_retrieval::store`]).
 
+use super::choice::choice;
 use super::{check_output, load_usable, CliError, MeshArgs};
-use clap::{Args, Subcommand, ValueEnum};
+use clap::{Args, Subcommand};
 use retrieval_store::SqliteIndex;
+use shape_retrieval::Descriptor;
 use shape_retrieval::{
     BagDistance, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexStore, JsonFile,
     RetrievalError, RetrievalIndex, RetrievalSettings, ShapeFeatures, Smoothing, VertexWeights, VocabularyModel,
@@ -30,6 +32,7 @@ use shape_retrieval::{
 };
 use std::io::Write;
 use std::path::PathBuf;
+use wfem_choice::Choice;
 
 /// Arguments of `wfem retrieval`.
 #[derive(Args, Clone, Debug)]
@@ -144,25 +147,12 @@ pub enum RetrievalAction {
     },
 }
 
-/// The dense descriptor.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DescriptorArg {
-    /// Scale-invariant HKS of the wFEM kernel, times in units of the area (default).
-    SiHks,
-    /// HKS of the lumped (Voronoi-cot) kernel at absolute times (`--times`).
-    Dhk1,
-    /// HKS of the wFEM kernel at absolute times (`--times`).
-    Dhk2,
-    /// HKS of the wFEM kernel with λ/λ_max (the paper's DHK3), times in units of 1/λ_max.
-    Dhk3,
-}
-
 /// Descriptor options (recorded in the vocabulary).
 #[derive(Args, Clone, Debug)]
 pub struct DescriptorArgs {
     /// Dense descriptor.
-    #[arg(long, value_enum, default_value = "si-hks")]
-    pub descriptor: DescriptorArg,
+    #[arg(long, value_parser = choice::<Descriptor>(), default_value = Descriptor::default_name())]
+    pub descriptor: Descriptor,
     /// Eigenpairs k per shape.
     #[arg(long, default_value_t = shape_retrieval::DEFAULT_EIGENPAIRS)]
     pub eigs: usize,
@@ -228,21 +218,12 @@ pub struct TrainingArgs {
     pub no_zscore: bool,
 }
 
-/// The distance between bags.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DistanceArg {
-    /// χ² = ½ Σ (a − b)²/(a + b) (default).
-    Chi2,
-    /// Σ |a − b| (Shape Google).
-    L1,
-}
-
 /// Bag options (recorded in the index).
 #[derive(Args, Clone, Debug)]
 pub struct BagArgs {
     /// Distance between bags.
-    #[arg(long, value_enum, default_value = "chi2")]
-    pub distance: DistanceArg,
+    #[arg(long, value_parser = choice::<BagDistance>(), default_value = BagDistance::default_name())]
+    pub distance: BagDistance,
     /// Vertex weights: areas capped at C times their median (default 3), so that a few
     /// inflated vertex areas (spikes, slivers) cannot dominate a bag; `off` for plain areas.
     #[arg(long, value_name = "C|off")]
@@ -252,8 +233,11 @@ pub struct BagArgs {
     pub fusion: Option<String>,
 }
 
-fn missing_times() -> CliError {
-    CliError::Usage("DHK1/DHK2 are scale covariant: give their absolute times with --times".into())
+fn missing_times(descriptor: Descriptor) -> CliError {
+    CliError::Usage(format!(
+        "--descriptor {} has no default times (they depend on the collection's scale): give them with --times",
+        descriptor.name()
+    ))
 }
 
 impl DescriptorArgs {
@@ -278,47 +262,33 @@ impl DescriptorArgs {
             ("--tau-step", self.tau_step.is_some()),
             ("--frequencies", self.frequencies.is_some()),
         ];
-        settings.descriptor.descriptor = match self.descriptor {
-            DescriptorArg::SiHks => {
+        let default = DescriptorSpec::retrieval_default(self.descriptor);
+        settings.descriptor.descriptor = match default {
+            Some(default) if default.sihks_params().is_some() => {
                 if self.times.is_some() {
-                    return Err(CliError::Usage(
-                        "--times is for DHK1/DHK2/DHK3; SI-HKS takes --tau-min/--tau-max/--tau-step/--frequencies"
-                            .into(),
-                    ));
+                    return Err(CliError::Usage(format!(
+                        "--times does not apply to --descriptor {}: it takes --tau-min/--tau-max/--tau-step/--frequencies",
+                        self.descriptor.name()
+                    )));
                 }
-                let DescriptorSpec::SiHks {
-                    alpha,
-                    tau_min,
-                    tau_max,
-                    tau_step,
-                    frequencies,
-                } = DescriptorSpec::default()
-                else {
-                    return Err(CliError::Usage("the default descriptor is not SI-HKS".into()));
-                };
-                DescriptorSpec::SiHks {
-                    alpha,
-                    tau_min: self.tau_min.unwrap_or(tau_min),
-                    tau_max: self.tau_max.unwrap_or(tau_max),
-                    tau_step: self.tau_step.unwrap_or(tau_step),
-                    frequencies: self.frequencies.unwrap_or(frequencies),
-                }
+                let mut p = default.sihks_params().unwrap_or_default();
+                p.tau_min = self.tau_min.unwrap_or(p.tau_min);
+                p.tau_max = self.tau_max.unwrap_or(p.tau_max);
+                p.tau_step = self.tau_step.unwrap_or(p.tau_step);
+                p.num_frequencies = self.frequencies.unwrap_or(p.num_frequencies);
+                DescriptorSpec::sihks(&p)
             }
-            DescriptorArg::Dhk1 | DescriptorArg::Dhk2 | DescriptorArg::Dhk3 => {
+            default => {
                 if let Some((flag, _)) = sihks_only.iter().find(|(_, given)| *given) {
-                    return Err(CliError::Usage(format!("{flag} is an SI-HKS option")));
+                    return Err(CliError::Usage(format!(
+                        "{flag} is an option of --descriptor {}",
+                        Descriptor::SiHks.name()
+                    )));
                 }
-                let times = self.times.clone();
-                match self.descriptor {
-                    DescriptorArg::Dhk3 => {
-                        times.map_or_else(DescriptorSpec::dhk3_default, |times| DescriptorSpec::Dhk3 { times })
-                    }
-                    DescriptorArg::Dhk1 => DescriptorSpec::Dhk1 {
-                        times: times.ok_or_else(missing_times)?,
-                    },
-                    _ => DescriptorSpec::Dhk2 {
-                        times: times.ok_or_else(missing_times)?,
-                    },
+                match (&self.times, default) {
+                    (Some(times), _) => DescriptorSpec::with_times(self.descriptor, times.clone()),
+                    (None, Some(spec)) => spec,
+                    (None, None) => return Err(missing_times(self.descriptor)),
                 }
             }
         };
@@ -337,10 +307,7 @@ impl TrainingArgs {
 
 impl BagArgs {
     fn apply(&self, settings: &mut RetrievalSettings) -> Result<(), CliError> {
-        settings.bags.distance = match self.distance {
-            DistanceArg::Chi2 => BagDistance::ChiSquared,
-            DistanceArg::L1 => BagDistance::L1,
-        };
+        settings.bags.distance = self.distance;
         if let Some(v) = number_or_off("--area-cap", &self.area_cap)? {
             settings.bags.weights = v.map_or(VertexWeights::Area, |factor| VertexWeights::CappedArea { factor });
         }
@@ -402,7 +369,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 out,
                 "trained {} words of {} on {} shapes ({} descriptors) into {}",
                 vocabulary.vocabulary().size(),
-                settings.descriptor.descriptor.name(),
+                settings.descriptor.descriptor.kind().label(),
                 meshes.len(),
                 vocabulary.info().descriptors,
                 path.display()
@@ -428,7 +395,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 out,
                 "indexed {} files ({} of {} words, {} distance) with {from} into {}",
                 index.entries().len(),
-                index.vocabulary().descriptor().descriptor.name(),
+                index.vocabulary().descriptor().descriptor.kind().label(),
                 index.vocabulary().vocabulary().size(),
                 index.bags().distance.name(),
                 path.display()

@@ -1,6 +1,6 @@
 //! End-to-end tests of `wfem hks` against a dense generalized eigendecomposition.
 
-use mesh_fem::{assemble, AssemblyParams, LumpedMassKind};
+use mesh_fem::{assemble, AssemblyParams, Lumping};
 use std::path::Path;
 use std::process::Command;
 use wfem_heat::Eigenbasis;
@@ -76,7 +76,7 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
     let ops = assemble(
         &mesh,
         &AssemblyParams {
-            lumped: LumpedMassKind::Voronoi,
+            lumping: Lumping::Voronoi,
         },
     )
     .unwrap();
@@ -150,7 +150,7 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
     ]);
     assert!(!o.status.success());
     assert!(
-        stderr(&o).contains("--lumped applies to --kernel lumped"),
+        stderr(&o).contains("--lumped applies to a lumped --mass"),
         "{}",
         stderr(&o)
     );
@@ -166,7 +166,11 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
         "-o",
         out.to_str().unwrap(),
     ]);
-    assert!(stderr(&o).contains("--eigs applies to"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--eigs does not apply to --method exact"),
+        "{}",
+        stderr(&o)
+    );
     assert!(!out.exists());
 }
 

@@ -354,7 +354,7 @@ fn issue_16_npy_outputs_carry_their_metadata_and_figures_have_short_names() {
     assert_eq!(meta["times"], serde_json::json!([0.010000000000000002, 0.5]));
     assert_eq!(meta["columns"], serde_json::json!(["t=0.01", "t=0.5"]));
     assert_eq!(meta["shape"], serde_json::json!([162, 2]));
-    assert_eq!(meta["kernel"], "lumped");
+    assert_eq!(meta["mass"], "barycentric");
     assert_eq!(meta["method"]["name"], "fast");
     assert_eq!(meta["source_vertex"], 3);
     assert_eq!(meta["command"], "heat");

@@ -12,4 +12,5 @@ mod common;
 mod fuzz_regressions;
 mod hostile;
 mod no_unwrap;
+mod registry;
 mod thin_library;

@@ -8,9 +8,6 @@
 use crate::MeshError;
 use std::path::{Path, PathBuf};
 
-/// Extensions (lower case) of the mesh files [`all_mesh_files`] lists.
-pub const MESH_EXTENSIONS: [&str; 4] = ["obj", "ply", "off", "stl"];
-
 fn missing(path: PathBuf, message: &str) -> MeshError {
     MeshError::Io {
         path,
@@ -107,7 +104,7 @@ pub fn all_mesh_files() -> Result<Vec<PathBuf>, MeshError> {
             } else if path
                 .extension()
                 .map(|e| e.to_string_lossy().to_ascii_lowercase())
-                .is_some_and(|e| MESH_EXTENSIONS.contains(&e.as_str()))
+                .is_some_and(|e| crate::io::MeshFormat::from_extension(&e).is_some())
             {
                 out.push(path);
             }

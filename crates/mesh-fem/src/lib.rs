@@ -46,6 +46,8 @@ pub mod vec3;
 pub use error::MeshError;
 pub use mesh::TriMesh;
 pub use mtx::{read_matrix_market, write_matrix_market, write_operators};
-pub use operators::{assemble, AssemblyParams, FemOperators, LumpedMassKind};
+pub use operators::{assemble, AssemblyParams, FemOperators, Lumping, Mass};
 pub use stats::{stats, MeshStats};
-pub use validate::{repair, validate, Problem, RepairOptions, RepairReport, Severity, ValidationReport, NEEDLE_ANGLE};
+pub use validate::{
+    repair, validate, Problem, RepairOptions, RepairReport, RepairStep, Severity, ValidationReport, NEEDLE_ANGLE,
+};

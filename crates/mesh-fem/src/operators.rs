@@ -24,9 +24,9 @@ use crate::{MeshError, TriMesh};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use rayon::prelude::*;
 
-/// Which diagonal lumped mass D to assemble.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum LumpedMassKind {
+/// How the diagonal lumped mass D is formed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Lumping {
     /// One third of the incident triangle areas, `D_ii = Σ_{T∋i}|T|/3` (the paper's Eq. (7));
     /// equal to the row sums of the consistent mass B.
     #[default]
@@ -36,11 +36,79 @@ pub enum LumpedMassKind {
     Voronoi,
 }
 
+wfem_choice::registry! {
+    Lumping as "lumped mass" {
+        Lumping::Barycentric = Lumping::Barycentric => "barycentric":
+            "one third of the incident triangle areas, the row sums of B: the paper's Eq. (7) (default)",
+        Lumping::Voronoi = Lumping::Voronoi => "voronoi" ["mixed-voronoi"]:
+            "mixed Voronoi areas (Meyer et al. 2003), libigl's MASSMATRIX_TYPE_VORONOI",
+    }
+}
+
+/// The mass matrix M of a heat kernel `K_t = exp(−t M⁻¹L)` (paper, Table 1): the one word
+/// for "which kernel" in wfem. Every kernel shares the stiffness L.
+///
+/// The same three matrices as libigl's `MassMatrixType` (FULL, BARYCENTRIC, VORONOI), plus the
+/// identity of the linear FEM kernel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Mass {
+    /// The consistent (Galerkin) FEM mass B, `B_ij = (|T₁| + |T₂|)/12` on an edge and
+    /// `Σ_{T∋i}|T|/6` on the diagonal: the paper's wFEM kernel `K_t = X D_t Xᵀ B` (Eq. (6)).
+    #[default]
+    Consistent,
+    /// A diagonal lumped mass D (Eq. (7)): the kernel `K_t = X D_t Xᵀ D` of most libraries.
+    Lumped(Lumping),
+    /// M = I: the linear FEM kernel `K̃_t = X D_t Xᵀ` (text after the paper's Eq. (7)).
+    Identity,
+}
+
+wfem_choice::registry! {
+    Mass as "mass" {
+        Mass::Consistent = Mass::Consistent => "consistent" ["wfem", "full", "fem"]:
+            "the consistent FEM mass B: the paper's wFEM kernel, Eq. (6) (default)",
+        Mass::Lumped(Lumping::Barycentric) = Mass::Lumped(Lumping::Barycentric) => "barycentric" ["lumped", "lumped-barycentric"]:
+            "the lumped mass D, one third of the incident triangle areas: Eq. (7)",
+        Mass::Lumped(Lumping::Voronoi) = Mass::Lumped(Lumping::Voronoi) => "voronoi" ["lumped-voronoi", "mixed-voronoi"]:
+            "the lumped mass D of mixed Voronoi areas (Meyer et al.): the Voronoi-cot kernel of DHK1",
+        Mass::Identity = Mass::Identity => "identity" ["linear"]:
+            "M = I: the linear FEM kernel X D_t Xᵀ",
+    }
+}
+
+impl Mass {
+    /// The older two-word spelling of a lumped mass (`--kernel lumped --lumped voronoi`): this
+    /// mass with the given lumping when it is lumped, `None` otherwise.
+    pub fn with_lumping(self, lumping: Lumping) -> Option<Mass> {
+        match self {
+            Mass::Lumped(_) => Some(Mass::Lumped(lumping)),
+            Mass::Consistent | Mass::Identity => None,
+        }
+    }
+
+    /// The lumping the operators must be assembled with for this mass (barycentric unless
+    /// the mass is the Voronoi one).
+    pub fn lumping(self) -> Lumping {
+        match self {
+            Mass::Lumped(lumping) => lumping,
+            Mass::Consistent | Mass::Identity => Lumping::Barycentric,
+        }
+    }
+}
+
 /// Options of [`assemble`].
 #[derive(Clone, Copy, Debug, Default)]
 pub struct AssemblyParams {
-    /// Which lumped mass to assemble.
-    pub lumped: LumpedMassKind,
+    /// Which lumped mass D to assemble.
+    pub lumping: Lumping,
+}
+
+impl AssemblyParams {
+    /// The assembly that provides `mass` ([`Mass::lumping`]).
+    pub fn for_mass(mass: Mass) -> Self {
+        Self {
+            lumping: mass.lumping(),
+        }
+    }
 }
 
 /// The FEM operators of a mesh, all n × n on one shared sparsity pattern (the vertex–edge
@@ -57,8 +125,10 @@ pub struct FemOperators {
     /// as L.
     pub mass: SparseColMat<usize, f64>,
     /// The diagonal of the lumped mass D (paper Eq. (7); barycentric or mixed Voronoi areas,
-    /// [`LumpedMassKind`]).
+    /// [`Self::lumping`]).
     pub lumped_diagonal: Vec<f64>,
+    /// How [`Self::lumped_diagonal`] was formed.
+    pub lumping: Lumping,
 }
 
 impl FemOperators {
@@ -178,7 +248,7 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
             reason: format!("{} faces: assembly indexes faces with 32 bits", faces.len()),
         });
     }
-    let voronoi = params.lumped == LumpedMassKind::Voronoi;
+    let voronoi = params.lumping == Lumping::Voronoi;
 
     // 1. Elements.
     let (elements, corner_mass) = face_elements(mesh, voronoi).map_err(|f| MeshError::DegenerateFace {
@@ -216,6 +286,7 @@ pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators,
         stiffness: SparseColMat::new(stiffness_pattern, columns.l_val),
         mass: SparseColMat::new(mass_pattern, columns.b_val),
         lumped_diagonal: columns.lumped_diagonal,
+        lumping: params.lumping,
     })
 }
 

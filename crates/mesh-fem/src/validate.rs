@@ -561,6 +561,57 @@ pub struct RepairOptions {
     pub drop_unreferenced_vertices: bool,
 }
 
+/// One repair of [`repair`], as users name it (`--repair unreferenced,orient`); the registry of
+/// repair steps. [`RepairStep::options`] turns a list into [`RepairOptions`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RepairStep {
+    /// Drop vertices that belong to no face (the original Stanford bunny has 1,113).
+    Unreferenced,
+    /// Merge vertices with identical coordinates (or within a tolerance): welds triangle soups
+    /// and STL-like files.
+    DuplicateVertices,
+    /// Drop faces that repeat a vertex or have (numerically) zero area.
+    Degenerate,
+    /// Drop later copies of faces with the same three vertices.
+    DuplicateFaces,
+    /// Orient every orientable component consistently.
+    Orient,
+    /// Every step above.
+    All,
+}
+
+wfem_choice::registry! {
+    RepairStep as "repair" {
+        RepairStep::Unreferenced = RepairStep::Unreferenced => "unreferenced":
+            "drop vertices that belong to no face (the original Stanford bunny has 1,113)",
+        RepairStep::DuplicateVertices = RepairStep::DuplicateVertices => "duplicate-vertices" ["weld"]:
+            "merge vertices with identical coordinates (or within the weld tolerance): welds triangle soups and STL files",
+        RepairStep::Degenerate = RepairStep::Degenerate => "degenerate":
+            "drop faces that repeat a vertex or have (numerically) zero area",
+        RepairStep::DuplicateFaces = RepairStep::DuplicateFaces => "duplicate-faces":
+            "drop later copies of faces with the same three vertices",
+        RepairStep::Orient = RepairStep::Orient => "orient":
+            "orient every orientable component consistently (L and B do not depend on it)",
+        RepairStep::All = RepairStep::All => "all":
+            "every repair above",
+    }
+}
+
+impl RepairStep {
+    /// The options of a list of steps; `weld_tolerance` is the merge tolerance of
+    /// [`RepairStep::DuplicateVertices`] (relative to the bounding-box diagonal).
+    pub fn options(steps: &[RepairStep], weld_tolerance: f64) -> RepairOptions {
+        let has = |s: RepairStep| steps.contains(&s) || steps.contains(&RepairStep::All);
+        RepairOptions {
+            merge_duplicate_vertices: has(RepairStep::DuplicateVertices).then_some(weld_tolerance),
+            drop_degenerate_faces: has(RepairStep::Degenerate),
+            drop_duplicate_faces: has(RepairStep::DuplicateFaces),
+            orient_faces: has(RepairStep::Orient),
+            drop_unreferenced_vertices: has(RepairStep::Unreferenced),
+        }
+    }
+}
+
 /// What [`repair`] changed.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct RepairReport {

@@ -86,14 +86,24 @@ pub struct Hit {
 
 /// Built-in distances of [`Store::search_metric`], on vectors read as `f32` and accumulated in
 /// `f64`. The definitions are those of the retrieval model (shape-retrieval's bag distances).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Metric {
     /// `Σ |a_i − b_i|`.
+    #[default]
     L1,
     /// `½ Σ (a_i − b_i)²/(a_i + b_i)` over the bins with `a_i + b_i > 0` (histograms).
     ChiSquared,
     /// `(Σ (a_i − b_i)²)^½`.
     Euclidean,
+}
+
+wfem_choice::registry! {
+    Metric as "metric" {
+        Metric::L1 = Metric::L1 => "l1" ["manhattan"]: "Σ |a_i − b_i| (default)",
+        Metric::ChiSquared = Metric::ChiSquared => "chi-squared" ["chi2", "chi-square"]:
+            "½ Σ (a_i − b_i)²/(a_i + b_i), for histograms",
+        Metric::Euclidean = Metric::Euclidean => "euclidean" ["l2"]: "(Σ (a_i − b_i)²)^½",
+    }
 }
 
 impl Metric {

@@ -3,16 +3,16 @@
 //! Run with `cargo run -p shape-retrieval --example hks`. It assembles L and B on `bumpy(2)`
 //! (162 vertices), solves the generalized eigenproblem densely (fine for small meshes only),
 //! and prints the HKS in both conventions at a few vertices and times, the heat trace, and the
-//! first SI-HKS frequencies. Checks a person can make: the matrix-diagonal values of one time
+//! first SI-HKS frequencies. Checks a person can make: the operator-diagonal values of one time
 //! sum to the heat trace; protruding vertices have larger HKS at small t than flat ones.
 
 #[path = "../tests/it/common/mod.rs"]
 mod common;
 
 use shape_retrieval::{
-    heat_kernel_signature, heat_trace, scale_invariant_hks, HksConvention, HksParams, RetrievalError, SihksParams,
-    Spectrum,
+    heat_kernel_signature, heat_trace, scale_invariant_hks, HksParams, RetrievalError, SihksParams, Spectrum,
 };
+use wfem_heat::KernelDiagonal;
 
 fn main() -> Result<(), RetrievalError> {
     let mesh = mesh_fem::generate::bumpy(2);
@@ -36,7 +36,7 @@ fn main() -> Result<(), RetrievalError> {
     let md = heat_kernel_signature(
         &spectrum,
         &HksParams {
-            convention: HksConvention::MatrixDiagonal,
+            convention: KernelDiagonal::OperatorDiagonal,
             ..Default::default()
         },
     )?;
@@ -54,7 +54,7 @@ fn main() -> Result<(), RetrievalError> {
         }
         println!();
     }
-    println!("\nHKS, matrix diagonal (Φ D_t Φᵀ B)_ii");
+    println!("\nHKS, operator diagonal (Φ D_t Φᵀ B)_ii");
     for i in [0usize, 40, 80, 120, 160] {
         print!("{i:>8}");
         for &j in &cols {
@@ -63,7 +63,7 @@ fn main() -> Result<(), RetrievalError> {
         println!();
     }
     let z = heat_trace(&s.eigenvalues[..k], &md.times);
-    println!("\ncolumn sums of the matrix diagonal vs heat trace Z(t):");
+    println!("\ncolumn sums of the operator diagonal vs heat trace Z(t):");
     for &j in &cols {
         let sum: f64 = md.values.col(j).iter().sum();
         println!("  t = {:.4e}: Σ_i = {sum:.12}, Z = {:.12}", md.times[j], z[j]);

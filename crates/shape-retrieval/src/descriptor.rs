@@ -21,7 +21,7 @@
 //!
 //! **Number of eigenpairs.** The default k = 100 (pyFM and DiffusionNet use 100–128; Sun's and
 //! Aubry's codes 300). The truncation error of the HKS at time t is about e^{−λ_k t}
-//! (NUMERICS §4), so times below ≈ 4 ln10/λ_k are not resolved; the automatic time range
+//! (docs/NUMERICS.md §4), so times below ≈ 4 ln10/λ_k are not resolved; the automatic time range
 //! starts there.
 //!
 //! When n ≤ max(3k, 400) (small meshes) the eigenpairs come from the dense decomposition
@@ -33,12 +33,12 @@
 //! the same function that survive persistence simplification at `persistence_fraction` of its
 //! range ([`mesh_fem::morse`], \[EMP06\]).
 
-use crate::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalization, TimeSampling};
-use crate::sihks::{scale_invariant_hks, SihksParams};
+use crate::hks::{heat_kernel_signature, HksParams, Spectrum, TimeSampling};
+use crate::sihks::SihksParams;
 use crate::RetrievalError;
 use faer::Mat;
-use mesh_fem::{assemble, AssemblyParams, FemOperators, LumpedMassKind, TriMesh};
-use wfem_heat::{EigenParams, Eigenbasis};
+use mesh_fem::{assemble, AssemblyParams, FemOperators, Lumping, TriMesh};
+use wfem_heat::{EigenParams, Eigenbasis, Operators};
 
 /// Default number k of eigenpairs (see the module docs).
 pub const DEFAULT_EIGENPAIRS: usize = 100;
@@ -46,45 +46,79 @@ pub const DEFAULT_EIGENPAIRS: usize = 100;
 /// Meshes with at most this many vertices use the dense eigendecomposition.
 const DENSE_BELOW: usize = 400;
 
-/// A dense (per-vertex) descriptor of the paper's Sect. 5.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// A dense (per-vertex) descriptor, without its parameters (paper, Sect. 5): the registry of
+/// descriptor names. [`crate::DescriptorSpec`] is a descriptor with its parameters, and the
+/// one place a descriptor is computed ([`crate::DescriptorSpec::compute`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Descriptor {
+    /// Scale-invariant HKS of Bronstein & Kokkinos on the wFEM spectrum ([`crate::sihks`]),
+    /// times in units of the surface area (the retrieval default).
+    #[default]
+    SiHks,
+    /// Log-HKS of the wFEM kernel on the shape rescaled to unit area, at dimensionless times.
+    AreaHks,
     /// HKS of the lumped Voronoi-cot kernel, spectrum of (L, D) with D the mixed Voronoi areas (Eq. (7)).
     Dhk1,
     /// HKS of the wFEM kernel, spectrum of (L, B) (Eq. (6)).
     Dhk2,
     /// Scale-invariant wFEM HKS: eigenvalues divided by λ_max ([`SpectrumNormalization::MaxEigenvalue`]).
     Dhk3,
-    /// Scale-invariant HKS of Bronstein & Kokkinos on the wFEM spectrum ([`crate::sihks`]).
-    SiHks,
+}
+
+wfem_choice::registry! {
+    Descriptor as "descriptor" {
+        Descriptor::SiHks = Descriptor::SiHks => "si-hks" ["sihks"]:
+            "scale-invariant HKS of the wFEM kernel, times in units of the surface area (default)",
+        Descriptor::AreaHks = Descriptor::AreaHks => "area-hks":
+            "log-HKS of the wFEM kernel on the shape rescaled to unit area",
+        Descriptor::Dhk1 = Descriptor::Dhk1 => "dhk1":
+            "HKS of the lumped Voronoi-cot kernel (Eq. (7)) at absolute times",
+        Descriptor::Dhk2 = Descriptor::Dhk2 => "dhk2":
+            "HKS of the wFEM kernel (Eq. (6)) at absolute times",
+        Descriptor::Dhk3 = Descriptor::Dhk3 => "dhk3":
+            "HKS of the wFEM kernel with eigenvalues divided by λ_max (the paper's scale-invariant DHK3)",
+    }
 }
 
 impl Descriptor {
-    /// All four, in table order.
-    pub const ALL: [Descriptor; 4] = [Descriptor::Dhk1, Descriptor::Dhk2, Descriptor::Dhk3, Descriptor::SiHks];
+    /// The four dense descriptors of the paper's Tables 3–4, in table order.
+    pub const PAPER: [Descriptor; 4] = [Descriptor::Dhk1, Descriptor::Dhk2, Descriptor::Dhk3, Descriptor::SiHks];
 
-    /// The paper's short name (`DHK1`, …, `SI-HKS`).
-    pub fn name(self) -> &'static str {
+    /// How the paper writes it (`DHK1`, …, `SI-HKS`, `area-HKS`), for tables and titles.
+    pub fn label(self) -> &'static str {
         match self {
             Descriptor::Dhk1 => "DHK1",
             Descriptor::Dhk2 => "DHK2",
             Descriptor::Dhk3 => "DHK3",
             Descriptor::SiHks => "SI-HKS",
+            Descriptor::AreaHks => "area-HKS",
         }
     }
 
-    fn uses_lumped(self) -> bool {
+    /// Whether it is computed from the spectrum of (L, D) (the lumped Voronoi mass) rather
+    /// than (L, B).
+    pub fn uses_lumped(self) -> bool {
         matches!(self, Descriptor::Dhk1)
     }
 }
 
 /// Sparse feature detectors of the paper's Sect. 5 (Table 4).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum FeatureDetector {
     /// Local maxima of the HKS at a large time.
+    #[default]
     Shk1,
     /// Maxima of the same function after persistence simplification.
     Shk2,
+}
+
+wfem_choice::registry! {
+    FeatureDetector as "feature detector" {
+        FeatureDetector::Shk1 = FeatureDetector::Shk1 => "shk1":
+            "local maxima of the wFEM HKS at a large time (default)",
+        FeatureDetector::Shk2 = FeatureDetector::Shk2 => "shk2":
+            "the maxima of the same function that survive persistence simplification",
+    }
 }
 
 /// Options of the descriptor pipeline.
@@ -144,7 +178,7 @@ impl ShapeDescriptors {
         let operators = assemble(
             mesh,
             &AssemblyParams {
-                lumped: LumpedMassKind::Voronoi,
+                lumping: Lumping::Voronoi,
             },
         )?;
         Self::from_operators(mesh, operators, params)
@@ -216,12 +250,6 @@ impl ShapeDescriptors {
         self.described
     }
 
-    /// Replaces the HKS times of later [`Self::dense`] calls, keeping the eigenbases (e.g. to
-    /// evaluate DHK3 at times in units of 1/λ_max after DHK2 at absolute times).
-    pub fn set_times(&mut self, times: TimeSampling) {
-        self.params.times = times;
-    }
-
     /// The mesh.
     pub fn mesh(&self) -> &TriMesh {
         &self.mesh
@@ -277,48 +305,22 @@ impl ShapeDescriptors {
         };
         let basis = match slot.take() {
             Some(basis) => basis,
-            // When k is a large fraction of n, the Krylov space fills the whole space and a dense
-            // decomposition is both cheaper and exact (block Lanczos also stalls there).
-            None if ops.n() <= (3 * k).max(DENSE_BELOW) && ops.n() <= wfem_heat::DENSE_MAX_VERTICES => {
-                let mut full = Eigenbasis::dense(&ops.stiffness, mass)?;
-                full.values.truncate(k);
-                full.vectors = full.vectors.subcols(0, k).to_owned();
-                full
-            }
-            None => Eigenbasis::partial(&ops.stiffness, mass, k, &self.params.eigen)?,
+            None => smallest_eigenpairs(
+                &Operators::from_matrices(ops.stiffness.as_ref(), mass.as_ref())?,
+                k,
+                &self.params.eigen,
+            )?,
         };
         Ok(slot.insert(basis))
     }
 
-    /// The dense descriptor (n × T for the HKS variants, n × K for SI-HKS); see the module docs.
+    /// The dense descriptor (n × T for the HKS variants, n × K for SI-HKS) with the times and
+    /// SI-HKS options of this shape's [`DescriptorParams`]; see the module docs.
     ///
     /// # Errors
-    /// [`RetrievalError::Heat`] from the eigensolver, and those of
-    /// [`heat_kernel_signature`] / [`scale_invariant_hks`].
+    /// Those of [`crate::DescriptorSpec::compute`].
     pub fn dense(&mut self, descriptor: Descriptor) -> Result<Mat<f64>, RetrievalError> {
-        let params = self.params.clone();
-        let area = self.area();
-        let basis = self.eigenbasis(descriptor.uses_lumped())?;
-        let spectrum = Spectrum::new(&basis.values, basis.vectors.as_ref())?;
-        match descriptor {
-            Descriptor::SiHks => scale_invariant_hks(&spectrum.with_area(area)?, &params.sihks),
-            _ => {
-                let normalization = if descriptor == Descriptor::Dhk3 {
-                    SpectrumNormalization::MaxEigenvalue
-                } else {
-                    SpectrumNormalization::None
-                };
-                let hks = heat_kernel_signature(
-                    &spectrum,
-                    &HksParams {
-                        times: params.times.clone(),
-                        normalization,
-                        ..Default::default()
-                    },
-                )?;
-                Ok(hks.values)
-            }
-        }
+        crate::DescriptorSpec::with_params(descriptor, &self.params).compute(self)
     }
 
     /// The feature function of SHK1/SHK2: the wFEM HKS at `t_f = feature_time_factor · 4 ln10/λ_2`.
@@ -373,6 +375,26 @@ impl ShapeDescriptors {
                 Ok(out)
             }
         }
+    }
+}
+
+/// The k smallest eigenpairs of (L, M), ascending: by the shift-invert block Lanczos, or by
+/// the dense decomposition truncated to k when k is a large fraction of n (the Krylov space
+/// then fills the whole space, where a dense decomposition is both cheaper and exact, and block
+/// Lanczos can stall).
+///
+/// # Errors
+/// [`RetrievalError::Heat`] if the eigensolver fails.
+pub fn smallest_eigenpairs(ops: &Operators, k: usize, eigen: &EigenParams) -> Result<Eigenbasis, RetrievalError> {
+    let n = ops.n();
+    let k = k.min(n);
+    if n <= (3 * k).max(DENSE_BELOW) && n <= wfem_heat::DENSE_MAX_VERTICES {
+        let mut full = Eigenbasis::dense_of(ops)?;
+        full.values.truncate(k);
+        full.vectors = full.vectors.subcols(0, k).to_owned();
+        Ok(full)
+    } else {
+        Ok(Eigenbasis::partial_of(ops, k, eigen)?)
     }
 }
 

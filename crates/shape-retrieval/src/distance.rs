@@ -29,17 +29,18 @@ pub enum BagDistance {
     ChiSquared,
 }
 
+wfem_choice::registry! {
+    BagDistance as "bag distance" {
+        BagDistance::L1 = BagDistance::L1 => "l1" ["manhattan"]:
+            "Σ |a_i − b_i| (Shape Google)",
+        BagDistance::ChiSquared = BagDistance::ChiSquared => "chi-squared" ["chi2", "chi-square"]:
+            "½ Σ (a_i − b_i)²/(a_i + b_i) (default)",
+    }
+}
+
 impl BagDistance {
     /// Both distances.
     pub const ALL: [BagDistance; 2] = [BagDistance::L1, BagDistance::ChiSquared];
-
-    /// The name used on the command line and in index files (`l1`, `chi-squared`).
-    pub fn name(self) -> &'static str {
-        match self {
-            BagDistance::L1 => "l1",
-            BagDistance::ChiSquared => "chi-squared",
-        }
-    }
 
     /// The distance between two bags.
     ///

@@ -52,9 +52,9 @@ pub enum RetrievalError {
         /// Its value.
         value: f64,
     },
-    /// The matrix-diagonal convention needs the mass matrix B (or BX), and none was given.
+    /// The operator-diagonal convention needs the mass matrix B (or BX), and none was given.
     #[error(
-        "the MatrixDiagonal HKS convention needs the mass matrix: call Spectrum::with_mass or with_mass_eigenvectors"
+        "the operator-diagonal HKS convention needs the mass matrix: call Spectrum::with_mass or with_mass_eigenvectors"
     )]
     MassRequired,
     /// Every eigenvalue is (numerically) zero, so no automatic time range exists.

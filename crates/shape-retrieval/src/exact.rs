@@ -10,7 +10,6 @@
 //! time, the truncated sum where [`truncation_bound`] says it is accurate (large t, where it
 //! is free once the eigenpairs are there) and the exact diagonal elsewhere.
 
-use crate::hks::HksConvention;
 use crate::RetrievalError;
 use faer::Mat;
 use wfem_heat::{DiagonalParams, HeatKernel, KernelDiagonal};
@@ -51,8 +50,19 @@ impl Default for HksMethod {
     }
 }
 
+wfem_choice::registry! {
+    HksMethod as "HKS method" {
+        HksMethod::Auto { .. } = HksMethod::default() => "auto":
+            "per time, the truncated spectral sum where its estimated error is below 1e−3, the exact diagonal elsewhere (default)",
+        HksMethod::Exact = HksMethod::Exact => "exact":
+            "the exact diagonal of the heat kernel at every time (selected inversion, no eigenpairs)",
+        HksMethod::Spectral = HksMethod::Spectral => "spectral" ["truncated"]:
+            "the truncated spectral sum of the k smallest eigenpairs at every time (Eq. (8); pyFM's HKS, wrong at small t)",
+    }
+}
+
 /// A rigorous bound on the relative error that truncating to the given eigenvalues causes in
-/// the heat trace `Z(t) = Σ_{all j} e^{−λ_j t}` (the sum over vertices of the matrix-diagonal
+/// the heat trace `Z(t) = Σ_{all j} e^{−λ_j t}` (the sum over vertices of the operator-diagonal
 /// HKS): `(n − K) e^{−λ_max t} / Σ_{k<K} e^{−λ_k t}`, valid when `eigenvalues` are the K
 /// smallest of the n eigenvalues (every omitted one is ≥ their maximum). 0 when K ≥ n. Where
 /// the mesh is uniform the pointwise HKS errors are of the same order; it is the criterion of
@@ -100,8 +110,8 @@ pub fn truncation_estimate(eigenvalues: &[f64], n: usize, t: f64) -> f64 {
 }
 
 /// The exact heat kernel signature at every time of `times` (n × T), without eigenpairs: the
-/// diagonal of the kernel in the given convention ([`HksConvention::KernelValue`]:
-/// `H_t(i, i) = (K_t M⁻¹)_ii`; [`HksConvention::MatrixDiagonal`]: `K_t(i, i)`, paper Eq. (6))
+/// diagonal of the kernel in the given convention ([`KernelDiagonal::KernelValue`]:
+/// `K̃_t(i, i) = (K_t M⁻¹)_ii`; [`KernelDiagonal::OperatorDiagonal`]: `K_t(i, i)`, paper Eq. (6))
 /// by [`HeatKernel::diagonal`] with `params` (default: selected inversion; with probing,
 /// `info.relative_tail` estimates each entry's probing error relative to the entry).
 ///
@@ -112,14 +122,10 @@ pub fn truncation_estimate(eigenvalues: &[f64], n: usize, t: f64) -> f64 {
 pub fn exact_signature(
     kernel: &HeatKernel,
     times: &[f64],
-    convention: HksConvention,
+    convention: KernelDiagonal,
     params: &DiagonalParams,
 ) -> Result<wfem_heat::DiagonalSeries, RetrievalError> {
-    let which = match convention {
-        HksConvention::KernelValue => KernelDiagonal::KernelValue,
-        HksConvention::MatrixDiagonal => KernelDiagonal::MatrixDiagonal,
-    };
-    Ok(kernel.diagonal(times, which, params)?)
+    Ok(kernel.diagonal(times, convention, params)?)
 }
 
 /// Where one column of a [`signature_by_method`] came from.
@@ -140,11 +146,11 @@ pub enum HksSource {
 }
 
 impl HksSource {
-    /// `"spectral"` or `"exact"`.
-    pub fn name(&self) -> &'static str {
+    /// The method that computed the column ([`HksMethod::Spectral`] or [`HksMethod::Exact`]).
+    pub fn method(&self) -> HksMethod {
         match self {
-            HksSource::Spectral { .. } => "spectral",
-            HksSource::Exact { .. } => "exact",
+            HksSource::Spectral { .. } => HksMethod::Spectral,
+            HksSource::Exact { .. } => HksMethod::Exact,
         }
     }
 }
@@ -162,7 +168,7 @@ pub fn signature_by_method(
     eigenvalues: &[f64],
     spectral: Mat<f64>,
     times: &[f64],
-    convention: HksConvention,
+    convention: KernelDiagonal,
     method: HksMethod,
     params: &DiagonalParams,
 ) -> Result<(Mat<f64>, Vec<HksSource>), RetrievalError> {
@@ -205,10 +211,7 @@ pub fn signature_by_method(
     let mut wanted = wanted;
     wanted.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
     if matches!(method, HksMethod::Auto { .. }) && !wanted.is_empty() {
-        let which = match convention {
-            HksConvention::KernelValue => KernelDiagonal::KernelValue,
-            HksConvention::MatrixDiagonal => KernelDiagonal::MatrixDiagonal,
-        };
+        let which = convention;
         let reachable = |m: usize| -> Result<bool, RetrievalError> {
             match kernel.diagonal_probes(times[wanted[m - 1]], which, params) {
                 Ok(_) => Ok(true),

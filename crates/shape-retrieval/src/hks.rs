@@ -8,11 +8,11 @@
 //!
 //! Two diagonals of this kernel are in use and both are offered, named by what they are:
 //!
-//! * [`HksConvention::KernelValue`]: `h(i, t) = Σ_k e^{−λ_k t} φ_k(i)²`, the diagonal of the
-//!   symmetric kernel matrix `H_t = Φ D_t Φᵀ = K_t B⁻¹`, i.e. the value K_t(x_i, x_i) of the
+//! * [`KernelDiagonal::KernelValue`]: `h(i, t) = Σ_k e^{−λ_k t} φ_k(i)²`, the diagonal of the
+//!   symmetric kernel matrix `K̃_t = Φ D_t Φᵀ = K_t B⁻¹`, i.e. the value K_t(x_i, x_i) of the
 //!   continuous heat kernel. This is Sun, Ovsjanikov & Guibas (SGP 2009) and what pyFM,
 //!   DiffusionNet and most libraries compute. It has units of 1/area.
-//! * [`HksConvention::MatrixDiagonal`]: `h(i, t) = (Φ D_t Φᵀ B)_ii = Σ_k e^{−λ_k t} φ_k(i) (Bφ_k)(i)`,
+//! * [`KernelDiagonal::OperatorDiagonal`]: `h(i, t) = (Φ D_t Φᵀ B)_ii = Σ_k e^{−λ_k t} φ_k(i) (Bφ_k)(i)`,
 //!   the diagonal of the wFEM heat kernel *matrix* of Eq. (6), as the paper uses it. It is
 //!   dimensionless, and its sum over the vertices is exactly the heat trace `Σ_k e^{−λ_k t}`
 //!   (`tr(Φ D_t Φᵀ B) = tr(D_t ΦᵀBΦ)`).
@@ -28,13 +28,14 @@ use faer::linalg::matmul::matmul;
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatRef, Par};
+use wfem_heat::KernelDiagonal;
 
 /// Eigenvalues below `ZERO_EIGENVALUE_RTOL · λ_max` count as zero (the constant modes) when
 /// choosing the automatic time range; pyFM uses the same relative threshold.
 const ZERO_EIGENVALUE_RTOL: f64 = 1e-8;
 
 /// A truncated spectrum of (L, B): k eigenvalues and n × k B-orthonormal eigenvectors,
-/// optionally with the products `BΦ` needed by [`HksConvention::MatrixDiagonal`].
+/// optionally with the products `BΦ` needed by [`KernelDiagonal::OperatorDiagonal`].
 ///
 /// Eigenvalues need not be sorted; they must be finite and non-negative up to round-off
 /// (λ ≥ −1e−8·max|λ|), since L is positive semidefinite.
@@ -203,17 +204,6 @@ impl<'a> Spectrum<'a> {
     }
 }
 
-/// Which diagonal of the heat kernel the signature is (see the module docs).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum HksConvention {
-    /// `Σ_k e^{−λ_k t} φ_k(i)²` = diag(Φ D_t Φᵀ): the kernel value K_t(x_i, x_i) (Sun et al. 2009, pyFM).
-    #[default]
-    KernelValue,
-    /// `Σ_k e^{−λ_k t} φ_k(i)(Bφ_k)(i)` = diag(Φ D_t Φᵀ B): the wFEM kernel matrix diagonal (paper, Eq. (6)).
-    /// Needs the mass matrix ([`Spectrum::with_mass`]).
-    MatrixDiagonal,
-}
-
 /// Rescaling of the shape before the descriptor is evaluated, for scale invariance (paper, Sect. 5).
 ///
 /// Rescaling a surface by s maps `λ → λ/s²` and `φ_k(i)² → φ_k(i)²/s²`, leaves
@@ -236,13 +226,31 @@ pub enum SpectrumNormalization {
     },
 }
 
-/// How the diffusion times are chosen.
-#[derive(Clone, Debug, PartialEq)]
+wfem_choice::registry! {
+    SpectrumNormalization as "spectrum normalization" {
+        SpectrumNormalization::None = SpectrumNormalization::None => "none":
+            "the spectrum as given: a scale-covariant descriptor (default)",
+        SpectrumNormalization::MaxEigenvalue = SpectrumNormalization::MaxEigenvalue => "max-eigenvalue":
+            "eigenvalues divided by the largest one given (the paper's DHK3)",
+        SpectrumNormalization::UnitArea { .. } = SpectrumNormalization::UnitArea { area: 1.0 } => "area" ["unit-area"]:
+            "the shape rescaled to unit area, λ·A (the area is the shape's own)",
+    }
+}
+
+/// Number of automatic times by default (the command line's and Python's too): 16 log-spaced
+/// times cover the range `[4 ln10/λ_max, 4 ln10/λ_2]` at about four per decade, as DiffusionNet
+/// and most HKS pipelines sample it.
+pub const DEFAULT_NUM_TIMES: usize = 16;
+
+/// How the diffusion times are chosen. In files, explicit times are a list of numbers and
+/// automatic ones `{"num_times": T}`.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
 pub enum TimeSampling {
     /// `num_times` values log-spaced between `4 ln10/λ_max` and `4 ln10/λ_2` of the (normalized)
     /// spectrum, λ_2 = the smallest eigenvalue above 1e−8·λ_max (Sun et al. 2009; pyFM `auto_HKS`).
     Auto {
-        /// Number of times T (default 100).
+        /// Number of times T (default [`DEFAULT_NUM_TIMES`]).
         num_times: usize,
     },
     /// Explicit positive times (in the units of the normalized spectrum).
@@ -251,15 +259,17 @@ pub enum TimeSampling {
 
 impl Default for TimeSampling {
     fn default() -> Self {
-        Self::Auto { num_times: 100 }
+        Self::Auto {
+            num_times: DEFAULT_NUM_TIMES,
+        }
     }
 }
 
 /// Options of [`heat_kernel_signature`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct HksParams {
-    /// Which diagonal (default [`HksConvention::KernelValue`]).
-    pub convention: HksConvention,
+    /// Which diagonal (default [`KernelDiagonal::KernelValue`]).
+    pub convention: KernelDiagonal,
     /// Which times (default: 100 automatic log-spaced times).
     pub times: TimeSampling,
     /// Divide each time's column by the heat trace `Z(t) = Σ_k e^{−λ_k t}` ("scaled" HKS, pyFM
@@ -280,10 +290,10 @@ pub struct HeatKernelSignature {
 
 /// Computes the heat kernel signature h(i, t) at all vertices and times (paper, Eqs. (6), (8)).
 ///
-/// `h(i,t) = c · Σ_k e^{−λ̃_k t} φ_k(i) ψ_k(i)` with `ψ = φ` ([`HksConvention::KernelValue`]) or
-/// `ψ = Bφ` ([`HksConvention::MatrixDiagonal`]), λ̃ and c from [`SpectrumNormalization`], divided
+/// `h(i,t) = c · Σ_k e^{−λ̃_k t} φ_k(i) ψ_k(i)` with `ψ = φ` ([`KernelDiagonal::KernelValue`]) or
+/// `ψ = Bφ` ([`KernelDiagonal::OperatorDiagonal`]), λ̃ and c from [`SpectrumNormalization`], divided
 /// by the heat trace `Σ_k e^{−λ̃_k t}` if `params.scaled`. Cost O(n·k·T), one parallel matrix
-/// product. Truncation error relative to the full spectrum is about e^{−t λ_k} (NUMERICS §4):
+/// product. Truncation error relative to the full spectrum is about e^{−t λ_k} (docs/NUMERICS.md §4):
 /// ≈1e−4 at the automatic smallest time.
 ///
 /// ```
@@ -302,7 +312,7 @@ pub struct HeatKernelSignature {
 /// ```
 ///
 /// # Errors
-/// [`RetrievalError::MassRequired`] for the matrix-diagonal convention without mass,
+/// [`RetrievalError::MassRequired`] for the operator-diagonal convention without mass,
 /// [`RetrievalError::InvalidParameter`] for non-positive times, `num_times = 0` or a bad area,
 /// [`RetrievalError::NoNonzeroEigenvalue`] for automatic times on a zero spectrum.
 pub fn heat_kernel_signature(
@@ -392,7 +402,7 @@ pub(crate) fn log_spaced(a: f64, b: f64, num: usize) -> Vec<f64> {
 pub(crate) fn normalized_spectrum(
     spectrum: &Spectrum<'_>,
     normalization: SpectrumNormalization,
-    convention: HksConvention,
+    convention: KernelDiagonal,
 ) -> Result<(Vec<f64>, f64), RetrievalError> {
     // s² = the squared rescaling factor: λ → λ/s², φ² → φ²/s².
     let s2 = match normalization {
@@ -411,8 +421,8 @@ pub(crate) fn normalized_spectrum(
     };
     let eigenvalues = spectrum.eigenvalues.iter().map(|l| l / s2).collect();
     let factor = match convention {
-        HksConvention::KernelValue => 1.0 / s2,
-        HksConvention::MatrixDiagonal => 1.0,
+        KernelDiagonal::KernelValue => 1.0 / s2,
+        KernelDiagonal::OperatorDiagonal => 1.0,
     };
     Ok((eigenvalues, factor))
 }
@@ -423,7 +433,7 @@ pub(crate) fn signature_at(
     spectrum: &Spectrum<'_>,
     eigenvalues: &[f64],
     factor: f64,
-    convention: HksConvention,
+    convention: KernelDiagonal,
     times: &[f64],
 ) -> Result<Mat<f64>, RetrievalError> {
     signature_rows(
@@ -441,14 +451,14 @@ pub(crate) fn signature_rows(
     spectrum: &Spectrum<'_>,
     eigenvalues: &[f64],
     factor: f64,
-    convention: HksConvention,
+    convention: KernelDiagonal,
     times: &[f64],
     rows: std::ops::Range<usize>,
 ) -> Result<Mat<f64>, RetrievalError> {
     let phi = spectrum.eigenvectors.subrows(rows.start, rows.len());
     let psi = match convention {
-        HksConvention::KernelValue => phi,
-        HksConvention::MatrixDiagonal => spectrum
+        KernelDiagonal::KernelValue => phi,
+        KernelDiagonal::OperatorDiagonal => spectrum
             .mass_eigenvectors
             .as_ref()
             .ok_or(RetrievalError::MassRequired)?

@@ -8,7 +8,7 @@
 //! (symmetric positive semidefinite, positive diagonal) and B the mass matrix, given as plain
 //! inputs ([`Spectrum`]), so any eigensolver can feed them:
 //!
-//! * [`hks`]: heat kernel signature in the kernel-value and matrix-diagonal conventions,
+//! * [`hks`]: heat kernel signature in the kernel-value and operator-diagonal conventions,
 //!   scaled and scale-normalized variants;
 //! * [`exact`]: the HKS without eigen truncation (the kernel's diagonal by selected inversion) and the
 //!   per-time choice between it and the truncated sum ([`HksMethod`], default auto);
@@ -37,6 +37,7 @@ pub mod features;
 pub mod global;
 pub mod hks;
 pub mod kmeans;
+pub mod mesh_hks;
 pub mod model;
 pub mod retrieval;
 pub mod sihks;
@@ -57,10 +58,11 @@ pub use exact::{
 };
 pub use features::{descriptor_distance, local_maxima, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
 pub use hks::{
-    heat_kernel_signature, heat_trace, HeatKernelSignature, HksConvention, HksParams, Spectrum, SpectrumNormalization,
-    TimeSampling,
+    heat_kernel_signature, heat_trace, HeatKernelSignature, HksParams, Spectrum, SpectrumNormalization, TimeSampling,
+    DEFAULT_NUM_TIMES,
 };
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
+pub use mesh_hks::{mesh_hks, HksStep, MeshHks, MeshHksParams};
 pub use model::{
     BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, HoleFilling,
     IndexEntry,

@@ -29,7 +29,7 @@
 
 use crate::bof::{Assignment, Vocabulary, VocabularyParams};
 use crate::check;
-use crate::descriptor::{DescriptorParams, ShapeDescriptors};
+use crate::descriptor::{Descriptor, DescriptorParams, ShapeDescriptors};
 use crate::distance::BagDistance;
 use crate::global::GlobalKind;
 use crate::spatial::{ShapeSpectrum, SpatialBag};
@@ -41,17 +41,19 @@ use faer::{Mat, MatRef};
 use mesh_fem::TriMesh;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use wfem_heat::KernelDiagonal;
 
-/// The per-vertex descriptor quantised by the vocabulary, with its parameters.
+/// A dense (per-vertex) descriptor with its parameters: the one place a descriptor is computed
+/// ([`Self::compute`]); [`Descriptor`] names it without parameters ([`Self::kind`]).
 ///
 /// Every variant is computed from the k smallest eigenpairs of its kernel (see
 /// [`crate::descriptor`]); the HKS variants are `h(x, t) = Σ_k e^{−λ_k t} φ_k(x)²` (the kernel
-/// value K_t(x, x) of Eq. (6), resp. Eq. (7) for DHK1).
+/// value k_t(x, x) of Eq. (6), resp. Eq. (7) for DHK1).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum DescriptorSpec {
-    /// SI-HKS of the wFEM kernel with times `t = A·α^τ` (A = surface area), exactly scale
-    /// invariant ([`crate::sihks`], [`TimeUnit::Area`]).
+    /// SI-HKS of the wFEM kernel with times `t = t₀·α^τ` (by default t₀ = A, the surface area:
+    /// exactly scale invariant; [`crate::sihks`], [`TimeUnit::Area`]).
     SiHks {
         /// Base α of the time sampling (> 1).
         alpha: f64,
@@ -63,6 +65,12 @@ pub enum DescriptorSpec {
         tau_step: f64,
         /// Number K of Fourier magnitudes kept.
         frequencies: usize,
+        /// The time unit t₀ (absent in files: the area).
+        #[serde(default = "area_unit", skip_serializing_if = "is_area_unit")]
+        time_unit: TimeUnit,
+        /// Which diagonal of the kernel is sampled (absent in files: the kernel value).
+        #[serde(default, skip_serializing_if = "is_kernel_value", with = "wfem_choice::serde_name")]
+        convention: KernelDiagonal,
     },
     /// Log-HKS of the wFEM kernel on the shape rescaled to unit area, `ln(A·h(x, A·τ_j))` at the
     /// given dimensionless times τ_j ([`SpectrumNormalization::UnitArea`]); exactly scale
@@ -73,20 +81,32 @@ pub enum DescriptorSpec {
     },
     /// DHK1: HKS of the lumped (Voronoi-cot) kernel, Eq. (7), at absolute times.
     Dhk1 {
-        /// Times in the squared length unit of the meshes.
-        times: Vec<f64>,
+        /// Times in the squared length unit of the meshes (or automatic per shape).
+        times: TimeSampling,
     },
     /// DHK2: HKS of the wFEM kernel, Eq. (6), at absolute times.
     Dhk2 {
-        /// Times in the squared length unit of the meshes.
-        times: Vec<f64>,
+        /// Times in the squared length unit of the meshes (or automatic per shape).
+        times: TimeSampling,
     },
     /// DHK3: HKS of the wFEM kernel with eigenvalues divided by λ_max of the k computed ones
     /// (the paper's scale-invariant dense descriptor, Sect. 5).
     Dhk3 {
-        /// Times in units of 1/λ_max.
-        times: Vec<f64>,
+        /// Times in units of 1/λ_max (or automatic per shape).
+        times: TimeSampling,
     },
+}
+
+fn area_unit() -> TimeUnit {
+    TimeUnit::Area(1.0)
+}
+
+fn is_area_unit(unit: &TimeUnit) -> bool {
+    *unit == area_unit()
+}
+
+fn is_kernel_value(convention: &KernelDiagonal) -> bool {
+    *convention == KernelDiagonal::KernelValue
 }
 
 /// The retrieval default: SI-HKS of the wFEM kernel (Eq. (6)), area time unit, α = 2,
@@ -94,32 +114,91 @@ pub enum DescriptorSpec {
 ///
 /// Narrower and lower than [`SihksParams::default`] (τ ∈ [−10, 2], K = 8): on TOSCA-76
 /// (`cargo xtask tosca-eval`, 48 words, χ²) that window gives mAP 0.986 (david 0.91); this one
-/// 0.998 with the vocabulary trained on the 76 and 0.999 with one trained outside them. The small
+/// 0.998 with the vocabulary trained on the 76 and 0.999 with one trained outside them, when it
+/// was chosen (with today's cleaning and capped weights: 0.9972 and 0.9978, docs/SHREC-RESULTS.md).
+/// The small
 /// times resolve the humans' fingers and faces; frequencies ≥ 5 mostly carried noise. At
 /// τ = −12 the 100th mode has tλ ≈ 4π·100·2⁻¹² ≈ 0.3 (Weyl), so the first samples see the
 /// truncation of the spectrum: the descriptor depends (mildly) on k, which is recorded with it.
 impl Default for DescriptorSpec {
     fn default() -> Self {
-        let p = SihksParams::default();
-        DescriptorSpec::SiHks {
-            alpha: p.alpha,
+        Self::sihks(&SihksParams {
             tau_min: -12.0,
             tau_max: 1.0,
-            tau_step: p.tau_step,
-            frequencies: 5,
-        }
+            num_frequencies: 5,
+            ..SihksParams::default()
+        })
     }
 }
 
 impl DescriptorSpec {
-    /// The short name (`SI-HKS`, `area-HKS`, `DHK1`, `DHK2`, `DHK3`).
-    pub fn name(&self) -> &'static str {
+    /// The descriptor without its parameters.
+    pub fn kind(&self) -> Descriptor {
         match self {
-            DescriptorSpec::SiHks { .. } => "SI-HKS",
-            DescriptorSpec::AreaHks { .. } => "area-HKS",
-            DescriptorSpec::Dhk1 { .. } => "DHK1",
-            DescriptorSpec::Dhk2 { .. } => "DHK2",
-            DescriptorSpec::Dhk3 { .. } => "DHK3",
+            DescriptorSpec::SiHks { .. } => Descriptor::SiHks,
+            DescriptorSpec::AreaHks { .. } => Descriptor::AreaHks,
+            DescriptorSpec::Dhk1 { .. } => Descriptor::Dhk1,
+            DescriptorSpec::Dhk2 { .. } => Descriptor::Dhk2,
+            DescriptorSpec::Dhk3 { .. } => Descriptor::Dhk3,
+        }
+    }
+
+    /// SI-HKS with the given options.
+    pub fn sihks(p: &SihksParams) -> Self {
+        DescriptorSpec::SiHks {
+            alpha: p.alpha,
+            tau_min: p.tau_min,
+            tau_max: p.tau_max,
+            tau_step: p.tau_step,
+            frequencies: p.num_frequencies,
+            time_unit: p.time_unit,
+            convention: p.convention,
+        }
+    }
+
+    /// A descriptor with the times and SI-HKS options of `params` (the parameters of
+    /// [`crate::ShapeDescriptors::dense`]; area-HKS takes its explicit times, or none).
+    pub fn with_params(descriptor: Descriptor, params: &DescriptorParams) -> Self {
+        let times = params.times.clone();
+        match descriptor {
+            Descriptor::SiHks => Self::sihks(&params.sihks),
+            Descriptor::AreaHks => DescriptorSpec::AreaHks {
+                times: match times {
+                    TimeSampling::Explicit(t) => t,
+                    TimeSampling::Auto { .. } => Vec::new(),
+                },
+            },
+            Descriptor::Dhk1 => DescriptorSpec::Dhk1 { times },
+            Descriptor::Dhk2 => DescriptorSpec::Dhk2 { times },
+            Descriptor::Dhk3 => DescriptorSpec::Dhk3 { times },
+        }
+    }
+
+    /// The descriptor's defaults for retrieval, or `None` where it has none: the absolute
+    /// times of DHK1/DHK2 and the area times of area-HKS depend on the collection.
+    pub fn retrieval_default(descriptor: Descriptor) -> Option<Self> {
+        match descriptor {
+            Descriptor::SiHks => Some(Self::default()),
+            Descriptor::Dhk3 => Some(Self::dhk3_default()),
+            Descriptor::AreaHks | Descriptor::Dhk1 | Descriptor::Dhk2 => None,
+        }
+    }
+
+    /// A descriptor at explicit times (SI-HKS, which samples its own times, gets its
+    /// retrieval default).
+    pub fn with_times(descriptor: Descriptor, times: Vec<f64>) -> Self {
+        match descriptor {
+            Descriptor::SiHks => Self::default(),
+            Descriptor::AreaHks => DescriptorSpec::AreaHks { times },
+            Descriptor::Dhk1 => DescriptorSpec::Dhk1 {
+                times: TimeSampling::Explicit(times),
+            },
+            Descriptor::Dhk2 => DescriptorSpec::Dhk2 {
+                times: TimeSampling::Explicit(times),
+            },
+            Descriptor::Dhk3 => DescriptorSpec::Dhk3 {
+                times: TimeSampling::Explicit(times),
+            },
         }
     }
 
@@ -127,32 +206,49 @@ impl DescriptorSpec {
     /// six scales over two decades from the finest resolved one, as in Shape Google.
     pub fn dhk3_default() -> Self {
         DescriptorSpec::Dhk3 {
-            times: (0..6)
-                .map(|j| 4.0 * std::f64::consts::LN_10 * 10f64.powf(0.4 * j as f64))
-                .collect(),
+            times: TimeSampling::Explicit(
+                (0..6)
+                    .map(|j| 4.0 * std::f64::consts::LN_10 * 10f64.powf(0.4 * j as f64))
+                    .collect(),
+            ),
         }
     }
 
-    fn sihks_params(alpha: f64, tau_min: f64, tau_max: f64, tau_step: f64, frequencies: usize) -> SihksParams {
-        SihksParams {
-            alpha,
-            tau_min,
-            tau_max,
-            tau_step,
-            time_unit: TimeUnit::Area(1.0),
-            num_frequencies: frequencies,
-            ..Default::default()
+    /// The SI-HKS options of an SI-HKS descriptor (`None` for the others).
+    pub fn sihks_params(&self) -> Option<SihksParams> {
+        match *self {
+            DescriptorSpec::SiHks {
+                alpha,
+                tau_min,
+                tau_max,
+                tau_step,
+                frequencies,
+                time_unit,
+                convention,
+            } => Some(SihksParams {
+                alpha,
+                tau_min,
+                tau_max,
+                tau_step,
+                time_unit,
+                num_frequencies: frequencies,
+                convention,
+            }),
+            _ => None,
         }
     }
 
-    /// The descriptor dimension d.
+    /// The descriptor dimension d (for automatic times, their number).
     pub fn dimension(&self) -> usize {
         match self {
             DescriptorSpec::SiHks { frequencies, .. } => *frequencies,
-            DescriptorSpec::AreaHks { times }
-            | DescriptorSpec::Dhk1 { times }
-            | DescriptorSpec::Dhk2 { times }
-            | DescriptorSpec::Dhk3 { times } => times.len(),
+            DescriptorSpec::AreaHks { times } => times.len(),
+            DescriptorSpec::Dhk1 { times } | DescriptorSpec::Dhk2 { times } | DescriptorSpec::Dhk3 { times } => {
+                match times {
+                    TimeSampling::Explicit(t) => t.len(),
+                    TimeSampling::Auto { num_times } => *num_times,
+                }
+            }
         }
     }
 
@@ -161,15 +257,13 @@ impl DescriptorSpec {
     /// # Errors
     /// [`RetrievalError::InvalidParameter`] / [`RetrievalError::Empty`] naming the parameter.
     pub fn validate(&self) -> Result<(), RetrievalError> {
+        let explicit = |times: &[f64]| {
+            check::non_empty("times", times.len())?;
+            times.iter().try_for_each(|&t| check::positive("time", t))
+        };
         match self {
-            DescriptorSpec::SiHks {
-                alpha,
-                tau_min,
-                tau_max,
-                tau_step,
-                frequencies,
-            } => {
-                let p = Self::sihks_params(*alpha, *tau_min, *tau_max, *tau_step, *frequencies);
+            DescriptorSpec::SiHks { frequencies, .. } => {
+                let p = self.sihks_params().unwrap_or_default();
                 let m = p.times(Some(1.0))?.len();
                 if *frequencies == 0 || m < 3 || *frequencies > (m - 1) / 2 + 1 {
                     return Err(RetrievalError::InvalidParameter {
@@ -180,12 +274,12 @@ impl DescriptorSpec {
                 }
                 Ok(())
             }
-            DescriptorSpec::AreaHks { times }
-            | DescriptorSpec::Dhk1 { times }
-            | DescriptorSpec::Dhk2 { times }
-            | DescriptorSpec::Dhk3 { times } => {
-                check::non_empty("times", times.len())?;
-                times.iter().try_for_each(|&t| check::positive("time", t))
+            DescriptorSpec::AreaHks { times } => explicit(times),
+            DescriptorSpec::Dhk1 { times } | DescriptorSpec::Dhk2 { times } | DescriptorSpec::Dhk3 { times } => {
+                match times {
+                    TimeSampling::Explicit(t) => explicit(t),
+                    TimeSampling::Auto { num_times } => check::non_empty("times", *num_times),
+                }
             }
         }
     }
@@ -197,14 +291,13 @@ impl DescriptorSpec {
     /// and [`scale_invariant_hks`].
     pub fn compute(&self, shape: &mut ShapeDescriptors) -> Result<Mat<f64>, RetrievalError> {
         let area = shape.area();
-        let lumped = matches!(self, DescriptorSpec::Dhk1 { .. });
-        let basis = shape.eigenbasis(lumped)?;
+        let basis = shape.eigenbasis(self.kind().uses_lumped())?;
         let spectrum = Spectrum::new(&basis.values, basis.vectors.as_ref())?.with_area(area)?;
-        let hks = |times: &[f64], normalization| {
+        let hks = |times: TimeSampling, normalization| {
             heat_kernel_signature(
                 &spectrum,
                 &HksParams {
-                    times: TimeSampling::Explicit(times.to_vec()),
+                    times,
                     normalization,
                     ..Default::default()
                 },
@@ -212,18 +305,12 @@ impl DescriptorSpec {
             .map(|h| h.values)
         };
         match self {
-            DescriptorSpec::SiHks {
-                alpha,
-                tau_min,
-                tau_max,
-                tau_step,
-                frequencies,
-            } => scale_invariant_hks(
-                &spectrum,
-                &Self::sihks_params(*alpha, *tau_min, *tau_max, *tau_step, *frequencies),
-            ),
+            DescriptorSpec::SiHks { .. } => scale_invariant_hks(&spectrum, &self.sihks_params().unwrap_or_default()),
             DescriptorSpec::AreaHks { times } => {
-                let mut h = hks(times, SpectrumNormalization::UnitArea { area })?;
+                let mut h = hks(
+                    TimeSampling::Explicit(times.clone()),
+                    SpectrumNormalization::UnitArea { area },
+                )?;
                 for j in 0..h.ncols() {
                     for i in 0..h.nrows() {
                         let v = h[(i, j)];
@@ -240,8 +327,10 @@ impl DescriptorSpec {
                 }
                 Ok(h)
             }
-            DescriptorSpec::Dhk1 { times } | DescriptorSpec::Dhk2 { times } => hks(times, SpectrumNormalization::None),
-            DescriptorSpec::Dhk3 { times } => hks(times, SpectrumNormalization::MaxEigenvalue),
+            DescriptorSpec::Dhk1 { times } | DescriptorSpec::Dhk2 { times } => {
+                hks(times.clone(), SpectrumNormalization::None)
+            }
+            DescriptorSpec::Dhk3 { times } => hks(times.clone(), SpectrumNormalization::MaxEigenvalue),
         }
     }
 }
@@ -290,7 +379,7 @@ impl<'m> EmbeddingFlow<'m> {
         let kernel = wfem_heat::HeatKernel::new(
             &ops,
             wfem_heat::HeatParams {
-                kernel: wfem_heat::KernelKind::Wfem,
+                mass: wfem_heat::Mass::Consistent,
                 method: wfem_heat::Method::Fast(Default::default()),
             },
         )?;
@@ -1221,7 +1310,7 @@ impl VocabularyModel {
             return Err(invalid(format!(
                 "words have dimension {} but the {} descriptor has {d}",
                 vocabulary.words().ncols(),
-                descriptor.descriptor.name()
+                descriptor.descriptor.kind().label()
             )));
         }
         if let Some(z) = &standardizer {

@@ -25,14 +25,15 @@
 //! **Default window** (area unit): α = 2, τ ∈ [−10, 2] in steps of 1/8 (97 samples), t₀ = A, K = 8.
 //! For a surface of area A, Weyl's law λ_k ≈ 4πk/A puts `t·λ_k = 4πk·2^τ`: the window starts
 //! where the 100th mode has `tλ ≈ 1.2` (the truncated spectrum of k = 100 eigenpairs is
-//! resolved from there on, NUMERICS §4) and ends at `t = 4A`, where only the constant mode is
+//! resolved from there on, docs/NUMERICS.md §4) and ends at `t = 4A`, where only the constant mode is
 //! left on TOSCA-like shapes (λ₁A ≳ 5). Chosen by the measurements of docs/SHREC-RESULTS.md.
 
 use crate::check;
-use crate::hks::{signature_rows, HksConvention, Spectrum};
+use crate::hks::{signature_rows, Spectrum};
 use crate::RetrievalError;
 use faer::Mat;
 use rayon::prelude::*;
+use wfem_heat::KernelDiagonal;
 
 /// Vertices per block of the HKS table (4096 × 385 doubles ≈ 12 MB).
 const VERTEX_BLOCK: usize = 4096;
@@ -52,8 +53,8 @@ pub struct SihksParams {
     pub time_unit: TimeUnit,
     /// Number K of Fourier magnitudes kept, frequencies 0 … K−1 (default 8).
     pub num_frequencies: usize,
-    /// Which HKS diagonal is sampled (default [`HksConvention::KernelValue`]).
-    pub convention: HksConvention,
+    /// Which HKS diagonal is sampled (default [`KernelDiagonal::KernelValue`]).
+    pub convention: KernelDiagonal,
 }
 
 impl Default for SihksParams {
@@ -65,13 +66,14 @@ impl Default for SihksParams {
             tau_step: 1.0 / 8.0,
             time_unit: TimeUnit::Area(1.0),
             num_frequencies: 8,
-            convention: HksConvention::KernelValue,
+            convention: KernelDiagonal::KernelValue,
         }
     }
 }
 
 /// The unit t₀ of the SI-HKS times `t = t₀ α^τ`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum TimeUnit {
     /// t₀ in the squared length units of the mesh (Bronstein & Kokkinos; scale invariant only
     /// up to the window's ends).

@@ -1,5 +1,5 @@
 //! Carathéodory–Fejér approximation of e^{-x} on [0, ∞) (Trefethen, Weideman & Schmelzer,
-//! BIT 46 (2006) 653–670, `cf.m`; NUMERICS §2.4), in float64 with plain O(N²) DFTs.
+//! BIT 46 (2006) 653–670, `cf.m`; docs/NUMERICS.md §2.4), in float64 with plain O(N²) DFTs.
 //!
 //! Test-only: an independent recomputation of the shipped tables for degrees ≤ 12 (CF is
 //! near-best, and its float64 accuracy collapses for n ≥ 14, so it is not a table generator).

@@ -39,12 +39,10 @@ use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
+use crate::blocks::{project_out, row_blocks, split_rows, ROTATION_ROWS};
 use crate::lanczos::symmetric_eigen;
 use crate::rng::SplitMix64;
 use crate::SolveError;
-
-/// Rows per work item of the in-place basis rotation `V ← V Y` at a restart.
-const ROTATION_ROWS: usize = 512;
 
 /// Options of [`largest_eigenpairs`].
 #[derive(Clone, Debug, PartialEq)]
@@ -457,63 +455,6 @@ fn rotate_in_place(v: MatMut<'_, f64>, y: MatRef<'_, f64>) {
     });
 }
 
-/// One pass of block classical Gram–Schmidt in the M-inner product against an M-orthonormal V:
-/// `C = Vᵀ(MW)`, `W ← W − V C`; returns C. `mw` is M W.
-///
-/// Both products are tall and skinny (n × m times n × b); they run as sequential BLAS-3
-/// products on row blocks spread over the rayon pool (C as a sum of per-block partial
-/// products), which keeps every core busy without faer's per-product barriers (those stall
-/// badly when the machine is shared).
-pub(crate) fn project_out(v: MatRef<'_, f64>, w: MatMut<'_, f64>, mw: MatRef<'_, f64>) -> Mat<f64> {
-    let (m, b) = (v.ncols(), w.ncols());
-    if m == 0 {
-        return Mat::zeros(0, b);
-    }
-    let rows = row_blocks(v.nrows());
-    let coef = rows
-        .par_iter()
-        .map(|&(r0, r1)| {
-            let mut c = Mat::<f64>::zeros(m, b);
-            matmul(
-                c.as_mut(),
-                Accum::Replace,
-                v.get(r0..r1, ..).transpose(),
-                mw.get(r0..r1, ..),
-                1.0,
-                Par::Seq,
-            );
-            c
-        })
-        .reduce(|| Mat::<f64>::zeros(m, b), |a, c| a + c);
-    let mut chunks = Vec::with_capacity(rows.len());
-    let mut rest = w;
-    let mut done = 0;
-    for &(_, r1) in &rows {
-        let (head, tail) = rest.split_at_row_mut(r1 - done);
-        chunks.push((done, head));
-        rest = tail;
-        done = r1;
-    }
-    chunks.into_par_iter().for_each(|(r0, mut chunk)| {
-        let r1 = r0 + chunk.nrows();
-        matmul(
-            chunk.as_mut(),
-            Accum::Add,
-            v.get(r0..r1, ..),
-            coef.as_ref(),
-            -1.0,
-            Par::Seq,
-        );
-    });
-    coef
-}
-
-/// Row ranges of about [`ROTATION_ROWS`]·4 rows for the tall-skinny products.
-fn row_blocks(n: usize) -> Vec<(usize, usize)> {
-    let step = 4 * ROTATION_ROWS;
-    (0..n).step_by(step).map(|r| (r, (r + step).min(n))).collect()
-}
-
 /// `A X` for a symmetric sparse A (both triangles stored, CSC) and an n × b block, in
 /// parallel over rows: row j of AX is column j of A (symmetry) times X. X is copied to row-major
 /// order first, so each stored entry a_ij costs one contiguous b-wide multiply-add
@@ -529,15 +470,7 @@ pub fn symmetric_block_mul(a: SparseColMatRef<'_, usize, f64>, x: MatRef<'_, f64
     // Row-major copy of X: x_rows[i·b + c] = X[i, c].
     let x_rows: Vec<f64> = (0..n * b).into_par_iter().map(|k| x[(k / b, k % b)]).collect();
     let mut out = Mat::<f64>::zeros(n, b);
-    let mut chunks = Vec::with_capacity(rows.len());
-    let mut rest = out.as_mut();
-    let mut done = 0;
-    for &(_, r1) in &rows {
-        let (head, tail) = rest.split_at_row_mut(r1 - done);
-        chunks.push((done, head));
-        rest = tail;
-        done = r1;
-    }
+    let chunks = split_rows(out.as_mut(), &rows);
     chunks.into_par_iter().for_each(|(r0, mut chunk)| {
         let mut acc = vec![0.0f64; b];
         for jj in 0..chunk.nrows() {

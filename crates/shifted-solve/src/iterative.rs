@@ -2,7 +2,7 @@
 //! preconditioned CG for the real SPD pole of odd degrees.
 //!
 //! Splitting x = u + iv, z = p + iq, K_p = tL − pB, the complex symmetric system becomes the
-//! real symmetric indefinite system (NUMERICS §3.3b)
+//! real symmetric indefinite system (docs/NUMERICS.md §3.3b)
 //!
 //! ```text
 //! [[K_p,  qB ],   [u]   [ Re b]
@@ -30,7 +30,7 @@ pub enum Preconditioner {
 /// The shift s of the preconditioner P = tL + sB.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PreconditionerShift {
-    /// s = |z_j|, one Cholesky per pole: κ ≤ 2 for every pole of degree 16 (NUMERICS §3.3b).
+    /// s = |z_j|, one Cholesky per pole: κ ≤ 2 for every pole of degree 16 (docs/NUMERICS.md §3.3b).
     PoleModulus,
     /// One shared s for every pole, one Cholesky per t: κ ≤ 3.3 with s = 10 for degree 16.
     Shared(f64),
@@ -147,7 +147,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Preconditioned MINRES (Elman–Silvester–Wathen form, NUMERICS §3.4) for a symmetric operator
+/// Preconditioned MINRES (Elman–Silvester–Wathen form, docs/NUMERICS.md §3.4) for a symmetric operator
 /// `apply_a` and SPD preconditioner `apply_m_inv`.
 pub(crate) fn minres(
     b: &[f64],

@@ -250,7 +250,7 @@ impl<'a> LanczosProcess<'a> {
                 // per pass instead of keeping M v_i for every basis vector (n·m doubles).
                 for _ in 0..2 {
                     let mw = (self.mass)(&w);
-                    let coef = crate::eigen::project_out(
+                    let coef = crate::blocks::project_out(
                         self.basis.v.as_ref().get(.., 0..j + 1),
                         MatMut::from_column_major_slice_mut(&mut w, n, 1),
                         MatRef::from_column_major_slice(&mw, n, 1),

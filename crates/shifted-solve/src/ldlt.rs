@@ -1,4 +1,4 @@
-//! Complex-symmetric supernodal LDLᵀ of the shifted matrices A = tL − zB (NUMERICS §3.1, §3.3d).
+//! Complex-symmetric supernodal LDLᵀ of the shifted matrices A = tL − zB (docs/NUMERICS.md §3.1, §3.3d).
 //!
 //! A = tL − zB is complex *symmetric* (Aᵀ = A, not Hermitian). With z = p + iq, q > 0, the
 //! Hermitian part of i·A is qB, which is positive definite, so every leading principal

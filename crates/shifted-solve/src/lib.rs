@@ -43,6 +43,7 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod backend;
+mod blocks;
 mod condition;
 mod eigen;
 mod error;

@@ -6,7 +6,7 @@
 //! definite (the consistent B, a lumped diagonal D, or I). Both are stored as values on the
 //! sorted union of their patterns plus the diagonal, so every combination `a·L + b·M` (real or
 //! complex) is assembled in O(nnz) as values on this pattern and one symbolic analysis serves
-//! every pole, every t and every shift (NUMERICS §1).
+//! every pole, every t and every shift (docs/NUMERICS.md §1).
 //!
 //! Validation happens once, in [`OperatorPair::new`]: square, equal sizes, non-empty, finite,
 //! symmetric (1e−10 relative), diag(M) > 0, diag(L) ≥ 0 — all O(nnz). The definiteness checks

@@ -20,7 +20,7 @@
 //! gives the factor 2 Re, so only the ⌊n/2⌋ upper-half-plane poles need a solve.
 //!
 //! # Provenance
-//! * Even n = 2…16: NUMERICS.md §2.3 (20 significant digits), obtained from transmutagen's
+//! * Even n = 2…16: docs/NUMERICS.md §2.3 (20 significant digits), obtained from transmutagen's
 //!   200-digit Remez cache (`ergs/transmutagen`, `transmutagen/data/CRAM_cache/{n}_200`) by
 //!   120-digit root finding; n = 14, 16 agree with Pusa, NSE 169 (2011) 155–167 (corrected
 //!   2012) under the mapping above.
@@ -49,12 +49,12 @@ pub struct RationalApprox {
     /// For odd degree: the real negative pole and its residue `(z_r, c_r)`.
     pub real_pole: Option<(f64, f64)>,
     /// E_n = max_{x ≥ 0} |r_n(x) − e^{-x}| (exact arithmetic; in f64 the partial-fraction sum
-    /// bottoms out near 2e−14, NUMERICS §2.2).
+    /// bottoms out near 2e−14, docs/NUMERICS.md §2.2).
     pub max_error: f64,
 }
 
 /// Default degree: n = 16 (8 complex solves). Its E_16 = 2.1e−16 is below the float64 floor of
-/// the partial-fraction sum (≈2e−14, NUMERICS §2.2), so 16 reaches the best accuracy attainable
+/// the partial-fraction sum (≈2e−14, docs/NUMERICS.md §2.2), so 16 reaches the best accuracy attainable
 /// in double precision; higher degrees only add solves and cancellation (Σ2|c_j| grows ~2.3× per
 /// degree), while n = 14 would already cost an extra decade (E_14 = 1.8e−14).
 pub const DEFAULT_DEGREE: usize = 16;
@@ -106,7 +106,7 @@ impl RationalApprox {
     }
 
     /// Σ_j 2|c_j| (+|c_r|): the factor by which a relative solve error ε per pole is amplified
-    /// in r_n(tB⁻¹L)f (NUMERICS §2.2).
+    /// in r_n(tB⁻¹L)f (docs/NUMERICS.md §2.2).
     pub fn error_amplification(&self) -> f64 {
         self.residues.iter().map(|r| 2.0 * r.norm()).sum::<f64>() + self.real_pole.map_or(0.0, |(_, r)| r.abs())
     }
@@ -130,7 +130,7 @@ impl RationalApprox {
 pub const SHIPPED_DEGREES: &[usize] = &[2, 3, 4, 5, 6, 7, 8, 10, 12, 14, 16];
 
 static TABLES: [RationalApprox; 11] = [
-    // NUMERICS §2.3, n = 2.
+    // docs/NUMERICS.md §2.3, n = 2.
     RationalApprox {
         degree: 2,
         c0: 7.3586701695805292800e-3,
@@ -148,7 +148,7 @@ static TABLES: [RationalApprox; 11] = [
         real_pole: Some((-1.3688493230338539681, 1.4838485523029698992)),
         max_error: 7.9938063633568782881e-4,
     },
-    // NUMERICS §2.3, n = 4.
+    // docs/NUMERICS.md §2.3, n = 4.
     RationalApprox {
         degree: 4,
         c0: 8.6522406952888523482e-5,
@@ -178,7 +178,7 @@ static TABLES: [RationalApprox; 11] = [
         real_pole: Some((-2.1554154620085580192, 3.2718193944526842925)),
         max_error: 9.3457131530266464768e-6,
     },
-    // NUMERICS §2.3, n = 6.
+    // docs/NUMERICS.md §2.3, n = 6.
     RationalApprox {
         degree: 6,
         c0: 1.0084543748996707079e-6,
@@ -212,7 +212,7 @@ static TABLES: [RationalApprox; 11] = [
         real_pole: Some((-2.9410969231931400453, 7.1876259359111990987)),
         max_error: 1.0874974913752479609e-7,
     },
-    // NUMERICS §2.3, n = 8.
+    // docs/NUMERICS.md §2.3, n = 8.
     RationalApprox {
         degree: 8,
         c0: 1.1722652116334907178e-8,
@@ -231,7 +231,7 @@ static TABLES: [RationalApprox; 11] = [
         real_pole: None,
         max_error: 1.1722652116334907178e-8,
     },
-    // NUMERICS §2.3, n = 10.
+    // docs/NUMERICS.md §2.3, n = 10.
     RationalApprox {
         degree: 10,
         c0: 1.3611205233454477499e-10,
@@ -252,7 +252,7 @@ static TABLES: [RationalApprox; 11] = [
         real_pole: None,
         max_error: 1.3611205233454477499e-10,
     },
-    // NUMERICS §2.3, n = 12.
+    // docs/NUMERICS.md §2.3, n = 12.
     RationalApprox {
         degree: 12,
         c0: 1.5794568370512387715e-12,
@@ -275,7 +275,7 @@ static TABLES: [RationalApprox; 11] = [
         real_pole: None,
         max_error: 1.5794568370512387715e-12,
     },
-    // NUMERICS §2.3, n = 14 (= Pusa 2011/2012 CRAM-14 under z = −conj θ, c = −conj α).
+    // docs/NUMERICS.md §2.3, n = 14 (= Pusa 2011/2012 CRAM-14 under z = −conj θ, c = −conj α).
     RationalApprox {
         degree: 14,
         c0: 1.8321743782540412752e-14,
@@ -300,7 +300,7 @@ static TABLES: [RationalApprox; 11] = [
         real_pole: None,
         max_error: 1.8321743782540412752e-14,
     },
-    // NUMERICS §2.3, n = 16 (= Pusa 2011/2012 CRAM-16 under z = −conj θ, c = −conj α).
+    // docs/NUMERICS.md §2.3, n = 16 (= Pusa 2011/2012 CRAM-16 under z = −conj θ, c = −conj α).
     RationalApprox {
         degree: 16,
         c0: 2.1248537104952237488e-16,

@@ -1,21 +1,22 @@
 //! The rational resolvent sum *on the sparsity pattern*, by selected inversion:
 //!
 //! ```text
-//! R_t = 2 Re Σ_j c_j (tL − z_j M)⁻¹  (+ the real pole)  ≈  X e^{−tΛ} Xᵀ = H_t,
+//! R_t = 2 Re Σ_j c_j (tL − z_j M)⁻¹  (+ the real pole)  ≈  X e^{−tΛ} Xᵀ = K̃_t,
 //! ```
 //!
-//! the heat-kernel matrix (paper Eq. (6) with `K_t = H_t M`; `XᵀMX = I`), evaluated only at
+//! the heat-kernel matrix (paper Eq. (6) with `K_t = K̃_t M`; `XᵀMX = I`), evaluated only at
 //! the stored entries (i, j) of the pattern of L and M — which include the diagonal
-//! `H_t(i, i)`, the heat kernel signature, and every entry that `diag(H_t M)` (the diagonal of
+//! `K̃_t(i, i)`, the heat kernel signature, and every entry that `diag(K̃_t M)` (the diagonal of
 //! K_t) needs. Each pole costs one complex-symmetric LDLᵀ and one selected inversion of it
-//! (about the cost of the factorization); no column of `H_t` is formed, so the cost does not
+//! (about the cost of the factorization); no column of `K̃_t` is formed, so the cost does not
 //! depend on how far the kernel spreads (probing needs ever more columns as t grows; eigen
 //! truncation misses the small-t diagonal).
 //!
-//! **Accuracy.** `|r_n(x) − e^{−x}| ≤ E_n` on [0, ∞) (Eq. (14)), so every entry is within
-//! `E_n · (M⁻¹)_ii` of H_t(i, i) (since `Σ_k x_k(i)² = (M⁻¹)_ii`); with the default degree 16
-//! (E_16 ≈ 2e−16) that is rounding level relative to `H_t(i, i) ≥ 1/area`. The c0 term
-//! `c0 M⁻¹` (|c0| = E_n) is omitted, as in [`crate::RationalFactors::apply_resolvent`].
+//! **Accuracy.** `|r_n(x) − e^{−x}| ≤ E_n` on [0, ∞) (Eq. (14)), so the full approximant is
+//! within `E_n · (M⁻¹)_ii` of K̃_t(i, i) (since `Σ_k x_k(i)² = (M⁻¹)_ii`). The c0 term
+//! `c0 M⁻¹` (|c0| ≤ E_n) is omitted, as in [`crate::RationalFactors::apply_resolvent`], which
+//! adds at most another `E_n · (M⁻¹)_ii`: every entry is within `2 E_n · (M⁻¹)_ii`. With the
+//! default degree 16 (E_16 ≈ 2e−16) that is rounding level relative to `K̃_t(i, i) ≥ 1/area`.
 
 use crate::backend::direct::shift_scale;
 use crate::backend::Pole;
@@ -64,7 +65,7 @@ impl SelectedInversion {
 
     /// `R_t = 2 Re Σ_j c_j (tL − z_j M)⁻¹` (+ the real pole) at every stored entry of the
     /// pair's pattern ([`OperatorPair::pattern`], both triangles, in its order): with the
-    /// default approximation, the heat-kernel matrix H_t on the pattern (module docs). The
+    /// default approximation, the heat-kernel matrix K̃_t on the pattern (module docs). The
     /// poles run in parallel.
     ///
     /// # Errors

@@ -102,7 +102,7 @@ impl ShiftedSolver {
     }
 
     /// Approximates the heat operator, `r_n(t M⁻¹L) F = c0·F + 2 Re Σ_j c_j (tL − z_j M)⁻¹ (M F)`
-    /// (paper Eq. (13) in the sign convention of NUMERICS §0.1). `rhs` is n × k.
+    /// (paper Eq. (13) in the sign convention of docs/NUMERICS.md §0.1). `rhs` is n × k.
     ///
     /// # Errors
     /// Invalid t, size/NaN problems in `rhs`, singular shifted matrices, non-convergence.
@@ -117,7 +117,7 @@ impl ShiftedSolver {
     }
 
     /// `2 Re Σ_j c_j (tL − z_j M)⁻¹ G` (+ the real pole), without the c0 term and without the
-    /// multiplication by M: with G = e_i this is the heat-kernel column H_t e_i (NUMERICS §1).
+    /// multiplication by M: with G = e_i this is the heat-kernel column H_t e_i (docs/NUMERICS.md §1).
     ///
     /// # Errors
     /// As [`Self::apply`].

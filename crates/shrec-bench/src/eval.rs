@@ -36,9 +36,8 @@ use faer::Mat;
 use rayon::prelude::*;
 use shape_retrieval::hks::TimeSampling;
 use shape_retrieval::{
-    descriptor_distance, repeatability, Assignment, BagDistance, BagSettings, Descriptor, DescriptorSettings,
-    DescriptorSpec, FeatureDetector, FeatureSet, GlobalSignature, RetrievalError, RetrievalSettings, TrainingParams,
-    VertexWeights,
+    descriptor_distance, repeatability, Assignment, BagDistance, BagSettings, DescriptorSettings, DescriptorSpec,
+    FeatureDetector, FeatureSet, GlobalSignature, RetrievalError, RetrievalSettings, TrainingParams, VertexWeights,
 };
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -216,7 +215,7 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
             "SG1 (ours)",
             "Shape Google: DHK1 (lumped kernel, Eq. (7)) at 6 global times, L1, no z-scoring",
             shape_google(DescriptorSpec::Dhk1 {
-                times: hks_times.to_vec(),
+                times: TimeSampling::Explicit(hks_times.to_vec()),
             }),
             VocabularySource::NullShapes,
             false,
@@ -225,7 +224,7 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
             "SG2 (ours)",
             "Shape Google: DHK2 (wFEM kernel, Eq. (6)) at 6 global times, L1, no z-scoring",
             shape_google(DescriptorSpec::Dhk2 {
-                times: hks_times.to_vec(),
+                times: TimeSampling::Explicit(hks_times.to_vec()),
             }),
             VocabularySource::NullShapes,
             false,
@@ -481,21 +480,21 @@ fn analyse(
     cache.fill(&s.file.path, &mut s.shape, true, settings)?;
     let shape = &mut s.shape;
     let mut dense = Vec::new();
-    shape.set_times(TimeSampling::Explicit(hks_times.to_vec()));
-    for d in [Descriptor::Dhk1, Descriptor::Dhk2] {
-        dense.push(shape.dense(d).map_err(BenchError::retrieval(s.file.name.clone()))?);
+    let (hks, dhk3) = (
+        TimeSampling::Explicit(hks_times.to_vec()),
+        TimeSampling::Explicit(dhk3_times.to_vec()),
+    );
+    for spec in [
+        DescriptorSpec::Dhk1 { times: hks.clone() },
+        DescriptorSpec::Dhk2 { times: hks },
+        DescriptorSpec::Dhk3 { times: dhk3 },
+        DescriptorSpec::default(),
+    ] {
+        dense.push(
+            spec.compute(shape)
+                .map_err(BenchError::retrieval(s.file.name.clone()))?,
+        );
     }
-    shape.set_times(TimeSampling::Explicit(dhk3_times.to_vec()));
-    dense.push(
-        shape
-            .dense(Descriptor::Dhk3)
-            .map_err(BenchError::retrieval(s.file.name.clone()))?,
-    );
-    dense.push(
-        DescriptorSpec::default()
-            .compute(shape)
-            .map_err(BenchError::retrieval(s.file.name.clone()))?,
-    );
     let features = [
         shape
             .features(FeatureDetector::Shk1)

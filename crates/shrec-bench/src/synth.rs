@@ -1,4 +1,4 @@
-//! Synthetic SHREC'10-style robustness benchmark (paper Sect. 5; NUMERICS §7).
+//! Synthetic SHREC'10-style robustness benchmark (paper Sect. 5; docs/NUMERICS.md §7).
 //!
 //! The SHREC'10 feature-detection/description data are not available, so we rebuild the
 //! protocol on TOSCA null shapes: every base mesh gets 9 synthetic transformation classes plus

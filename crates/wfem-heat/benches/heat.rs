@@ -9,7 +9,7 @@
 //!   Cholesky, every size), with the direct LDLᵀ and the MINRES backends, and degree 7 (the
 //!   paper's r) with LDLᵀ (these three at 164K only with `WFEM_BENCH_LARGE=1`);
 //! * 100 log-spaced times over three decades from one factorization (`apply_times`);
-//! * the exact diagonal H_t(i, i) by selected inversion, and a whole row of diffusion
+//! * the exact diagonal K̃_t(i, i) by selected inversion, and a whole row of diffusion
 //!   distances (one kernel column plus the diagonal of H_{2t});
 //! * the spectral method (Eq. (8)) with k = 100, 200, 300 eigenpairs, eigensolve included
 //!   (`HeatKernel::new` + `apply`), and the apply alone with the eigenpairs precomputed
@@ -115,7 +115,7 @@ fn bench(c: &mut Criterion) {
             let k = kernel(&ops, method);
             group.bench_function(name, |b| b.iter(|| k.apply(black_box(&e), next_t()).unwrap()));
         }
-        // The exact diagonal H_t(i, i) (the HKS without truncation) by selected inversion, and
+        // The exact diagonal K̃_t(i, i) (the HKS without truncation) by selected inversion, and
         // a whole row of diffusion distances (one column plus that diagonal at 2t).
         let diagonal = DiagonalParams::default();
         group.bench_function("diagonal_selected_inversion", |b| {

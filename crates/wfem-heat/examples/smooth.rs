@@ -6,7 +6,7 @@
 use mesh_fem::{assemble, generate, AssemblyParams};
 use std::f64::consts::PI;
 use std::time::Instant;
-use wfem_heat::{EigenParams, HeatError, HeatKernel, HeatParams, KernelKind, Method};
+use wfem_heat::{EigenParams, HeatError, HeatKernel, HeatParams, Mass, Method};
 
 fn main() -> Result<(), HeatError> {
     let mesh = generate::bumpy(3).with_area(4.0 * PI)?;
@@ -47,7 +47,7 @@ fn main() -> Result<(), HeatError> {
         let k = HeatKernel::new(
             &ops,
             HeatParams {
-                kernel: KernelKind::Wfem,
+                mass: Mass::Consistent,
                 method,
             },
         )?;

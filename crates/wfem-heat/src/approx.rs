@@ -104,6 +104,19 @@ pub enum Coefficients {
     Normalized,
 }
 
+wfem_choice::registry! {
+    Coefficients as "coefficients" {
+        Coefficients::LeastSquares = Coefficients::LeastSquares => "least-squares":
+            "the best approximation of f in span{K_t e_i : i ∈ A} (M-orthogonal projection; default)",
+        Coefficients::Normalized = Coefficients::Normalized => "normalized":
+            "the feature values averaged with heat-kernel weights: Σ f(p_i) K_t e_i / Σ K_t e_i",
+        Coefficients::FeatureValues = Coefficients::FeatureValues => "feature-values" ["paper"]:
+            "the paper's literal f_glob = Σ_{i∈A} f(p_i) K_t e_i (small with sparse anchors)",
+        Coefficients::Interpolate = Coefficients::Interpolate => "interpolate":
+            "interpolate f on the anchors: Σ_{i∈A} c_i K_t e_i with f_glob(p_j) = f(p_j), j ∈ A",
+    }
+}
+
 /// Persistence threshold selecting the anchor set A among the critical points of f.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Persistence {

@@ -1,6 +1,6 @@
 //! The diagonal of a symmetric operator A that decays with graph distance on the mesh (the
-//! heat-kernel matrix `H_t`, the Gram matrix `S_t = M K_t`), known only through products
-//! `A E` with blocks of vectors: probing (Tang & Saad, NLAA 19 (2012) 485–501; NUMERICS §4) or,
+//! heat-kernel matrix `K̃_t`, the Gram matrix `S_t = M K_t`), known only through products
+//! `A E` with blocks of vectors: probing (Tang & Saad, NLAA 19 (2012) 485–501; docs/NUMERICS.md §4) or,
 //! as a reference, n unit vectors.
 //!
 //! **Probing.** A greedy distance-p colouring of the mesh graph (vertices within p edges get
@@ -26,16 +26,16 @@ pub enum DiagonalMethod {
     /// Exactly (rational degree 16, rounding level), from the heat-kernel matrix on the
     /// sparsity pattern by selected inversion of one complex LDLᵀ per pole
     /// ([`shifted_solve::SelectedInversion`]): the cost of 8 factorizations per t whatever t
-    /// is — no probe columns, no eigen truncation. For the diagonal of `H_t` and `K_t`
+    /// is — no probe columns, no eigen truncation. For the diagonal of `K̃_t` and `K_t`
     /// ([`crate::HeatKernel::diagonal`], the diffusion distance); an operator whose diagonal
     /// is not on the pattern (the Gram matrix `M K_t` of the mass-weighted distance) is
     /// probed instead, with the default tolerance.
     SelectedInversion,
-    /// Exactly (to the method's accuracy) from n unit-vector columns: cost grows like
+    /// From n unit-vector columns, exact to the kernel method's accuracy: cost grows like
     /// n × (one block application), for small meshes or as a reference.
-    Exact,
+    UnitColumns,
     /// Probing with a distance-p colouring chosen for a relative tail `tol` (see the module
-    /// docs). Falls back to [`Self::Exact`] when the colouring would need more than n/4
+    /// docs). Falls back to [`Self::UnitColumns`] when the colouring would need more than n/4
     /// colours (large t).
     Probing {
         /// Relative tail tolerance (default 1e−10).
@@ -55,15 +55,26 @@ impl Default for DiagonalMethod {
     }
 }
 
+wfem_choice::registry! {
+    DiagonalMethod as "diagonal method" {
+        DiagonalMethod::SelectedInversion = DiagonalMethod::SelectedInversion => "selected-inversion" ["selinv"]:
+            "selected inversion of the rational method's factors: exact at every t, no eigenpairs (default)",
+        DiagonalMethod::Probing { .. } = DiagonalMethod::Probing { tol: DEFAULT_PROBING_TOL } => "probing":
+            "probing with a distance-p colouring of the mesh (Tang & Saad), relative tail tol",
+        DiagonalMethod::UnitColumns = DiagonalMethod::UnitColumns => "columns" ["unit-columns"]:
+            "n unit columns (small meshes; a reference)",
+    }
+}
+
 impl DiagonalMethod {
     /// For the column-based computation: the probing tolerance, or `None` for the n unit
-    /// columns ([`Self::Exact`]); [`Self::SelectedInversion`] falls back to the default
+    /// columns ([`Self::UnitColumns`]); [`Self::SelectedInversion`] falls back to the default
     /// probing where it does not apply.
     pub(crate) fn probe_tol(self) -> Option<f64> {
         match self {
             DiagonalMethod::Probing { tol } => Some(tol),
             DiagonalMethod::SelectedInversion => Some(DEFAULT_PROBING_TOL),
-            DiagonalMethod::Exact => None,
+            DiagonalMethod::UnitColumns => None,
         }
     }
 
@@ -83,14 +94,19 @@ impl DiagonalMethod {
 /// How a diagonal was computed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DiagonalInfo {
-    /// Number of probe columns used (n for the exact method, 0 for selected inversion).
+    /// The method that computed the diagonal: the one asked for, or the one it gave way to
+    /// where it does not apply (probing at a t where the colouring needs more than n/4 colours
+    /// takes the n unit columns; selected inversion of an operator whose diagonal is not on
+    /// the pattern is probed). Never silent: reports and sidecars name it.
+    pub method: DiagonalMethod,
+    /// Number of probe columns used (n for unit columns, 0 for selected inversion).
     pub columns: usize,
-    /// Graph distance p of the colouring (`None` for the exact method and selected
+    /// Graph distance p of the colouring (`None` for unit columns and selected
     /// inversion).
     pub hops: Option<usize>,
     /// The relative tail `Σ_{dist(i,k) > p} |A_ik| / A_ii` of the sample column used to choose
     /// p: the stated error bound of every entry, relative to its own size, when the kernel's
-    /// decay is uniform over the mesh (0 for the exact method and selected inversion).
+    /// decay is uniform over the mesh (0 for unit columns and selected inversion).
     pub relative_tail: f64,
 }
 
@@ -117,12 +133,13 @@ impl Probes {
         let n = pattern.nrows();
         let probed = method
             .probe_tol()
-            .and_then(|tol| colouring(pattern, i, col, tol, (n / 4).min(max_columns)));
+            .and_then(|tol| Some((tol, colouring(pattern, i, col, tol, (n / 4).min(max_columns))?)));
         match probed {
-            Some((colour, n_colours, hops, relative_tail)) => Self {
+            Some((tol, (colour, n_colours, hops, relative_tail))) => Self {
                 colour,
                 n_colours,
                 info: DiagonalInfo {
+                    method: DiagonalMethod::Probing { tol },
                     columns: n_colours,
                     hops: Some(hops),
                     relative_tail,
@@ -132,6 +149,7 @@ impl Probes {
                 colour: (0..n).collect(),
                 n_colours: n,
                 info: DiagonalInfo {
+                    method: DiagonalMethod::UnitColumns,
                     columns: n,
                     hops: None,
                     relative_tail: 0.0,

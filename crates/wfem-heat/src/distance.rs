@@ -1,4 +1,4 @@
-//! Diffusion distances (paper, Sect. 3, Eq. (18) and the display after Eq. (20); NUMERICS §1)
+//! Diffusion distances (paper, Sect. 3, Eq. (18) and the display after Eq. (20); docs/NUMERICS.md §1)
 //! on any [`HeatKernel`] — every kernel (wFEM, lumped, linear) and every method.
 //!
 //! Both distances are `d²(i, j) = (e_i − e_j)ᵀ A (e_i − e_j) = A_ii − 2A_ij + A_jj` for a
@@ -6,7 +6,7 @@
 //!
 //! * [`DistanceKind::Diffusion`] (default): the standard diffusion distance (Coifman & Lafon;
 //!   the paper's "linear FEM diffusion distance" with the eigenvectors of (L, M))
-//!   `d_t²(i,j) = Σ_k e^{−2λ_k t} (x_k(i) − x_k(j))²` with `A = H_{2t} = K_{2t} M⁻¹ = X D_{2t} Xᵀ`,
+//!   `d_t²(i,j) = Σ_k e^{−2λ_k t} (x_k(i) − x_k(j))²` with `A = K̃_{2t} = K_{2t} M⁻¹ = X D_{2t} Xᵀ`,
 //!   the heat-kernel matrix ([`HeatKernel::apply_kernel_matrix`]). It behaves like a distance:
 //!   0 at the source and growing with the geodesic distance from it.
 //! * [`DistanceKind::MassWeighted`]: the paper's wFEM distance `‖h_i − h_j‖_M²` with
@@ -24,10 +24,10 @@
 //! Cost: [`DiffusionDistance::pairs`] needs one column `A(e_i − e_j)` per pair, in blocks of
 //! columns with the kernel's factorizations of t reused. A whole row `d(i, ·)` needs the column
 //! `A e_i` and the diagonal of A, computed once and cached, so every further row costs one
-//! column. The diagonal of `H_{2t}` is `H_{2t}` on the sparsity pattern by selected inversion
+//! column. The diagonal of `K̃_{2t}` is `K̃_{2t}` on the sparsity pattern by selected inversion
 //! (default, [`crate::diagonal::DiagonalMethod::SelectedInversion`]): eight complex LDLᵀ and
 //! their selected inverses, whatever t — probing needed hundreds to thousands of columns
-//! there, because `H_{2t} = K_{2t}M⁻¹` inherits the slow geometric decay of M⁻¹ (48K vertices:
+//! there, because `K̃_{2t} = K_{2t}M⁻¹` inherits the slow geometric decay of M⁻¹ (48K vertices:
 //! 1.1 s for the whole `wfem distance` run, where probing took minutes). The mass-weighted
 //! Gram matrix `M K_t` has no diagonal on the pattern and is probed ([`crate::diagonal`]).
 
@@ -41,7 +41,7 @@ use std::sync::OnceLock;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DistanceKind {
     /// The standard diffusion distance `Σ_k e^{−2λ_k t}(x_k(i) − x_k(j))²`,
-    /// `A = H_{2t} = K_{2t}M⁻¹`.
+    /// `A = K̃_{2t} = K_{2t}M⁻¹`.
     #[default]
     Diffusion,
     /// The paper's wFEM distance `‖h_i − h_j‖_M²`, `h_i = K_{t/2} e_i`, `A = S_t = M K_t`
@@ -49,13 +49,12 @@ pub enum DistanceKind {
     MassWeighted,
 }
 
-impl DistanceKind {
-    /// Short name (`diffusion`, `mass-weighted`).
-    pub fn name(self) -> &'static str {
-        match self {
-            DistanceKind::Diffusion => "diffusion",
-            DistanceKind::MassWeighted => "mass-weighted",
-        }
+wfem_choice::registry! {
+    DistanceKind as "distance" {
+        DistanceKind::Diffusion = DistanceKind::Diffusion => "diffusion" ["linear"]:
+            "the diffusion distance Σ e^{−2λt}(x(i) − x(j))², the paper's linear FEM distance (default)",
+        DistanceKind::MassWeighted = DistanceKind::MassWeighted => "mass-weighted" ["wfem"]:
+            "the paper's wFEM distance ‖K_{t/2}e_i − K_{t/2}e_j‖_M² (Eq. (18b))",
     }
 }
 
@@ -135,7 +134,7 @@ impl DiffusionDistance {
         &self.kernel
     }
 
-    /// `A E` for an n × m block E: `H_{2t} E` ([`DistanceKind::Diffusion`]) or `M K_t E`
+    /// `A E` for an n × m block E: `K̃_{2t} E` ([`DistanceKind::Diffusion`]) or `M K_t E`
     /// ([`DistanceKind::MassWeighted`]), in blocks of columns.
     ///
     /// # Errors
@@ -194,7 +193,7 @@ impl DiffusionDistance {
         Ok(self.pairs_squared(pairs)?.into_iter().map(f64::sqrt).collect())
     }
 
-    /// The diagonal of A (`H_{2t}(j,j)`, the heat kernel signature HKS_{2t}, or `S_t(j,j)`), by
+    /// The diagonal of A (`K̃_{2t}(j,j)`, the heat kernel signature HKS_{2t}, or `S_t(j,j)`), by
     /// the [`DiagonalMethod`] of the parameters (probing chooses its colouring from the column
     /// of vertex 0). Computed on the first call (of this or of [`Self::row_squared`]) and
     /// cached; [`Self::diagonal_info`] says how.

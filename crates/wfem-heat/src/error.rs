@@ -50,6 +50,17 @@ pub enum HeatError {
         /// Why it was rejected.
         reason: String,
     },
+    /// An option given beside a method's name that belongs to another method (it is refused,
+    /// not ignored; [`crate::Method::with_options`]).
+    #[error("option `{option}` applies to the {owner} method only, not to {method}")]
+    MisplacedOption {
+        /// The option (`degree`, `backend`, `eigenpairs`).
+        option: &'static str,
+        /// The method it was given to.
+        method: &'static str,
+        /// The method it belongs to.
+        owner: &'static str,
+    },
     /// The operators are inconsistent (size or sparsity pattern).
     #[error("inconsistent operators: {reason}")]
     InconsistentOperators {

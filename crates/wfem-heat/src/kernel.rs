@@ -5,11 +5,12 @@ use crate::check;
 use crate::diagonal::{DiagonalInfo, DiagonalMethod, Probes};
 use crate::method::{Method, PreparedMethod};
 use crate::spectral::Eigenbasis;
-use crate::{HeatError, KernelKind, Operators};
+use crate::{HeatError, Operators};
 use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef};
-use mesh_fem::FemOperators;
+use mesh_fem::{FemOperators, Mass};
 use std::sync::Arc;
+use wfem_choice::Choice;
 
 /// Kernels whose operators alone make K_t uncertain by more than this (relative) are refused
 /// ([`crate::Conditioning`], [`HeatError::IllConditionedMesh`]).
@@ -18,8 +19,8 @@ pub const MAX_ROUNDING_ERROR: f64 = 1e-3;
 /// Options of [`HeatKernel::new`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct HeatParams {
-    /// Which discrete kernel (mass matrix).
-    pub kernel: KernelKind,
+    /// Which discrete kernel: its mass matrix M (default the consistent B, the wFEM kernel).
+    pub mass: Mass,
     /// How to evaluate it (default: the fast exact path, [`Method::Fast`]).
     pub method: Method,
 }
@@ -28,7 +29,7 @@ pub struct HeatParams {
 /// operators and applied to any number of functions and times. Cheap to clone (shared).
 ///
 /// L is the stiffness (symmetric positive semidefinite, positive diagonal; the paper prints
-/// it with the opposite sign) and M the mass of the [`KernelKind`].
+/// it with the opposite sign) and M the kernel's [`Mass`].
 #[derive(Clone, Debug)]
 pub struct HeatKernel {
     ops: Operators,
@@ -37,13 +38,13 @@ pub struct HeatKernel {
 }
 
 impl HeatKernel {
-    /// Builds the operator context of `params.kernel` ([`Operators::new`]) and prepares
+    /// Builds the operator context of `params.mass` ([`Operators::new`]) and prepares
     /// `params.method` on it.
     ///
     /// # Errors
     /// Those of [`Operators::new`] and [`Self::with_operators`].
     pub fn new(fem: &FemOperators, params: HeatParams) -> Result<Self, HeatError> {
-        Self::with_operators(&Operators::new(fem, params.kernel)?, params.method)
+        Self::with_operators(&Operators::new(fem, params.mass)?, params.method)
     }
 
     /// Prepares `method` on a validated context (shared with other kernels, distances, …): the
@@ -133,9 +134,9 @@ impl HeatKernel {
         self.deflated(f, t, false)
     }
 
-    /// `K_t F` (`kernel_matrix` false) or `H_t F` (true) with the null space deflated exactly:
+    /// `K_t F` (`kernel_matrix` false) or `K̃_t F` (true) with the null space deflated exactly:
     /// `K_t f = P f + (I − P) K_t (I − P) f` with P the M-orthogonal projector onto the
-    /// constants of each component (exact: K_t P = P), and the dual split for `H_t`
+    /// constants of each component (exact: K_t P = P), and the dual split for `K̃_t`
     /// (`null_space.rs`); only the null space survives from [`Operators::time_at_infinity`] on.
     fn deflated(&self, f: MatRef<'_, f64>, t: f64, kernel_matrix: bool) -> Result<Mat<f64>, HeatError> {
         check::time(t)?;
@@ -171,9 +172,9 @@ impl HeatKernel {
         Ok(m)
     }
 
-    /// The heat-kernel matrix applied to a block, `H_t G = K_t M⁻¹ G = X D_t Xᵀ G`
-    /// (NUMERICS §1): column i of `H_t` is the heat kernel `H_t(·, p_i)`, whose value at p_i is
-    /// the heat kernel signature HKS_t(i), and `H_{2t}` is the Gram matrix of the diffusion
+    /// The heat-kernel matrix applied to a block, `K̃_t G = K_t M⁻¹ G = X D_t Xᵀ G`
+    /// (docs/NUMERICS.md §1): column i of `K̃_t` is the heat kernel `K̃_t(·, p_i)`, whose value at p_i is
+    /// the heat kernel signature HKS_t(i), and `K̃_{2t}` is the Gram matrix of the diffusion
     /// distances. Symmetric positive definite. The null space is deflated exactly, so the
     /// constant part `Σ_c 1_c 1_cᵀ/1_cᵀM1_c` (the t → ∞ limit) is exact for every t.
     ///
@@ -190,7 +191,7 @@ impl HeatKernel {
 pub struct TimeSeries {
     /// The times t, as given.
     pub times: Vec<f64>,
-    /// `K_t F` (or `H_t F`) for each t, n × k each.
+    /// `K_t F` (or `K̃_t F`) for each t, n × k each.
     pub values: Vec<Mat<f64>>,
     /// Per t, the largest relative error estimate over the columns (the fast path's
     /// successive-iterate estimate in the M-norm); `None` for methods exact to their own
@@ -198,16 +199,27 @@ pub struct TimeSeries {
     pub error_estimates: Vec<Option<f64>>,
 }
 
-/// Which diagonal of the heat kernel ([`HeatKernel::diagonal`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Which diagonal of the heat kernel ([`HeatKernel::diagonal`]); the two conventions of the heat
+/// kernel signature (HKS).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum KernelDiagonal {
-    /// `H_t(i, i) = (K_t M⁻¹)_ii = Σ_k e^{−λ_k t} x_k(i)²`: the heat kernel's value
-    /// `K_t(x_i, x_i)` (units 1/area) — the heat kernel signature of Sun, Ovsjanikov & Guibas.
+    /// `K̃_t(i, i) = (K_t M⁻¹)_ii = Σ_k e^{−λ_k t} x_k(i)²`: the diagonal of the symmetric kernel
+    /// matrix `K̃_t = X D_t Xᵀ`, the heat kernel's value `k_t(x_i, x_i)` (units 1/area) — the
+    /// heat kernel signature of Sun, Ovsjanikov & Guibas, pyFM and most libraries.
     #[default]
     KernelValue,
-    /// `K_t(i, i) = Σ_k e^{−λ_k t} x_k(i)(M x_k)(i)`: the diagonal of the kernel matrix of the
-    /// paper's Eq. (6) (dimensionless; its sum is the heat trace).
-    MatrixDiagonal,
+    /// `K_t(i, i) = Σ_k e^{−λ_k t} x_k(i)(M x_k)(i)`: the diagonal of the heat operator
+    /// `K_t = X D_t Xᵀ M` of the paper's Eq. (6) (dimensionless; its sum is the heat trace).
+    OperatorDiagonal,
+}
+
+wfem_choice::registry! {
+    KernelDiagonal as "HKS convention" {
+        KernelDiagonal::KernelValue = KernelDiagonal::KernelValue => "kernel-value":
+            "the kernel's value k_t(x, x) = Σ e^{−λt} φ(x)², the diagonal of X D_t Xᵀ (Sun et al., pyFM; default)",
+        KernelDiagonal::OperatorDiagonal = KernelDiagonal::OperatorDiagonal => "operator-diagonal" ["matrix-diagonal"]:
+            "the diagonal of the heat operator K_t = X D_t Xᵀ M of Eq. (6) (dimensionless; sums to the heat trace)",
+    }
 }
 
 /// Options of [`HeatKernel::diagonal`].
@@ -259,7 +271,7 @@ impl HeatKernel {
         self.times(f, times, false)
     }
 
-    /// The heat-kernel matrix `H_t G = K_t M⁻¹ G` for every t of `times` (see
+    /// The heat-kernel matrix `K̃_t G = K_t M⁻¹ G` for every t of `times` (see
     /// [`Self::apply_kernel_matrix`] and [`Self::apply_times`]).
     ///
     /// # Errors
@@ -385,15 +397,15 @@ impl HeatKernel {
     }
 
     /// [`Self::diagonal`] by selected inversion ([`DiagonalMethod::SelectedInversion`]): per
-    /// t, the heat-kernel matrix on the pattern, `R_t ≈ H_t` (rational degree 16), whose
-    /// diagonal is `H_t(i, i)` and whose entries in column i give `K_t(i, i) = Σ_j H_t(i, j)
+    /// t, the heat-kernel matrix on the pattern, `R_t ≈ K̃_t` (rational degree 16), whose
+    /// diagonal is `K̃_t(i, i)` and whose entries in column i give `K_t(i, i) = Σ_j K̃_t(i, j)
     /// M(j, i)`. From [`Operators::time_at_infinity`] on, the exact limit.
     fn selected_diagonal(&self, times: &[f64], which: KernelDiagonal) -> Result<DiagonalSeries, HeatError> {
         let n = self.n();
         let pair = self.ops.pair();
         let selected = shifted_solve::SelectedInversion::new(pair.clone())?;
         let approx = shifted_solve::RationalApprox::cram(shifted_solve::DEFAULT_DEGREE)?;
-        let matrix = which == KernelDiagonal::MatrixDiagonal;
+        let matrix = which == KernelDiagonal::OperatorDiagonal;
         let (ptr, idx) = (pair.pattern().col_ptr(), pair.pattern().row_idx());
         let mass = pair.mass_values();
         let mut values = Mat::<f64>::zeros(n, times.len());
@@ -419,6 +431,7 @@ impl HeatKernel {
             times: times.to_vec(),
             values: self.finite(values)?,
             info: DiagonalInfo {
+                method: DiagonalMethod::SelectedInversion,
                 columns: 0,
                 hops: None,
                 relative_tail: 0.0,
@@ -444,6 +457,7 @@ impl HeatKernel {
         params.method.validate()?;
         if params.method == DiagonalMethod::SelectedInversion {
             return Ok(DiagonalInfo {
+                method: DiagonalMethod::SelectedInversion,
                 columns: 0,
                 hops: None,
                 relative_tail: 0.0,
@@ -453,7 +467,7 @@ impl HeatKernel {
     }
 
     /// The operator whose diagonal `which` names, applied to a block at several times:
-    /// `H_t P` for the kernel value, `K_t P` for the matrix diagonal.
+    /// `K̃_t P` for the kernel value, `K_t P` for the operator diagonal.
     fn apply_diagonal_kind(
         &self,
         which: KernelDiagonal,
@@ -462,7 +476,7 @@ impl HeatKernel {
     ) -> Result<TimeSeries, HeatError> {
         match which {
             KernelDiagonal::KernelValue => self.apply_kernel_matrix_times(p, ts),
-            KernelDiagonal::MatrixDiagonal => self.apply_times(p, ts),
+            KernelDiagonal::OperatorDiagonal => self.apply_times(p, ts),
         }
     }
 

@@ -3,10 +3,10 @@
 //! The wFEM heat kernel `K_t = exp(−t B⁻¹L) = X D_t Xᵀ B` (paper, Eq. (6)) applied to
 //! functions on a triangle mesh, without computing the spectrum. Modules follow the paper:
 //!
-//! * [`Operators`] — the one validated context: L, the mass M of a [`KernelKind`] (wFEM B,
-//!   lumped D, linear I; Table 1), their shared pattern, symbolic analysis and null space.
+//! * [`Operators`] — the one validated context: L, the [`Mass`] M of the kernel (consistent B
+//!   of the wFEM kernel, lumped D, identity; Table 1), their shared pattern, symbolic analysis and null space.
 //! * [`kernel`] — [`HeatKernel`]: a context with a prepared [`Method`], applied to many
-//!   functions and times (`K_t f`, and the kernel matrix `H_t = K_t M⁻¹`); [`heat`] is the
+//!   functions and times (`K_t f`, and the kernel matrix `K̃_t = K_t M⁻¹ = X D_t Xᵀ`); [`heat`] is the
 //!   one-shot version. [`method`] lists the methods (Eq. (6), (8), (9), (11)–(13) and the fast
 //!   exact path, the default).
 //! * [`spectral`] — [`Eigenbasis`]: generalized eigenpairs `L x = λ M x`, dense or the k
@@ -68,8 +68,9 @@ pub use kernel::{
 /// The mesh and FEM operator crate, re-exported so that depending on `wfem-heat` alone is
 /// enough to build the operators.
 pub use mesh_fem;
-pub use method::Method;
-pub use operators::{AsSparse, Conditioning, KernelKind, Operators};
+pub use mesh_fem::Mass;
+pub use method::{Method, MethodOptions};
+pub use operators::{AsSparse, Conditioning, Operators};
 /// The shifted-solver crate (rational approximations, backends), re-exported.
 pub use shifted_solve;
 pub use shifted_solve::{rng, Backend, KrylovParams};

@@ -149,9 +149,9 @@ impl NullSpace {
         (out, coefs)
     }
 
-    /// For the kernel matrix `H_t = K_t M⁻¹`: since `(I − P)M⁻¹ = M⁻¹(I − Pᵀ)` with
+    /// For the kernel matrix `K̃_t = K_t M⁻¹`: since `(I − P)M⁻¹ = M⁻¹(I − Pᵀ)` with
     /// `Pᵀg = Σ_c (1_cᵀ g / 1_cᵀM1_c) M1_c`,
-    /// `H_t g = Σ_c (1_cᵀ g / 1_cᵀM1_c) 1_c + (I − P) H_t (I − Pᵀ) g`.
+    /// `K̃_t g = Σ_c (1_cᵀ g / 1_cᵀM1_c) 1_c + (I − P) K̃_t (I − Pᵀ) g`.
     /// Returns `((I − Pᵀ) g, coefficients 1_cᵀ g / 1_cᵀM1_c)` for every column; finish with
     /// [`Self::restore`].
     pub(crate) fn split_dual(&self, g: faer::MatRef<'_, f64>) -> (Mat<f64>, Vec<Vec<f64>>) {

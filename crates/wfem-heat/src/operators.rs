@@ -1,5 +1,5 @@
 //! The one validated operator context of wfem-heat: the stiffness L, the mass M of a
-//! [`KernelKind`] (paper, Table 1), their shared pattern and symbolic Cholesky analysis
+//! [`Mass`] (paper, Table 1), their shared pattern and symbolic Cholesky analysis
 //! ([`shifted_solve::OperatorPair`]) and the null space of L (the constants on every
 //! connected component). Built once, validated once, shared (cheap clones) by
 //! [`crate::HeatKernel`] and every method, [`crate::DiffusionDistance`], the RKHS algebra
@@ -8,34 +8,16 @@
 use crate::null_space::NullSpace;
 use crate::HeatError;
 use faer::sparse::{SparseColMat, SparseColMatRef};
-use mesh_fem::FemOperators;
+use mesh_fem::{FemOperators, Mass};
 use shifted_solve::{OperatorPair, SolveError, SpdFactor};
 use std::sync::{Arc, OnceLock};
-
-/// Which discrete heat kernel (paper, Table 1). All share the stiffness L (symmetric positive
-/// semidefinite, positive diagonal) and differ in the mass matrix M of `K_t = exp(−t M⁻¹L)`.
-///
-/// "Lumped" means one thing everywhere in wfem: the diagonal mass D carried by the
-/// [`FemOperators`] (`lumped_mass`), by default the barycentric areas
-/// `D_ii = Σ_{T∋i}|T|/3` of the paper's Eq. (7) (= the row sums of B); assembled with
-/// [`mesh_fem::LumpedMassKind::Voronoi`] it is the mixed Voronoi area of Meyer et al.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum KernelKind {
-    /// The wFEM kernel `K_t = X D_t Xᵀ B` with the consistent mass B (paper, Eq. (6)).
-    #[default]
-    Wfem,
-    /// The lumped-mass kernel `K_t = X D_t Xᵀ D` with the diagonal lumped mass D (Eq. (7)).
-    Lumped,
-    /// The linear FEM kernel with B := I, `K̃_t = X D_t Xᵀ` (text after Eq. (7)).
-    Linear,
-}
 
 /// The validated operator context: L and the kernel's mass M on one pattern with their
 /// symbolic analysis and the null space of L. Cheap to clone (shared).
 #[derive(Clone, Debug)]
 pub struct Operators {
     pair: Arc<OperatorPair>,
-    kind: Option<KernelKind>,
+    mass: Option<Mass>,
     null_space: Arc<NullSpace>,
     mass_factor: Arc<OnceLock<Option<SpdFactor>>>,
     conditioning: Arc<OnceLock<Conditioning>>,
@@ -105,26 +87,37 @@ pub(crate) fn operator_error(e: SolveError) -> HeatError {
 }
 
 impl Operators {
-    /// The context of the kernel `kind` of assembled FEM operators: L with B (wFEM), the
-    /// lumped D, or I (linear).
+    /// The context of the kernel of `mass` on assembled FEM operators: L with B (the wFEM
+    /// kernel), the lumped D, or I (the linear FEM kernel).
     ///
     /// # Errors
-    /// As [`Self::from_matrices`].
-    pub fn new(fem: &FemOperators, kind: KernelKind) -> Result<Self, HeatError> {
+    /// [`HeatError::InvalidParameter`] for a lumped mass the operators were not assembled with
+    /// (assemble with [`mesh_fem::AssemblyParams::for_mass`]); as [`Self::from_matrices`].
+    pub fn new(fem: &FemOperators, mass: Mass) -> Result<Self, HeatError> {
         let diagonal;
-        let mass = match kind {
-            KernelKind::Wfem => &fem.mass,
-            KernelKind::Lumped => {
+        let matrix = match mass {
+            Mass::Consistent => &fem.mass,
+            Mass::Lumped(lumping) => {
+                if lumping != fem.lumping {
+                    return Err(HeatError::InvalidParameter {
+                        name: "mass",
+                        reason: format!(
+                            "the {lumping:?} lumped mass was asked for, but the operators were assembled with the \
+                             {:?} one (assemble with AssemblyParams::for_mass)",
+                            fem.lumping
+                        ),
+                    });
+                }
                 diagonal = fem.lumped_mass();
                 &diagonal
             }
-            KernelKind::Linear => {
+            Mass::Identity => {
                 diagonal = fem.identity_mass();
                 &diagonal
             }
         };
-        let mut ops = Self::from_matrices(fem.stiffness.as_ref(), mass.as_ref())?;
-        ops.kind = Some(kind);
+        let mut ops = Self::from_matrices(fem.stiffness.as_ref(), matrix.as_ref())?;
+        ops.mass = Some(mass);
         ops.fem = true;
         Ok(ops)
     }
@@ -145,7 +138,7 @@ impl Operators {
         let null_space = NullSpace::new(&pair);
         Ok(Self {
             pair: Arc::new(pair),
-            kind: None,
+            mass: None,
             null_space: Arc::new(null_space),
             mass_factor: Arc::new(OnceLock::new()),
             conditioning: Arc::new(OnceLock::new()),
@@ -158,9 +151,9 @@ impl Operators {
         self.pair.n()
     }
 
-    /// The kernel (mass) of this context; `None` for matrices given directly.
-    pub fn kind(&self) -> Option<KernelKind> {
-        self.kind
+    /// The mass of this context's kernel; `None` for matrices given directly.
+    pub fn mass_kind(&self) -> Option<Mass> {
+        self.mass
     }
 
     /// The validated pair (L, M) of shifted-solve.
@@ -256,7 +249,7 @@ impl Operators {
             })
         };
         let mut ops = Self::from_matrices(build(&lt)?.as_ref(), build(&mt)?.as_ref())?;
-        ops.kind = self.kind;
+        ops.mass = self.mass;
         ops.fem = self.fem;
         Ok(ops)
     }
@@ -302,7 +295,7 @@ impl Operators {
         &self.null_space
     }
 
-    /// The Cholesky factor of M, computed on first use (for M⁻¹ in H_t = K_t M⁻¹).
+    /// The Cholesky factor of M, computed on first use (for M⁻¹ in K̃_t = K_t M⁻¹).
     ///
     /// # Errors
     /// [`HeatError::NotPositiveDefinite`] if M cannot be factored.

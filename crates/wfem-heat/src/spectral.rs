@@ -145,7 +145,7 @@ impl Eigenbasis {
     }
 
     /// The `k` smallest eigenpairs by thick-restart block Lanczos with locking, in the
-    /// M-inner product, on the shift-inverted operator (NUMERICS §5;
+    /// M-inner product, on the shift-inverted operator (docs/NUMERICS.md §5;
     /// [`shifted_solve::largest_eigenpairs`]).
     ///
     /// The operator S = (L − σM)⁻¹M (σ < 0, one sparse Cholesky of the SPD matrix L − σM) is
@@ -303,7 +303,7 @@ impl Eigenbasis {
         Ok(g.col(0).iter().copied().collect())
     }
 
-    /// The spectral kernel matrix applied to a block, `X e^{−tΛ} Xᵀ G` (= `H_t G` with all
+    /// The spectral kernel matrix applied to a block, `X e^{−tΛ} Xᵀ G` (= `K̃_t G` with all
     /// pairs; truncated to the pairs held otherwise).
     pub(crate) fn heat_scaled(&self, g: MatRef<'_, f64>, t: f64) -> Mat<f64> {
         let mut c = self.vectors.transpose() * g;

@@ -3,6 +3,7 @@
 //! OSError), with `kind` = the Rust variant's name and the culprit's data as attributes
 //! (face, vertex, pole, residual, …), mirroring the Rust enums.
 
+use crate::out::{mat_out, vec_out};
 use mesh_fem::MeshError;
 use pyo3::prelude::*;
 use pyo3::types::{PyComplex, PyDict};
@@ -403,6 +404,11 @@ pub fn heat(py: Python<'_>, e: &HeatError) -> PyErr {
             "InvalidParameter",
             fields!(name = *name, reason = reason),
         ),
+        HeatError::MisplacedOption { option, method, owner } => (
+            Class::InvalidInput,
+            "MisplacedOption",
+            fields!(option = *option, method = *method, owner = *owner),
+        ),
         HeatError::InconsistentOperators { reason } => {
             (Class::InvalidInput, "InconsistentOperators", fields!(reason = reason))
         }
@@ -422,7 +428,7 @@ pub fn heat(py: Python<'_>, e: &HeatError) -> PyErr {
                 max_residual = *max_residual,
             );
             // The converged pairs are kept: `err.found` is an Eigenbasis of them.
-            if let Ok(obj) = crate::spectral::found_arrays(py, found) {
+            if let Ok(obj) = found_arrays(py, found) {
                 f.push(("found", Value::Object(obj)));
             }
             (Class::Convergence, "EigenNoConvergence", f)
@@ -653,4 +659,11 @@ impl Error {
             ),
         }
     }
+}
+
+/// `(values, vectors)` arrays of a basis (for `ConvergenceError.found`).
+fn found_arrays(py: Python<'_>, basis: &wfem_heat::Eigenbasis) -> PyResult<Py<PyAny>> {
+    let values = vec_out(py, basis.values.clone());
+    let vectors = mat_out(py, basis.vectors.as_ref());
+    Ok((values, vectors).into_pyobject(py)?.into_any().unbind())
 }

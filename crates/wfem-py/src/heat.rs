@@ -1,86 +1,62 @@
 //! The heat kernel K_t = exp(−t M⁻¹L) (paper, Eq. (6)), its algebra and diffusion distances.
 
-use crate::convert::{
-    mat_in, mat_out, mats_out, mesh_in, sparse_arg, sparse_out, vec_in, vec_out, SparseIn, SparseOut,
-};
+use crate::choices;
+use crate::convert::{mat_in, mesh_in, sparse_arg, vec_in, SparseIn};
 use crate::errors::{invalid, invalid_param};
-use crate::mesh::lumped_kind;
+use crate::out::{mat_out, mats_out, sparse_out, vec_out, SparseOut};
 use crate::run::run;
 use faer::Mat;
 use mesh_fem::{assemble, AssemblyParams, TriMesh};
 use numpy::{PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use shifted_solve::Backend;
 use std::sync::Arc;
+use wfem_choice::Choice;
 use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
 use wfem_heat::rkhs::{heat_inner_product, inverse_cg, InverseParams};
 use wfem_heat::scale::{largest_eigenvalue, LargestEigenParams};
-use wfem_heat::{HeatKernel, HeatParams, KernelKind, Method, Operators};
+use wfem_heat::{HeatError, HeatKernel, HeatParams, Mass, Method, MethodOptions, Operators};
 
-pub fn kernel_kind(py: Python<'_>, name: &str) -> PyResult<KernelKind> {
-    match name {
-        "wfem" => Ok(KernelKind::Wfem),
-        "lumped" => Ok(KernelKind::Lumped),
-        "linear" => Ok(KernelKind::Linear),
-        other => Err(invalid_param(
-            py,
-            "kernel",
-            format!("{other:?} is not one of \"wfem\", \"lumped\", \"linear\""),
-        )),
-    }
-}
-
-/// The method of a name and its options (`degree`, `backend` for "rational"; `k` for
-/// "spectral"); options that do not belong to the method are refused.
+/// The method of a name and its options (`degree`, `backend` for the rational method; `k` for
+/// the spectral one); an option that does not belong to the method is refused.
 pub fn method(
     py: Python<'_>,
-    name: &str,
+    name: Option<&str>,
     degree: Option<usize>,
     k: Option<usize>,
     backend: Option<&str>,
 ) -> PyResult<Method> {
-    let unused = |what: &str| invalid_param(py, "method", format!("`{what}` does not apply to method {name:?}"));
-    if name != "rational" && degree.is_some() {
-        return Err(unused("degree"));
+    let backend = match backend {
+        None => None,
+        Some(b) => Some(choices::parse::<Backend>(py, "backend", Some(b))?),
+    };
+    let options = MethodOptions {
+        degree,
+        backend,
+        eigenpairs: k,
+    };
+    let method: Method = match name {
+        None if options.names_rational() => Method::rational(shifted_solve::DEFAULT_DEGREE),
+        other => choices::parse(py, "method", other)?,
+    };
+    if matches!(method, Method::Spectral { .. }) && k.is_none() {
+        return Err(invalid_param(
+            py,
+            "k",
+            "the spectral method needs k (number of eigenpairs)",
+        ));
     }
-    if name != "rational" && backend.is_some() {
-        return Err(unused("backend"));
-    }
-    if name != "spectral" && k.is_some() {
-        return Err(unused("k"));
-    }
-    Ok(match name {
-        "fast" => Method::fast(),
-        "dense" => Method::Dense,
-        "taylor" => Method::Taylor,
-        "backward-euler" | "backward_euler" => Method::BackwardEuler,
-        "spectral" => {
-            let k = k.ok_or_else(|| invalid_param(py, "k", "the spectral method needs k (number of eigenpairs)"))?;
-            Method::spectral(k)
-        }
-        "rational" => {
-            let degree = degree.unwrap_or(shifted_solve::DEFAULT_DEGREE);
-            let backend = match backend {
-                None => shifted_solve::Backend::DirectLdlt,
-                Some(b) => shifted_solve::Backend::from_name(b).ok_or_else(|| {
-                    invalid_param(
-                        py,
-                        "backend",
-                        format!("{b:?} is not one of {:?}", ["ldlt", "lu", "minres", "multishift"]),
-                    )
-                })?,
-            };
-            Method::Rational { degree, backend }
-        }
-        other => {
-            return Err(invalid_param(
+    method.with_options(&options).map_err(|e| match e {
+        HeatError::MisplacedOption { option, method, owner } => {
+            let option = if option == "eigenpairs" { "k" } else { option };
+            invalid_param(
                 py,
                 "method",
-                format!(
-                    "{other:?} is not one of \"fast\", \"rational\", \"spectral\", \"dense\", \"taylor\", \"backward-euler\""
-                ),
-            ))
+                format!("`{option}` does not apply to method {method:?} (only to {owner:?})"),
+            )
         }
+        other => crate::errors::heat(py, &other),
     })
 }
 
@@ -107,26 +83,24 @@ pub struct PyHeatKernel {
 #[pymethods]
 impl PyHeatKernel {
     #[staticmethod]
-    #[pyo3(signature = (v, f, kernel="wfem", method_name="fast", degree=None, k=None, backend=None, lumped="barycentric"))]
+    #[pyo3(signature = (v, f, mass=None, method_name=None, degree=None, k=None, backend=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_mesh(
         py: Python<'_>,
         v: PyReadonlyArray2<'_, f64>,
         f: PyReadonlyArray2<'_, i64>,
-        kernel: &str,
-        method_name: &str,
+        mass: Option<&str>,
+        method_name: Option<&str>,
         degree: Option<usize>,
         k: Option<usize>,
         backend: Option<&str>,
-        lumped: &str,
     ) -> PyResult<Self> {
         let mesh = mesh_in(py, &v, &f)?;
-        let kind = kernel_kind(py, kernel)?;
+        let mass: Mass = choices::parse(py, "mass", mass)?;
         let method = method(py, method_name, degree, k, backend)?;
-        let lumped = lumped_kind(py, lumped)?;
         run(py, move |_| {
-            let fem = assemble(&mesh, &AssemblyParams { lumped })?;
-            let kernel = HeatKernel::new(&fem, HeatParams { kernel: kind, method })?;
+            let fem = assemble(&mesh, &AssemblyParams::for_mass(mass))?;
+            let kernel = HeatKernel::new(&fem, HeatParams { mass, method })?;
             Ok(Self {
                 kernel,
                 mesh: Some(Arc::new(mesh)),
@@ -135,13 +109,13 @@ impl PyHeatKernel {
     }
 
     #[staticmethod]
-    #[pyo3(signature = (l, m, method_name="fast", degree=None, k=None, backend=None))]
+    #[pyo3(signature = (l, m, method_name=None, degree=None, k=None, backend=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_operators(
         py: Python<'_>,
         l: SparseIn<'_>,
         m: SparseIn<'_>,
-        method_name: &str,
+        method_name: Option<&str>,
         degree: Option<usize>,
         k: Option<usize>,
         backend: Option<&str>,
@@ -170,15 +144,10 @@ impl PyHeatKernel {
         self.kernel.method().name()
     }
 
-    /// The kernel's name ("wfem", "lumped", "linear", or "custom" for from_operators).
+    /// The mass's name (the registry's), or None for operators given directly.
     #[getter]
-    fn kernel(&self) -> &'static str {
-        match self.kernel.operators().kind() {
-            Some(KernelKind::Wfem) => "wfem",
-            Some(KernelKind::Lumped) => "lumped",
-            Some(KernelKind::Linear) => "linear",
-            _ => "custom",
-        }
+    fn mass_name(&self) -> Option<&'static str> {
+        self.kernel.operators().mass_kind().map(|m| m.name())
     }
 
     fn stiffness<'py>(&self, py: Python<'py>) -> SparseOut<'py> {
@@ -234,24 +203,21 @@ impl PyHeatKernel {
 
     /// The exact diagonal of the heat kernel at every t (n, T), without eigenpairs, by
     /// `method` ([`diagonal_method`]).
-    #[pyo3(signature = (times, convention="kernel_value", method="selected_inversion", tol=1e-10, max_columns=4096, block=64))]
+    #[pyo3(signature = (times, convention=None, method=None, tol=wfem_heat::diagonal::DEFAULT_PROBING_TOL, max_columns=4096, block=64))]
     #[allow(clippy::too_many_arguments)]
     fn diagonal<'py>(
         &self,
         py: Python<'py>,
         times: Vec<f64>,
-        convention: &str,
-        method: &str,
+        convention: Option<&str>,
+        method: Option<&str>,
         tol: f64,
         max_columns: usize,
         block: usize,
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
         use wfem_heat::{DiagonalParams, KernelDiagonal};
         check_times(py, &times)?;
-        let which = match crate::spectral::convention(py, convention)? {
-            shape_retrieval::HksConvention::KernelValue => KernelDiagonal::KernelValue,
-            shape_retrieval::HksConvention::MatrixDiagonal => KernelDiagonal::MatrixDiagonal,
-        };
+        let which: KernelDiagonal = choices::parse(py, "convention", convention)?;
         let params = DiagonalParams {
             method: diagonal_method(py, method, tol)?,
             max_columns,
@@ -260,6 +226,7 @@ impl PyHeatKernel {
         let kernel = self.kernel.clone();
         let series = run(py, move |_| Ok(kernel.diagonal(&times, which, &params)?))?;
         let info = PyDict::new(py);
+        info.set_item("method", series.info.method.name())?;
         info.set_item("columns", series.info.columns)?;
         info.set_item("hops", series.info.hops)?;
         info.set_item("relative_tail", series.info.relative_tail)?;
@@ -272,7 +239,7 @@ impl PyHeatKernel {
     /// bound is above `tol` by the exact diagonal (selected inversion, as the CLI), "exact"
     /// replaces every column.
     /// Returns (values, [(source, bound)]).
-    #[pyo3(signature = (eigenvalues, spectral, times, convention="kernel_value", method="auto", tol=shape_retrieval::DEFAULT_TRUNCATION_TOL))]
+    #[pyo3(signature = (eigenvalues, spectral, times, convention=None, method=None, tol=shape_retrieval::DEFAULT_TRUNCATION_TOL))]
     #[allow(clippy::too_many_arguments)]
     fn hks_by_method<'py>(
         &self,
@@ -280,26 +247,19 @@ impl PyHeatKernel {
         eigenvalues: Vec<f64>,
         spectral: PyReadonlyArray2<'py, f64>,
         times: Vec<f64>,
-        convention: &str,
-        method: &str,
+        convention: Option<&str>,
+        method: Option<&str>,
         tol: f64,
     ) -> PyResult<Sourced<'py>> {
         use shape_retrieval::{HksMethod, HksSource};
         use wfem_heat::DiagonalParams;
         check_times(py, &times)?;
-        let convention = crate::spectral::convention(py, convention)?;
-        let (method, params) = match method {
-            "auto" => (HksMethod::Auto { tol }, DiagonalParams::default()),
-            "exact" => (HksMethod::Exact, DiagonalParams::default()),
-            "spectral" => (HksMethod::Spectral, DiagonalParams::default()),
-            other => {
-                return Err(invalid_param(
-                    py,
-                    "method",
-                    format!("{other:?} is not one of \"auto\", \"exact\", \"spectral\""),
-                ))
-            }
+        let convention = choices::parse(py, "convention", convention)?;
+        let method = match choices::parse::<HksMethod>(py, "method", method)? {
+            HksMethod::Auto { .. } => HksMethod::Auto { tol },
+            other => other,
         };
+        let params = DiagonalParams::default();
         let spectral = mat_in(&spectral);
         let kernel = self.kernel.clone();
         let (values, sources) = run(py, move |_| {
@@ -316,8 +276,8 @@ impl PyHeatKernel {
         let sources = sources
             .iter()
             .map(|s| match *s {
-                HksSource::Spectral { estimate, .. } => ("spectral".to_string(), estimate),
-                HksSource::Exact { relative_tail } => ("exact".to_string(), relative_tail),
+                HksSource::Spectral { estimate, .. } => (HksMethod::Spectral.name().to_string(), estimate),
+                HksSource::Exact { relative_tail } => (HksMethod::Exact.name().to_string(), relative_tail),
             })
             .collect();
         Ok((mat_out(py, values.as_ref()), sources))
@@ -488,27 +448,17 @@ impl PyHeatKernel {
     }
 
     /// Diffusion distances of `kind` at time t on this kernel.
-    #[pyo3(signature = (t, kind="diffusion", block=64, diagonal="selected_inversion", diagonal_tol=1e-10))]
+    #[pyo3(signature = (t, kind=None, block=64, diagonal=None, diagonal_tol=wfem_heat::diagonal::DEFAULT_PROBING_TOL))]
     fn distance(
         &self,
         py: Python<'_>,
         t: f64,
-        kind: &str,
+        kind: Option<&str>,
         block: usize,
-        diagonal: &str,
+        diagonal: Option<&str>,
         diagonal_tol: f64,
     ) -> PyResult<PyDiffusionDistance> {
-        let kind = match kind {
-            "diffusion" => DistanceKind::Diffusion,
-            "mass-weighted" | "mass_weighted" => DistanceKind::MassWeighted,
-            other => {
-                return Err(invalid_param(
-                    py,
-                    "kind",
-                    format!("{other:?} is not one of \"diffusion\", \"mass-weighted\""),
-                ))
-            }
-        };
+        let kind: DistanceKind = choices::parse(py, "kind", kind)?;
         let params = DistanceParams {
             block,
             diagonal: diagonal_method(py, diagonal, diagonal_tol)?,
@@ -573,21 +523,13 @@ impl PyDiffusionDistance {
     }
 }
 
-/// The diagonal method of a name: "selected_inversion" (exact at every t), "probing" (with
-/// relative tail `tol`) or "columns" (n unit columns).
-fn diagonal_method(py: Python<'_>, name: &str, tol: f64) -> PyResult<wfem_heat::diagonal::DiagonalMethod> {
+/// The diagonal method of a name (the registry's; default selected inversion), probing with
+/// relative tail `tol`.
+fn diagonal_method(py: Python<'_>, name: Option<&str>, tol: f64) -> PyResult<wfem_heat::diagonal::DiagonalMethod> {
     use wfem_heat::diagonal::DiagonalMethod;
-    Ok(match name {
-        "selected_inversion" => DiagonalMethod::SelectedInversion,
-        "probing" => DiagonalMethod::Probing { tol },
-        "columns" => DiagonalMethod::Exact,
-        other => {
-            return Err(invalid_param(
-                py,
-                "method",
-                format!("{other:?} is not one of \"selected_inversion\", \"probing\", \"columns\""),
-            ))
-        }
+    Ok(match choices::parse(py, "method", name)? {
+        DiagonalMethod::Probing { .. } => DiagonalMethod::Probing { tol },
+        other => other,
     })
 }
 

@@ -4,11 +4,13 @@
 //! Every long call runs without the GIL and can be interrupted with Ctrl-C (`run.rs`); every
 //! Rust error becomes an exception of `wfem._errors` keeping the culprit (`errors.rs`).
 
+mod choices;
 mod convert;
 mod errors;
 mod heat;
 mod index;
 mod mesh;
+mod out;
 mod retrieval;
 mod run;
 mod spectral;
@@ -29,6 +31,14 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     m.add("DEFAULT_TARGET_ROUGHNESS", shape_retrieval::DEFAULT_TARGET_ROUGHNESS)?;
     m.add("SHIPPED_DEGREES", shifted_solve::SHIPPED_DEGREES.to_vec())?;
+    m.add(
+        "PAPER_DESCRIPTORS",
+        shape_retrieval::Descriptor::PAPER
+            .map(|d| wfem_choice::Choice::name(&d))
+            .to_vec(),
+    )?;
+    m.add("DEFAULT_NUM_TIMES", shape_retrieval::DEFAULT_NUM_TIMES)?;
+    choices::register(m)?;
     mesh::register(m)?;
     heat::register(m)?;
     spectral::register(m)?;

@@ -1,10 +1,11 @@
 //! Meshes: reading, validation, repair, statistics, generators and the FEM operators.
 
-use crate::convert::{mesh_in, mesh_out, sparse_out, SparseOut};
+use crate::convert::mesh_in;
 use crate::errors::{invalid_param, Error};
+use crate::out::{mesh_out, sparse_out, SparseOut};
 use crate::run::run;
 use mesh_fem::io::{load, LoadOptions};
-use mesh_fem::{assemble, generate, repair, stats, validate, AssemblyParams, LumpedMassKind, RepairOptions, TriMesh};
+use mesh_fem::{assemble, generate, repair, stats, validate, AssemblyParams, Lumping, RepairOptions, TriMesh};
 use numpy::{PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use std::path::PathBuf;
@@ -13,18 +14,6 @@ type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
 
 /// Largest generated mesh (vertices): beyond it a typo would exhaust memory.
 const MAX_GENERATED_VERTICES: usize = 20_000_000;
-
-pub fn lumped_kind(py: Python<'_>, name: &str) -> PyResult<LumpedMassKind> {
-    match name {
-        "barycentric" => Ok(LumpedMassKind::Barycentric),
-        "voronoi" => Ok(LumpedMassKind::Voronoi),
-        other => Err(invalid_param(
-            py,
-            "lumped",
-            format!("{other:?} is not one of \"barycentric\", \"voronoi\""),
-        )),
-    }
-}
 
 fn json<T: serde::Serialize>(py: Python<'_>, value: &T) -> PyResult<String> {
     serde_json::to_string(value).map_err(|e| Error::Panic(format!("report serialisation failed: {e}")).into_py(py))
@@ -149,19 +138,20 @@ pub fn mesh_stats(py: Python<'_>, v: PyReadonlyArray2<'_, f64>, f: PyReadonlyArr
     json(py, &s)
 }
 
-/// `operators(V, F, lumped) -> (L, B, D)` as CSC arrays.
+/// `operators(V, F, lumped_mass) -> (L, B, D)` as CSC arrays; D is the given lumped mass
+/// (default barycentric).
 #[pyfunction]
-#[pyo3(signature = (v, f, lumped="barycentric"))]
+#[pyo3(signature = (v, f, lumped_mass=None))]
 pub fn operators<'py>(
     py: Python<'py>,
     v: PyReadonlyArray2<'py, f64>,
     f: PyReadonlyArray2<'py, i64>,
-    lumped: &str,
+    lumped_mass: Option<&str>,
 ) -> PyResult<(SparseOut<'py>, SparseOut<'py>, SparseOut<'py>)> {
     let mesh = mesh_in(py, &v, &f)?;
-    let lumped = lumped_kind(py, lumped)?;
+    let lumping: Lumping = crate::choices::parse(py, "lumped_mass", lumped_mass)?;
     let fem = run(py, move |_| {
-        assemble(&mesh, &AssemblyParams { lumped }).map_err(Error::from)
+        assemble(&mesh, &AssemblyParams { lumping }).map_err(Error::from)
     })?;
     Ok((
         sparse_out(py, fem.stiffness.as_ref()),

@@ -1,9 +1,11 @@
 //! Shape descriptors (DHK1–3, SI-HKS, sparse features), vocabularies, bags of features and
 //! retrieval metrics (paper, Sect. 5).
 
-use crate::convert::{mat_in, mat_out, mesh_in, vec_in, vec_out};
+use crate::choices;
+use crate::convert::{mat_in, mesh_in, vec_in};
 use crate::errors::invalid_param;
 use crate::heat::PyHeatKernel;
+use crate::out::{mat_out, vec_out};
 use crate::run::run;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -14,20 +16,6 @@ use shape_retrieval::{
     SihksParams, Vocabulary, VocabularyParams,
 };
 use std::sync::Arc;
-
-fn descriptor(py: Python<'_>, name: &str) -> PyResult<Descriptor> {
-    match name.to_ascii_lowercase().replace(['-', '_'], "").as_str() {
-        "dhk1" => Ok(Descriptor::Dhk1),
-        "dhk2" => Ok(Descriptor::Dhk2),
-        "dhk3" => Ok(Descriptor::Dhk3),
-        "sihks" => Ok(Descriptor::SiHks),
-        _ => Err(invalid_param(
-            py,
-            "kind",
-            format!("{name:?} is not one of \"dhk1\", \"dhk2\", \"dhk3\", \"sihks\""),
-        )),
-    }
-}
 
 /// The descriptor pipeline's parameters from Python values.
 #[allow(clippy::too_many_arguments)]
@@ -68,7 +56,7 @@ fn sihks_params(py: Python<'_>, d: Option<&Bound<'_, PyDict>>) -> PyResult<Optio
             "time_unit" => p.time_unit = shape_retrieval::sihks::TimeUnit::Absolute(value.extract()?),
             "time_unit_area" => p.time_unit = shape_retrieval::sihks::TimeUnit::Area(value.extract()?),
             "num_frequencies" => p.num_frequencies = value.extract()?,
-            "convention" => p.convention = crate::spectral::convention(py, &value.extract::<String>()?)?,
+            "convention" => p.convention = choices::parse(py, "convention", Some(&value.extract::<String>()?))?,
             other => {
                 return Err(invalid_param(
                     py,
@@ -105,7 +93,10 @@ pub fn descriptors<'py>(
     sihks: Option<Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mesh = mesh_in(py, &v, &f)?;
-    let which = kinds.iter().map(|s| descriptor(py, s)).collect::<PyResult<Vec<_>>>()?;
+    let which = kinds
+        .iter()
+        .map(|s| choices::parse::<Descriptor>(py, "kinds", Some(s)))
+        .collect::<PyResult<Vec<_>>>()?;
     let params = descriptor_params(k, times, num_times, sihks_params(py, sihks.as_ref())?, 0.1, 1, 0.05);
     let out = run(py, move |cancel| {
         let mut shape = ShapeDescriptors::new(&mesh, &params)?;
@@ -125,30 +116,20 @@ pub fn descriptors<'py>(
 
 /// Sparse feature points (SHK1 / SHK2) of a mesh and the feature time t_f.
 #[pyfunction]
-#[pyo3(signature = (v, f, detector="shk1", k=100, feature_time_factor=0.1, feature_rings=1, persistence_fraction=0.05))]
+#[pyo3(signature = (v, f, detector=None, k=100, feature_time_factor=0.1, feature_rings=1, persistence_fraction=0.05))]
 #[allow(clippy::too_many_arguments)]
 pub fn sparse_features(
     py: Python<'_>,
     v: PyReadonlyArray2<'_, f64>,
     f: PyReadonlyArray2<'_, i64>,
-    detector: &str,
+    detector: Option<&str>,
     k: usize,
     feature_time_factor: f64,
     feature_rings: usize,
     persistence_fraction: f64,
 ) -> PyResult<(Vec<u32>, f64)> {
     let mesh = mesh_in(py, &v, &f)?;
-    let detector = match detector.to_ascii_lowercase().as_str() {
-        "shk1" => FeatureDetector::Shk1,
-        "shk2" => FeatureDetector::Shk2,
-        other => {
-            return Err(invalid_param(
-                py,
-                "detector",
-                format!("{other:?} is not one of \"shk1\", \"shk2\""),
-            ))
-        }
-    };
+    let detector: FeatureDetector = choices::parse(py, "detector", detector)?;
     let params = descriptor_params(
         k,
         None,

@@ -1,10 +1,10 @@
 //! Eigenpairs L x = λ M x (paper, Eq. (4)) and the spectral descriptors built on them: HKS in
 //! both conventions, SI-HKS, the truncated kernel (Eq. (8)) and the RKHS operators.
 
-use crate::convert::{mat_in, mat_out, mesh_in, sparse_arg, vec_in, vec_out, SparseIn};
+use crate::choices;
+use crate::convert::{mat_in, mesh_in, sparse_arg, vec_in, SparseIn};
 use crate::errors::{invalid_param, Error};
-use crate::heat::kernel_kind;
-use crate::mesh::lumped_kind;
+use crate::out::{mat_out, vec_out};
 use crate::run::run;
 use faer::Mat;
 use mesh_fem::{assemble, AssemblyParams};
@@ -12,35 +12,16 @@ use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use shape_retrieval::{
-    heat_kernel_signature, scale_invariant_hks, HksConvention, HksParams, SihksParams, Spectrum, SpectrumNormalization,
-    TimeSampling,
+    heat_kernel_signature, scale_invariant_hks, HksParams, SihksParams, Spectrum, SpectrumNormalization, TimeSampling,
 };
 use std::sync::Arc;
+use wfem_choice::Choice;
 use wfem_heat::rkhs::{inverse_spectral, reproducing_kernel_apply, TruncationReport};
-use wfem_heat::{EigenParams, Eigenbasis, Operators};
+use wfem_heat::{EigenParams, Eigenbasis, KernelDiagonal, Mass, Operators};
 
 /// Largest number of τ samples of an SI-HKS window (385 by default); beyond it a typo in
 /// the step would exhaust memory.
 const MAX_SIHKS_SAMPLES: f64 = 100_000.0;
-
-/// `(values, vectors)` arrays of a basis (for `ConvergenceError.found`).
-pub fn found_arrays(py: Python<'_>, basis: &Eigenbasis) -> PyResult<Py<PyAny>> {
-    let values = vec_out(py, basis.values.clone());
-    let vectors = mat_out(py, basis.vectors.as_ref());
-    Ok((values, vectors).into_pyobject(py)?.into_any().unbind())
-}
-
-pub fn convention(py: Python<'_>, name: &str) -> PyResult<HksConvention> {
-    match name {
-        "kernel_value" | "kernel-value" => Ok(HksConvention::KernelValue),
-        "matrix_diagonal" | "matrix-diagonal" => Ok(HksConvention::MatrixDiagonal),
-        other => Err(invalid_param(
-            py,
-            "convention",
-            format!("{other:?} is not one of \"kernel_value\", \"matrix_diagonal\""),
-        )),
-    }
-}
 
 /// Rust side of `wfem.Eigenbasis`: the pairs and the operators they belong to.
 #[pyclass(name = "Eigenbasis", module = "wfem._wfem", frozen)]
@@ -92,15 +73,14 @@ fn truncation<'py>(py: Python<'py>, r: &TruncationReport) -> PyResult<Bound<'py,
 #[pymethods]
 impl PyEigenbasis {
     #[staticmethod]
-    #[pyo3(signature = (v, f, k=None, kernel="wfem", lumped="barycentric", tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None, max_restarts=100))]
+    #[pyo3(signature = (v, f, k=None, mass=None, tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None, max_restarts=100))]
     #[allow(clippy::too_many_arguments)]
     fn from_mesh(
         py: Python<'_>,
         v: PyReadonlyArray2<'_, f64>,
         f: PyReadonlyArray2<'_, i64>,
         k: Option<usize>,
-        kernel: &str,
-        lumped: &str,
+        mass: Option<&str>,
         tol: f64,
         block_size: usize,
         max_dim: Option<usize>,
@@ -109,12 +89,11 @@ impl PyEigenbasis {
         max_restarts: usize,
     ) -> PyResult<Self> {
         let mesh = mesh_in(py, &v, &f)?;
-        let kind = kernel_kind(py, kernel)?;
-        let lumped = lumped_kind(py, lumped)?;
+        let mass: Mass = choices::parse(py, "mass", mass)?;
         let params = eigen_params(py, tol, block_size, max_dim, seed, shift, max_restarts)?;
         run(py, move |_| {
-            let fem = assemble(&mesh, &AssemblyParams { lumped })?;
-            let ops = Operators::new(&fem, kind)?;
+            let fem = assemble(&mesh, &AssemblyParams::for_mass(mass))?;
+            let ops = Operators::new(&fem, mass)?;
             let basis = compute(&ops, k, &params)?;
             Ok(Self {
                 basis: Arc::new(basis),
@@ -243,30 +222,22 @@ impl PyEigenbasis {
     }
 
     /// The heat kernel signature (n, T) and its times.
-    #[pyo3(signature = (times=None, num_times=100, convention="kernel_value", scaled=false, normalization=None))]
+    #[pyo3(signature = (times=None, num_times=shape_retrieval::DEFAULT_NUM_TIMES, convention=None, scaled=false, normalization=None))]
     fn hks<'py>(
         &self,
         py: Python<'py>,
         times: Option<Vec<f64>>,
         num_times: usize,
-        convention: &str,
+        convention: Option<&str>,
         scaled: bool,
         normalization: Option<&str>,
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, Vec<f64>)> {
-        let convention = self::convention(py, convention)?;
-        let normalization = match normalization {
-            None | Some("none") => SpectrumNormalization::None,
-            Some("max_eigenvalue") | Some("max-eigenvalue") => SpectrumNormalization::MaxEigenvalue,
-            Some("area") => SpectrumNormalization::UnitArea {
+        let convention: KernelDiagonal = choices::parse(py, "convention", convention)?;
+        let normalization = match choices::parse(py, "normalization", normalization)? {
+            SpectrumNormalization::UnitArea { .. } => SpectrumNormalization::UnitArea {
                 area: self.ops.total_mass(),
             },
-            Some(other) => {
-                return Err(invalid_param(
-                    py,
-                    "normalization",
-                    format!("{other:?} is not one of None, \"max_eigenvalue\", \"area\""),
-                ))
-            }
+            other => other,
         };
         let params = HksParams {
             convention,
@@ -286,7 +257,7 @@ impl PyEigenbasis {
     }
 
     /// The scale-invariant HKS (n, K) of Bronstein & Kokkinos.
-    #[pyo3(signature = (alpha=2.0, tau_min=1.0, tau_max=25.0, tau_step=0.0625, time_unit=1.0, num_frequencies=6, convention="kernel_value"))]
+    #[pyo3(signature = (alpha=2.0, tau_min=1.0, tau_max=25.0, tau_step=0.0625, time_unit=1.0, num_frequencies=6, convention=None))]
     #[allow(clippy::too_many_arguments)]
     fn sihks<'py>(
         &self,
@@ -297,9 +268,9 @@ impl PyEigenbasis {
         tau_step: f64,
         time_unit: f64,
         num_frequencies: usize,
-        convention: &str,
+        convention: Option<&str>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let convention = self::convention(py, convention)?;
+        let convention: KernelDiagonal = choices::parse(py, "convention", convention)?;
         let samples = (tau_max - tau_min) / tau_step;
         if samples.is_finite() && samples > MAX_SIHKS_SAMPLES {
             return Err(invalid_param(
@@ -362,7 +333,85 @@ fn check_finite(m: &Mat<f64>) -> Result<(), Error> {
 }
 
 /// Registers the classes of this module.
+/// `(values (n, T), times, [(method name, bound)], eigenvalues or None)` of [`mesh_hks`].
+type MeshHksOut<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Vec<f64>,
+    Vec<(&'static str, f64)>,
+    Option<Vec<f64>>,
+);
+
+/// The heat kernel signature of a mesh: shape_retrieval's one orchestration (auto / exact /
+/// spectral), as `wfem hks` runs it.
+#[pyfunction]
+#[pyo3(signature = (v, f, times=None, num_times=None, k=shape_retrieval::DEFAULT_EIGENPAIRS, mass=None, method=None, convention=None, scaled=false, normalization=None, basis=None, tol=shape_retrieval::DEFAULT_TRUNCATION_TOL))]
+#[allow(clippy::too_many_arguments)]
+pub fn mesh_hks<'py>(
+    py: Python<'py>,
+    v: PyReadonlyArray2<'py, f64>,
+    f: PyReadonlyArray2<'py, i64>,
+    times: Option<Vec<f64>>,
+    num_times: Option<usize>,
+    k: usize,
+    mass: Option<&str>,
+    method: Option<&str>,
+    convention: Option<&str>,
+    scaled: bool,
+    normalization: Option<&str>,
+    basis: Option<PyRef<'py, PyEigenbasis>>,
+    tol: f64,
+) -> PyResult<MeshHksOut<'py>> {
+    use shape_retrieval::{HksMethod, HksSource, MeshHksParams};
+    let mesh = mesh_in(py, &v, &f)?;
+    let method = match choices::parse::<HksMethod>(py, "method", method)? {
+        HksMethod::Auto { .. } => HksMethod::Auto { tol },
+        other => other,
+    };
+    let params = MeshHksParams {
+        mass: choices::parse(py, "mass", mass)?,
+        method,
+        times: match times {
+            Some(t) => TimeSampling::Explicit(t),
+            None => TimeSampling::Auto {
+                num_times: num_times.unwrap_or(shape_retrieval::DEFAULT_NUM_TIMES),
+            },
+        },
+        eigenpairs: k,
+        convention: choices::parse(py, "convention", convention)?,
+        scaled,
+        normalization: choices::parse(py, "normalization", normalization)?,
+        ..Default::default()
+    };
+    if let Some(b) = &basis {
+        if let Some(own) = b.ops.mass_kind().filter(|own| *own != params.mass) {
+            return Err(invalid_param(
+                py,
+                "basis",
+                format!(
+                    "the basis holds eigenpairs of the {} mass, not of the {} one",
+                    own.name(),
+                    params.mass.name()
+                ),
+            ));
+        }
+    }
+    let basis = basis.map(|b| (*b.basis).clone());
+    let hks = run(py, move |_| {
+        Ok(shape_retrieval::mesh_hks(&mesh, &params, basis, &mut |_| {})?)
+    })?;
+    let sources = hks
+        .sources
+        .iter()
+        .map(|s| match *s {
+            HksSource::Spectral { estimate, .. } => (s.method().name(), estimate),
+            HksSource::Exact { relative_tail } => (s.method().name(), relative_tail),
+        })
+        .collect();
+    Ok((mat_out(py, hks.values.as_ref()), hks.times, sources, hks.eigenvalues))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyEigenbasis>()?;
+    m.add_function(wrap_pyfunction!(mesh_hks, m)?)?;
     Ok(())
 }

@@ -22,19 +22,6 @@ pub struct PyIndexStore {
     dimension: usize,
 }
 
-fn metric(py: Python<'_>, name: &str) -> PyResult<Metric> {
-    match name {
-        "l1" => Ok(Metric::L1),
-        "chi2" | "chi-squared" | "chi_squared" => Ok(Metric::ChiSquared),
-        "euclidean" | "l2" => Ok(Metric::Euclidean),
-        other => Err(invalid_param(
-            py,
-            "metric",
-            format!("{other:?} is not one of \"l1\", \"chi2\", \"euclidean\""),
-        )),
-    }
-}
-
 impl PyIndexStore {
     fn wrap(store: Store) -> Self {
         Self {
@@ -139,16 +126,16 @@ impl PyIndexStore {
     }
 
     /// The k nearest shapes: [(id, name, info, distance)].
-    #[pyo3(signature = (query, k=10, metric="l1"))]
+    #[pyo3(signature = (query, k=10, metric=None))]
     fn search(
         &self,
         py: Python<'_>,
         query: PyReadonlyArray1<'_, f64>,
         k: usize,
-        metric: &str,
+        metric: Option<&str>,
     ) -> PyResult<Vec<HitTuple>> {
         let q = vec_in(&query);
-        let metric = self::metric(py, metric)?;
+        let metric: Metric = crate::choices::parse(py, "metric", metric)?;
         self.with(py, move |s| {
             Ok(s.search_metric(&q, k, metric)?
                 .into_iter()

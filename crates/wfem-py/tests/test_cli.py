@@ -58,7 +58,7 @@ def test_hks_matches_the_cli(cli, mesh_file, tmp_path):
     np.testing.assert_allclose(np.load(out), h, rtol=1e-10)
     # ... and the exact diagonal (no eigenpairs) on both sides.
     run(cli, "hks", mesh_file, "--times", "0.01", "0.1", "--method", "exact", "-o", out)
-    h = wfem.hks(V, F, [0.01, 0.1], exact=True)
+    h = wfem.hks(V, F, [0.01, 0.1], method="exact")
     np.testing.assert_allclose(np.load(out), h, rtol=1e-8)
 
 

@@ -114,10 +114,10 @@ def test_bad_functions():
 def test_bad_options():
     V, F = wfem.generate.icosphere(1)
     with pytest.raises(wfem.InvalidInputError) as e:
-        wfem.HeatKernel(V, F, method="chebyshev")
+        wfem.HeatKernel(V, F, method="nonsense")
     assert e.value.name == "method"
     with pytest.raises(wfem.InvalidInputError):
-        wfem.HeatKernel(V, F, kernel="voronoi")
+        wfem.HeatKernel(V, F, mass="nonsense")
     with pytest.raises(wfem.InvalidInputError) as e2:
         wfem.HeatKernel(V, F, method="rational", degree=9)
     assert e2.value.kind == "UnsupportedDegree" and 16 in e2.value.available

@@ -30,7 +30,7 @@ def test_apply_equals_dense_eigh_to_1e10(mesh, kernel):
         import scipy.sparse as sp
 
         M = sp.identity(len(V), format="csc")
-    K = wfem.HeatKernel(V, F, kernel=kernel)
+    K = wfem.HeatKernel(V, F, mass=kernel)
     f = functions(V)
     scale = 1.0 / max(np.linalg.eigvalsh(L.toarray())[-1], 1e-300)
     for t in (1e-3 * scale, scale, 100 * scale, 1e4 * scale):

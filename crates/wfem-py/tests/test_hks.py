@@ -9,10 +9,10 @@ import wfem
 from conftest import dense_eigh
 
 
-def hks_ref(lam, X, M, times, convention="kernel_value", k=None):
+def hks_ref(lam, X, M, times, convention="kernel-value", k=None):
     k = len(lam) if k is None else k
     lam, X = lam[:k], X[:, :k]
-    Y = X if convention == "kernel_value" else M @ X
+    Y = X if wfem.choices()["convention"]["default"] == wfem._wfem.canonical("convention", convention) else M @ X
     return np.column_stack([(X * Y) @ np.exp(-lam * t) for t in times])
 
 
@@ -134,7 +134,7 @@ def test_exact_hks_without_eigenpairs_equals_dense_truth(convention):
     L, B, _ = wfem.operators(V, F)
     lam, X = dense_eigh(L, B)
     times = [1e-4, 1e-3, 1e-2]
-    h = wfem.hks(V, F, times, exact=True, convention=convention)
+    h = wfem.hks(V, F, times, method="exact", convention=convention)
     ref = hks_ref(lam, X, B, times, convention)
     assert np.max(np.abs(h - ref) / np.abs(ref)) <= 1e-8
     values, info = wfem.HeatKernel(V, F).diagonal(times, convention, return_info=True)
@@ -144,10 +144,13 @@ def test_exact_hks_without_eigenpairs_equals_dense_truth(convention):
         other, info = wfem.HeatKernel(V, F).diagonal(times, convention, method=method, return_info=True)
         assert np.max(np.abs(other - ref) / np.abs(ref)) <= 1e-8
         assert 0 < info["columns"] <= len(V)
-    with pytest.raises(wfem.InvalidInputError, match="selected_inversion"):
+    with pytest.raises(wfem.InvalidInputError, match="selected-inversion"):
         wfem.HeatKernel(V, F).diagonal(times, method="eigen")
-    with pytest.raises(wfem.InvalidInputError):
-        wfem.hks(V, F, exact=True)  # needs times
+    # Exact values at the automatic times (chosen from 60 eigenpairs), as `wfem hks --method exact`.
+    h, ts = wfem.hks(V, F, method="exact", k=60, return_times=True, convention=convention)
+    ref = hks_ref(lam, X, B, ts, convention)
+    assert len(ts) == wfem._wfem.DEFAULT_NUM_TIMES
+    assert np.max(np.abs(h - ref) / np.abs(ref)) <= 1e-8
 
 
 def test_apply_times_matches_apply():

@@ -28,6 +28,56 @@ pub enum UpAxis {
     NegZ,
 }
 
+/// Which way is up in the figures: an axis, or [`Up::Auto`], chosen from the mesh's extents
+/// ([`Frame::auto`]); the registry of `--up`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Up {
+    /// From the extents of the mesh (its second moments along x, y, z): +z for a shape thin
+    /// along y (a person in a TOSCA-style z-up file) or thin along x and longer in y than in z
+    /// (a standing quadruped), +y otherwise.
+    #[default]
+    Auto,
+    /// The given axis.
+    Axis(UpAxis),
+}
+
+wfem_choice::registry! {
+    Up as "up direction" {
+        Up::Auto = Up::Auto => "auto":
+            "from the extents of the mesh: +z for a person thin along y or a quadruped standing along y (TOSCA), +y otherwise (default)",
+        Up::Axis(UpAxis::X) = Up::Axis(UpAxis::X) => "x" ["+x"]: "+x",
+        Up::Axis(UpAxis::Y) = Up::Axis(UpAxis::Y) => "y" ["+y"]: "+y (most OBJ/PLY scans: bunny, armadillo, spot)",
+        Up::Axis(UpAxis::Z) = Up::Axis(UpAxis::Z) => "z" ["+z"]: "+z (TOSCA, CAD)",
+        Up::Axis(UpAxis::NegX) = Up::Axis(UpAxis::NegX) => "-x": "−x",
+        Up::Axis(UpAxis::NegY) = Up::Axis(UpAxis::NegY) => "-y": "−y",
+        Up::Axis(UpAxis::NegZ) = Up::Axis(UpAxis::NegZ) => "-z": "−z",
+    }
+}
+
+impl Up {
+    /// The frame of the standard views for `mesh`.
+    pub fn frame(self, mesh: &mesh_fem::TriMesh) -> Frame {
+        match self {
+            Up::Auto => Frame::auto(mesh),
+            Up::Axis(axis) => Frame::from_up(axis),
+        }
+    }
+}
+
+/// "+z", "-y", or the rounded vector for a direction off the axes (for messages naming the up
+/// direction a figure uses).
+pub fn direction_label(v: [f64; 3]) -> String {
+    match v.map(|c| c.round() as i64) {
+        [1, 0, 0] if v[0] == 1.0 => "+x".into(),
+        [-1, 0, 0] if v[0] == -1.0 => "-x".into(),
+        [0, 1, 0] if v[1] == 1.0 => "+y".into(),
+        [0, -1, 0] if v[1] == -1.0 => "-y".into(),
+        [0, 0, 1] if v[2] == 1.0 => "+z".into(),
+        [0, 0, -1] if v[2] == -1.0 => "-z".into(),
+        _ => format!("({:.2}, {:.2}, {:.2})", v[0], v[1], v[2]),
+    }
+}
+
 /// A right-handed orthonormal frame of the figures: `up` is screen-up in the front view,
 /// `front` points from the mesh towards the viewer of the front view, and
 /// `right = up × front` is screen-right there.

@@ -25,7 +25,7 @@ mod raster;
 mod vec3;
 
 pub use colormap::Colormap;
-pub use frame::{Frame, UpAxis};
+pub use frame::{direction_label, Frame, Up, UpAxis};
 
 use mesh_fem::TriMesh;
 use rayon::prelude::*;

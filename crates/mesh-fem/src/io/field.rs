@@ -76,18 +76,43 @@ pub enum FieldFormat {
     Csv,
 }
 
-impl FieldFormat {
-    /// The extensions, as a message lists them.
-    pub const EXTENSIONS: &'static str = ".ply, .npy, .csv";
+wfem_choice::registry! {
+    FieldFormat as "field format" {
+        FieldFormat::Ply = FieldFormat::Ply => "ply":
+            "binary PLY: the mesh with one double vertex property per field (MeshLab, Polyscope)",
+        FieldFormat::Npy = FieldFormat::Npy => "npy": "NumPy .npy: an n × k float64 array",
+        FieldFormat::Csv = FieldFormat::Csv => "csv": "comma-separated values with a header of field names",
+    }
+}
 
-    /// The format named by a file extension (case-insensitive, without the dot), if any.
+impl FieldFormat {
+    /// Whether [`read_field`] reads fields in this format (NPY and CSV: one value per vertex).
+    pub fn readable(self) -> bool {
+        matches!(self, FieldFormat::Npy | FieldFormat::Csv)
+    }
+
+    /// The extensions [`read_field`] reads, as a message lists them (`.npy, .csv`).
+    pub fn readable_extensions() -> String {
+        <Self as wfem_choice::Choice>::entries()
+            .iter()
+            .filter(|e| Self::from_extension(e.name).is_some_and(Self::readable))
+            .map(|e| format!(".{}", e.name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// The extensions, as a message lists them (`.ply, .npy, .csv`).
+    pub fn extensions() -> String {
+        <Self as wfem_choice::Choice>::names()
+            .map(|n| format!(".{n}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// The format named by a file extension (its registry name; case-insensitive, without the
+    /// dot), if any.
     pub fn from_extension(extension: &str) -> Option<Self> {
-        match extension.to_ascii_lowercase().as_str() {
-            "ply" => Some(Self::Ply),
-            "npy" => Some(Self::Npy),
-            "csv" => Some(Self::Csv),
-            _ => None,
-        }
+        <Self as wfem_choice::Choice>::parse(extension).ok()
     }
 
     /// The format of a path, judged by its extension.
@@ -95,7 +120,7 @@ impl FieldFormat {
     /// # Errors
     /// [`MeshError::UnknownFormat`] if the extension is missing or names no field format.
     pub fn from_path(path: &Path) -> Result<Self, MeshError> {
-        Self::from_extension(&extension(path)).ok_or_else(|| unsupported(path, Self::EXTENSIONS))
+        Self::from_extension(&extension(path)).ok_or_else(|| unsupported(path, &Self::extensions()))
     }
 }
 
@@ -308,8 +333,8 @@ fn write_npy(w: &mut dyn Write, n: usize, fields: &[(&str, &[f64])]) -> std::io:
 /// [`MeshError::UnknownFormat`] for another extension, [`MeshError::Io`] if unreadable.
 pub fn read_field(path: &Path, n_vertices: usize) -> Result<Vec<f64>, MeshError> {
     let format = match FieldFormat::from_path(path) {
-        Ok(f @ (FieldFormat::Npy | FieldFormat::Csv)) => f,
-        _ => return Err(unsupported(path, ".npy, .csv")),
+        Ok(f) if f.readable() => f,
+        _ => return Err(unsupported(path, &FieldFormat::readable_extensions())),
     };
     let bytes = super::read_regular_file(path)?;
     let values = match format {

@@ -54,16 +54,20 @@ pub enum MeshFormat {
     Stl,
 }
 
+wfem_choice::registry! {
+    MeshFormat as "mesh format" {
+        MeshFormat::Obj = MeshFormat::Obj => "obj": "Wavefront OBJ (v and f records)",
+        MeshFormat::Ply = MeshFormat::Ply => "ply": "Stanford PLY, ASCII or binary",
+        MeshFormat::Off = MeshFormat::Off => "off": "Object File Format (OFF, COFF, NOFF, …), ASCII",
+        MeshFormat::Stl = MeshFormat::Stl => "stl": "stereolithography STL, ASCII or binary",
+    }
+}
+
 impl MeshFormat {
-    /// The format named by a file extension (case-insensitive, without the dot), if any.
+    /// The format named by a file extension (its registry name; case-insensitive, without the
+    /// dot), if any.
     pub fn from_extension(extension: &str) -> Option<Self> {
-        match extension.to_ascii_lowercase().as_str() {
-            "obj" => Some(Self::Obj),
-            "ply" => Some(Self::Ply),
-            "off" => Some(Self::Off),
-            "stl" => Some(Self::Stl),
-            _ => None,
-        }
+        <Self as wfem_choice::Choice>::parse(extension).ok()
     }
 
     /// The format of a path, judged by its extension.

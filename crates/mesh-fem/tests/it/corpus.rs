@@ -8,8 +8,13 @@ use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Number of mesh files SOURCES.md lists.
+/// Number of mesh files SOURCES.md's per-file table lists.
 const CORPUS_FILES: usize = 209;
+
+/// The SHREC'11 collection (500-face copy): its own folder, SOURCES.md and `labels.csv`
+/// (`file,class`), 600 closed triangle meshes of 250–252 vertices and 500 faces each.
+const SHREC11: &str = "shrec11-meshcnn500/";
+const SHREC11_FILES: usize = 600;
 
 /// Files that do NOT load with default options, and the error they must give: the polygon
 /// meshes (`MeshError::Polygon` naming the first polygon, 0-based record index, and its
@@ -72,8 +77,12 @@ fn load_all(files: &[PathBuf], opts: &LoadOptions) -> Vec<Outcome> {
 #[test]
 fn every_corpus_file_loads_or_gives_its_expected_error() {
     let root = meshes_dir().unwrap();
-    let files = all_mesh_files().unwrap();
+    let (shrec11, files): (Vec<PathBuf>, Vec<PathBuf>) = all_mesh_files()
+        .unwrap()
+        .into_iter()
+        .partition(|p| rel(p, &root).starts_with(SHREC11));
     assert_eq!(files.len(), CORPUS_FILES, "corpus at {}", root.display());
+    check_shrec11(&root, &shrec11);
     let names: Vec<String> = files.iter().map(|p| rel(p, &root)).collect();
     for (polygon_file, _, _) in POLYGON_FILES {
         assert!(names.iter().any(|n| n == polygon_file), "{polygon_file} missing");
@@ -148,6 +157,32 @@ fn every_corpus_file_loads_or_gives_its_expected_error() {
         failures.len(),
         failures.join("\n")
     );
+}
+
+/// Every SHREC'11 file is listed once in `labels.csv` and loads as a closed 500-face mesh of
+/// 250–252 vertices (its SOURCES.md).
+fn check_shrec11(root: &Path, files: &[PathBuf]) {
+    assert_eq!(files.len(), SHREC11_FILES, "{SHREC11} files");
+    let labels = std::fs::read_to_string(root.join(SHREC11).join("labels.csv")).expect("labels.csv");
+    let listed: std::collections::BTreeSet<String> = labels
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').next())
+        .map(|f| format!("{SHREC11}{f}"))
+        .collect();
+    assert_eq!(listed.len(), SHREC11_FILES, "labels.csv rows");
+    let outcomes = load_all(files, &LoadOptions::default());
+    for (path, outcome) in files.iter().zip(outcomes) {
+        let name = rel(path, root);
+        assert!(listed.contains(&name), "{name} is not in labels.csv");
+        let (mesh, _) = outcome.unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(
+            (250..=252).contains(&mesh.n_vertices()),
+            "{name}: {} vertices",
+            mesh.n_vertices()
+        );
+        assert_eq!(mesh.n_faces(), 500, "{name}");
+    }
 }
 
 #[test]

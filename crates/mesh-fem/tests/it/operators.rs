@@ -12,7 +12,7 @@
 
 use faer::{Mat, Par, Side};
 use mesh_fem::generate::{bumpy, grid, icosphere, irregular_sphere, torus, uv_sphere};
-use mesh_fem::{assemble, AssemblyParams, FemOperators, LumpedMassKind, MeshError, TriMesh};
+use mesh_fem::{assemble, AssemblyParams, FemOperators, Lumping, MeshError, TriMesh};
 use std::collections::HashMap;
 use std::path::PathBuf;
 
@@ -26,7 +26,7 @@ fn ops(mesh: &TriMesh) -> FemOperators {
 
 fn voronoi_ops(mesh: &TriMesh) -> FemOperators {
     let params = AssemblyParams {
-        lumped: LumpedMassKind::Voronoi,
+        lumping: Lumping::Voronoi,
     };
     assemble(mesh, &params).expect("generated meshes assemble")
 }
@@ -840,4 +840,24 @@ fn unreferenced_vertex_is_a_typed_error() {
     let err = assemble(&mesh, &AssemblyParams::default()).unwrap_err();
     assert!(matches!(err, MeshError::UnreferencedVertex { vertex: 2 }), "{err:?}");
     assert!(err.to_string().contains("vertex 2"), "{err}");
+}
+
+#[test]
+fn mass_registry_is_consistent_and_names_libigls_matrices() {
+    use mesh_fem::Mass;
+    use wfem_choice::Choice;
+    wfem_choice::check_registry::<Mass>().unwrap();
+    assert_eq!(Mass::default(), Mass::Consistent);
+    assert_eq!(Mass::parse("wfem").unwrap(), Mass::Consistent);
+    assert_eq!(Mass::parse("lumped").unwrap(), Mass::Lumped(Lumping::Barycentric));
+    assert_eq!(Mass::parse("VORONOI").unwrap(), Mass::Lumped(Lumping::Voronoi));
+    assert_eq!(Mass::parse("linear").unwrap(), Mass::Identity);
+    assert_eq!(Mass::Lumped(Lumping::Voronoi).lumping(), Lumping::Voronoi);
+    assert_eq!(Mass::Identity.lumping(), Lumping::Barycentric);
+    let fem = assemble(
+        &icosphere(1),
+        &AssemblyParams::for_mass(Mass::parse("voronoi").unwrap()),
+    )
+    .unwrap();
+    assert_eq!(fem.lumping, Lumping::Voronoi);
 }

@@ -6,7 +6,7 @@ use crate::common;
 use common::{dense_spectrum, rel_err, sig};
 use faer::Mat;
 use mesh_fem::generate::bumpy;
-use mesh_fem::{assemble, AssemblyParams, LumpedMassKind};
+use mesh_fem::{assemble, AssemblyParams, Lumping};
 use shape_retrieval::{
     dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, RetrievalError, ShapeDescriptors,
     SihksParams, TimeSampling, TimeUnit,
@@ -66,7 +66,7 @@ fn dhk1_matches_dense_voronoi_lumped_spectrum() {
     let ops = assemble(
         &mesh,
         &AssemblyParams {
-            lumped: LumpedMassKind::Voronoi,
+            lumping: Lumping::Voronoi,
         },
     )
     .unwrap();
@@ -107,7 +107,7 @@ fn scale_laws_of_section_5() {
     for d in [Descriptor::Dhk3, Descriptor::SiHks] {
         let (x, y) = (a.dense(d).unwrap(), b.dense(d).unwrap());
         let e = rel_err(&flat(&y), &flat(&x));
-        assert!(e < 2e-2, "{}: {e}", d.name());
+        assert!(e < 2e-2, "{}: {e}", d.label());
     }
     let (x, y) = (a.dense(Descriptor::Dhk2).unwrap(), b.dense(Descriptor::Dhk2).unwrap());
     assert!(rel_err(&flat(&y), &flat(&x)) > 0.5);
@@ -191,9 +191,9 @@ fn snapshot_descriptors_on_bumpy() {
     let p = params(60);
     let mut s = ShapeDescriptors::new(&mesh, &p).unwrap();
     let mut out = String::new();
-    for d in Descriptor::ALL {
+    for d in Descriptor::PAPER {
         let m = s.dense(d).unwrap();
-        out += &format!("{} ({} × {})\n", d.name(), m.nrows(), m.ncols());
+        out += &format!("{} ({} × {})\n", d.label(), m.nrows(), m.ncols());
         for i in (0..m.nrows()).step_by(20) {
             out += &format!("v{i:03}:");
             for j in 0..m.ncols() {

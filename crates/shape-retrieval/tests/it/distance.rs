@@ -1,6 +1,7 @@
 //! L1 and χ² bag distances against hand computations.
 
 use shape_retrieval::{chi_squared_distance, l1_distance, pairwise_distances, BagDistance, RetrievalError};
+use wfem_choice::Choice;
 
 #[test]
 fn chi_squared_matches_a_hand_computation() {

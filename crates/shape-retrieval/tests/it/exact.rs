@@ -4,11 +4,11 @@
 use crate::common::{dense_spectrum, rel_err};
 use faer::Mat;
 use mesh_fem::generate;
-use shape_retrieval::hks::HksConvention;
 use shape_retrieval::{
     exact_signature, heat_kernel_signature, signature_by_method, truncation_bound, truncation_estimate, HksMethod,
     HksParams, HksSource, Spectrum, TimeSampling,
 };
+use wfem_heat::KernelDiagonal;
 use wfem_heat::{DiagonalParams, HeatKernel, HeatParams};
 
 /// HKS (kernel-value convention) from the first k of the dense eigenpairs.
@@ -70,15 +70,15 @@ fn exact_signature_matches_the_full_spectrum_where_truncation_fails() {
     let truth = truncated(&s, n, &times);
     let k30 = truncated(&s, 30, &times);
     for (convention, name) in [
-        (HksConvention::KernelValue, "kernel value"),
-        (HksConvention::MatrixDiagonal, "matrix diagonal"),
+        (KernelDiagonal::KernelValue, "kernel value"),
+        (KernelDiagonal::OperatorDiagonal, "operator diagonal"),
     ] {
         let exact = exact_signature(&kernel, &times, convention, &DiagonalParams::default()).unwrap();
         for (j, t) in times.iter().enumerate() {
             let want = match convention {
-                HksConvention::KernelValue => col(&truth, j),
+                KernelDiagonal::KernelValue => col(&truth, j),
                 // diag(Φ e^{−tΛ} Φᵀ B): the dense kernel matrix times B, diagonal only.
-                HksConvention::MatrixDiagonal => {
+                KernelDiagonal::OperatorDiagonal => {
                     let x = &s.eigenvectors;
                     let bx = &s.mass * x;
                     (0..n)
@@ -114,7 +114,7 @@ fn auto_takes_the_spectral_sum_only_where_its_bound_holds() {
         &s.eigenvalues[..k],
         spectral.clone(),
         &times,
-        HksConvention::KernelValue,
+        KernelDiagonal::KernelValue,
         HksMethod::Auto { tol },
         &DiagonalParams::default(),
     )
@@ -136,7 +136,7 @@ fn auto_takes_the_spectral_sum_only_where_its_bound_holds() {
                 assert!(e < 1e-8, "t = {t}: exact column off by {e:e}");
             }
         }
-        kinds.push(sources[j].name());
+        kinds.push(wfem_choice::Choice::name(&sources[j].method()));
     }
     assert_eq!(kinds, ["exact", "exact", "spectral", "spectral"]);
 
@@ -146,7 +146,7 @@ fn auto_takes_the_spectral_sum_only_where_its_bound_holds() {
         &s.eigenvalues[..k],
         spectral.clone(),
         &times,
-        HksConvention::KernelValue,
+        KernelDiagonal::KernelValue,
         HksMethod::Spectral,
         &DiagonalParams::default(),
     )
@@ -157,7 +157,7 @@ fn auto_takes_the_spectral_sum_only_where_its_bound_holds() {
         &s.eigenvalues[..k],
         spectral.clone(),
         &times,
-        HksConvention::KernelValue,
+        KernelDiagonal::KernelValue,
         HksMethod::Auto { tol: 2.0 },
         &DiagonalParams::default(),
     );
@@ -185,7 +185,7 @@ fn auto_keeps_the_spectral_sum_where_probing_is_out_of_reach_and_exact_refuses()
         ..Default::default()
     };
     let columns = |t: f64| {
-        exact_signature(&kernel, &[t], HksConvention::KernelValue, &probing)
+        exact_signature(&kernel, &[t], KernelDiagonal::KernelValue, &probing)
             .unwrap()
             .info
             .columns
@@ -202,21 +202,21 @@ fn auto_keeps_the_spectral_sum_where_probing_is_out_of_reach_and_exact_refuses()
             &eigenvalues,
             spectral.clone(),
             &times,
-            HksConvention::KernelValue,
+            KernelDiagonal::KernelValue,
             method,
             params,
         )
     };
     let run = |method| run_with(method, &params);
     let (values, sources) = run(HksMethod::Auto { tol: 1e-6 }).unwrap();
-    assert_eq!(sources[0].name(), "exact");
-    assert_eq!(sources[1].name(), "spectral");
+    assert_eq!(sources[0].method(), HksMethod::Exact);
+    assert_eq!(sources[1].method(), HksMethod::Spectral);
     assert!(values.col(0).iter().all(|&v| v > 0.0), "the exact column was filled in");
     assert!(values.col(1).iter().all(|&v| v == 0.0), "the spectral column kept");
     assert!(run(HksMethod::Exact).is_err());
     // Selected inversion: every time exact, equal to the probed column where probing works.
     let (all, sources) = run_with(HksMethod::Auto { tol: 1e-6 }, &DiagonalParams::default()).unwrap();
-    assert!(sources.iter().all(|s| s.name() == "exact"), "{sources:?}");
+    assert!(sources.iter().all(|s| s.method() == HksMethod::Exact), "{sources:?}");
     for i in 0..n {
         assert!((all[(i, 0)] - values[(i, 0)]).abs() <= 1e-8 * all[(i, 0)]);
         assert!(all[(i, 1)] > 0.0);

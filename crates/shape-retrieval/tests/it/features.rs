@@ -7,11 +7,12 @@ use faer::Mat;
 use mesh_fem::generate::{bumpy, icosphere};
 use mesh_fem::TriMesh;
 use shape_retrieval::{
-    descriptor_distance, heat_kernel_signature, repeatability, FeatureSet, HksConvention, HksParams, RetrievalError,
-    Spectrum, SpectrumNormalization,
+    descriptor_distance, heat_kernel_signature, repeatability, FeatureSet, HksParams, RetrievalError, Spectrum,
+    SpectrumNormalization,
 };
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
+use wfem_heat::KernelDiagonal;
 
 /// Single-source Dijkstra on the edge graph of the mesh (edge length = Euclidean length).
 fn dijkstra(mesh: &TriMesh, source: u32) -> Vec<f64> {
@@ -247,7 +248,7 @@ fn hks_robustness_scale_and_noise() {
     let x = bumpy(2);
     let pairs: Vec<(u32, u32)> = (0..x.n_vertices() as u32).map(|i| (i, i)).collect();
     let dhk3 = HksParams {
-        convention: HksConvention::MatrixDiagonal,
+        convention: KernelDiagonal::OperatorDiagonal,
         normalization: SpectrumNormalization::MaxEigenvalue,
         times: shape_retrieval::TimeSampling::Explicit(vec![0.002, 0.005, 0.01, 0.02, 0.05, 0.1]),
         ..Default::default()

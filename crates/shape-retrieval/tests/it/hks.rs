@@ -7,9 +7,9 @@ use faer::Mat;
 use mesh_fem::generate::{bumpy, icosphere};
 use shape_retrieval::hks::auto_times;
 use shape_retrieval::{
-    heat_kernel_signature, heat_trace, HksConvention, HksParams, RetrievalError, Spectrum, SpectrumNormalization,
-    TimeSampling,
+    heat_kernel_signature, heat_trace, HksParams, RetrievalError, Spectrum, SpectrumNormalization, TimeSampling,
 };
+use wfem_heat::KernelDiagonal;
 
 #[test]
 fn dense_spectrum_is_b_orthonormal() {
@@ -54,7 +54,7 @@ fn matrix_diagonal_matches_dense_diagonal_and_sums_to_heat_trace() {
         .unwrap();
     let times = vec![0.01, 0.1, 1.0];
     let params = HksParams {
-        convention: HksConvention::MatrixDiagonal,
+        convention: KernelDiagonal::OperatorDiagonal,
         times: TimeSampling::Explicit(times.clone()),
         ..Default::default()
     };
@@ -83,7 +83,7 @@ fn matrix_diagonal_with_full_spectrum_is_one_at_small_time() {
         .with_mass(s.ops.mass.as_ref())
         .unwrap();
     let params = HksParams {
-        convention: HksConvention::MatrixDiagonal,
+        convention: KernelDiagonal::OperatorDiagonal,
         times: TimeSampling::Explicit(vec![1e-12]),
         ..Default::default()
     };
@@ -106,7 +106,7 @@ fn precomputed_mass_eigenvectors_equal_sparse_product() {
         .with_mass_eigenvectors(bx.as_ref())
         .unwrap();
     let params = HksParams {
-        convention: HksConvention::MatrixDiagonal,
+        convention: KernelDiagonal::OperatorDiagonal,
         ..Default::default()
     };
     let ha = heat_kernel_signature(&a, &params).unwrap();
@@ -218,7 +218,7 @@ fn normalizations_make_both_conventions_scale_invariant() {
     let beta = 3.7;
     let (l2, x2, bx2) = scaled_spectrum(&s, beta);
     let bx = &s.mass * &s.eigenvectors;
-    for convention in [HksConvention::KernelValue, HksConvention::MatrixDiagonal] {
+    for convention in [KernelDiagonal::KernelValue, KernelDiagonal::OperatorDiagonal] {
         for (norm, norm2) in [
             (
                 SpectrumNormalization::MaxEigenvalue,
@@ -299,7 +299,7 @@ fn bad_inputs_are_typed_errors() {
     ));
     let s = Spectrum::new(&[0.0, 1.0], x.as_ref()).unwrap();
     let md = HksParams {
-        convention: HksConvention::MatrixDiagonal,
+        convention: KernelDiagonal::OperatorDiagonal,
         ..Default::default()
     };
     assert!(matches!(
@@ -354,6 +354,15 @@ fn table(hks: &shape_retrieval::HeatKernelSignature) -> String {
     out
 }
 
+/// The snapshots were taken with 100 automatic times (the default before it became
+/// [`shape_retrieval::DEFAULT_NUM_TIMES`] = 16); every 11th column is shown.
+fn hundred() -> HksParams {
+    HksParams {
+        times: shape_retrieval::hks::TimeSampling::Auto { num_times: 100 },
+        ..Default::default()
+    }
+}
+
 #[test]
 fn snapshot_hks_conventions_on_bumpy() {
     let s = dense_spectrum(&bumpy(2));
@@ -363,11 +372,11 @@ fn snapshot_hks_conventions_on_bumpy() {
         .unwrap()
         .with_mass(s.ops.mass.as_ref())
         .unwrap();
-    let kv = heat_kernel_signature(&spectrum, &HksParams::default()).unwrap();
+    let kv = heat_kernel_signature(&spectrum, &hundred()).unwrap();
     insta::assert_snapshot!("hks_kernel_value_bumpy2_k100", table(&kv));
     let md = HksParams {
-        convention: HksConvention::MatrixDiagonal,
-        ..Default::default()
+        convention: KernelDiagonal::OperatorDiagonal,
+        ..hundred()
     };
     insta::assert_snapshot!(
         "hks_matrix_diagonal_bumpy2_k100",
@@ -375,16 +384,16 @@ fn snapshot_hks_conventions_on_bumpy() {
     );
     let scaled = HksParams {
         scaled: true,
-        ..Default::default()
+        ..hundred()
     };
     insta::assert_snapshot!(
         "hks_scaled_bumpy2_k100",
         table(&heat_kernel_signature(&spectrum, &scaled).unwrap())
     );
     let dhk3 = HksParams {
-        convention: HksConvention::MatrixDiagonal,
+        convention: KernelDiagonal::OperatorDiagonal,
         normalization: SpectrumNormalization::MaxEigenvalue,
-        ..Default::default()
+        ..hundred()
     };
     insta::assert_snapshot!(
         "hks_dhk3_max_eigenvalue_bumpy2_k100",
@@ -392,7 +401,7 @@ fn snapshot_hks_conventions_on_bumpy() {
     );
     let unit = HksParams {
         normalization: SpectrumNormalization::UnitArea { area },
-        ..Default::default()
+        ..hundred()
     };
     insta::assert_snapshot!(
         "hks_unit_area_bumpy2_k100",

@@ -3,6 +3,7 @@
 //! independent references, and every validation error.
 
 use crate::common;
+use shape_retrieval::hks::TimeSampling;
 
 use common::{sig, small_collection, small_settings};
 use faer::Mat;
@@ -251,7 +252,7 @@ fn smoothing_is_the_heat_kernel_applied_to_the_coordinates() {
     let dense = wfem_heat::HeatKernel::new(
         &ops,
         wfem_heat::HeatParams {
-            kernel: wfem_heat::KernelKind::Wfem,
+            mass: wfem_heat::Mass::Consistent,
             method: wfem_heat::Method::Dense,
         },
     )
@@ -386,6 +387,8 @@ fn invalid_settings_and_inputs_are_typed_errors() {
         tau_max: 1.0,
         tau_step: 0.5,
         frequencies: 5,
+        time_unit: shape_retrieval::TimeUnit::Area(1.0),
+        convention: wfem_heat::KernelDiagonal::KernelValue,
     };
     assert!(matches!(
         settings.descriptor.validate(),
@@ -394,12 +397,16 @@ fn invalid_settings_and_inputs_are_typed_errors() {
             ..
         })
     ));
-    settings.descriptor.descriptor = DescriptorSpec::Dhk2 { times: vec![] };
+    settings.descriptor.descriptor = DescriptorSpec::Dhk2 {
+        times: TimeSampling::Explicit(vec![]),
+    };
     assert!(matches!(
         settings.descriptor.validate(),
         Err(RetrievalError::Empty { .. })
     ));
-    settings.descriptor.descriptor = DescriptorSpec::Dhk2 { times: vec![1.0, -1.0] };
+    settings.descriptor.descriptor = DescriptorSpec::Dhk2 {
+        times: TimeSampling::Explicit(vec![1.0, -1.0]),
+    };
     assert!(matches!(
         settings.descriptor.validate(),
         Err(RetrievalError::InvalidParameter { .. })

@@ -1,7 +1,7 @@
 //! The complex-symmetric supernodal LDLᵀ backend ([`super::Backend::DirectLdlt`], the default):
 //! `P(tL − zM)Pᵀ = LDLᵀ` without pivoting and without conjugation, on the AMD ordering and
 //! supernodes of the pair's shared Cholesky analysis (numeric kernel: `crate::ldlt`; why it
-//! exists without pivoting: the Hermitian part of i(tL − zM) is qM ≻ 0, NUMERICS §3.3d).
+//! exists without pivoting: the Hermitian part of i(tL − zM) is qM ≻ 0, docs/NUMERICS.md §3.3d).
 
 use super::direct::{factor_all, ComplexFactor};
 use super::{Pole, PreparedBackend, ShiftedSolve, SolveMethod};

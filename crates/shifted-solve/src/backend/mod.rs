@@ -10,9 +10,10 @@
 //!
 //! A backend implements `PreparedBackend` (its t-independent preparation, e.g. a symbolic
 //! analysis) and returns a `ShiftedSolve` for each t; [`Backend`] is the registry (one match
-//! in `Backend::prepare`, the name table and the [`SolveMethod`] of its reports).
-//! **Adding a backend** = a new module here + a `Backend` variant, its `prepare` arm and its
-//! name; nothing else changes (the CLI reads [`Backend::NAMES`]).
+//! in `Backend::prepare`, the registry line with its names and help, and the [`SolveMethod`] of
+//! its reports). **Adding a backend** = a new module here + a `Backend` variant with its line in
+//! the `registry!` below and its arm in `Backend::prepare`; the command line and the Python
+//! package read the names and help from the registry ([`wfem_choice::Choice`]).
 
 pub(crate) mod direct;
 pub mod ldlt;
@@ -50,31 +51,20 @@ impl Default for Backend {
     }
 }
 
+wfem_choice::registry! {
+    Backend as "rational backend" {
+        Backend::DirectLdlt = Backend::DirectLdlt => "ldlt" ["direct-ldlt"]:
+            "complex-symmetric sparse LDLᵀ, one factorization per pole (default)",
+        Backend::DirectLu = Backend::DirectLu => "lu" ["direct-lu"]:
+            "pivoted complex sparse LU, one factorization per pole",
+        Backend::Minres(_) = Backend::Minres(MinresParams::default()) => "minres":
+            "preconditioned MINRES per pole (the paper's choice)",
+        Backend::MultiShift(_) = Backend::MultiShift(KrylovParams::default()) => "multishift" ["multi-shift"]:
+            "all poles in one shift-and-invert Lanczos space: one real Cholesky per t",
+    }
+}
+
 impl Backend {
-    /// The names of the backends ([`Self::name`]), for command lines and bindings.
-    pub const NAMES: [&'static str; 4] = ["ldlt", "lu", "minres", "multishift"];
-
-    /// The short name of this backend (`ldlt`, `lu`, `minres`, `multishift`).
-    pub fn name(&self) -> &'static str {
-        match self {
-            Backend::DirectLdlt => "ldlt",
-            Backend::DirectLu => "lu",
-            Backend::Minres(_) => "minres",
-            Backend::MultiShift(_) => "multishift",
-        }
-    }
-
-    /// The backend of a name from [`Self::NAMES`] with its default parameters.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Some(match name {
-            "ldlt" => Backend::DirectLdlt,
-            "lu" => Backend::DirectLu,
-            "minres" => Backend::Minres(MinresParams::default()),
-            "multishift" => Backend::MultiShift(KrylovParams::default()),
-            _ => return None,
-        })
-    }
-
     /// Validates the parameters and runs the t-independent preparation on `pair`.
     pub(crate) fn prepare(&self, pair: &Arc<OperatorPair>) -> Result<Box<dyn PreparedBackend>, SolveError> {
         match self {

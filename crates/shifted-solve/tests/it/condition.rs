@@ -64,7 +64,7 @@ fn condition_estimates_match_dense_svd_on_small_matrices() {
                 "t={t} z={z}: {} vs {kappa_p}",
                 rep.preconditioned
             );
-            // NUMERICS §3.3b: with s = |z| the preconditioned κ of degree 16 is ≤ 2.
+            // docs/NUMERICS.md §3.3b: with s = |z| the preconditioned κ of degree 16 is ≤ 2.
             assert!(rep.preconditioned <= 2.0 + 1e-9);
         }
     }

@@ -1,4 +1,4 @@
-//! The shipped rational approximations against e^{-x} itself (paper Eq. (10), NUMERICS §2.2).
+//! The shipped rational approximations against e^{-x} itself (paper Eq. (10), docs/NUMERICS.md §2.2).
 #![allow(clippy::excessive_precision)] // published constants are quoted verbatim
 use shifted_solve::*;
 
@@ -61,7 +61,7 @@ fn structure_of_the_tables() {
 }
 
 /// Pusa (2011, corrected 2012) CRAM-14 in the nuclear convention: θ, α with
-/// exp(z) ≈ α0 + Σ α/(z − θ); the mapping is θ = −conj z, α = −conj c (NUMERICS §0.1, §2.3).
+/// exp(z) ≈ α0 + Σ α/(z − θ); the mapping is θ = −conj z, α = −conj c (docs/NUMERICS.md §0.1, §2.3).
 #[test]
 fn degree_14_matches_pusa_published_values() {
     let a = RationalApprox::cram(14).unwrap();

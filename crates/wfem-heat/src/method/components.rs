@@ -23,7 +23,7 @@ struct Part {
 }
 
 impl Part {
-    /// `K_t F` (or `H_t F`) of this component at every t; from the component's own
+    /// `K_t F` (or `K̃_t F`) of this component at every t; from the component's own
     /// [`Operators::time_at_infinity`] on the (deflated) result is 0 without a solve — a tiny
     /// component reaches it at once, and its shifted matrices, whose constant direction is
     /// below rounding, are never factored.

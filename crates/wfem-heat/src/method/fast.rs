@@ -8,7 +8,7 @@
 //!
 //! `K_t f = g(S) f`, with `g(s) = exp(−(1/s − 1)/γ)`,
 //!
-//! and the kernel matrix `H_t = K_t M⁻¹ = g(S) S⁻¹ A⁻¹ = (g(s)/s)(S) A⁻¹` needs no solve with
+//! and the kernel matrix `K̃_t = K_t M⁻¹ = g(S) S⁻¹ A⁻¹ = (g(s)/s)(S) A⁻¹` needs no solve with
 //! M. m steps of Lanczos in the M-inner product ([`shifted_solve::lanczos_function`]) give
 //! `K_t f ≈ ‖f‖_M V_m g(T_m) e₁`. Because g is smooth on (0, 1] and its poles are all at
 //! s = 0, the convergence does not depend on ‖tL‖ (mesh size or t), only on the accuracy
@@ -223,7 +223,7 @@ impl PreparedMethod for Fast {
         Some(self.apply_with_outcome(ops, f, t))
     }
 
-    /// `H_t G = (g(s)/s)(S) A⁻¹ G`: no solve with M.
+    /// `K̃_t G = (g(s)/s)(S) A⁻¹ G`: no solve with M.
     fn apply_kernel_matrix(&self, ops: &Operators, g: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
         let gamma = self.params.gamma;
         let h = |s: f64| if s <= 0.0 { 0.0 } else { exp_of(s, gamma) / s };

@@ -10,7 +10,8 @@
 //! | [`Method::Rational`] | `rational` | the backend's symbolic analysis | one factorization per pole (or one, multi-shift) |
 //!
 //! **Adding a method** = a module here implementing `PreparedMethod` + a [`Method`] variant
-//! and its arm in `Method::prepare`. The variant's prepared data lives in the module's type,
+//! with its line in the `registry!` (names, help, default parameters) and its arm in
+//! `Method::prepare_connected`. The variant's prepared data lives in the module's type,
 //! so no match can meet an impossible (method, data) pair.
 
 mod backward_euler;
@@ -76,9 +77,85 @@ pub enum Method {
     },
 }
 
+/// Eigenpairs of [`Method::Spectral`] when none are given (the command line's default is
+/// min(this, n)).
+pub const DEFAULT_SPECTRAL_EIGENPAIRS: usize = 200;
+
+wfem_choice::registry! {
+    Method as "heat method" {
+        Method::Fast(_) = Method::fast() => "fast":
+            "shift-and-invert rational Krylov with one real factorization per t (beyond the paper; exact to ≈1e−12 and the quickest: the default)",
+        Method::Rational { .. } = Method::rational(shifted_solve::DEFAULT_DEGREE) => "rational" ["chebyshev", "cram"]:
+            "the paper's rational Chebyshev approximation, r shifted sparse solves (Eq. (11)–(13))",
+        Method::Spectral { .. } = Method::spectral(DEFAULT_SPECTRAL_EIGENPAIRS) => "spectral" ["truncated"]:
+            "the truncated spectral sum of the k smallest eigenpairs (Eq. (8)); inaccurate at small t",
+        Method::Dense = Method::Dense => "dense":
+            "all eigenpairs by a dense generalized eigendecomposition (small meshes; the exact reference)",
+        Method::Taylor = Method::Taylor => "taylor":
+            "one first-order Taylor step B g = (B − tL) f (Eq. (9)); inaccurate except at tiny t",
+        Method::BackwardEuler = Method::BackwardEuler => "backward-euler" ["implicit-euler"]:
+            "one backward-Euler step (B + tL) g = B f; inaccurate except at tiny t",
+    }
+}
+
+/// Options a caller may give beside a method's name (command-line flags, keyword arguments):
+/// each belongs to one method, and [`Method::with_options`] refuses it for another.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MethodOptions {
+    /// Degree of the rational approximation ([`Method::Rational`]).
+    pub degree: Option<usize>,
+    /// Backend of the shifted solves ([`Method::Rational`]).
+    pub backend: Option<Backend>,
+    /// Number of eigenpairs ([`Method::Spectral`]).
+    pub eigenpairs: Option<usize>,
+}
+
+impl MethodOptions {
+    /// Whether an option of the rational method is given (a method left unnamed is then the
+    /// rational one).
+    pub fn names_rational(&self) -> bool {
+        self.degree.is_some() || self.backend.is_some()
+    }
+}
+
 impl Method {
+    /// This method with `options` applied.
+    ///
+    /// # Errors
+    /// [`HeatError::MisplacedOption`] for an option that does not belong to this method (it is
+    /// refused, not ignored). (A degree that is not shipped is refused when the method is
+    /// prepared, naming the shipped ones.)
+    pub fn with_options(self, options: &MethodOptions) -> Result<Self, HeatError> {
+        let misplaced = |option: &'static str, owner: Method| HeatError::MisplacedOption {
+            option,
+            method: wfem_choice::Choice::name(&self),
+            owner: wfem_choice::Choice::name(&owner),
+        };
+        let rational = !matches!(self, Method::Rational { .. });
+        if options.degree.is_some() && rational {
+            return Err(misplaced("degree", Method::rational(shifted_solve::DEFAULT_DEGREE)));
+        }
+        if options.backend.is_some() && rational {
+            return Err(misplaced("backend", Method::rational(shifted_solve::DEFAULT_DEGREE)));
+        }
+        if options.eigenpairs.is_some() && !matches!(self, Method::Spectral { .. }) {
+            return Err(misplaced("eigenpairs", Method::spectral(DEFAULT_SPECTRAL_EIGENPAIRS)));
+        }
+        Ok(match self {
+            Method::Rational { degree, backend } => Method::Rational {
+                degree: options.degree.unwrap_or(degree),
+                backend: options.backend.unwrap_or(backend),
+            },
+            Method::Spectral { k, eigen } => Method::Spectral {
+                k: options.eigenpairs.unwrap_or(k),
+                eigen,
+            },
+            other => other,
+        })
+    }
+
     /// The rational Chebyshev method of `degree` with the direct complex-symmetric LDLᵀ backend
-    /// (NUMERICS §3.3d; about half the work of the pivoted LU, residual reported per pole).
+    /// (docs/NUMERICS.md §3.3d; about half the work of the pivoted LU, residual reported per pole).
     pub fn rational(degree: usize) -> Self {
         Method::Rational {
             degree,
@@ -97,18 +174,6 @@ impl Method {
     /// The fast exact path with its default parameters.
     pub fn fast() -> Self {
         Method::Fast(KrylovParams::default())
-    }
-
-    /// A short name (`dense`, `spectral`, `taylor`, `backward-euler`, `fast`, `rational`).
-    pub fn name(&self) -> &'static str {
-        match self {
-            Method::Dense => "dense",
-            Method::Spectral { .. } => "spectral",
-            Method::Taylor => "taylor",
-            Method::BackwardEuler => "backward-euler",
-            Method::Fast(_) => "fast",
-            Method::Rational { .. } => "rational",
-        }
     }
 
     /// Whether the method evaluates K_t exactly up to a stated tolerance (dense, fast,
@@ -161,8 +226,8 @@ pub(crate) trait PreparedMethod: Send + Sync + Debug {
     /// caller, so F is M-orthogonal to it).
     fn apply(&self, ops: &Operators, f: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError>;
 
-    /// The kernel matrix applied to a block, `H_t G = K_t M⁻¹ G = X D_t Xᵀ G` (its columns are
-    /// the heat-kernel functions `H_t(·, p_i)` for G = e_i; NUMERICS §1). By default `M⁻¹G`
+    /// The kernel matrix applied to a block, `K̃_t G = K_t M⁻¹ G = X D_t Xᵀ G` (its columns are
+    /// the heat-kernel functions `K̃_t(·, p_i)` for G = e_i; docs/NUMERICS.md §1). By default `M⁻¹G`
     /// (one Cholesky of M, cached) followed by [`Self::apply`]; methods that can avoid the
     /// solve with M do.
     fn apply_kernel_matrix(&self, ops: &Operators, g: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
@@ -171,7 +236,7 @@ pub(crate) trait PreparedMethod: Send + Sync + Debug {
         self.apply(ops, x.as_ref(), t)
     }
 
-    /// `K_t F` (or `H_t F` with `kernel_matrix`) for every t of `times`, with a per-t error
+    /// `K_t F` (or `K̃_t F` with `kernel_matrix`) for every t of `times`, with a per-t error
     /// estimate where the method has one. By default one evaluation per t; methods that can
     /// serve many times from one factorization do.
     fn apply_times(&self, ops: &Operators, f: MatRef<'_, f64>, times: &[f64], kernel_matrix: bool) -> TimesResult {

@@ -50,7 +50,7 @@ impl PreparedMethod for Rational {
         Ok(self.factors(t)?.apply(f)?.0)
     }
 
-    /// `H_t G ≈ c0 M⁻¹G + 2 Re Σ_j c_j (tL − z_j M)⁻¹ G` (NUMERICS §1): the resolvent sum needs
+    /// `K̃_t G ≈ c0 M⁻¹G + 2 Re Σ_j c_j (tL − z_j M)⁻¹ G` (docs/NUMERICS.md §1): the resolvent sum needs
     /// no solve with M; the tiny `c0 M⁻¹G` term (|c0| = E_n) is kept, through the context's
     /// Cholesky of M, so the result matches `K_t M⁻¹ G` to the method's accuracy.
     fn apply_kernel_matrix(&self, ops: &Operators, g: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {

@@ -12,7 +12,7 @@ use wfem_heat::rkhs::{
     diffusion_embeddings, heat_inner_product, inverse_cg, inverse_spectral, reproducing_embedding,
     reproducing_kernel_apply, InverseParams,
 };
-use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KernelKind, Method};
+use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, Mass, Method};
 
 /// Small meshes (area 4π): the brief's icosphere(2), irregular_sphere(2, 5.6), grid(15, 15).
 fn small_meshes() -> Vec<(&'static str, FemOperators)> {
@@ -80,7 +80,7 @@ fn semigroup_and_commutativity_to_the_rational_error() {
         let d = HeatKernel::new(
             &ops,
             HeatParams {
-                kernel: KernelKind::Wfem,
+                mass: Mass::Consistent,
                 method: Method::Dense,
             },
         )
@@ -115,7 +115,7 @@ fn heat_equation_by_central_differences() {
     let dk = HeatKernel::new(
         &ops,
         HeatParams {
-            kernel: KernelKind::Wfem,
+            mass: Mass::Consistent,
             method: Method::Dense,
         },
     )

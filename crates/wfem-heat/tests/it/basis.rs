@@ -9,10 +9,10 @@ use wfem_heat::approx::{
     Coefficients, Persistence,
 };
 use wfem_heat::basis::{canonical_basis, canonical_limit};
-use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KernelKind, Method};
+use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, Mass, Method};
 
-fn kernel(ops: &mesh_fem::FemOperators, kind: KernelKind, method: Method) -> HeatKernel {
-    HeatKernel::new(ops, HeatParams { kernel: kind, method }).unwrap()
+fn kernel(ops: &mesh_fem::FemOperators, kind: Mass, method: Method) -> HeatKernel {
+    HeatKernel::new(ops, HeatParams { mass: kind, method }).unwrap()
 }
 
 fn col(m: &Mat<f64>, j: usize) -> Vec<f64> {
@@ -26,8 +26,8 @@ fn canonical_basis_matches_dense_reference() {
     for (name, _, ops) in meshes() {
         let n = ops.stiffness.nrows();
         let anchors = [0u32, (n / 3) as u32, (n - 1) as u32];
-        let rational = kernel(&ops, KernelKind::Wfem, Method::rational(shifted_solve::DEFAULT_DEGREE));
-        let dense = kernel(&ops, KernelKind::Wfem, Method::Dense);
+        let rational = kernel(&ops, Mass::Consistent, Method::rational(shifted_solve::DEFAULT_DEGREE));
+        let dense = kernel(&ops, Mass::Consistent, Method::Dense);
         for t in [1e-3, 0.05, 1.0] {
             let block = canonical_basis(&rational, &anchors, t).unwrap();
             let reference = canonical_basis(&dense, &anchors, t).unwrap();
@@ -52,7 +52,7 @@ fn canonical_basis_matches_dense_reference() {
 fn canonical_basis_converges_to_the_b_mean() {
     for (name, _, ops) in meshes() {
         let n = ops.stiffness.nrows();
-        for kind in [KernelKind::Wfem, KernelKind::Lumped] {
+        for kind in [Mass::Consistent, Mass::Lumped(Default::default())] {
             let k = kernel(&ops, kind, Method::rational(shifted_solve::DEFAULT_DEGREE));
             let anchors = [1u32, (n / 2) as u32];
             let limits = canonical_limit(&k, &anchors).unwrap();
@@ -92,7 +92,7 @@ fn canonical_basis_converges_to_the_b_mean() {
 #[test]
 fn canonical_basis_rejects_bad_anchors() {
     let (_, ops) = ops_of(&generate::icosphere(1));
-    let k = kernel(&ops, KernelKind::Wfem, Method::rational(shifted_solve::DEFAULT_DEGREE));
+    let k = kernel(&ops, Mass::Consistent, Method::rational(shifted_solve::DEFAULT_DEGREE));
     assert!(matches!(
         canonical_basis(&k, &[0, 42], 0.1),
         Err(HeatError::InvalidParameter { name: "anchors", .. })
@@ -131,7 +131,7 @@ fn kernel_diagonals_match_the_spectral_sums() {
     for (name, _, ops) in meshes() {
         let n = ops.stiffness.nrows();
         let all: Vec<u32> = (0..n as u32).collect();
-        for kind in [KernelKind::Wfem, KernelKind::Lumped] {
+        for kind in [Mass::Consistent, Mass::Lumped(Default::default())] {
             let k = kernel(&ops, kind, Method::rational(shifted_solve::DEFAULT_DEGREE));
             let dense = Eigenbasis::dense(&ops.stiffness, k.mass()).unwrap();
             let t = 0.02;
@@ -153,7 +153,7 @@ fn kernel_diagonals_match_the_spectral_sums() {
                     value[i]
                 );
             }
-            if kind == KernelKind::Lumped {
+            if kind == Mass::Lumped(Default::default()) {
                 for i in 0..n {
                     let d = ops.lumped_diagonal[i];
                     assert!((value[i] * d - diag[i]).abs() < 1e-10 * diag[i], "{name} vertex {i}");
@@ -231,7 +231,7 @@ fn noisy_field(mesh: &mesh_fem::TriMesh, amplitude: f64) -> (Vec<f64>, Vec<f64>)
 fn global_component_is_linear_and_matches_columns() {
     let (mesh, ops) = ops_of(&generate::irregular_sphere(3, 5.6));
     let n = mesh.n_vertices();
-    let k = kernel(&ops, KernelKind::Wfem, Method::rational(shifted_solve::DEFAULT_DEGREE));
+    let k = kernel(&ops, Mass::Consistent, Method::rational(shifted_solve::DEFAULT_DEGREE));
     let (f, g) = noisy_field(&mesh, 0.3);
     let anchors: Vec<u32> = vec![3, 17, 200, 411, 600];
     let t = 0.05;
@@ -291,7 +291,7 @@ fn global_component_is_linear_and_matches_columns() {
 #[test]
 fn feature_approximation_separates_noise() {
     let (mesh, ops) = ops_of(&generate::icosphere(3));
-    let k = kernel(&ops, KernelKind::Wfem, Method::rational(shifted_solve::DEFAULT_DEGREE));
+    let k = kernel(&ops, Mass::Consistent, Method::rational(shifted_solve::DEFAULT_DEGREE));
     let amplitude = 0.3;
     let (smooth, noise) = noisy_field(&mesh, amplitude);
     let f: Vec<f64> = smooth.iter().zip(&noise).map(|(a, b)| a + b).collect();
@@ -351,7 +351,7 @@ fn auto_diffusion_features_are_strict_extrema() {
     let (mesh, ops) = ops_of(&generate::bumpy(3));
     let n = mesh.n_vertices();
     let basis = Eigenbasis::partial(&ops.stiffness, &ops.mass, 60, &EigenParams::default()).unwrap();
-    // The matrix-diagonal auto-diffusion map Σ_k e^{−λ_k t} x_k(i)(Bx_k)(i).
+    // The operator-diagonal auto-diffusion map Σ_k e^{−λ_k t} x_k(i)(Bx_k)(i).
     let t = 20.0 / basis.values[59];
     let mut hks = vec![0.0; n];
     for (k, &lambda) in basis.values.iter().enumerate() {
@@ -392,7 +392,7 @@ fn auto_diffusion_features_are_strict_extrema() {
 #[test]
 fn feature_approximation_rejects_bad_parameters() {
     let (mesh, ops) = ops_of(&generate::icosphere(2));
-    let k = kernel(&ops, KernelKind::Wfem, Method::rational(shifted_solve::DEFAULT_DEGREE));
+    let k = kernel(&ops, Mass::Consistent, Method::rational(shifted_solve::DEFAULT_DEGREE));
     let f = x_coordinate(&mesh);
     let bad = |p: ApproxParams| feature_approximation(&mesh, &k, &f, &p);
     for (params, name) in [
@@ -462,7 +462,7 @@ fn approx_default_is_a_meaningful_global_component() {
     assert_eq!(Coefficients::default(), Coefficients::LeastSquares);
     let (mesh, ops) = ops_of(&generate::irregular_sphere(3, 5.6));
     let n = mesh.n_vertices();
-    let k = kernel(&ops, KernelKind::Wfem, Method::fast());
+    let k = kernel(&ops, Mass::Consistent, Method::fast());
     let (smooth, noise) = noisy_field(&mesh, 0.1);
     let f: Vec<f64> = smooth.iter().zip(&noise).map(|(a, b)| a + b).collect();
     let anchors: Vec<u32> = vec![3, 17, 200, 411, 600];

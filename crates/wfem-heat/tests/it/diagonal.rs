@@ -4,14 +4,14 @@ use crate::common;
 use common::*;
 use mesh_fem::generate;
 use wfem_heat::diagonal::DiagonalMethod;
-use wfem_heat::{DiagonalParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KernelDiagonal, KernelKind, Operators};
+use wfem_heat::{DiagonalParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KernelDiagonal, Mass, Operators};
 
 #[test]
 fn probed_diagonal_matches_dense_where_truncation_fails() {
     let (_, ops) = ops_of(&generate::icosphere(4));
     let n = ops.n();
     let dense = Eigenbasis::dense(&ops.stiffness, &ops.mass).unwrap();
-    // B X, for the matrix diagonal Σ_k e^{−λ_k t} x_k(i)(Bx_k)(i).
+    // B X, for the operator diagonal Σ_k e^{−λ_k t} x_k(i)(Bx_k)(i).
     let mut bx = faer::Mat::<f64>::zeros(n, n);
     faer::sparse::linalg::matmul::sparse_dense_matmul(
         bx.as_mut(),
@@ -29,7 +29,7 @@ fn probed_diagonal_matches_dense_where_truncation_fails() {
     };
     let series = kernel.diagonal(&times, KernelDiagonal::KernelValue, &probing).unwrap();
     let matrix = kernel
-        .diagonal(&times, KernelDiagonal::MatrixDiagonal, &probing)
+        .diagonal(&times, KernelDiagonal::OperatorDiagonal, &probing)
         .unwrap();
     eprintln!("n = {n}: {:?}", series.info);
     assert!(
@@ -77,7 +77,7 @@ fn probed_diagonal_matches_dense_where_truncation_fails() {
             &[1e-3],
             KernelDiagonal::KernelValue,
             &DiagonalParams {
-                method: DiagonalMethod::Exact,
+                method: DiagonalMethod::UnitColumns,
                 ..Default::default()
             },
         )
@@ -122,7 +122,7 @@ fn diagonal_at_huge_times_is_one_over_area() {
             &[1e300],
             KernelDiagonal::KernelValue,
             &DiagonalParams {
-                method: DiagonalMethod::Exact,
+                method: DiagonalMethod::UnitColumns,
                 ..Default::default()
             },
         )
@@ -182,11 +182,11 @@ fn selected_inversion_diagonal_matches_dense_at_every_time() {
     let (_, sphere) = ops_of(&generate::icosphere(3));
     let (_, two) = ops_of(&two_components());
     for (name, ops) in [("icosphere", &sphere), ("two components", &two)] {
-        for kind in [KernelKind::Wfem, KernelKind::Lumped] {
+        for kind in [Mass::Consistent, Mass::Lumped(Default::default())] {
             let kernel = HeatKernel::new(
                 ops,
                 HeatParams {
-                    kernel: kind,
+                    mass: kind,
                     ..Default::default()
                 },
             )
@@ -198,7 +198,7 @@ fn selected_inversion_diagonal_matches_dense_at_every_time() {
             let times = [1e-4, 1e-2, 1.0, 1e300];
             let value = kernel.diagonal(&times, KernelDiagonal::KernelValue, &params).unwrap();
             let matrix = kernel
-                .diagonal(&times, KernelDiagonal::MatrixDiagonal, &params)
+                .diagonal(&times, KernelDiagonal::OperatorDiagonal, &params)
                 .unwrap();
             assert_eq!((value.info.columns, value.info.hops), (0, None));
             for (c, &t) in times.iter().enumerate() {

@@ -1,6 +1,6 @@
 //! Diffusion distances through the rational method against the spectral formulas with the full
 //! dense spectrum: wFEM `Σ_k e^{−λ_k t}((Bx_k)_i − (Bx_k)_j)²` (Eq. (18b)) and linear
-//! `Σ_k e^{−2λ_k t}(x_k(i) − x_k(j))²` (NUMERICS §1).
+//! `Σ_k e^{−2λ_k t}(x_k(i) − x_k(j))²` (docs/NUMERICS.md §1).
 
 use crate::common;
 

@@ -15,7 +15,7 @@ use common::{dot, matvec, rel_err, unit};
 use faer::sparse::SparseColMat;
 use mesh_fem::{assemble, generate, AssemblyParams, FemOperators, TriMesh};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
-use wfem_heat::{EigenParams, Eigenbasis, HeatKernel, HeatParams, KernelKind, KrylovParams, Method};
+use wfem_heat::{EigenParams, Eigenbasis, HeatKernel, HeatParams, KrylovParams, Mass, Method};
 
 const REL_TOL: f64 = 1e-10;
 const ABS_FLOOR: f64 = 1e-12;
@@ -137,11 +137,11 @@ impl Reference {
     }
 }
 
-fn mass_of(ops: &FemOperators, kind: KernelKind) -> SparseColMat<usize, f64> {
+fn mass_of(ops: &FemOperators, kind: Mass) -> SparseColMat<usize, f64> {
     match kind {
-        KernelKind::Wfem => ops.mass.clone(),
-        KernelKind::Lumped => ops.lumped_mass(),
-        KernelKind::Linear => ops.identity_mass(),
+        Mass::Consistent => ops.mass.clone(),
+        Mass::Lumped(_) => ops.lumped_mass(),
+        Mass::Identity => ops.identity_mass(),
     }
 }
 
@@ -191,7 +191,7 @@ fn methods(n: usize) -> Vec<(&'static str, Method)> {
 
 /// Checks every method of `methods` and both kinds against the reference at every t; returns
 /// the worst ratio error / bound seen (for the messages).
-fn check_against_reference(label: &str, ops: &FemOperators, times: &[f64], kinds: &[KernelKind]) -> f64 {
+fn check_against_reference(label: &str, ops: &FemOperators, times: &[f64], kinds: &[Mass]) -> f64 {
     let n = ops.n();
     let mut worst = 0.0f64;
     let mut spectral_checked = 0;
@@ -217,7 +217,7 @@ fn check_against_reference(label: &str, ops: &FemOperators, times: &[f64], kinds
             let kernel = HeatKernel::new(
                 ops,
                 HeatParams {
-                    kernel: kind,
+                    mass: kind,
                     method: method.clone(),
                 },
             )
@@ -251,7 +251,7 @@ fn check_against_reference(label: &str, ops: &FemOperators, times: &[f64], kinds
     worst
 }
 
-const KINDS: [KernelKind; 2] = [KernelKind::Wfem, KernelKind::Lumped];
+const KINDS: [Mass; 2] = [Mass::Consistent, Mass::Lumped(mesh_fem::Lumping::Barycentric)];
 
 fn times_relative(mesh: &TriMesh, factors: &[f64]) -> Vec<f64> {
     let h2 = mean_edge_length(mesh).powi(2);
@@ -278,7 +278,7 @@ fn extreme_scales_match_reference_and_are_covariant() {
                 Method::Fast(KrylovParams::default()),
             ] {
                 let params = HeatParams {
-                    kernel: kind,
+                    mass: kind,
                     method: method.clone(),
                 };
                 let base = HeatKernel::new(&base_ops, params.clone()).unwrap();
@@ -441,7 +441,7 @@ fn several_connected_components_stay_block_diagonal() {
             Method::Fast(KrylovParams::default()),
         ] {
             let params = HeatParams {
-                kernel: kind,
+                mass: kind,
                 method: method.clone(),
             };
             let kernel = HeatKernel::new(&ops, params.clone()).unwrap();
@@ -507,7 +507,7 @@ fn open_boundaries_conserve_mass() {
                 let kernel = HeatKernel::new(
                     &ops,
                     HeatParams {
-                        kernel: kind,
+                        mass: kind,
                         method: method.clone(),
                     },
                 )
@@ -632,11 +632,11 @@ fn issue_16_huge_times_give_the_mean() {
         .iter()
         .map(|p| p[0] + 2.0 * p[1] * p[2] + 3.0)
         .collect();
-    for kind in [KernelKind::Wfem, KernelKind::Lumped, KernelKind::Linear] {
+    for kind in [Mass::Consistent, Mass::Lumped(Default::default()), Mass::Identity] {
         let mass = match kind {
-            KernelKind::Wfem => ops.mass.clone(),
-            KernelKind::Lumped => ops.lumped_mass(),
-            KernelKind::Linear => ops.identity_mass(),
+            Mass::Consistent => ops.mass.clone(),
+            Mass::Lumped(_) => ops.lumped_mass(),
+            Mass::Identity => ops.identity_mass(),
         };
         let m1 = matvec(&mass, &vec![1.0; n]);
         let mean = f.iter().zip(&m1).map(|(a, b)| a * b).sum::<f64>() / m1.iter().sum::<f64>();
@@ -649,7 +649,7 @@ fn issue_16_huge_times_give_the_mean() {
             let kernel = HeatKernel::new(
                 &ops,
                 HeatParams {
-                    kernel: kind,
+                    mass: kind,
                     method: method.clone(),
                 },
             )
@@ -693,14 +693,13 @@ fn issue_16_scaled_meshes_for_every_backend() {
         let mesh = base.scaled(alpha).unwrap();
         let ops = assemble(&mesh, &AssemblyParams::default()).unwrap();
         let t = t0 * alpha * alpha;
-        let mut methods: Vec<(String, Method)> = shifted_solve::Backend::NAMES
-            .iter()
+        let mut methods: Vec<(String, Method)> = <shifted_solve::Backend as wfem_choice::Choice>::names()
             .map(|name| {
                 (
                     format!("rational/{name}"),
                     Method::Rational {
                         degree: 16,
-                        backend: shifted_solve::Backend::from_name(name).unwrap(),
+                        backend: <shifted_solve::Backend as wfem_choice::Choice>::parse(name).unwrap(),
                     },
                 )
             })
@@ -753,7 +752,7 @@ fn obtuse_lattice(h: f64) -> TriMesh {
 
 /// Issue #16: near-degenerate meshes either give the right answer or are refused, naming a
 /// vertex. On the obtuse lattice a 60-digit evaluation of the same double-precision matrices
-/// (NUMERICS-style reference, recorded in `Conditioning`'s docs) gave 1e−9 errors at h = 1e−4,
+/// (a 60-digit reference, recorded in `Conditioning`'s docs) gave 1e−9 errors at h = 1e−4,
 /// 3e−4 at h = 1e−7 and 91 % at h = 1e−10 (the assembled L is indefinite there) for every
 /// method; before, h = 1e−10 returned values of ±4.7e268 (dense) or disagreeing answers.
 #[test]

@@ -6,7 +6,7 @@ use crate::common;
 use common::*;
 use mesh_fem::{generate, FemOperators};
 use shifted_solve::{Backend, MinresParams, Preconditioner, SolveError};
-use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KernelKind, KrylovParams, Method};
+use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KrylovParams, Mass, Method};
 
 fn small() -> FemOperators {
     ops_of(&generate::icosphere(2)).1
@@ -40,7 +40,7 @@ fn minres_non_convergence_is_reported_not_replaced() {
     let kernel = HeatKernel::new(
         &ops,
         HeatParams {
-            kernel: KernelKind::Wfem,
+            mass: Mass::Consistent,
             method: Method::Rational {
                 degree: 16,
                 backend: Backend::Minres(params),
@@ -81,7 +81,7 @@ fn eigensolver_non_convergence_carries_pairs_and_does_not_fall_back() {
     let err = HeatKernel::new(
         &ops,
         HeatParams {
-            kernel: KernelKind::Wfem,
+            mass: Mass::Consistent,
             method: Method::Spectral { k: 36, eigen },
         },
     )
@@ -114,12 +114,12 @@ fn every_method_refuses(label: &str, edit: impl Fn(&mut FemOperators), row: usiz
     let mut ops = small();
     edit(&mut ops);
     let f = vec![1.0; ops.n()];
-    for kind in [KernelKind::Wfem, KernelKind::Lumped] {
+    for kind in [Mass::Consistent, Mass::Lumped(Default::default())] {
         for method in all_methods() {
             let built = HeatKernel::new(
                 &ops,
                 HeatParams {
-                    kernel: kind,
+                    mass: kind,
                     method: method.clone(),
                 },
             );

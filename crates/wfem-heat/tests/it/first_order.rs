@@ -4,18 +4,18 @@
 use crate::common;
 use common::*;
 use mesh_fem::generate;
-use wfem_heat::{HeatKernel, HeatParams, KernelKind, Method};
+use wfem_heat::{HeatKernel, HeatParams, Mass, Method};
 
 #[test]
 fn taylor_and_backward_euler_local_error_is_second_order() {
     let (mesh, ops) = ops_of(&generate::icosphere(3));
     // A smooth function (spherical-harmonic degrees ≤ 2) so that tλ ≪ 1 on its support.
     let f: Vec<f64> = mesh.positions().iter().map(|p| p[0] + p[1] * p[2]).collect();
-    for kind in [KernelKind::Wfem, KernelKind::Lumped] {
+    for kind in [Mass::Consistent, Mass::Lumped(Default::default())] {
         let dense = HeatKernel::new(
             &ops,
             HeatParams {
-                kernel: kind,
+                mass: kind,
                 method: Method::Dense,
             },
         )
@@ -24,7 +24,7 @@ fn taylor_and_backward_euler_local_error_is_second_order() {
             let k = HeatKernel::new(
                 &ops,
                 HeatParams {
-                    kernel: kind,
+                    mass: kind,
                     method: method.clone(),
                 },
             )

@@ -2,16 +2,16 @@
 //! reference and on the fast path, plus the real-mesh check.
 use crate::common;
 use common::*;
-use wfem_heat::{HeatKernel, HeatParams, KernelKind, Method};
+use wfem_heat::{HeatKernel, HeatParams, Mass, Method};
 
-fn kernels(ops: &mesh_fem::FemOperators, kind: KernelKind) -> Vec<(&'static str, HeatKernel)> {
+fn kernels(ops: &mesh_fem::FemOperators, kind: Mass) -> Vec<(&'static str, HeatKernel)> {
     vec![
         (
             "dense",
             HeatKernel::new(
                 ops,
                 HeatParams {
-                    kernel: kind,
+                    mass: kind,
                     method: Method::Dense,
                 },
             )
@@ -22,7 +22,7 @@ fn kernels(ops: &mesh_fem::FemOperators, kind: KernelKind) -> Vec<(&'static str,
             HeatKernel::new(
                 ops,
                 HeatParams {
-                    kernel: kind,
+                    mass: kind,
                     method: Method::rational(shifted_solve::DEFAULT_DEGREE),
                 },
             )
@@ -44,7 +44,7 @@ fn conservation_constants_and_self_adjointness() {
             .map(|p| (3.0 * p[1]).sin() + p[2] * p[2])
             .collect();
         let ones = vec![1.0; n];
-        for kind in [KernelKind::Wfem, KernelKind::Lumped, KernelKind::Linear] {
+        for kind in [Mass::Consistent, Mass::Lumped(Default::default()), Mass::Identity] {
             for (method, k) in kernels(&ops, kind) {
                 let m = k.mass();
                 for t in [1e-3, 1e-1, 2.0] {
@@ -79,7 +79,7 @@ fn conservation_constants_and_self_adjointness() {
 fn long_time_limit_is_the_mean() {
     for (name, _, ops) in meshes() {
         let n = ops.n();
-        for kind in [KernelKind::Wfem, KernelKind::Lumped, KernelKind::Linear] {
+        for kind in [Mass::Consistent, Mass::Lumped(Default::default()), Mass::Identity] {
             for (method, k) in kernels(&ops, kind) {
                 let i = n / 2;
                 let e = unit(n, i);
@@ -89,7 +89,7 @@ fn long_time_limit_is_the_mean() {
                 // λ₂ ≥ 0.7 on these meshes of area 4π, so e^{−60λ₂} < 1e−18. The linear
                 // kernel (M = I) runs on the time scale of L itself, whose eigenvalues are
                 // smaller by the area per vertex A/n: stretch t by n/A.
-                let t = if kind == KernelKind::Linear {
+                let t = if kind == Mass::Identity {
                     60.0 * n as f64 / ops.area()
                 } else {
                     60.0
@@ -112,7 +112,7 @@ fn fast_path_on_real_mesh() {
     let dense = HeatKernel::new(
         &ops,
         HeatParams {
-            kernel: KernelKind::Wfem,
+            mass: Mass::Consistent,
             method: Method::Dense,
         },
     )
@@ -181,7 +181,7 @@ fn apply_many_matches_apply_for_every_method() {
         let k = HeatKernel::new(
             &ops,
             HeatParams {
-                kernel: KernelKind::Wfem,
+                mass: Mass::Consistent,
                 method: method.clone(),
             },
         )
@@ -203,7 +203,7 @@ fn factor_cache_follows_t() {
     let f = x_coordinate(&mesh);
     for method in [Method::BackwardEuler, Method::rational(shifted_solve::DEFAULT_DEGREE)] {
         let params = HeatParams {
-            kernel: KernelKind::Wfem,
+            mass: Mass::Consistent,
             method,
         };
         let k = HeatKernel::new(&ops, params.clone()).unwrap();

@@ -10,10 +10,14 @@
 use faer::Mat;
 use mesh_fem::{assemble, generate, AssemblyParams, FemOperators, TriMesh};
 use shifted_solve::{Backend, KrylovParams, MinresParams};
-use wfem_heat::{HeatKernel, HeatParams, KernelKind, Method};
+use wfem_heat::{HeatKernel, HeatParams, Mass, Method};
 
 const TIMES: [f64; 6] = [1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0];
-const KERNELS: [KernelKind; 3] = [KernelKind::Wfem, KernelKind::Lumped, KernelKind::Linear];
+const KERNELS: [Mass; 3] = [
+    Mass::Consistent,
+    Mass::Lumped(mesh_fem::Lumping::Barycentric),
+    Mass::Identity,
+];
 
 fn four_pi(mesh: TriMesh) -> TriMesh {
     mesh.with_area(4.0 * std::f64::consts::PI).unwrap()
@@ -36,11 +40,11 @@ fn check(ops: &FemOperators, positions: &[[f64; 3]], method: Method, label: &str
     let mut e = vec![0.0; n];
     e[n / 3] = 1.0;
     let mut worst: f64 = 0.0;
-    for kernel in KERNELS {
+    for mass in KERNELS {
         let dense = HeatKernel::new(
             ops,
             HeatParams {
-                kernel,
+                mass,
                 method: Method::Dense,
             },
         )
@@ -48,7 +52,7 @@ fn check(ops: &FemOperators, positions: &[[f64; 3]], method: Method, label: &str
         let rational = HeatKernel::new(
             ops,
             HeatParams {
-                kernel,
+                mass,
                 method: method.clone(),
             },
         )
@@ -59,10 +63,7 @@ fn check(ops: &FemOperators, positions: &[[f64; 3]], method: Method, label: &str
                 let g = rational.apply(f, t).unwrap();
                 let err = g.iter().zip(&g_ref).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
                 let bound = 1e-11 * max_abs(&g_ref) + 1e-13 * max_abs(f);
-                assert!(
-                    err <= bound,
-                    "{label} {kernel:?} t={t}: error {err:e} > bound {bound:e}"
-                );
+                assert!(err <= bound, "{label} {mass:?} t={t}: error {err:e} > bound {bound:e}");
                 worst = worst.max(err / bound);
             }
         }
@@ -135,7 +136,7 @@ fn lower_degrees_reach_their_documented_error() {
     let dense = HeatKernel::new(
         &ops,
         HeatParams {
-            kernel: KernelKind::Wfem,
+            mass: Mass::Consistent,
             method: Method::Dense,
         },
     )
@@ -150,7 +151,7 @@ fn lower_degrees_reach_their_documented_error() {
         let k = HeatKernel::new(
             &ops,
             HeatParams {
-                kernel: KernelKind::Wfem,
+                mass: Mass::Consistent,
                 method: Method::rational(degree),
             },
         )
@@ -221,7 +222,7 @@ fn rational_rejects_unknown_degree_with_a_typed_error() {
     let err = HeatKernel::new(
         &ops,
         HeatParams {
-            kernel: KernelKind::Wfem,
+            mass: Mass::Consistent,
             method: Method::rational(99),
         },
     )

@@ -4,13 +4,13 @@ use crate::common;
 use common::*;
 use mesh_fem::{assemble, generate, AssemblyParams};
 use wfem_heat::scale::{largest_eigenvalue, LargestEigenParams, Normalization, NormalizedHeatKernel};
-use wfem_heat::{Eigenbasis, HeatError, HeatKernel, HeatParams, KernelKind, Method, Operators};
+use wfem_heat::{Eigenbasis, HeatError, HeatKernel, HeatParams, Mass, Method, Operators};
 
-fn mass_of(ops: &mesh_fem::FemOperators, kind: KernelKind) -> faer::sparse::SparseColMat<usize, f64> {
+fn mass_of(ops: &mesh_fem::FemOperators, kind: Mass) -> faer::sparse::SparseColMat<usize, f64> {
     match kind {
-        KernelKind::Wfem => ops.mass.clone(),
-        KernelKind::Lumped => ops.lumped_mass(),
-        KernelKind::Linear => ops.identity_mass(),
+        Mass::Consistent => ops.mass.clone(),
+        Mass::Lumped(_) => ops.lumped_mass(),
+        Mass::Identity => ops.identity_mass(),
     }
 }
 
@@ -27,7 +27,7 @@ fn scale_covariance_without_normalisation() {
     let e = unit(n, 17);
     for method in [Method::rational(shifted_solve::DEFAULT_DEGREE), Method::Dense] {
         let params = HeatParams {
-            kernel: KernelKind::Wfem,
+            mass: Mass::Consistent,
             method: method.clone(),
         };
         let base = HeatKernel::new(&ops, params.clone()).unwrap();
@@ -57,7 +57,7 @@ fn scale_covariance_without_normalisation() {
 #[test]
 fn largest_eigenvalue_matches_dense() {
     for (name, _, ops) in meshes() {
-        for kind in [KernelKind::Wfem, KernelKind::Lumped, KernelKind::Linear] {
+        for kind in [Mass::Consistent, Mass::Lumped(Default::default()), Mass::Identity] {
             let m = mass_of(&ops, kind);
             let dense = Eigenbasis::dense(&ops.stiffness, &m).unwrap();
             let expected = *dense.values.last().unwrap();

@@ -3,13 +3,13 @@
 use crate::common;
 use common::*;
 use mesh_fem::generate;
-use wfem_heat::{EigenParams, Eigenbasis, HeatKernel, HeatParams, KernelKind, Method};
+use wfem_heat::{EigenParams, Eigenbasis, HeatKernel, HeatParams, Mass, Method};
 
-fn mass_of(ops: &mesh_fem::FemOperators, kind: KernelKind) -> faer::sparse::SparseColMat<usize, f64> {
+fn mass_of(ops: &mesh_fem::FemOperators, kind: Mass) -> faer::sparse::SparseColMat<usize, f64> {
     match kind {
-        KernelKind::Wfem => ops.mass.clone(),
-        KernelKind::Lumped => ops.lumped_mass(),
-        KernelKind::Linear => ops.identity_mass(),
+        Mass::Consistent => ops.mass.clone(),
+        Mass::Lumped(_) => ops.lumped_mass(),
+        Mass::Identity => ops.identity_mass(),
     }
 }
 
@@ -19,7 +19,7 @@ fn mass_of(ops: &mesh_fem::FemOperators, kind: KernelKind) -> faer::sparse::Spar
 #[test]
 fn partial_eigenvalues_match_dense() {
     for (name, _, ops) in meshes() {
-        for kind in [KernelKind::Wfem, KernelKind::Lumped, KernelKind::Linear] {
+        for kind in [Mass::Consistent, Mass::Lumped(Default::default()), Mass::Identity] {
             let m = mass_of(&ops, kind);
             let dense = Eigenbasis::dense(&ops.stiffness, &m).unwrap();
             let k = 40;
@@ -63,7 +63,7 @@ fn spectral_with_all_pairs_equals_dense() {
     let spectral = HeatKernel::new(
         &ops,
         HeatParams {
-            kernel: KernelKind::Wfem,
+            mass: Mass::Consistent,
             method: Method::Spectral { k: n, eigen },
         },
     )
@@ -71,7 +71,7 @@ fn spectral_with_all_pairs_equals_dense() {
     let dense = HeatKernel::new(
         &ops,
         HeatParams {
-            kernel: KernelKind::Wfem,
+            mass: Mass::Consistent,
             method: Method::Dense,
         },
     )

@@ -38,7 +38,8 @@ from ._errors import (
     StoreError,
     WfemError,
 )
-from ._heat import KERNELS, METHODS, DiffusionDistance, HeatKernel
+from ._choices import choices
+from ._heat import KERNELS, MASSES, METHODS, DiffusionDistance, HeatKernel
 from ._mesh import (
     RepairReport,
     ValidationReport,
@@ -52,6 +53,7 @@ from ._mesh import (
 )
 from ._retrieval import (
     DESCRIPTORS,
+    PAPER_DESCRIPTORS,
     Hit,
     IndexStore,
     RetrievalIndex,
@@ -66,7 +68,7 @@ from ._retrieval import (
     pairwise_l1,
     sparse_features,
 )
-from ._spectral import HKS_CONVENTIONS, Eigenbasis, eigenbasis, hks, sihks
+from ._spectral import HKS_CONVENTIONS, HKS_METHODS, Eigenbasis, eigenbasis, hks, sihks
 from . import generate
 
 __version__: str = _wfem.__version__
@@ -90,15 +92,19 @@ __all__ = [
     "HeatKernel",
     "DiffusionDistance",
     "METHODS",
+    "MASSES",
     "KERNELS",
+    "choices",
     # spectrum and signatures
     "Eigenbasis",
     "eigenbasis",
     "hks",
     "sihks",
     "HKS_CONVENTIONS",
+    "HKS_METHODS",
     # retrieval
     "DESCRIPTORS",
+    "PAPER_DESCRIPTORS",
     "descriptors",
     "descriptor",
     "sparse_features",

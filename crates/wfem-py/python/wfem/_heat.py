@@ -7,15 +7,17 @@ from typing import Any, Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from . import _wfem
+from . import _choices, _wfem
 from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, to_csc
 
-__all__ = ["HeatKernel", "DiffusionDistance", "METHODS", "KERNELS"]
+__all__ = ["HeatKernel", "DiffusionDistance", "METHODS", "MASSES"]
 
-#: Names accepted by ``method=``.
-METHODS = ("fast", "rational", "spectral", "dense", "taylor", "backward-euler")
-#: Names accepted by ``kernel=`` (paper, Table 1).
-KERNELS = ("wfem", "lumped", "linear")
+#: Names accepted by ``method=`` (the library's registry; aliases are accepted too).
+METHODS = _choices.names("method")
+#: Names accepted by ``mass=`` (paper, Table 1): which mass M the kernel exp(−t M⁻¹L) uses.
+MASSES = _choices.names("mass")
+#: Older name of :data:`MASSES`.
+KERNELS = MASSES
 
 
 class HeatKernel:
@@ -23,12 +25,13 @@ class HeatKernel:
 
     ``K_t = exp(−t M⁻¹L) = X D_t Xᵀ M``, ``D_t = diag(e^{−λ_i t})`` (paper, Eq. (6)), where
     ``L x_i = λ_i M x_i``. **L is the cotangent stiffness, symmetric positive semidefinite**
-    (positive diagonal, ``L @ 1 = 0``; ``L = −igl.cotmatrix(V, F)``), and M the mass of the kernel:
+    (positive diagonal, ``L @ 1 = 0``; ``L = −igl.cotmatrix(V, F)``), and M the kernel's mass
+    (``mass=``, :data:`MASSES`; ``wfem.choices()["mass"]`` has the help of each):
 
-    * ``kernel="wfem"`` (default): the consistent mass B, the paper's wFEM kernel;
-    * ``kernel="lumped"``: the diagonal lumped mass D (barycentric, Eq. (7); ``lumped="voronoi"``
-      for mixed Voronoi areas), the kernel of most libraries;
-    * ``kernel="linear"``: M = I, the linear FEM kernel ``X D_t Xᵀ``.
+    * ``"consistent"`` (default; alias ``"wfem"``): the consistent mass B, the paper's wFEM kernel;
+    * ``"barycentric"`` (alias ``"lumped"``): the diagonal lumped mass D of Eq. (7), the kernel
+      of most libraries; ``"voronoi"``: D of mixed Voronoi areas (the paper's DHK1 kernel);
+    * ``"identity"`` (alias ``"linear"``): M = I, the linear FEM kernel ``X D_t Xᵀ``.
 
     Methods (``method=``):
 
@@ -45,9 +48,11 @@ class HeatKernel:
     Args:
         V, F: vertices (n, 3) and triangles (m, 3), or one object with ``.vertices``/``.faces``.
 
+    ``kernel=`` and ``lumped=`` are the older spellings of ``mass=`` (DeprecationWarning).
+
     Raises:
         MeshError: the mesh cannot be assembled (names the face or vertex).
-        InvalidInputError: an unknown kernel/method or a bad option.
+        InvalidInputError: an unknown mass/method or a bad option.
 
     Example::
 
@@ -62,23 +67,25 @@ class HeatKernel:
         self,
         V: Any,
         F: Any = None,
-        kernel: str = "wfem",
-        method: str = "fast",
+        mass: str | None = None,
+        method: str | None = None,
         *,
         degree: int | None = None,
         k: int | None = None,
         backend: str | None = None,
-        lumped: str = "barycentric",
+        kernel: str | None = None,
+        lumped: str | None = None,
     ) -> None:
         v, f = as_mesh(V, F)
-        self._k = _wfem.HeatKernel.from_mesh(v, f, kernel, method, degree, k, backend, lumped)
+        mass = _choices.mass_of(mass, kernel, lumped)
+        self._k = _wfem.HeatKernel.from_mesh(v, f, mass, method, degree, k, backend)
 
     @classmethod
     def from_operators(
         cls,
         L: Any,
         M: Any,
-        method: str = "fast",
+        method: str | None = None,
         *,
         degree: int | None = None,
         k: int | None = None,
@@ -103,7 +110,7 @@ class HeatKernel:
         return self
 
     def __repr__(self) -> str:
-        return f"HeatKernel(n={self.n}, kernel={self.kernel!r}, method={self.method!r})"
+        return f"HeatKernel(n={self.n}, mass={self.mass_name!r}, method={self.method!r})"
 
     @property
     def n(self) -> int:
@@ -111,9 +118,16 @@ class HeatKernel:
         return int(self._k.n)
 
     @property
+    def mass_name(self) -> str | None:
+        """The name of the kernel's mass (one of :data:`MASSES`), or None for
+        :meth:`from_operators`; the matrix itself is :attr:`mass`."""
+        name = self._k.mass_name
+        return None if name is None else str(name)
+
+    @property
     def kernel(self) -> str:
-        """``"wfem"``, ``"lumped"``, ``"linear"``, or ``"custom"`` (from_operators)."""
-        return str(self._k.kernel)
+        """Older name of :attr:`mass_name` (``"custom"`` for :meth:`from_operators`)."""
+        return self.mass_name or "custom"
 
     @property
     def method(self) -> str:
@@ -176,9 +190,9 @@ class HeatKernel:
     def diagonal(
         self,
         times: Any,
-        convention: str = "kernel_value",
+        convention: str | None = None,
         *,
-        method: str = "selected_inversion",
+        method: str | None = None,
         tol: float = 1e-10,
         max_columns: int = 4096,
         block: int = 64,
@@ -187,10 +201,10 @@ class HeatKernel:
         """The diagonal of the heat kernel at every t, **without eigenpairs**: the exact heat
         kernel signature (n, T), accurate at small t where any truncated spectrum fails.
 
-        * ``convention="kernel_value"``: ``H_t(i, i) = (K_t M⁻¹)_ii = Σ_k e^{−λ_k t} x_k(i)²``;
-        * ``convention="matrix_diagonal"``: ``K_t(i, i)``, the diagonal of Eq. (6).
+        * ``convention="kernel-value"`` (default): ``K̃_t(i, i) = (K_t M⁻¹)_ii = Σ_k e^{−λ_k t} x_k(i)²``;
+        * ``convention="operator-diagonal"``: ``K_t(i, i)``, the diagonal of Eq. (6).
 
-        ``method="selected_inversion"`` (default): the kernel matrix on the sparsity pattern by
+        ``method="selected-inversion"`` (default): the kernel matrix on the sparsity pattern by
         selected inversion of the rational method's eight complex LDLᵀ factors — exact to
         rounding at every t, 0.03 s per t at 5K vertices, 0.3 s at 28K.
         ``method="probing"`` (Tang & Saad): a distance-p colouring of the mesh chosen so that
@@ -203,9 +217,9 @@ class HeatKernel:
         return (np.asarray(values), dict(info)) if return_info else np.asarray(values)
 
     def apply_kernel_matrix(self, G: Any, t: float) -> np.ndarray:
-        """``H_t G = K_t M⁻¹ G = X D_t Xᵀ G``: column i of H_t is the heat kernel H_t(·, p_i)
-        whose value at p_i is the HKS (kernel-value convention); H_{2t} is the Gram matrix of
-        the diffusion distances. G (n,) or (n, k)."""
+        """``K̃_t G = K_t M⁻¹ G = X D_t Xᵀ G``: column i of the kernel matrix K̃_t is the heat
+        kernel k_t(·, p_i), whose value at p_i is the HKS (kernel-value convention); K̃_{2t} is
+        the Gram matrix of the diffusion distances. G (n,) or (n, k)."""
         a = as_float_array(G, "G", (1, 2))
         out = self._k.apply_kernel_matrix(a.reshape(a.shape[0], -1), float(t))
         return out.reshape(a.shape)
@@ -262,21 +276,21 @@ class HeatKernel:
     def distance(
         self,
         t: float,
-        kind: str = "diffusion",
+        kind: str | None = None,
         *,
         block: int = 64,
-        diagonal: str = "selected_inversion",
+        diagonal: str | None = None,
         diagonal_tol: float = 1e-10,
     ) -> "DiffusionDistance":
         """Diffusion distances at time t through this kernel (paper, Sect. 3, Eq. (18)).
 
         * ``kind="diffusion"`` (default): ``d_t²(i,j) = Σ_k e^{−2λ_k t}(x_k(i) − x_k(j))²``, from
-          ``A = H_{2t} = K_{2t} M⁻¹``;
+          ``A = K̃_{2t} = K_{2t} M⁻¹``;
         * ``kind="mass-weighted"``: the paper's ``‖h_i − h_j‖_M²``, ``h_i = K_{t/2} e_i``
           (Eq. (18b)), from ``A = S_t = M K_t``.
 
         ``d²(i,j) = A_ii − 2A_ij + A_jj``; a whole row needs diag(A): by selected inversion
-        (``diagonal="selected_inversion"``, default; exact at every t, about a second at 50K
+        (``diagonal="selected-inversion"``, default; exact at every t, about a second at 50K
         vertices; the mass-weighted Gram matrix is probed instead), probing
         (``diagonal="probing"``, relative tail ``diagonal_tol``) or n unit columns
         (``diagonal="columns"``).

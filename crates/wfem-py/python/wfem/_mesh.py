@@ -163,7 +163,7 @@ def mesh_stats(V: Any, F: Any = None) -> dict[str, Any]:
 
 
 def operators(
-    V: Any, F: Any = None, *, lumped: str = "barycentric"
+    V: Any, F: Any = None, *, lumped: str | None = None
 ) -> tuple[sp.csc_matrix, sp.csc_matrix, sp.csc_matrix]:
     """The linear FEM operators ``(L, B, D)`` as ``scipy.sparse.csc_matrix`` (paper, Eq. (3), (7)).
 
@@ -172,8 +172,9 @@ def operators(
       and libigl print the opposite sign.
     * ``B``: consistent mass, ``B_ij = |T|/12`` (i ≠ j), ``|T|/6`` (i = j) summed over triangles;
       ``1ᵀB1`` is the area.
-    * ``D``: diagonal lumped mass: ``"barycentric"`` (row sums of B, Eq. (7)) or ``"voronoi"``
-      (mixed Voronoi areas, = ``igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)``).
+    * ``D``: diagonal lumped mass (``lumped=``, a lumped mass of ``wfem.MASSES``):
+      ``"barycentric"`` (default; row sums of B, Eq. (7)) or ``"voronoi"`` (mixed Voronoi
+      areas, = ``igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)``).
 
     All three share one sparsity pattern (vertex–edge graph plus diagonal).
     """

@@ -10,7 +10,7 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
-from . import _wfem
+from . import _choices, _wfem
 from ._arrays import as_float_array, as_indices, as_mesh, as_vector
 from ._errors import InvalidInputError
 from ._heat import HeatKernel
@@ -32,14 +32,16 @@ __all__ = [
     "RetrievalIndex",
 ]
 
-#: The dense descriptors of the paper's Sect. 5.
-DESCRIPTORS = ("dhk1", "dhk2", "dhk3", "sihks")
+#: Every dense descriptor name (the library's registry; aliases such as "sihks" are accepted).
+DESCRIPTORS = _choices.names("descriptor")
+#: The four dense descriptors of the paper's Sect. 5 (Tables 3–4), computed by default.
+PAPER_DESCRIPTORS = tuple(_wfem.PAPER_DESCRIPTORS)
 
 
 def descriptors(
     V: Any,
     F: Any = None,
-    kinds: Sequence[str] = DESCRIPTORS,
+    kinds: Sequence[str] = PAPER_DESCRIPTORS,
     *,
     k: int = 100,
     times: Any = None,
@@ -52,7 +54,7 @@ def descriptors(
     * ``"dhk2"``: HKS of the wFEM kernel, spectrum of (L, B) (Eq. (6));
     * ``"dhk3"``: scale-invariant wFEM HKS, eigenvalues divided by λ_max (times in units of
       1/λ_max);
-    * ``"sihks"``: the scale-invariant HKS of Bronstein & Kokkinos on the wFEM spectrum
+    * ``"si-hks"`` (or ``"sihks"``): the scale-invariant HKS of Bronstein & Kokkinos on the wFEM spectrum
       (options in ``sihks``: alpha, tau_min, tau_max, tau_step, time_unit, num_frequencies,
       convention).
 
@@ -68,15 +70,16 @@ def descriptors(
     return dict(_wfem.descriptors(v, f, list(kinds), k, t, num_times, sihks))
 
 
-def descriptor(V: Any, F: Any = None, kind: str = "sihks", **options: Any) -> np.ndarray:
-    """One dense descriptor (n, d); see :func:`descriptors`."""
+def descriptor(V: Any, F: Any = None, kind: str | None = None, **options: Any) -> np.ndarray:
+    """One dense descriptor (n, d), by default SI-HKS; see :func:`descriptors`."""
+    kind = _choices.default("descriptor") if kind is None else kind
     return descriptors(V, F, [kind], **options)[kind]
 
 
 def sparse_features(
     V: Any,
     F: Any = None,
-    detector: str = "shk1",
+    detector: str | None = None,
     *,
     k: int = 100,
     feature_time_factor: float = 0.1,
@@ -288,8 +291,9 @@ class IndexStore:
         v = v.reshape(1, -1) if v.ndim == 1 else v
         return list(self._s.add(names, infos, v))
 
-    def search(self, query: Any, k: int = 10, *, metric: str = "l1") -> list[Hit]:
-        """The k nearest shapes, nearest first (ties by id); ``metric`` "l1", "chi2" or "euclidean"."""
+    def search(self, query: Any, k: int = 10, *, metric: str | None = None) -> list[Hit]:
+        """The k nearest shapes, nearest first (ties by id); ``metric`` one of
+        ``wfem.choices()["metric"]`` (default "l1")."""
         return [Hit(*h) for h in self._s.search(as_vector(query, "query"), int(k), metric)]
 
     def shapes(self) -> list[tuple[int, str, str]]:

@@ -6,13 +6,15 @@ from typing import Any
 
 import numpy as np
 
-from . import _wfem
+from . import _choices, _wfem
 from ._arrays import as_float_array, as_mesh, as_sparse, as_vector
 
-__all__ = ["Eigenbasis", "eigenbasis", "hks", "sihks", "HKS_CONVENTIONS"]
+__all__ = ["Eigenbasis", "eigenbasis", "hks", "sihks", "HKS_CONVENTIONS", "HKS_METHODS"]
 
 #: The two HKS conventions, named by what they are (see :func:`hks`).
-HKS_CONVENTIONS = ("kernel_value", "matrix_diagonal")
+HKS_CONVENTIONS = _choices.names("convention")
+#: How :func:`hks` evaluates the signature.
+HKS_METHODS = _choices.names("hks_method")
 
 
 class Eigenbasis:
@@ -100,8 +102,8 @@ class Eigenbasis:
         self,
         times: Any = None,
         *,
-        num_times: int = 100,
-        convention: str = "kernel_value",
+        num_times: int = _wfem.DEFAULT_NUM_TIMES,
+        convention: str | None = None,
         scaled: bool = False,
         normalization: str | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
@@ -119,7 +121,7 @@ class Eigenbasis:
         tau_step: float = 1.0 / 16.0,
         time_unit: float = 1.0,
         num_frequencies: int = 6,
-        convention: str = "kernel_value",
+        convention: str | None = None,
     ) -> np.ndarray:
         """SI-HKS of this basis (n, num_frequencies); see :func:`sihks`."""
         return np.asarray(
@@ -127,29 +129,30 @@ class Eigenbasis:
         )
 
 
+
 def eigenbasis(
     V: Any,
     F: Any = None,
     k: int | None = 100,
     *,
-    kernel: str = "wfem",
-    lumped: str = "barycentric",
+    mass: str | None = None,
     tol: float = 1e-10,
     block_size: int = 8,
     max_dim: int | None = None,
     seed: int = 0x5EED2010,
     shift: float | None = None,
     max_restarts: int = 100,
+    kernel: str | None = None,
+    lumped: str | None = None,
 ) -> Eigenbasis:
     """The k smallest eigenpairs of ``L x = λ M x`` on a mesh (paper, Eq. (4)), M = B for the
-    wFEM kernel (D for ``"lumped"``, I for ``"linear"``); ``k=None`` gives all n (dense,
+    wFEM kernel (D for a lumped ``mass``, I for ``"identity"``); ``k=None`` gives all n (dense,
     n ≤ 5000). Shift-invert thick-restart block Lanczos with one sparse Cholesky of ``L − σM``:
     a basis of at most ``max_dim`` vectors (default max(2k, k + 4b) + b), restarted at most
     ``max_restarts`` times (then ``ConvergenceError`` carrying the converged pairs)."""
     v, f = as_mesh(V, F)
-    return Eigenbasis(
-        _wfem.Eigenbasis.from_mesh(v, f, k, kernel, lumped, tol, block_size, max_dim, seed, shift, max_restarts)
-    )
+    mass = _choices.mass_of(mass, kernel, lumped)
+    return Eigenbasis(_wfem.Eigenbasis.from_mesh(v, f, k, mass, tol, block_size, max_dim, seed, shift, max_restarts))
 
 
 def hks(
@@ -158,79 +161,62 @@ def hks(
     times: Any = None,
     *,
     k: int = 100,
-    num_times: int = 100,
-    convention: str = "kernel_value",
+    num_times: int | None = None,
+    convention: str | None = None,
     scaled: bool = False,
     normalization: str | None = None,
-    kernel: str = "wfem",
+    mass: str | None = None,
     basis: Eigenbasis | None = None,
-    method: str = "auto",
-    exact: bool = False,
+    method: str | None = None,
     return_times: bool = False,
+    exact: bool = False,
+    kernel: str | None = None,
 ) -> Any:
-    """The heat kernel signature h(i, t) at every vertex and time, shape (n, T).
+    """The heat kernel signature h(i, t) at every vertex and time, shape (n, T): the same
+    computation as ``wfem hks`` (one library routine).
 
-    From the k smallest eigenpairs of ``L x = λ B x`` (the wFEM kernel ``K_t = X D_t Xᵀ B``,
-    paper Eq. (6), truncated as in Eq. (8)), in one of two conventions:
+    In one of two conventions (``convention=``, :data:`HKS_CONVENTIONS`):
 
-    * ``convention="kernel_value"`` (default; Sun, Ovsjanikov & Guibas 2009, pyFM):
+    * ``"kernel-value"`` (default; Sun, Ovsjanikov & Guibas 2009, pyFM):
       ``h(i, t) = Σ_k e^{−λ_k t} x_k(i)²`` = diag(X D_t Xᵀ), the continuous kernel's value
-      K_t(p_i, p_i) (units 1/area);
-    * ``convention="matrix_diagonal"`` (the paper): ``h(i, t) = (X D_t Xᵀ B)_ii``, the diagonal
-      of the wFEM kernel matrix of Eq. (6); dimensionless, sums to the heat trace.
+      k_t(p_i, p_i) (units 1/area);
+    * ``"operator-diagonal"`` (the paper): ``h(i, t) = (X D_t Xᵀ B)_ii``, the diagonal
+      of the wFEM heat operator of Eq. (6); dimensionless, sums to the heat trace.
 
     Args:
-        times: explicit positive times; ``None`` = ``num_times`` times log-spaced between
-            ``4 ln10/λ_max`` and ``4 ln10/λ_2`` (pyFM's ``auto_HKS``).
-        k: eigenpairs (ignored when ``basis`` is given).
+        times: explicit positive times; ``None`` = ``num_times`` (default 16) times log-spaced
+            between ``4 ln10/λ_max`` and ``4 ln10/λ_2`` (pyFM's ``auto_HKS``).
+        k: eigenpairs of the truncated sum (ignored when ``basis`` is given).
         scaled: divide each column by the heat trace ``Σ_k e^{−λ_k t}`` (pyFM ``scaled=True``).
-        normalization: ``None``, ``"max_eigenvalue"`` (λ/λ_max, DHK3) or ``"area"`` (λ·A).
-        kernel: ``"wfem"`` (B), ``"lumped"`` (D) or ``"linear"`` (I).
-        basis: a precomputed :class:`Eigenbasis` to reuse.
+        normalization: ``None``, ``"max-eigenvalue"`` (λ/λ_max, DHK3) or ``"area"`` (λ·A).
+        mass: the kernel's mass (default ``"consistent"``, the wFEM kernel; ``"voronoi"`` gives
+            the paper's DHK1).
+        basis: a precomputed :class:`Eigenbasis` of the same mass to reuse.
         method: ``"auto"`` (default): per time, the truncated sum where its truncation error
             (Weyl-law estimate: the omitted eigenvalues grow like ``λ_k j/k``) is below 1e−3, and
             the exact diagonal of the kernel (selected inversion, :meth:`HeatKernel.diagonal`)
-            at the smaller times where it is not; ``"exact"``: the exact diagonal at every time (explicit ``times``; no eigenpairs); ``"spectral"``:
-            the truncated sum only (pyFM's HKS). With ``scaled`` or ``normalization`` the
-            spectral sum is used.
-        exact: same as ``method="exact"``.
+            at the smaller times where it is not; ``"exact"``: the exact diagonal at every time
+            (no eigenpairs with explicit ``times``); ``"spectral"``: the truncated sum only
+            (pyFM's HKS). ``scaled`` and ``normalization`` keep the spectral sum.
         return_times: also return the times used.
+        exact, kernel: older spellings of ``method="exact"`` and ``mass=`` (DeprecationWarning).
 
     Returns:
         (n, T) array, or ``(values, times)`` with ``return_times=True``.
     """
-    if method not in ("auto", "exact", "spectral"):
-        from ._errors import InvalidInputError
+    import warnings
 
-        raise InvalidInputError(
-            f"method={method!r} is not one of 'auto', 'exact', 'spectral'", "InvalidParameter", name="method"
-        )
-    if exact or method == "exact":
-        from ._errors import InvalidInputError
-        from ._heat import HeatKernel
-
-        if times is None or scaled or normalization is not None or basis is not None:
-            raise InvalidInputError(
-                "exact=True needs explicit times and takes no scaled/normalization/basis", "InvalidParameter",
-                name="exact",
-            )
-        ts = np.atleast_1d(np.asarray(times, dtype=np.float64))
-        values = HeatKernel(V, F, kernel=kernel).diagonal(ts, convention)
-        return (values, ts) if return_times else values
-    if basis is None:
-        basis = eigenbasis(V, F, k, kernel=kernel)
-    values, used = basis.hks(
-        times, num_times=num_times, convention=convention, scaled=scaled, normalization=normalization
+    if exact:
+        warnings.warn("exact=True is now method='exact'", DeprecationWarning, stacklevel=2)
+        method = _wfem.canonical("hks_method", "exact") if method is None else method
+    mass = _choices.mass_of(mass, kernel, None)
+    v, f = as_mesh(V, F)
+    t = None if times is None else [float(x) for x in as_vector(np.atleast_1d(times), "times")]
+    values, used, _, _ = _wfem.mesh_hks(
+        v, f, t, num_times, k, mass, method, convention, scaled, normalization, None if basis is None else basis._b
     )
-    if method == "auto" and not scaled and normalization is None:
-        from ._heat import HeatKernel
-
-        K = HeatKernel(V, F, kernel=kernel)
-        values, _ = K._k.hks_by_method(
-            [float(x) for x in basis.values], values, [float(t) for t in used], convention, "auto"
-        )
-        values = np.asarray(values)
-    return (values, used) if return_times else values
+    h = np.asarray(values)
+    return (h, np.asarray(used)) if return_times else h
 
 
 def sihks(
@@ -244,9 +230,10 @@ def sihks(
     tau_step: float = 1.0 / 16.0,
     time_unit: float = 1.0,
     num_frequencies: int = 6,
-    convention: str = "kernel_value",
-    kernel: str = "wfem",
+    convention: str | None = None,
+    mass: str | None = None,
     basis: Eigenbasis | None = None,
+    kernel: str | None = None,
 ) -> np.ndarray:
     """The scale-invariant HKS of Bronstein & Kokkinos (CVPR 2010), shape (n, num_frequencies).
 
@@ -256,7 +243,7 @@ def sihks(
     t₀, ``tau_*``) so that it covers t·λ_max ≪ 1 to t·λ_2 ≫ 1 for your units.
     """
     if basis is None:
-        basis = eigenbasis(V, F, k, kernel=kernel)
+        basis = eigenbasis(V, F, k, mass=_choices.mass_of(mass, kernel, None))
     return basis.sihks(
         alpha=alpha,
         tau_min=tau_min,

@@ -22,6 +22,12 @@ DEFAULT_SPIKE_THRESHOLD: float
 DEFAULT_MAX_HOLE_PERIMETER: float
 DEFAULT_TARGET_ROUGHNESS: float
 SHIPPED_DEGREES: list[int]
+PAPER_DESCRIPTORS: list[str]
+DEFAULT_NUM_TIMES: int
+
+# the registries of the library's choices
+def choices() -> dict[str, Any]: ...
+def canonical(argument: str, text: str) -> str: ...
 
 # meshes
 def read_mesh(path: _Path, triangulate: bool = False) -> tuple[_Mesh, str]: ...
@@ -37,7 +43,7 @@ def repair_mesh(
 ) -> tuple[_Mesh, str]: ...
 def fill_holes(v: _F64, f: _I64, max_perimeter: float = ...) -> tuple[_Mesh, int]: ...
 def mesh_stats(v: _F64, f: _I64) -> str: ...
-def operators(v: _F64, f: _I64, lumped: str = "barycentric") -> tuple[_Sparse, _Sparse, _Sparse]: ...
+def operators(v: _F64, f: _I64, lumped_mass: str | None = None) -> tuple[_Sparse, _Sparse, _Sparse]: ...
 def extrema(v: _F64, f: _I64, field: _F64, persistence: float | None = None) -> list[int]: ...
 def icosphere(level: int) -> _Mesh: ...
 def uv_sphere(rings: int, segments: int) -> _Mesh: ...
@@ -53,18 +59,17 @@ class HeatKernel:
     def from_mesh(
         v: _F64,
         f: _I64,
-        kernel: str = "wfem",
-        method_name: str = "fast",
+        mass: str | None = None,
+        method_name: str | None = None,
         degree: int | None = None,
         k: int | None = None,
         backend: str | None = None,
-        lumped: str = "barycentric",
     ) -> HeatKernel: ...
     @staticmethod
     def from_operators(
         l: _Sparse,
         m: _Sparse,
-        method_name: str = "fast",
+        method_name: str | None = None,
         degree: int | None = None,
         k: int | None = None,
         backend: str | None = None,
@@ -74,7 +79,7 @@ class HeatKernel:
     @property
     def method(self) -> str: ...
     @property
-    def kernel(self) -> str: ...
+    def mass_name(self) -> str | None: ...
     def stiffness(self) -> _Sparse: ...
     def mass(self) -> _Sparse: ...
     def vertex_areas(self) -> _F64: ...
@@ -83,9 +88,9 @@ class HeatKernel:
     def diagonal(
         self,
         times: list[float],
-        convention: str = "kernel_value",
-        method: str = "selected_inversion",
-        tol: float = 1e-10,
+        convention: str | None = None,
+        method: str | None = None,
+        tol: float = ...,
         max_columns: int = 4096,
         block: int = 64,
     ) -> tuple[_F64, dict[str, Any]]: ...
@@ -94,8 +99,8 @@ class HeatKernel:
         eigenvalues: list[float],
         spectral: _F64,
         times: list[float],
-        convention: str = "kernel_value",
-        method: str = "auto",
+        convention: str | None = None,
+        method: str | None = None,
         tol: float = ...,
     ) -> tuple[_F64, list[tuple[str, float]]]: ...
     def apply_kernel_matrix(self, g: _F64, t: float) -> _F64: ...
@@ -126,10 +131,10 @@ class HeatKernel:
     def distance(
         self,
         t: float,
-        kind: str = "diffusion",
+        kind: str | None = None,
         block: int = 64,
-        diagonal: str = "selected_inversion",
-        diagonal_tol: float = 1e-10,
+        diagonal: str | None = None,
+        diagonal_tol: float = ...
     ) -> DiffusionDistance: ...
 
 @final
@@ -152,8 +157,7 @@ class Eigenbasis:
         v: _F64,
         f: _I64,
         k: int | None = None,
-        kernel: str = "wfem",
-        lumped: str = "barycentric",
+        mass: str | None = None,
         tol: float = 1e-10,
         block_size: int = 8,
         max_dim: int | None = None,
@@ -189,8 +193,8 @@ class Eigenbasis:
     def hks(
         self,
         times: list[float] | None = None,
-        num_times: int = 100,
-        convention: str = "kernel_value",
+        num_times: int = ...,
+        convention: str | None = None,
         scaled: bool = False,
         normalization: str | None = None,
     ) -> tuple[_F64, list[float]]: ...
@@ -202,8 +206,22 @@ class Eigenbasis:
         tau_step: float = 0.0625,
         time_unit: float = 1.0,
         num_frequencies: int = 6,
-        convention: str = "kernel_value",
+        convention: str | None = None,
     ) -> _F64: ...
+def mesh_hks(
+    v: _F64,
+    f: _I64,
+    times: list[float] | None = None,
+    num_times: int | None = None,
+    k: int = ...,
+    mass: str | None = None,
+    method: str | None = None,
+    convention: str | None = None,
+    scaled: bool = False,
+    normalization: str | None = None,
+    basis: Eigenbasis | None = None,
+    tol: float = ...,
+) -> tuple[_F64, list[float], list[tuple[str, float]], list[float] | None]: ...
 
 # retrieval
 def descriptors(
@@ -218,7 +236,7 @@ def descriptors(
 def sparse_features(
     v: _F64,
     f: _I64,
-    detector: str = "shk1",
+    detector: str | None = None,
     k: int = 100,
     feature_time_factor: float = 0.1,
     feature_rings: int = 1,
@@ -267,7 +285,7 @@ class IndexStore:
     def meta(self, key: str) -> bytes | None: ...
     def set_meta(self, key: str, value: bytes) -> None: ...
     def add(self, names: list[str], infos: list[str], vectors: _F64) -> list[int]: ...
-    def search(self, query: _F64, k: int = 10, metric: str = "l1") -> list[tuple[int, str, str, float]]: ...
+    def search(self, query: _F64, k: int = 10, metric: str | None = None) -> list[tuple[int, str, str, float]]: ...
     def shapes(self) -> list[tuple[int, str, str]]: ...
     def find(self, name: str) -> tuple[int, str] | None: ...
     def vectors(self) -> _F32: ...
