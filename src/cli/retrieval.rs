@@ -24,6 +24,9 @@ use super::choice::choice;
 use super::{check_output, load_usable, CliError, MeshArgs};
 use clap::{Args, Subcommand};
 use retrieval_store::SqliteIndex;
+use shape_retrieval::eval::ClassRule;
+use shape_retrieval::global::GlobalKind;
+use shape_retrieval::spatial::SpatialBag;
 use shape_retrieval::Descriptor;
 use shape_retrieval::{
     BagDistance, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexStore, JsonFile,
@@ -105,8 +108,8 @@ pub enum RetrievalAction {
         labels: Option<PathBuf>,
         /// Without `--labels`, a file's class is the folder holding it (`folder`, default) or
         /// its name without extension and digits (`stem`: cat10.off → cat).
-        #[arg(long, conflicts_with = "labels", value_parser = clap::builder::PossibleValuesParser::new(shape_retrieval::eval::ClassRule::NAMES))]
-        class_from: Option<String>,
+        #[arg(long, conflicts_with = "labels", value_parser = choice::<ClassRule>())]
+        class_from: Option<ClassRule>,
         /// Reuse a vocabulary from `wfem retrieval vocab` (recommended: trained on other shapes).
         #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
         vocab: Option<PathBuf>,
@@ -208,7 +211,7 @@ fn number_or_off(flag: &str, text: &Option<String>) -> Result<Option<Option<f64>
 #[derive(Args, Clone, Debug)]
 pub struct TrainingArgs {
     /// Vocabulary size V.
-    #[arg(long, default_value_t = 48)]
+    #[arg(long, default_value_t = shape_retrieval::DEFAULT_WORDS)]
     pub words: usize,
     /// k-means seed.
     #[arg(long, default_value_t = 0)]
@@ -228,9 +231,16 @@ pub struct BagArgs {
     /// inflated vertex areas (spikes, slivers) cannot dominate a bag; `off` for plain areas.
     #[arg(long, value_name = "C|off")]
     pub area_cap: Option<String>,
-    /// Fuse with the Shape-DNA ln(λ_i·A), i = 1…M, at weight W: `M:W` (e.g. `20:0.5`).
+    /// Spatially sensitive bags (Shape Google Sect. 4.2): the bag also holds the heat that
+    /// flows between words in time t = C·A (default 2⁻⁸ = 0.00390625); `off` for plain bags.
+    #[arg(long, value_name = "C|off")]
+    pub spatial: Option<String>,
+    /// Fuse with a global spectral signature of M eigenvalues at weight W: `M:W` (e.g. `40:0.3`).
     #[arg(long)]
     pub fusion: Option<String>,
+    /// The global signature of `--fusion`.
+    #[arg(long, requires = "fusion", value_parser = choice::<GlobalKind>(), default_value = GlobalKind::default_name())]
+    pub fusion_kind: GlobalKind,
 }
 
 fn missing_times(descriptor: Descriptor) -> CliError {
@@ -311,13 +321,16 @@ impl BagArgs {
         if let Some(v) = number_or_off("--area-cap", &self.area_cap)? {
             settings.bags.weights = v.map_or(VertexWeights::Area, |factor| VertexWeights::CappedArea { factor });
         }
+        if let Some(v) = number_or_off("--spatial", &self.spatial)? {
+            settings.bags.spatial = v.map(|time| SpatialBag { time });
+        }
         settings.bags.global = match &self.fusion {
             None => None,
             Some(text) => {
                 let bad = || CliError::Usage(format!("--fusion {text:?}: expected M:W, e.g. 20:0.5"));
                 let (m, w) = text.split_once(':').ok_or_else(bad)?;
                 Some(GlobalSignature {
-                    kind: Default::default(),
+                    kind: self.fusion_kind,
                     eigenvalues: m.trim().parse().map_err(|_| bad())?,
                     weight: w.trim().parse().map_err(|_| bad())?,
                 })
@@ -413,7 +426,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             bags,
         } => {
             let outputs: Vec<&std::path::Path> = json.iter().chain(index).map(PathBuf::as_path).collect();
-            let labelled = labelled_files(files, labels.as_deref(), class_from.as_deref())?;
+            let labelled = labelled_files(files, labels.as_deref(), class_from.unwrap_or_default())?;
             let (settings, vocabulary) = settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &outputs)?;
             let paths: Vec<PathBuf> = labelled.iter().map(|(f, _)| f.clone()).collect();
             let meshes = load_all(&paths, &outputs)?;
@@ -428,6 +441,12 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 index_file(p).save_index(&run.index)?;
             }
             write!(out, "{}", run.report.to_text())?;
+            if vocab.is_none() {
+                super::progress::note(
+                    "for an honest evaluation train a vocabulary on other shapes \
+                     (`wfem retrieval vocab OTHER... --out vocab.json`) and pass `--vocab vocab.json`",
+                );
+            }
         }
         RetrievalAction::Add { index: path, files } => {
             if !is_sqlite(path)? {
@@ -517,9 +536,9 @@ fn settings_and_vocabulary(
 fn labelled_files(
     files: &[PathBuf],
     labels: Option<&std::path::Path>,
-    class_from: Option<&str>,
+    rule: ClassRule,
 ) -> Result<Vec<(PathBuf, String)>, CliError> {
-    use shape_retrieval::eval::{read_label_file, ClassRule};
+    use shape_retrieval::eval::read_label_file;
     match labels {
         Some(l) => {
             let all = read_label_file(l)?;
@@ -530,7 +549,10 @@ fn labelled_files(
                 .iter()
                 .map(|f| {
                     all.iter()
-                        .find(|(g, _)| g == f || g.canonicalize().ok() == f.canonicalize().ok())
+                        .find(|(g, _)| {
+                            g == f
+                                || matches!((g.canonicalize(), f.canonicalize()), (Ok(a), Ok(b)) if a == b)
+                        })
                         .cloned()
                         .ok_or_else(|| CliError::Usage(format!("{} is not in {}", f.display(), l.display())))
                 })
@@ -540,7 +562,6 @@ fn labelled_files(
             if files.is_empty() {
                 return Err(CliError::Usage("give mesh files, or --labels with a label file".into()));
             }
-            let rule = class_from.and_then(ClassRule::from_name).unwrap_or_default();
             Ok(files
                 .iter()
                 .map(|f| rule.class_of(f).map(|c| (f.clone(), c)))

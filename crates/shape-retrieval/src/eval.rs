@@ -28,6 +28,7 @@
 //! very shapes that are then retrieved, which is optimistic; the report says which was used.
 
 use crate::check;
+use wfem_choice::Choice as _;
 use crate::model::{RetrievalIndex, RetrievalSettings, VocabularyModel};
 use crate::retrieval::average_precision;
 use crate::RetrievalError;
@@ -202,6 +203,13 @@ impl EvalReport {
                 let _ = writeln!(s, "  {} → {}: {:.3}", c.query, c.retrieved, c.share);
             }
         }
+        if self.vocabulary.contains("optimistic") {
+            let _ = writeln!(
+                s,
+                "note: the words were fit to shapes that are also evaluated, which flatters every \
+                 measure; a vocabulary trained on other shapes gives the honest number"
+            );
+        }
         s
     }
 }
@@ -354,6 +362,26 @@ pub fn evaluate_index(
     })
 }
 
+/// Where the index's vocabulary was trained, for a report: "trained on N other shapes" when
+/// none of its training shapes is indexed (an honest evaluation), otherwise how many of them
+/// are (optimistic: the words were fit to the shapes then retrieved). Shapes are matched by
+/// name.
+pub fn vocabulary_source(index: &RetrievalIndex) -> String {
+    let trained = &index.vocabulary().info().shapes;
+    let indexed: std::collections::HashSet<&str> = index.entries().iter().map(|e| e.name.as_str()).collect();
+    let inside = trained.iter().filter(|s| indexed.contains(s.as_str())).count();
+    if inside == 0 {
+        format!("trained on {} other shapes", trained.len())
+    } else if inside == trained.len() && inside == indexed.len() {
+        "trained on the indexed shapes (optimistic)".to_string()
+    } else {
+        format!(
+            "trained on {} shapes, {inside} of them indexed (optimistic)",
+            trained.len()
+        )
+    }
+}
+
 /// What [`evaluate_collection`] returns: the index it built and its evaluation.
 #[derive(Clone, Debug)]
 pub struct CollectionEvaluation {
@@ -377,15 +405,8 @@ pub fn evaluate_collection(
     vocabulary: Option<VocabularyModel>,
 ) -> Result<CollectionEvaluation, RetrievalError> {
     check::same("classes vs meshes", meshes.len(), classes.len())?;
-    let source = match &vocabulary {
-        Some(v) => format!(
-            "trained on {} other shapes",
-            v.info().shapes.iter().filter(|s| !meshes.iter().any(|(n, _)| n == *s)).count()
-        ),
-        None => "trained on the indexed shapes (optimistic)".to_string(),
-    };
     let index = RetrievalIndex::build(meshes, settings, vocabulary)?;
-    let report = evaluate_index(&index, classes, &source)?;
+    let report = evaluate_index(&index, classes, &vocabulary_source(&index))?;
     Ok(CollectionEvaluation { index, report })
 }
 
@@ -401,35 +422,16 @@ pub enum ClassRule {
     Stem,
 }
 
+wfem_choice::registry! {
+    ClassRule as "class rule" {
+        ClassRule::Folder = ClassRule::Folder => "folder" ["parent"]:
+            "the folder holding the file (default)",
+        ClassRule::Stem = ClassRule::Stem => "stem" ["name"]:
+            "the file name without extension and digits (cat10.off → cat)",
+    }
+}
+
 impl ClassRule {
-    /// Every rule's name.
-    pub const NAMES: &'static [&'static str] = &["folder", "stem"];
-
-    /// Its name.
-    pub fn name(&self) -> &'static str {
-        match self {
-            ClassRule::Folder => "folder",
-            ClassRule::Stem => "stem",
-        }
-    }
-
-    /// The rule with that name.
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "folder" => Some(ClassRule::Folder),
-            "stem" => Some(ClassRule::Stem),
-            _ => None,
-        }
-    }
-
-    /// One line of help.
-    pub fn help(&self) -> &'static str {
-        match self {
-            ClassRule::Folder => "the folder holding the file",
-            ClassRule::Stem => "the file name without extension and digits (cat10.off → cat)",
-        }
-    }
-
     /// The class of the file at `path`.
     ///
     /// # Errors

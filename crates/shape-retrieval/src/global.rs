@@ -42,38 +42,18 @@ pub enum GlobalKind {
     Biharmonic,
 }
 
+wfem_choice::registry! {
+    GlobalKind as "global signature" {
+        GlobalKind::LogShapeDna = GlobalKind::LogShapeDna => "log-shape-dna":
+            "ln(λ_i·A), i = 1…m, mean absolute difference",
+        GlobalKind::WeylShapeDna = GlobalKind::WeylShapeDna => "weyl-shape-dna" ["shape-dna"]:
+            "Shape-DNA λ_i·A/(4πi), i = 1…m, Euclidean distance",
+        GlobalKind::Biharmonic = GlobalKind::Biharmonic => "biharmonic":
+            "histogram of biharmonic distances / √A (m eigenpairs), χ²",
+    }
+}
+
 impl GlobalKind {
-    /// Every kind's name.
-    pub const NAMES: &'static [&'static str] = &["log-shape-dna", "weyl-shape-dna", "biharmonic"];
-
-    /// Its name.
-    pub fn name(&self) -> &'static str {
-        match self {
-            GlobalKind::LogShapeDna => "log-shape-dna",
-            GlobalKind::WeylShapeDna => "weyl-shape-dna",
-            GlobalKind::Biharmonic => "biharmonic",
-        }
-    }
-
-    /// The kind of that name.
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "log-shape-dna" => Some(GlobalKind::LogShapeDna),
-            "weyl-shape-dna" | "shape-dna" => Some(GlobalKind::WeylShapeDna),
-            "biharmonic" => Some(GlobalKind::Biharmonic),
-            _ => None,
-        }
-    }
-
-    /// One line of help.
-    pub fn help(&self) -> &'static str {
-        match self {
-            GlobalKind::LogShapeDna => "ln(λ_i·A), i = 1…m, mean absolute difference",
-            GlobalKind::WeylShapeDna => "Shape-DNA λ_i·A/(4πi), i = 1…m, Euclidean distance",
-            GlobalKind::Biharmonic => "histogram of biharmonic distances / √A (m eigenpairs), χ²",
-        }
-    }
-
     /// The signature length for m eigenvalues.
     pub fn len(&self, eigenvalues: usize) -> usize {
         match self {

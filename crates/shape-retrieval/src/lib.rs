@@ -64,12 +64,11 @@ pub use hks::{
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
 pub use mesh_hks::{mesh_hks, HksStep, MeshHks, MeshHksParams};
 pub use model::{
-    BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, HoleFilling,
-    IndexEntry,
-    Ranked, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TopologyRepair, TrainingInfo, TrainingParams,
-    VertexWeights, VocabularyModel,
+    BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexEntry,
+    Ranked, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TopologyRepair, TrainingInfo,
+    TrainingParams, VertexWeights, VocabularyModel,
 };
-pub use model::{DEFAULT_AREA_CAP, DEFAULT_MAX_COHERENCE, DEFAULT_TARGET_ROUGHNESS};
+pub use model::{DEFAULT_AREA_CAP, DEFAULT_MAX_COHERENCE, DEFAULT_TARGET_ROUGHNESS, DEFAULT_WORDS};
 pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
 pub use sihks::{scale_invariant_hks, SihksParams, TimeUnit};
 pub use standardize::Standardizer;

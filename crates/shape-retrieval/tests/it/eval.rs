@@ -9,6 +9,7 @@ use shape_retrieval::eval::{
 };
 use shape_retrieval::{RetrievalError, RetrievalIndex, ShapeFeatures, VocabularyModel};
 use std::path::Path;
+use wfem_choice::Choice;
 
 fn strings(v: &[&str]) -> Vec<String> {
     v.iter().map(|s| s.to_string()).collect()
@@ -152,10 +153,11 @@ fn class_rules() {
     assert!(matches!(e, RetrievalError::Labels { .. }), "{e}");
     let e = folder.class_of(Path::new("cat0.off")).unwrap_err();
     assert!(matches!(e, RetrievalError::Labels { .. }), "{e}");
-    for &name in ClassRule::NAMES {
-        assert_eq!(ClassRule::from_name(name).unwrap().name(), name);
+    for name in ClassRule::names() {
+        assert_eq!(ClassRule::parse(name).unwrap().name(), name);
     }
-    assert_eq!(ClassRule::from_name("parent"), None);
+    assert_eq!(ClassRule::parse("Parent"), Ok(ClassRule::Folder));
+    assert!(ClassRule::parse("grandparent").is_err());
     assert_eq!(ClassRule::default(), ClassRule::Folder);
 }
 
@@ -239,6 +241,13 @@ fn an_outside_vocabulary_is_reported_as_such() {
     let vocabulary = VocabularyModel::train(&settings.descriptor, &settings.training, &features).unwrap();
     let run = evaluate_collection(&meshes, &classes, &settings, Some(vocabulary)).unwrap();
     assert_eq!(run.report.vocabulary, "trained on 2 other shapes");
+    // One indexed shape among the training shapes makes the evaluation optimistic.
+    let mut mixed = other.clone();
+    mixed.push(meshes[0].clone());
+    let features = ShapeFeatures::compute_many(&mixed, &settings.descriptor, &settings.bags).unwrap();
+    let vocabulary = VocabularyModel::train(&settings.descriptor, &settings.training, &features).unwrap();
+    let run_mixed = evaluate_collection(&meshes, &classes, &settings, Some(vocabulary)).unwrap();
+    assert_eq!(run_mixed.report.vocabulary, "trained on 3 shapes, 1 of them indexed (optimistic)");
     let e = evaluate_collection(&meshes, &classes[1..], &settings, None).unwrap_err();
     assert!(matches!(e, RetrievalError::DimensionMismatch { .. }), "{e}");
     let index: &RetrievalIndex = &run.index;

@@ -449,7 +449,7 @@ fn stored_parts_are_validated() {
         name: "bad.off".into(),
         signature: ShapeSignature { bag, global },
     };
-    let v = vocabulary.vocabulary().size();
+    let v = index.bags().bag_len(vocabulary.vocabulary().size());
     let mut huge = vec![0.0; v];
     huge[2] = 1e308;
     for (bad, what) in [

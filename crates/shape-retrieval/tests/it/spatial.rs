@@ -5,6 +5,7 @@ use crate::common::{dense_spectrum, small_collection, small_settings};
 use faer::Mat;
 use mesh_fem::generate::{bumpy, icosphere};
 use shape_retrieval::global::{GlobalKind, BIHARMONIC_BINS};
+use wfem_choice::Choice;
 use shape_retrieval::spatial::{ShapeSpectrum, SpatialBag};
 use shape_retrieval::{
     DescriptorSettings, GlobalSignature, IndexStore, JsonFile, RetrievalError, RetrievalIndex, ShapeFeatures,
@@ -111,7 +112,9 @@ fn spatial_indexes_round_trip_and_plain_files_stay_plain() {
     assert_eq!(back.entries(), index.entries());
     assert_eq!(back.bags(), index.bags());
     // An index written without the field holds plain bags and reads as such.
-    let plain = RetrievalIndex::build(&shapes, &small_settings(), None).unwrap();
+    let mut plain_settings = small_settings();
+    plain_settings.bags.spatial = None;
+    let plain = RetrievalIndex::build(&shapes, &plain_settings, None).unwrap();
     JsonFile::new(&path).save_index(&plain).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(!text.contains("spatial"));
@@ -154,9 +157,10 @@ fn weyl_shape_dna_matches_the_dense_spectrum() {
     assert_eq!(GlobalKind::LogShapeDna.distance(&a, &b), 7.0 / 3.0);
     let old: GlobalSignature = serde_json::from_str(r#"{"eigenvalues": 20, "weight": 0.5}"#).unwrap();
     assert_eq!(old.kind, GlobalKind::LogShapeDna);
-    for &name in GlobalKind::NAMES {
-        assert_eq!(GlobalKind::from_name(name).unwrap().name(), name);
+    for name in GlobalKind::names() {
+        assert_eq!(GlobalKind::parse(name).unwrap().name(), name);
     }
+    assert_eq!(GlobalKind::parse("shape_dna"), Ok(GlobalKind::WeylShapeDna));
 }
 
 #[test]
