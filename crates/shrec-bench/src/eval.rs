@@ -178,7 +178,9 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
                 hole_filling: None,
                 topology_repair: None,
             },
+            // Shape Google: 48 words, raw descriptors, plain area-weighted bags, L1.
             training: TrainingParams {
+                words: 48,
                 standardize: false,
                 ..Default::default()
             },

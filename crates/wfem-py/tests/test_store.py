@@ -150,14 +150,17 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
     default = wfem.RetrievalIndex.build(paths, tmp_path / "a.sqlite", words=4)
     descriptor = default.settings["vocabulary"]["descriptor"]
     assert descriptor["despiking"] == {"threshold": 3.0}
-    assert descriptor["denoising"] == {"roughness": 0.1}
+    assert descriptor["denoising"] == {"roughness": 0.1, "max_coherence": 0.1}
+    assert descriptor["topology_repair"] == {"max_handle": 0.35}
     assert descriptor["hole_filling"] == {"max_perimeter": wfem._wfem.DEFAULT_MAX_HOLE_PERIMETER} == {"max_perimeter": 3.0}
     assert default.settings["bags"]["weights"] == {"kind": "capped-area", "factor": 3.0}
+    assert default.settings["bags"]["spatial"] == {"time": wfem._wfem.DEFAULT_SPATIAL_TIME} == {"time": 2.0**-8}
     off = wfem.RetrievalIndex.build(
-        paths, tmp_path / "b.sqlite", words=4, despike=None, fill_holes=None, denoise=0.2
+        paths, tmp_path / "b.sqlite", words=4, despike=None, fill_holes=None, denoise=0.2, spatial=None
     )
     descriptor = off.settings["vocabulary"]["descriptor"]
-    assert descriptor["despiking"] is None and descriptor["denoising"] == {"roughness": 0.2}
+    assert descriptor["despiking"] is None and descriptor["denoising"] == {"roughness": 0.2, "max_coherence": 0.1}
+    assert "spatial" not in off.settings["bags"]
     assert descriptor["hole_filling"] is None
     for bad in (
         {"despike": -1.0},
@@ -166,9 +169,11 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
         {"fill_holes": -1.0},
         {"fill_holes": 0.0},
         {"fill_holes": float("inf")},
+        {"spatial": 0.0},
     ):
         with pytest.raises(
-            wfem.InvalidInputError, match="spike threshold|target roughness|largest hole perimeter"
+            wfem.InvalidInputError,
+            match="spike threshold|target roughness|largest hole perimeter|spatial bag time",
         ):
             wfem.RetrievalIndex.build(paths, tmp_path / "c.sqlite", words=4, **bad)
     assert not (tmp_path / "c.sqlite").exists()
