@@ -398,7 +398,8 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             training,
             bags,
         } => {
-            let (settings, vocabulary) = settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &[path])?;
+            let (settings, vocabulary) =
+                settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &[path])?;
             let from = match vocab {
                 Some(v) => format!("the vocabulary of {}", v.display()),
                 None => "a vocabulary trained on these shapes (optimistic if they are also the test set)".into(),
@@ -429,7 +430,8 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
         } => {
             let outputs: Vec<&std::path::Path> = json.iter().chain(index).map(PathBuf::as_path).collect();
             let labelled = labelled_files(files, labels.as_deref(), class_from.unwrap_or_default())?;
-            let (settings, vocabulary) = settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &outputs)?;
+            let (settings, vocabulary) =
+                settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &outputs)?;
             let paths: Vec<PathBuf> = labelled.iter().map(|(f, _)| f.clone()).collect();
             let meshes = load_all(&paths, &outputs)?;
             let classes: Vec<String> = labelled.into_iter().map(|(_, c)| c).collect();
@@ -552,8 +554,7 @@ fn labelled_files(
                 .map(|f| {
                     all.iter()
                         .find(|(g, _)| {
-                            g == f
-                                || matches!((g.canonicalize(), f.canonicalize()), (Ok(a), Ok(b)) if a == b)
+                            g == f || matches!((g.canonicalize(), f.canonicalize()), (Ok(a), Ok(b)) if a == b)
                         })
                         .cloned()
                         .ok_or_else(|| CliError::Usage(format!("{} is not in {}", f.display(), l.display())))

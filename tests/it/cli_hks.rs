@@ -382,7 +382,10 @@ fn retrieval_cleaning_is_selectable_and_checked() {
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&vocab).unwrap()).unwrap();
     // Written as null (a missing field would read as the default, on).
     assert!(v["descriptor"]["despiking"].is_null(), "{}", v["descriptor"]);
-    assert_eq!(v["descriptor"]["denoising"], serde_json::json!({"roughness": 0.2, "max_coherence": 0.1}));
+    assert_eq!(
+        v["descriptor"]["denoising"],
+        serde_json::json!({"roughness": 0.2, "max_coherence": 0.1})
+    );
     assert_eq!(
         v["descriptor"]["hole_filling"],
         serde_json::json!({"max_perimeter": 1.5})

@@ -13,7 +13,10 @@ fn labelled_set(dir: &Path) -> Vec<(PathBuf, &'static str)> {
     use mesh_fem::TriMesh;
     let stretch = |m: TriMesh, s: [f64; 3]| {
         TriMesh::new(
-            m.positions().iter().map(|p| [s[0] * p[0], s[1] * p[1], s[2] * p[2]]).collect(),
+            m.positions()
+                .iter()
+                .map(|p| [s[0] * p[0], s[1] * p[1], s[2] * p[2]])
+                .collect(),
             m.faces().to_vec(),
         )
         .unwrap()
@@ -27,7 +30,11 @@ fn labelled_set(dir: &Path) -> Vec<(PathBuf, &'static str)> {
         out.push((path, class));
     };
     for (i, level) in [2u32, 3, 2].into_iter().enumerate() {
-        put("sphere", i, stretch(icosphere(level), [1.0, 1.0, 1.0 + 0.05 * i as f64]));
+        put(
+            "sphere",
+            i,
+            stretch(icosphere(level), [1.0, 1.0, 1.0 + 0.05 * i as f64]),
+        );
     }
     for (i, (minor, nu)) in [(0.4, 24), (0.38, 28), (0.42, 20)].into_iter().enumerate() {
         put("torus", i, torus(1.0, minor, nu, nu / 2));
@@ -99,15 +106,25 @@ fn retrieval_eval_reports_the_measures_of_its_rankings() {
             .collect();
         let m = measures(&rel);
         let stored = &report["per_query"][q]["measures"];
-        for (k, key) in ["map", "nn", "first_tier", "second_tier", "e_measure", "dcg"].iter().enumerate() {
+        for (k, key) in ["map", "nn", "first_tier", "second_tier", "e_measure", "dcg"]
+            .iter()
+            .enumerate()
+        {
             let got = stored[key].as_f64().unwrap();
             assert!((got - m[k]).abs() < 1e-12, "{} {key}: {got} vs {}", files[q], m[k]);
             sum[k] += m[k];
         }
     }
-    for (k, key) in ["map", "nn", "first_tier", "second_tier", "e_measure", "dcg"].iter().enumerate() {
+    for (k, key) in ["map", "nn", "first_tier", "second_tier", "e_measure", "dcg"]
+        .iter()
+        .enumerate()
+    {
         let got = report["overall"][key].as_f64().unwrap();
-        assert!((got - sum[k] / 9.0).abs() < 1e-12, "overall {key}: {got} vs {}", sum[k] / 9.0);
+        assert!(
+            (got - sum[k] / 9.0).abs() < 1e-12,
+            "overall {key}: {got} vs {}",
+            sum[k] / 9.0
+        );
     }
 
     // Classes from the file stems, and from a label file (paths relative to it), give the
@@ -135,10 +152,20 @@ fn retrieval_eval_reports_the_measures_of_its_rankings() {
     insta::assert_snapshot!("retrieval_eval_small", text);
 
     // Errors: a shape without a class, a label file naming no file, a file not in it.
-    let o = wfem(&["retrieval", "eval", "--labels", dir.path().join("none.csv").to_str().unwrap()]);
+    let o = wfem(&[
+        "retrieval",
+        "eval",
+        "--labels",
+        dir.path().join("none.csv").to_str().unwrap(),
+    ]);
     assert!(!o.status.success());
     std::fs::write(dir.path().join("bad.csv"), "a.off\n").unwrap();
-    let o = wfem(&["retrieval", "eval", "--labels", dir.path().join("bad.csv").to_str().unwrap()]);
+    let o = wfem(&[
+        "retrieval",
+        "eval",
+        "--labels",
+        dir.path().join("bad.csv").to_str().unwrap(),
+    ]);
     assert!(stderr(&o).contains("bad.csv:1"), "{}", stderr(&o));
     let stray = dir.path().join("0042.off");
     mesh_fem::io::write_mesh(&stray, &mesh_fem::generate::icosphere(1)).unwrap();
@@ -146,6 +173,12 @@ fn retrieval_eval_reports_the_measures_of_its_rankings() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("0042.off"), "{}", stderr(&o));
     let labels = dir.path().join("labels.csv");
-    let o = wfem(&["retrieval", "eval", stray.to_str().unwrap(), "--labels", labels.to_str().unwrap()]);
+    let o = wfem(&[
+        "retrieval",
+        "eval",
+        stray.to_str().unwrap(),
+        "--labels",
+        labels.to_str().unwrap(),
+    ]);
     assert!(stderr(&o).contains("is not in"), "{}", stderr(&o));
 }

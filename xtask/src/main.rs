@@ -292,9 +292,8 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             let collections = collections
                 .iter()
                 .map(|c| {
-                    Collection::from_name(c).ok_or_else(|| {
-                        format!("unknown collection {c:?}: one of {}", Collection::NAMES.join(", "))
-                    })
+                    Collection::from_name(c)
+                        .ok_or_else(|| format!("unknown collection {c:?}: one of {}", Collection::NAMES.join(", ")))
                 })
                 .collect::<Result<Vec<_>, _>>()?;
             let cache = eigen_cache(cache)?;

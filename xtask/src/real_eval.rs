@@ -68,7 +68,10 @@ impl Collection {
         let all = protocol::outside_files(meshes_dir)?;
         Ok(match self {
             // The four-legged animals are in the collection itself.
-            Collection::Shrec11Fourleg => all.into_iter().filter(|f| !f.name.starts_with("shrec07-fourleg")).collect(),
+            Collection::Shrec11Fourleg => all
+                .into_iter()
+                .filter(|f| !f.name.starts_with("shrec07-fourleg"))
+                .collect(),
             _ => all,
         })
     }
@@ -232,9 +235,8 @@ pub fn markdown(results: &[CollectionResult]) -> String {
             let _ = writeln!(s, "| class | {} | baseline |\n|---|---|---|", first.method);
             for c in &first.report.per_class {
                 let b = base.report.per_class.iter().find(|x| x.class == c.class);
-                let f = |m: &shape_retrieval::eval::Measures| {
-                    format!("{:.3} / {:.2} / {:.3}", m.map, m.nn, m.first_tier)
-                };
+                let f =
+                    |m: &shape_retrieval::eval::Measures| format!("{:.3} / {:.2} / {:.3}", m.map, m.nn, m.first_tier);
                 let _ = writeln!(
                     s,
                     "| {} | {} | {} |",

@@ -250,7 +250,10 @@ pub fn surface_noise(mesh: &TriMesh) -> SurfaceNoise {
     }
     variation.sort_unstable_by(f64::total_cmp);
     let k = pairs.len() as f64;
-    let (ms, mm) = (pairs.iter().map(|p| p.0).sum::<f64>() / k, pairs.iter().map(|p| p.1).sum::<f64>() / k);
+    let (ms, mm) = (
+        pairs.iter().map(|p| p.0).sum::<f64>() / k,
+        pairs.iter().map(|p| p.1).sum::<f64>() / k,
+    );
     let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
     for (x, y) in &pairs {
         sxy += (x - ms) * (y - mm);

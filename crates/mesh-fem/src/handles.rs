@@ -279,12 +279,16 @@ pub fn cut_handles(mesh: &TriMesh, max_length: f64) -> Result<CutHandles, MeshEr
         }
         let graph = Graph::new(&current, &topology);
         let n_faces = current.n_faces();
-        let Some(best) = search(&graph, &topology.edges, n_faces) else { break };
+        let Some(best) = search(&graph, &topology.edges, n_faces) else {
+            break;
+        };
         if best.length > max_length * scale {
             break;
         }
         let genus_before = genus(&current, &topology);
-        let Some(opened) = cut_along(&current, &best.cycle) else { break };
+        let Some(opened) = cut_along(&current, &best.cycle) else {
+            break;
+        };
         let first_copy = current.n_vertices() as u32;
         let mut opened_origin = origin.clone();
         opened_origin.resize(opened.n_vertices(), None);
@@ -468,7 +472,11 @@ pub fn unweld(mesh: &TriMesh) -> Unwelded {
             continue;
         }
         let size = |g: u32| roots.iter().filter(|&&r| r == g).count();
-        let keep = groups.iter().copied().max_by_key(|&g| (size(g), std::cmp::Reverse(g))).unwrap_or(groups[0]);
+        let keep = groups
+            .iter()
+            .copied()
+            .max_by_key(|&g| (size(g), std::cmp::Reverse(g)))
+            .unwrap_or(groups[0]);
         for g in groups.into_iter().filter(|&g| g != keep) {
             let copy = positions.len() as u32;
             positions.push(positions[v]);
@@ -522,7 +530,10 @@ fn seeds(graph: &Graph, n: usize) -> Vec<u32> {
                 *m = m.min(x);
             }
         }
-        match (0..n).filter(|&v| nearest[v].is_finite()).max_by(|&a, &b| nearest[a].total_cmp(&nearest[b])) {
+        match (0..n)
+            .filter(|&v| nearest[v].is_finite())
+            .max_by(|&a, &b| nearest[a].total_cmp(&nearest[b]))
+        {
             Some(v) if nearest[v] > 0.0 => next = v as u32,
             _ => break,
         }

@@ -76,7 +76,8 @@ impl SqliteIndex {
             .ok_or_else(|| self.storage("a vector store, but not a wfem retrieval index (no settings)"))?;
         let text = String::from_utf8(text).map_err(|_| self.storage("the index settings are not UTF-8"))?;
         let index = index_from_settings(&text, Vec::new()).map_err(|e| self.located(e))?;
-        let width = index.bags().bag_len(index.vocabulary().vocabulary().size()) + index.bags().global.map_or(0, |g| g.len());
+        let width =
+            index.bags().bag_len(index.vocabulary().vocabulary().size()) + index.bags().global.map_or(0, |g| g.len());
         if store.dimension() != width {
             return Err(self.storage(format!(
                 "vectors of {} values, the settings describe {width}",
@@ -209,7 +210,8 @@ impl IndexStore for SqliteIndex {
 
     fn save_index(&self, index: &RetrievalIndex) -> Result<(), RetrievalError> {
         let settings = index_settings(index).map_err(|e| self.located(e))?;
-        let width = index.bags().bag_len(index.vocabulary().vocabulary().size()) + index.bags().global.map_or(0, |g| g.len());
+        let width =
+            index.bags().bag_len(index.vocabulary().vocabulary().size()) + index.bags().global.map_or(0, |g| g.len());
         let dir = match self.path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),

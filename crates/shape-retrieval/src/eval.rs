@@ -28,7 +28,6 @@
 //! very shapes that are then retrieved, which is optimistic; the report says which was used.
 
 use crate::check;
-use wfem_choice::Choice as _;
 use crate::model::{RetrievalIndex, RetrievalSettings, VocabularyModel};
 use crate::retrieval::average_precision;
 use crate::RetrievalError;
@@ -39,6 +38,7 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
+use wfem_choice::Choice as _;
 
 /// The E-measure looks at this many retrieved shapes (PSB, SHREC).
 pub const E_MEASURE_CUTOFF: usize = 32;
@@ -74,7 +74,12 @@ impl Measures {
         let (p, rc) = (hits(k) / k as f64, hits(k) / r as f64);
         let e_measure = if p + rc > 0.0 { 2.0 * p * rc / (p + rc) } else { 0.0 };
         let gain = |k: usize| if k == 0 { 1.0 } else { 1.0 / ((k + 1) as f64).log2() };
-        let dcg: f64 = relevance.iter().enumerate().filter(|(_, &x)| x).map(|(k, _)| gain(k)).sum();
+        let dcg: f64 = relevance
+            .iter()
+            .enumerate()
+            .filter(|(_, &x)| x)
+            .map(|(k, _)| gain(k))
+            .sum();
         let ideal: f64 = (0..r).map(gain).sum();
         Some(Self {
             map,
@@ -186,13 +191,23 @@ impl EvalReport {
                 m.map, m.nn, m.first_tier, m.second_tier, m.e_measure, m.dcg
             )
         };
-        let width = self.per_class.iter().map(|c| c.class.chars().count()).max().unwrap_or(0).max(7);
+        let width = self
+            .per_class
+            .iter()
+            .map(|c| c.class.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(7);
         let _ = writeln!(
             s,
             "{} shapes, {} classes, {} queries (leave-one-out); vocabulary: {}",
             self.shapes, self.classes, self.queries, self.vocabulary
         );
-        let _ = writeln!(s, "{:<width$}  shapes  mAP     NN      FT      ST      E       DCG", "class");
+        let _ = writeln!(
+            s,
+            "{:<width$}  shapes  mAP     NN      FT      ST      E       DCG",
+            "class"
+        );
         let _ = writeln!(s, "{:<width$}  {:>6}  {}", "overall", self.shapes, row(&self.overall));
         for c in &self.per_class {
             let _ = writeln!(s, "{:<width$}  {:>6}  {}", c.class, c.shapes, row(&c.measures));
@@ -235,7 +250,8 @@ pub fn evaluate_rankings(
             let order = rank(q)?;
             let mut seen = vec![false; n];
             seen[q] = true;
-            let complete = order.len() == n - 1 && order.iter().all(|&j| j < n && !std::mem::replace(&mut seen[j], true));
+            let complete =
+                order.len() == n - 1 && order.iter().all(|&j| j < n && !std::mem::replace(&mut seen[j], true));
             if complete {
                 Ok(order)
             } else {

@@ -101,8 +101,14 @@ impl GlobalKind {
                 .map(|i| Ok(lambda(i)? * area / (4.0 * std::f64::consts::PI * i as f64)))
                 .collect(),
             GlobalKind::Biharmonic => {
-                let inv: Vec<f64> = (1..=eigenvalues).map(|i| lambda(i).map(|l| 1.0 / l)).collect::<Result<_, _>>()?;
-                check::same("eigenvector rows vs weights", weights.len().max(vectors.nrows()), vectors.nrows())?;
+                let inv: Vec<f64> = (1..=eigenvalues)
+                    .map(|i| lambda(i).map(|l| 1.0 / l))
+                    .collect::<Result<_, _>>()?;
+                check::same(
+                    "eigenvector rows vs weights",
+                    weights.len().max(vectors.nrows()),
+                    vectors.nrows(),
+                )?;
                 Ok(biharmonic_histogram(vectors, &inv, weights, area))
             }
         }

@@ -32,9 +32,9 @@ use crate::check;
 use crate::descriptor::{Descriptor, DescriptorParams, ShapeDescriptors};
 use crate::distance::BagDistance;
 use crate::global::GlobalKind;
-use crate::spatial::{ShapeSpectrum, SpatialBag};
 use crate::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalization, TimeSampling};
 use crate::sihks::{scale_invariant_hks, SihksParams, TimeUnit};
+use crate::spatial::{ShapeSpectrum, SpatialBag};
 use crate::standardize::Standardizer;
 use crate::RetrievalError;
 use faer::{Mat, MatRef};
@@ -1419,7 +1419,10 @@ impl VocabularyModel {
         };
         let spectrum = features.spectrum.as_ref().ok_or_else(|| RetrievalError::InvalidModel {
             what: "features",
-            reason: format!("{}: spatial bags need the eigenpairs (ShapeFeatures::attach_spectrum)", features.name),
+            reason: format!(
+                "{}: spatial bags need the eigenpairs (ShapeFeatures::attach_spectrum)",
+                features.name
+            ),
         })?;
         let flow = spatial.histogram(theta.as_ref(), &features.weights, spectrum)?;
         Ok(bag.iter().chain(&flow).map(|x| 0.5 * x).collect())

@@ -76,9 +76,17 @@ impl SpatialBag {
         self.validate()?;
         let (m, v) = (theta.nrows(), theta.ncols());
         check::same("spatial bag: weights vs assignment rows", m, weights.len())?;
-        check::same("spatial bag: eigenvector rows vs assignment rows", m, spectrum.vectors.nrows())?;
+        check::same(
+            "spatial bag: eigenvector rows vs assignment rows",
+            m,
+            spectrum.vectors.nrows(),
+        )?;
         let k = spectrum.values.len();
-        check::same("spatial bag: eigenvector columns vs eigenvalues", k, spectrum.vectors.ncols())?;
+        check::same(
+            "spatial bag: eigenvector columns vs eigenvalues",
+            k,
+            spectrum.vectors.ncols(),
+        )?;
         // W Θ, then P = Φᵀ (W Θ) (k × V).
         let w_theta = Mat::from_fn(m, v, |i, a| weights[i] * theta[(i, a)]);
         let p = spectrum.vectors.transpose() * &w_theta;

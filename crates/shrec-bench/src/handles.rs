@@ -232,7 +232,11 @@ pub fn add_handles(base: &BaseShape, count: usize, rng: &mut SplitMix64) -> Resu
         // A direction across the tube, common to both rims.
         let e = {
             let u = axis.map(|x| x / length);
-            let t = if u[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+            let t = if u[0].abs() < 0.9 {
+                [1.0, 0.0, 0.0]
+            } else {
+                [0.0, 1.0, 0.0]
+            };
             let w = sub(t, u.map(|x| x * dot(t, u)));
             w.map(|x| x / norm(w))
         };

@@ -59,7 +59,10 @@ pub fn fourleg_files(meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
         .map(|e| e.path())
         .filter(|p| p.extension().and_then(|x| x.to_str()) == Some("off"))
         .map(|path| ShapeFile {
-            name: format!("shrec07-fourleg/{}", path.file_name().map(|s| s.to_string_lossy()).unwrap_or_default()),
+            name: format!(
+                "shrec07-fourleg/{}",
+                path.file_name().map(|s| s.to_string_lossy()).unwrap_or_default()
+            ),
             path,
             family: "fourleg".into(),
             transform: None,
@@ -83,7 +86,11 @@ pub struct Described {
 ///
 /// # Errors
 /// The first failure, naming the shape.
-pub fn describe(files: Vec<ShapeFile>, settings: &RetrievalSettings, cache: &EigenCache) -> Result<Described, BenchError> {
+pub fn describe(
+    files: Vec<ShapeFile>,
+    settings: &RetrievalSettings,
+    cache: &EigenCache,
+) -> Result<Described, BenchError> {
     let mut shapes = protocol::load_shapes(files.clone(), &settings.descriptor, cache)?;
     let features = protocol::features(&mut shapes, settings, cache)?;
     Ok(Described { files, features })
@@ -141,7 +148,9 @@ pub fn shape_dna_baseline(files: &[ShapeFile], cache: &EigenCache) -> Result<Eva
             .map_err(wrap)?;
             cache.fill(&file.path, &mut shape, true, &settings)?;
             let area = shape.area();
-            let basis = shape.eigenbasis(true).map_err(BenchError::retrieval(file.name.clone()))?;
+            let basis = shape
+                .eigenbasis(true)
+                .map_err(BenchError::retrieval(file.name.clone()))?;
             Ok(weyl_shape_dna(&basis.values, area, SHAPE_DNA_EIGENVALUES))
         })
         .collect::<Result<_, BenchError>>()?;
@@ -165,6 +174,9 @@ pub fn weyl_shape_dna(values: &[f64], area: f64, m: usize) -> Vec<f64> {
     let mut v = values.to_vec();
     v.sort_by(f64::total_cmp);
     (1..=m)
-        .map(|i| v.get(i).map_or(0.0, |l| l * area / (4.0 * std::f64::consts::PI * i as f64)))
+        .map(|i| {
+            v.get(i)
+                .map_or(0.0, |l| l * area / (4.0 * std::f64::consts::PI * i as f64))
+        })
         .collect()
 }

@@ -161,7 +161,11 @@ fn coherence_tells_noise_from_a_coarse_clean_mesh() {
     use mesh_fem::filter::surface_noise;
     use mesh_fem::generate::torus;
     // Coarse clean meshes: the heights follow the curvature from vertex to vertex.
-    for (name, mesh) in [("bumpy(1)", bumpy(1)), ("torus 10×5", torus(1.0, 0.3, 10, 5)), ("bumpy(4)", bumpy(4))] {
+    for (name, mesh) in [
+        ("bumpy(1)", bumpy(1)),
+        ("torus 10×5", torus(1.0, 0.3, 10, 5)),
+        ("bumpy(4)", bumpy(4)),
+    ] {
         let n = surface_noise(&mesh);
         assert!(n.coherence > 0.3, "{name}: {n:?}");
     }

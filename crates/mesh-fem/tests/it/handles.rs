@@ -55,6 +55,9 @@ fn genus_zero_and_open_meshes_are_left_alone() {
         assert_eq!(c.mesh.faces(), mesh.faces());
     }
     for bad in [-1.0, f64::NAN, f64::INFINITY] {
-        assert!(matches!(cut_handles(&icosphere(1), bad), Err(MeshError::Invalid { .. })), "{bad}");
+        assert!(
+            matches!(cut_handles(&icosphere(1), bad), Err(MeshError::Invalid { .. })),
+            "{bad}"
+        );
     }
 }

@@ -78,7 +78,10 @@ fn collection_measures_by_hand() {
     // b's two queries have one first-tier place each and b1 gave its one to a0; a's three
     // queries have six places and a0 gave one to b0.
     assert_eq!(r.confusions.len(), 2);
-    assert_eq!((r.confusions[0].query.as_str(), r.confusions[0].retrieved.as_str()), ("b", "a"));
+    assert_eq!(
+        (r.confusions[0].query.as_str(), r.confusions[0].retrieved.as_str()),
+        ("b", "a")
+    );
     close(r.confusions[0].share, 0.5);
     close(r.confusions[1].share, 1.0 / 6.0);
     assert_eq!(r.per_query[4].nearest.as_deref(), Some("a0"));
@@ -143,7 +146,10 @@ fn bad_rankings_and_labels_are_errors() {
 #[test]
 fn class_rules() {
     let folder = ClassRule::Folder;
-    assert_eq!(folder.class_of(Path::new("data/chairs/chair_07.off")).unwrap(), "chairs");
+    assert_eq!(
+        folder.class_of(Path::new("data/chairs/chair_07.off")).unwrap(),
+        "chairs"
+    );
     let stem = ClassRule::Stem;
     assert_eq!(stem.class_of(Path::new("tosca/cat10.off")).unwrap(), "cat");
     assert_eq!(stem.class_of(Path::new("david_3.obj")).unwrap(), "david");
@@ -194,7 +200,10 @@ fn label_files() {
 fn labelled_collection() -> (Vec<(String, TriMesh)>, Vec<String>) {
     let stretch = |m: TriMesh, s: [f64; 3]| {
         TriMesh::new(
-            m.positions().iter().map(|p| [s[0] * p[0], s[1] * p[1], s[2] * p[2]]).collect(),
+            m.positions()
+                .iter()
+                .map(|p| [s[0] * p[0], s[1] * p[1], s[2] * p[2]])
+                .collect(),
             m.faces().to_vec(),
         )
         .unwrap()
@@ -202,7 +211,10 @@ fn labelled_collection() -> (Vec<(String, TriMesh)>, Vec<String>) {
     let mut meshes = Vec::new();
     let mut classes = Vec::new();
     for (i, level) in [2u32, 3, 2].into_iter().enumerate() {
-        meshes.push((format!("sphere{i}"), stretch(generate::icosphere(level), [1.0, 1.0, 1.0 + 0.05 * i as f64])));
+        meshes.push((
+            format!("sphere{i}"),
+            stretch(generate::icosphere(level), [1.0, 1.0, 1.0 + 0.05 * i as f64]),
+        ));
         classes.push("sphere".to_string());
     }
     for (i, (minor, nu)) in [(0.4, 24), (0.38, 28), (0.42, 20)].into_iter().enumerate() {
@@ -210,7 +222,10 @@ fn labelled_collection() -> (Vec<(String, TriMesh)>, Vec<String>) {
         classes.push("torus".to_string());
     }
     for (i, (a, level)) in [(2.2, 2u32), (2.0, 3), (2.4, 2)].into_iter().enumerate() {
-        meshes.push((format!("ellipsoid{i}"), stretch(generate::icosphere(level), [a, 1.0, 0.6])));
+        meshes.push((
+            format!("ellipsoid{i}"),
+            stretch(generate::icosphere(level), [a, 1.0, 0.6]),
+        ));
         classes.push("ellipsoid".to_string());
     }
     (meshes, classes)
@@ -247,7 +262,10 @@ fn an_outside_vocabulary_is_reported_as_such() {
     let features = ShapeFeatures::compute_many(&mixed, &settings.descriptor, &settings.bags).unwrap();
     let vocabulary = VocabularyModel::train(&settings.descriptor, &settings.training, &features).unwrap();
     let run_mixed = evaluate_collection(&meshes, &classes, &settings, Some(vocabulary)).unwrap();
-    assert_eq!(run_mixed.report.vocabulary, "trained on 3 shapes, 1 of them indexed (optimistic)");
+    assert_eq!(
+        run_mixed.report.vocabulary,
+        "trained on 3 shapes, 1 of them indexed (optimistic)"
+    );
     let e = evaluate_collection(&meshes, &classes[1..], &settings, None).unwrap_err();
     assert!(matches!(e, RetrievalError::DimensionMismatch { .. }), "{e}");
     let index: &RetrievalIndex = &run.index;

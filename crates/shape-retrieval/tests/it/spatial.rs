@@ -5,12 +5,12 @@ use crate::common::{dense_spectrum, small_collection, small_settings};
 use faer::Mat;
 use mesh_fem::generate::{bumpy, icosphere};
 use shape_retrieval::global::{GlobalKind, BIHARMONIC_BINS};
-use wfem_choice::Choice;
 use shape_retrieval::spatial::{ShapeSpectrum, SpatialBag};
 use shape_retrieval::{
     DescriptorSettings, GlobalSignature, IndexStore, JsonFile, RetrievalError, RetrievalIndex, ShapeFeatures,
     VertexWeights,
 };
+use wfem_choice::Choice;
 
 /// A fixed assignment Θ (n × V, rows summing to 1) from a smooth function of the position.
 fn assignment(mesh: &mesh_fem::TriMesh, v: usize) -> Mat<f64> {
@@ -62,7 +62,9 @@ fn spatial_histogram_is_the_heat_flow_between_words() {
     assert!(matches!(e, RetrievalError::DimensionMismatch { .. }), "{e}");
     let e = bag.histogram(theta.as_ref(), &vec![0.0; n], &spectrum).unwrap_err();
     assert!(matches!(e, RetrievalError::InvalidModel { .. }), "{e}");
-    let e = SpatialBag { time: -1.0 }.histogram(theta.as_ref(), &weights, &spectrum).unwrap_err();
+    let e = SpatialBag { time: -1.0 }
+        .histogram(theta.as_ref(), &weights, &spectrum)
+        .unwrap_err();
     assert!(matches!(e, RetrievalError::InvalidParameter { .. }), "{e}");
 }
 
@@ -125,7 +127,8 @@ fn spatial_indexes_round_trip_and_plain_files_stay_plain() {
     let e = RetrievalIndex::from_parts(index.vocabulary().clone(), index.bags().clone(), broken).unwrap_err();
     assert!(matches!(e, RetrievalError::InvalidModel { .. }), "{e}");
     // Features without their eigenpairs cannot make a spatial bag.
-    let mut f = ShapeFeatures::compute("b", &shapes[0].1, &small_settings().descriptor, &small_settings().bags).unwrap();
+    let mut f =
+        ShapeFeatures::compute("b", &shapes[0].1, &small_settings().descriptor, &small_settings().bags).unwrap();
     f.spectrum = None;
     let e = index.signature(&f).unwrap_err();
     assert!(matches!(e, RetrievalError::InvalidModel { .. }), "{e}");
@@ -176,7 +179,9 @@ fn biharmonic_distribution_is_a_scale_invariant_histogram() {
     };
     let mesh = bumpy(2);
     let a = g.compute(&mut settings.shape(&mesh).unwrap()).unwrap();
-    let b = g.compute(&mut settings.shape(&mesh.scaled(30.0).unwrap()).unwrap()).unwrap();
+    let b = g
+        .compute(&mut settings.shape(&mesh.scaled(30.0).unwrap()).unwrap())
+        .unwrap();
     assert_eq!(a.len(), BIHARMONIC_BINS);
     assert!((a.iter().sum::<f64>() - 1.0).abs() < 1e-12);
     assert!(a.iter().all(|&x| x >= 0.0));
@@ -185,7 +190,11 @@ fn biharmonic_distribution_is_a_scale_invariant_histogram() {
     }
     // A sphere and a stretched sphere have different distributions.
     let long = mesh_fem::TriMesh::new(
-        icosphere(2).positions().iter().map(|p| [3.0 * p[0], p[1], p[2]]).collect(),
+        icosphere(2)
+            .positions()
+            .iter()
+            .map(|p| [3.0 * p[0], p[1], p[2]])
+            .collect(),
         icosphere(2).faces().to_vec(),
     )
     .unwrap();
@@ -227,7 +236,9 @@ fn repair_damped_weights_fade_next_to_added_vertices() {
     let shape = settings.shape(&holed).unwrap();
     assert!(shape.mesh().n_vertices() > shape.described_vertices());
     let capped = VertexWeights::CappedArea { factor: 3.0 }.compute(&shape).unwrap();
-    let damped = VertexWeights::RepairDamped { factor: 3.0, hops: 3 }.compute(&shape).unwrap();
+    let damped = VertexWeights::RepairDamped { factor: 3.0, hops: 3 }
+        .compute(&shape)
+        .unwrap();
     let rim: Vec<usize> = mesh_fem::holes::boundary_loops(&holed)
         .into_iter()
         .flat_map(|l| l.vertices)
@@ -235,10 +246,17 @@ fn repair_damped_weights_fade_next_to_added_vertices() {
         .collect();
     assert!(!rim.is_empty());
     for &v in &rim {
-        assert!(damped[v] < 0.3 * capped[v], "rim vertex {v}: {} vs {}", damped[v], capped[v]);
+        assert!(
+            damped[v] < 0.3 * capped[v],
+            "rim vertex {v}: {} vs {}",
+            damped[v],
+            capped[v]
+        );
     }
     let far = holed.positions().iter().position(|p| p[2] < -0.9).unwrap();
     assert_eq!(damped[far], capped[far]);
-    let e = VertexWeights::RepairDamped { factor: 3.0, hops: 0 }.validate().unwrap_err();
+    let e = VertexWeights::RepairDamped { factor: 3.0, hops: 0 }
+        .validate()
+        .unwrap_err();
     assert!(matches!(e, RetrievalError::InvalidParameter { .. }), "{e}");
 }

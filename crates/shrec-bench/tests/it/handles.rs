@@ -5,7 +5,9 @@ use shrec_bench::handles::{handle_count, HANDLE_MAX_DISTANCE, HANDLE_MIN_GRAPH_D
 use shrec_bench::synth::*;
 
 fn david() -> BaseShape {
-    let dir = mesh_fem::corpus::meshes_dir().unwrap().join("tosca-bcicp-5k/TOSCA_Isometric");
+    let dir = mesh_fem::corpus::meshes_dir()
+        .unwrap()
+        .join("tosca-bcicp-5k/TOSCA_Isometric");
     let (mesh, _) = mesh_fem::io::load(&dir.join("david0.off"), &Default::default()).unwrap();
     BaseShape::new("david0", mesh).unwrap()
 }
@@ -23,7 +25,14 @@ fn handles_raise_the_genus_by_one_each() {
         let stats = mesh_fem::stats(&t.mesh);
         assert!(report.is_usable(), "strength {s}");
         assert_eq!(stats.n_boundary_loops, 0, "strength {s}: closed");
-        assert_eq!((stats.n_components, stats.n_non_manifold_edges, stats.n_non_manifold_vertices), (1, 0, 0));
+        assert_eq!(
+            (
+                stats.n_components,
+                stats.n_non_manifold_edges,
+                stats.n_non_manifold_vertices
+            ),
+            (1, 0, 0)
+        );
         assert_eq!(stats.genus, Some(pairs.len() as i64));
         // χ = V − E + F = 2 − 2g.
         assert_eq!(stats.euler_characteristic, 2 - 2 * pairs.len() as i64, "strength {s}");
@@ -49,8 +58,14 @@ fn handles_raise_the_genus_by_one_each() {
         );
     }
     // Deterministic, and each strength adds handles to the previous ones.
-    let (a, c) = (transform(&b, Class::Handles, 3, 2010).unwrap(), transform(&b, Class::Handles, 3, 2010).unwrap());
+    let (a, c) = (
+        transform(&b, Class::Handles, 3, 2010).unwrap(),
+        transform(&b, Class::Handles, 3, 2010).unwrap(),
+    );
     assert_eq!(a.mesh.positions(), c.mesh.positions());
     let two = transform(&b, Class::Handles, 2, 2010).unwrap();
-    assert_eq!(two.params["handles"].as_array().unwrap()[..], a.params["handles"].as_array().unwrap()[..2]);
+    assert_eq!(
+        two.params["handles"].as_array().unwrap()[..],
+        a.params["handles"].as_array().unwrap()[..2]
+    );
 }

@@ -2,6 +2,6 @@
 //! file; see README, "Running the tests"). Each module is one former `tests/<name>.rs`.
 
 mod eval;
+mod handles;
 mod synth;
 mod transform;
-mod handles;
