@@ -317,7 +317,7 @@ fn fixture() -> Fixture {
     // A retrieval index built by the CLI, and hand-edited ones.
     let built = run(
         &expand(
-            "retrieval build {d}/sphere.off {d}/small.off --out {d}/index.json --words 4",
+            "retrieval build {d}/sphere.off {d}/small.off --out {d}/index.json --words 4 --spatial off",
             &d,
             &d,
         ),

@@ -10,6 +10,7 @@ mod cli_distance;
 mod cli_hks;
 mod cli_index_safety;
 mod cli_issue16;
+mod cli_retrieval_eval;
 mod common;
 mod fuzz_regressions;
 mod hostile;

@@ -7,4 +7,5 @@ pub mod approx;
 pub mod bench;
 pub mod lab;
 pub mod peers;
+pub mod real_eval;
 pub mod test_all;

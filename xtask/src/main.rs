@@ -86,6 +86,29 @@ enum Cmd {
         #[arg(long)]
         cache: Option<PathBuf>,
     },
+    /// Retrieval on real labelled collections (SHREC'11 500-face copy, TOSCA-76) with the
+    /// defaults (or --variants) beside the Shape-DNA baseline; writes docs/RETRIEVAL-RESULTS.md.
+    RealEval {
+        /// Mesh corpus folder.
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Cache eigenbases in this folder.
+        #[arg(long)]
+        cache: Option<PathBuf>,
+        /// Variants: JSON array of {"name": …, "settings": {…}} (partial settings laid over the
+        /// defaults); without it, the defaults alone.
+        #[arg(long)]
+        variants: Option<PathBuf>,
+        /// Comma-separated collections: shrec11, tosca76, shrec11-fourleg.
+        #[arg(long, value_delimiter = ',', default_value = "shrec11,tosca76")]
+        collections: Vec<String>,
+        /// Also evaluate with a vocabulary trained on shapes outside the collection.
+        #[arg(long)]
+        outside: bool,
+        /// Report file whose generated part is rewritten (default: print only).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Measure and write the benchmark report: DIR/BENCHMARKS.md (generated section) and
     /// DIR/bench/*.svg. Full run: 10K/41K/164K vertices (see docs/BENCHMARKS.md), then the
     /// peers table: wfem's CLI against scipy/libigl, whole process (xtask/src/peers.rs).
@@ -261,6 +284,47 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             let cache = eigen_cache(cache)?;
             for v in &variants {
                 xtask::lab::run_variant(v, &meshes_dir, shrec.as_deref(), &cache, seeds)?;
+            }
+        }
+        Cmd::RealEval {
+            meshes,
+            cache,
+            variants,
+            collections,
+            outside,
+            out,
+        } => {
+            use xtask::real_eval::{self, Collection, RealEvalOptions};
+            let meshes_dir = match meshes {
+                Some(d) => d,
+                None => mesh_fem::corpus::meshes_dir()?,
+            };
+            let variants: Vec<xtask::lab::Variant> = match variants {
+                Some(p) => serde_json::from_str(&std::fs::read_to_string(&p)?)?,
+                None => serde_json::from_str(r#"[{"name": "default"}]"#)?,
+            };
+            let collections = collections
+                .iter()
+                .map(|c| {
+                    Collection::from_name(c)
+                        .ok_or_else(|| format!("unknown collection {c:?}: one of {}", Collection::NAMES.join(", ")))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let cache = eigen_cache(cache)?;
+            let results = real_eval::run(&RealEvalOptions {
+                meshes_dir: &meshes_dir,
+                cache: &cache,
+                variants: &variants,
+                collections: &collections,
+                outside,
+            })?;
+            let text = real_eval::markdown(&results);
+            match out {
+                Some(path) => {
+                    real_eval::write_generated(&path, &text)?;
+                    println!("wrote {}", path.display());
+                }
+                None => print!("{text}"),
             }
         }
         Cmd::Bench {

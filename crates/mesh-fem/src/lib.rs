@@ -10,6 +10,7 @@
 //! * [`mtx`]: Matrix Market reading and writing (atomic, shortest round-trip decimals) and `nalgebra-sparse`
 //!   conversions.
 //! * [`filter`]: geometric filters (removal of isolated spikes).
+//! * [`handles`]: thin handles (short non-separating cycles) found and cut.
 //! * [`holes`]: boundary loops and hole filling (smooth patches of new vertices).
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
 //! * [`operators`]: the cotangent stiffness L, the consistent mass B and the lumped mass D of
@@ -38,6 +39,7 @@ pub mod cloud;
 pub mod corpus;
 pub mod filter;
 pub mod generate;
+pub mod handles;
 pub mod holes;
 pub mod intrinsic;
 pub mod io;

@@ -81,7 +81,8 @@ impl SqliteIndex {
             index.vocabulary().descriptor().eigenpairs,
             index.vocabulary().vocabulary().size(),
         )?;
-        let width = index.vocabulary().vocabulary().size() + index.bags().global.map_or(0, |g| g.eigenvalues);
+        let width =
+            index.bags().bag_len(index.vocabulary().vocabulary().size()) + index.bags().global.map_or(0, |g| g.len());
         if store.dimension() != width {
             return Err(self.storage(format!(
                 "vectors of {} values, the settings describe {width}",
@@ -188,7 +189,10 @@ impl SqliteIndex {
 /// A stored vector as a signature: the bag (renormalised when within f32 rounding of sum 1)
 /// and the global part.
 fn signature(settings: &RetrievalIndex, row: &[f32]) -> ShapeSignature {
-    let v = settings.vocabulary().vocabulary().size().min(row.len());
+    let v = settings
+        .bags()
+        .bag_len(settings.vocabulary().vocabulary().size())
+        .min(row.len());
     let mut bag: Vec<f64> = row[..v].iter().map(|&x| f64::from(x)).collect();
     let sum: f64 = bag.iter().sum();
     if (sum - 1.0).abs() <= 1e-4 && sum > 0.0 {
@@ -230,7 +234,8 @@ impl IndexStore for SqliteIndex {
 
     fn save_index(&self, index: &RetrievalIndex) -> Result<(), RetrievalError> {
         let settings = index_settings(index).map_err(|e| self.located(e))?;
-        let width = index.vocabulary().vocabulary().size() + index.bags().global.map_or(0, |g| g.eigenvalues);
+        let width =
+            index.bags().bag_len(index.vocabulary().vocabulary().size()) + index.bags().global.map_or(0, |g| g.len());
         let dir = match self.path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),

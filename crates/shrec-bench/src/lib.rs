@@ -23,7 +23,9 @@
 pub mod approx_eval;
 mod error;
 pub mod eval;
+pub mod handles;
 pub mod protocol;
+pub mod real;
 pub mod synth;
 pub mod transform;
 

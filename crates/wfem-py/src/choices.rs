@@ -78,6 +78,7 @@ registries! {
     "detector" => shape_retrieval::FeatureDetector,
     "bag_distance" => shape_retrieval::BagDistance,
     "metric" => retrieval_store::Metric,
+    "class_from" => shape_retrieval::eval::ClassRule,
 }
 
 /// Registers `choices` and `canonical`.

@@ -546,6 +546,11 @@ pub fn retrieval(py: Python<'_>, e: &RetrievalError) -> PyErr {
             "InvalidDistance",
             fields!(source = *from, target = *to, value = *value),
         ),
+        RetrievalError::Labels { location, reason } => (
+            Class::InvalidInput,
+            "Labels",
+            fields!(location = location, reason = reason),
+        ),
         other => {
             let kind = variant_name(&format!("{other:?}"));
             return raise(py, Class::Retrieval, &kind, message, Vec::new());

@@ -31,6 +31,7 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
         mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER,
     )?;
     m.add("DEFAULT_TARGET_ROUGHNESS", shape_retrieval::DEFAULT_TARGET_ROUGHNESS)?;
+    m.add("DEFAULT_SPATIAL_TIME", shape_retrieval::spatial::DEFAULT_SPATIAL_TIME)?;
     m.add("SHIPPED_DEGREES", shifted_solve::SHIPPED_DEGREES.to_vec())?;
     m.add(
         "PAPER_DESCRIPTORS",

@@ -7,6 +7,7 @@ mod cloud;
 mod corpus;
 mod filter;
 mod generate;
+mod handles;
 mod io_obj_oracle;
 mod io_points;
 mod io_readers;

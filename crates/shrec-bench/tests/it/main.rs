@@ -3,5 +3,6 @@
 
 mod approx_eval;
 mod eval;
+mod handles;
 mod synth;
 mod transform;
