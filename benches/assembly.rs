@@ -31,6 +31,7 @@ fn bench_assembly(c: &mut Criterion) {
     let mesh = icosphere(levels::levels().into_iter().max().unwrap_or(5));
     let params = AssemblyParams {
         lumping: Lumping::Voronoi,
+        ..Default::default()
     };
     group.bench_with_input(BenchmarkId::new("icosphere", mesh.n_vertices()), &mesh, |b, mesh| {
         b.iter_with_large_drop(|| assemble(black_box(mesh), &params))

@@ -10,6 +10,8 @@ DiffusionNet, libigl tutorials):
   automatic times geomspace(4 ln10/λ_k, 4 ln10/λ_2, T) (pyFM ``auto_HKS``), written as .npy;
 * ``operators``: libigl's ``cotmatrix`` and ``massmatrix(..., MASSMATRIX_TYPE_FULL)``, written
   as Matrix Market;
+* ``cloud-laplacian``: robust_laplacian's ``point_cloud_laplacian`` (L and its lumped mass
+  from the k = 30 nearest neighbours) on an (n, 3) ``.npy`` cloud;
 * ``heat``: K_t f = exp(−t B⁻¹L) f by CRAM-16 (the best rational approximation of degree 16,
   8 complex SuperLU factorizations of tL − z_j B with the consistent mass B: the same kernel
   as wfem's, the reference of the issues) or by ``scipy.sparse.linalg.expm_multiply`` on
@@ -208,6 +210,26 @@ def cmd_operators(args):
     )
 
 
+def cmd_cloud_laplacian(args):
+    """robust_laplacian's point_cloud_laplacian (k = 30, mollify_factor = 1e-5) on an (n, 3)
+    .npy cloud; kernel_seconds is the call alone (the file read excluded)."""
+    import numpy as np
+    import robust_laplacian
+
+    points = np.load(args.points)
+    t0 = time.perf_counter()
+    lap, mass = robust_laplacian.point_cloud_laplacian(points, mollify_factor=1e-5, n_neighbors=30)
+    t1 = time.perf_counter()
+    emit(
+        {
+            "peer": "robust_laplacian point_cloud_laplacian",
+            "n": int(points.shape[0]),
+            "nnz": int(lap.nnz),
+            "kernel_seconds": t1 - t0,
+        }
+    )
+
+
 def cmd_heat(args):
     import numpy as np
     import scipy.sparse as sp
@@ -327,6 +349,9 @@ def main():
     p.add_argument("--method", choices=["cram16", "expm"], default="cram16")
     p.add_argument("--out")
     p.set_defaults(run=cmd_heat)
+    p = sub.add_parser("cloud-laplacian", help="robust_laplacian point_cloud_laplacian on an .npy cloud")
+    p.add_argument("points")
+    p.set_defaults(run=cmd_cloud_laplacian)
     p = sub.add_parser("compare", help="relative difference of two .npy arrays")
     p.add_argument("a")
     p.add_argument("b")

@@ -5,12 +5,13 @@ use super::heat::{far_exponent, prepare_kernel, times_pow2};
 use super::output::{short_label, short_labels, write_fields, Column, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, MassArgs, MeshArgs, Output, OutputFormat};
 use clap::Args;
-use mesh_fem::{assemble, AssemblyParams};
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
 use wfem_choice::Choice;
-use wfem_heat::approx::{feature_approximation, ApproxParams, Coefficients, Persistence};
+use wfem_heat::approx::{
+    feature_approximation, ApproxParams, Coefficients, FeatureApproximation, Persistence, ScaleSampling,
+};
 use wfem_heat::{HeatParams, Method};
 
 /// Arguments of `wfem approx`.
@@ -22,18 +23,21 @@ pub struct ApproxArgs {
     /// The per-vertex field f (.npy or .csv, one value per vertex).
     #[arg(long, value_parser = super::input::field_path)]
     pub field: PathBuf,
-    /// Persistence threshold of the anchors, as a fraction of max f − min f (e.g. 0.1), or in
-    /// units of f with --absolute.
+    /// Persistence threshold of the anchors, as a fraction of max f − min f, or in units of f
+    /// with --absolute [default: 0.1, as in the paper's Fig. 13].
     #[arg(long, allow_negative_numbers = true)]
-    pub persistence: f64,
+    pub persistence: Option<f64>,
     /// Read --persistence in units of f instead of as a fraction of the range.
     #[arg(long)]
     pub absolute: bool,
-    /// Number of scales t_i = (i/10) / λ_k, i = 1..N (1..=100).
+    /// Number of scales N (1..=100).
     #[arg(long, default_value_t = 10)]
     pub scales: usize,
-    /// Index k of the eigenvalue λ_k setting the time scale (default min(20, n); 2..=n, at
-    /// most n/10 above 1000 vertices).
+    /// How the scales are sampled.
+    #[arg(long, value_parser = choice::<ScaleSampling>(), default_value = ScaleSampling::default_name())]
+    pub sampling: ScaleSampling,
+    /// Index k of the eigenvalue λ_k setting the coarsest scale 1/λ_k (default min(20, n);
+    /// 2..=n, at most n/10 above 1000 vertices).
     #[arg(long)]
     pub k: Option<usize>,
     /// Coefficients of the global component.
@@ -42,14 +46,49 @@ pub struct ApproxArgs {
     #[command(flatten)]
     #[allow(missing_docs)]
     pub mass: MassArgs,
-    /// Output file: .ply, .npy (+ .json sidecar with the times) or .csv (f, then f_glob and
-    /// f_loc at every scale, named with their t), or .png (one figure each for f, f_glob and
-    /// f_loc at the coarsest scale, anchors highlighted).
+    /// Output file: .ply, .npy (+ .json sidecar with the scales, anchors and coefficients) or
+    /// .csv (f, then f_glob and f_loc at every scale, named with their t), or .png (one figure
+    /// each for f, f_glob and f_loc at the coarsest scale, anchors highlighted).
     #[arg(short = 'o', long = "output", value_parser = Output::parse)]
     pub output: Output,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub render: RenderArgs,
+}
+
+/// What defines every f_glob of a run, for the sidecar: the rule and its formula, the
+/// sampling, the anchors with their persistence and, per scale, t, the anchors with a
+/// coefficient and the coefficients.
+fn record(a: &FeatureApproximation) -> serde_json::Value {
+    let scales: Vec<serde_json::Value> = a
+        .scales
+        .iter()
+        .map(|s| {
+            json!({
+                "t": s.t,
+                "anchors": s.anchors,
+                "coefficients": s.coefficients,
+                "linf_error": s.linf_error,
+                "relative_linf_error": s.relative_linf_error,
+                "anchor_error": s.anchor_error,
+                "critical_points": s.critical_points,
+                "persistent_extrema": s.persistent_extrema,
+            })
+        })
+        .collect();
+    json!({
+        "coefficients": a.coefficients.name(),
+        "formula": a.coefficients.formula(),
+        "sampling": a.sampling.name(),
+        "lambda_k": a.lambda_k,
+        "lambda_max": a.lambda_max,
+        "range": a.range,
+        "threshold": a.threshold,
+        "anchors": a.anchors,
+        "anchor_persistence": a.anchor_persistence,
+        "persistent_extrema": a.persistent_extrema,
+        "scales": scales,
+    })
 }
 
 /// Figure names of a PNG output (f, f_glob, f_loc).
@@ -65,10 +104,18 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         limits::MAX_APPROX_SCALES,
         "number of scales t_i = (i/10)/λ_k (paper: 5 to 10)",
     )?;
-    if !(args.persistence.is_finite() && args.persistence >= 0.0) {
+    let defaults = ApproxParams::default();
+    let persistence = match (args.persistence, defaults.persistence) {
+        (Some(x), _) if args.absolute => Persistence::Absolute(x),
+        (Some(x), _) => Persistence::Relative(x),
+        (None, _) if args.absolute => return Err(CliError::Usage("--absolute needs --persistence".into())),
+        (None, default) => default,
+    };
+    let (Persistence::Relative(threshold) | Persistence::Absolute(threshold)) = persistence;
+    if !(threshold.is_finite() && threshold >= 0.0) {
         return Err(CliError::OutOfRange {
             flag: "--persistence",
-            value: args.persistence.to_string(),
+            value: threshold.to_string(),
             allowed: "a finite number ≥ 0".into(),
             why: if args.absolute {
                 "a persistence in units of f".into()
@@ -101,9 +148,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     }
     limits::columns("--scales", 1 + 2 * args.scales, n)?;
     let mass = args.mass.mass()?;
-    let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams::for_mass(mass))
-    })?;
+    let ops = progress::run("assembling L, B, D", || input.assemble(mass.lumping()))?;
     let kernel = prepare_kernel(
         &ops,
         HeatParams {
@@ -118,13 +163,13 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let params = ApproxParams {
         k,
         scales: args.scales,
-        persistence: if args.absolute {
-            Persistence::Absolute(args.persistence * 2f64.powi(-e))
-        } else {
-            Persistence::Relative(args.persistence)
+        persistence: match persistence {
+            Persistence::Absolute(x) => Persistence::Absolute(x * 2f64.powi(-e)),
+            relative => relative,
         },
         coefficients: args.coefficients,
-        ..ApproxParams::default()
+        sampling: args.sampling,
+        ..defaults
     };
     let mut approx = progress::run(format!("λ_{k}, anchors and {} scales", args.scales), || {
         feature_approximation(&input.mesh, &kernel, &times_pow2(&f, -e), &params)
@@ -133,8 +178,14 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         for s in &mut approx.scales {
             s.global = times_pow2(&s.global, e);
             s.local = times_pow2(&s.local, e);
+            s.coefficients = times_pow2(&s.coefficients, e);
             s.linf_error *= 2f64.powi(e);
         }
+        approx.threshold *= 2f64.powi(e);
+        approx.range *= 2f64.powi(e);
+    }
+    if let Some(w) = approx.warning() {
+        progress::warn(&w.message(&|p, v| format!("--{p}{}", v.map(|v| format!(" {v}")).unwrap_or_default())));
     }
     let field_name = args
         .field
@@ -206,6 +257,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     meta.insert("mass".into(), json!(mass.name()));
     meta.insert("lambda_k".into(), json!({ "k": k, "value": approx.lambda_k }));
     meta.insert("anchors".into(), json!(approx.anchors));
+    meta.insert("approximation".into(), record(&approx));
     let how = Writing {
         render: args.render,
         highlight: &approx.anchors,
@@ -216,14 +268,16 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let written = write_fields(&args.output, &input.mesh, &columns, how)?;
     writeln!(
         out,
-        "{} vertices, {} critical points of f, {} anchors (persistence {}{}), λ_{} = {:.6e}",
+        "{} vertices, {} critical points of f, {} anchors (persistence {}{}), λ_{} = {:.6e}; {} coefficients, {} scales",
         n,
         approx.input_critical_points,
         approx.anchors.len(),
-        args.persistence,
+        threshold,
         if args.absolute { "" } else { " × range" },
         k,
-        approx.lambda_k
+        approx.lambda_k,
+        approx.coefficients.name(),
+        approx.sampling.name(),
     )?;
     writeln!(
         out,

@@ -50,6 +50,7 @@ pub const DEMO_TIMES: [f64; 4] = [0.002, 0.01, 0.05, 0.25];
 fn demo_files() -> Vec<String> {
     let mut files = vec!["basis.ply".to_string(), "report.md".to_string()];
     files.extend(DEMO_TIMES.iter().map(|t| format!("basis_t{}.png", short_label(*t))));
+    files.extend(super::demo_approx::files());
     files
 }
 
@@ -169,7 +170,14 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
     bar.done();
     timed("write PLY + PNG", start);
 
-    let report = demo_report(&mesh, anchor, eigs, &timings, &rows);
+    let start = Instant::now();
+    let approx = progress::run("feature-driven approximation", || {
+        super::demo_approx::section(&mesh, &fast, &args.out, &mut set, &views)
+    })?;
+    timed("feature-driven approximation (10 scales, 7 figures)", start);
+
+    let mut report = demo_report(&mesh, anchor, eigs, &timings, &rows);
+    report.push_str(&approx);
     let report_path = args.out.join("report.md");
     set.stage(&report_path, |w| w.write_all(report.as_bytes()))?;
     set.commit()?;
@@ -179,7 +187,7 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
         "wrote {}, {} and {} PNG files",
         ply.display(),
         report_path.display(),
-        DEMO_TIMES.len()
+        DEMO_TIMES.len() + super::demo_approx::files().len()
     )?;
     Ok(())
 }

@@ -5,7 +5,6 @@ use super::heat::{check_degree, prepare_kernel};
 use super::output::{short_label, write_fields, Column, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
 use clap::Args;
-use mesh_fem::{assemble, AssemblyParams};
 use serde_json::json;
 use std::io::Write;
 use wfem_choice::Choice;
@@ -57,9 +56,7 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
     let i = input.vertex("--from", args.from)?;
     let times = args.time_unit.resolve("--t", &input.mesh, &[args.t])?;
     let t = times.absolute[0];
-    let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams::default())
-    })?;
+    let ops = progress::run("assembling L, B, D", || input.assemble(Default::default()))?;
     let method = args.degree.map_or_else(Method::default, Method::rational);
     let kernel = prepare_kernel(
         &ops,

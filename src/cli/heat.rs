@@ -4,7 +4,7 @@ use super::choice::choice;
 use super::output::{short_labels, Column, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, MassArgs, MeshArgs, Output};
 use clap::Args;
-use mesh_fem::{assemble, AssemblyParams, FemOperators};
+use mesh_fem::FemOperators;
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
@@ -265,9 +265,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         _ => 0,
     };
     let method = args.method.resolve(eigs)?;
-    let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams::for_mass(mass))
-    })?;
+    let ops = progress::run("assembling L, B, D", || input.assemble(mass.lumping()))?;
     let kernel = prepare_kernel(
         &ops,
         HeatParams {

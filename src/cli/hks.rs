@@ -6,7 +6,7 @@ use super::{limits, progress, read_usable, CliError, MassArgs, MeshArgs, Output}
 use clap::Args;
 use serde_json::json;
 use shape_retrieval::hks::TimeSampling;
-use shape_retrieval::{mesh_hks, HksMethod, HksSource, HksStep, MeshHksParams, RetrievalError, DEFAULT_NUM_TIMES};
+use shape_retrieval::{operators_hks, HksMethod, HksSource, HksStep, MeshHksParams, RetrievalError, DEFAULT_NUM_TIMES};
 use std::io::Write;
 use wfem_choice::Choice;
 use wfem_heat::diagonal::DiagonalMethod;
@@ -56,7 +56,7 @@ fn retrieval(e: RetrievalError) -> CliError {
     }
 }
 
-/// A spinner per step of [`mesh_hks`].
+/// A spinner per step of [`operators_hks`].
 struct Steps {
     current: Option<progress::Step>,
 }
@@ -86,7 +86,7 @@ impl Steps {
 }
 
 /// `wfem hks`: writes the n × T heat kernel signature `h(i, t) = Σ_k e^{−λ_k t} φ_k(i)²` of
-/// the chosen kernel (shape_retrieval's [`mesh_hks`]).
+/// the chosen kernel (shape_retrieval::mesh_hks).
 pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let count = if args.times.is_empty() {
         limits::count(
@@ -148,9 +148,13 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         ..Default::default()
     };
     let mut steps = Steps { current: None };
-    let result = mesh_hks(&input.mesh, &params, None, &mut |s| steps.start(s));
+    steps.start(HksStep::Assembly);
+    let fem = input.assemble(mass.lumping());
+    let result = fem
+        .map_err(CliError::from)
+        .and_then(|fem| operators_hks(&fem, &params, None, &mut |s| steps.start(s)).map_err(retrieval));
     steps.finish();
-    let hks = result.map_err(retrieval)?;
+    let hks = result?;
     // Given times keep their labels (in their unit); automatic ones are in the mesh's units.
     let (labels, unit) = if args.times.is_empty() {
         (short_labels(&hks.times), "")

@@ -4,16 +4,25 @@
 use super::progress;
 use super::CliError;
 use clap::Args;
-use mesh_fem::io::{load, read_field, LoadOptions, LoadReport};
-use mesh_fem::{repair, MeshError, RepairOptions, RepairReport, RepairStep, TriMesh};
+use mesh_fem::io::{load_shape, read_field, LoadOptions, LoadReport, MeshFormat, Shape};
+use mesh_fem::{
+    assemble, assemble_cloud, repair, AssemblyParams, CloudParams, FemOperators, Laplacian, Lumping, MeshError,
+    PointCloud, RepairOptions, RepairReport, RepairStep, TriMesh,
+};
 use std::path::{Path, PathBuf};
 use wfem_choice::Choice;
 
 /// The mesh argument shared by every subcommand that reads a mesh.
 #[derive(Args, Clone, Debug, Default)]
 pub struct MeshArgs {
-    /// Mesh file (.obj, .ply, .off, .stl).
+    /// Mesh file (.obj, .ply, .off, .stl), or a point cloud (.ply without faces, .xyz, .pts,
+    /// .csv, .npy): its operators come from local triangulations of the 30 nearest neighbours.
     pub mesh: PathBuf,
+    /// Laplacian of a mesh: cotan (the default, paper Eq. (3)) or robust (intrinsic Delaunay
+    /// L of the tufted cover: for non-manifold, badly oriented or degenerate meshes; its
+    /// lumped heat is never negative). Point clouds always use the robust construction.
+    #[arg(long, value_parser = super::choice::choice::<Laplacian>(), default_value = Laplacian::default_name())]
+    pub laplacian: Laplacian,
     /// Fan-triangulate polygons with more than three corners instead of refusing them.
     #[arg(long)]
     pub triangulate: bool,
@@ -29,6 +38,11 @@ pub struct MeshArgs {
 }
 
 impl MeshArgs {
+    /// The Laplacian of `--laplacian` (the library default when absent).
+    pub fn laplacian(&self) -> Laplacian {
+        self.laplacian
+    }
+
     /// The mesh argument for a file, with no triangulation and no repair.
     pub fn new(mesh: PathBuf) -> Self {
         Self {
@@ -116,9 +130,29 @@ pub struct Input {
     pub file_vertices: usize,
     /// The mesh file's name (for titles and metadata).
     pub name: String,
+    /// The point cloud, when the file holds one; `mesh` is then its neighbourhood mesh (the
+    /// merged local triangles on the points, for figures and graph searches).
+    pub cloud: Option<PointCloud>,
+    /// The Laplacian of `--laplacian`.
+    pub laplacian: Laplacian,
 }
 
 impl Input {
+    /// L, B, D of the input: of the mesh with the chosen Laplacian, or of the point cloud.
+    ///
+    /// # Errors
+    /// Assembly errors.
+    pub fn assemble(&self, lumping: Lumping) -> Result<FemOperators, MeshError> {
+        let params = AssemblyParams {
+            lumping,
+            laplacian: self.laplacian,
+        };
+        match &self.cloud {
+            Some(cloud) => Ok(assemble_cloud(cloud, &CloudParams::default(), &params)?.operators),
+            None => assemble(&self.mesh, &params),
+        }
+    }
+
     /// Whether the vertex numbering differs from the file's (vertices dropped or merged).
     pub fn renumbered(&self) -> bool {
         self.repair
@@ -243,9 +277,36 @@ pub fn read_input(args: &MeshArgs) -> Result<Input, CliError> {
         .file_name()
         .map(|f| f.to_string_lossy().into_owned())
         .unwrap_or_else(|| args.mesh.display().to_string());
-    let (mesh, load_report) = progress::run(format!("reading {name}"), || {
-        load(&args.mesh, &LoadOptions::with_triangulation(args.triangulate))
+    let shape = progress::run(format!("reading {name}"), || {
+        load_shape(&args.mesh, &LoadOptions::with_triangulation(args.triangulate))
     })?;
+    let laplacian = args.laplacian();
+    let (mesh, load_report, cloud) = match shape {
+        Shape::Mesh(mesh, report) => (mesh, report, None),
+        Shape::Cloud(cloud) => {
+            if !args.repair.is_empty() {
+                return Err(CliError::Usage(format!(
+                    "{name} is a point cloud: --repair applies to meshes (merge duplicate points beforehand)"
+                )));
+            }
+            let ops = progress::run("local triangulations of the point cloud", || {
+                assemble_cloud(&cloud, &CloudParams::default(), &AssemblyParams::default())
+            })?;
+            progress::note(&format!(
+                "{name}: a point cloud of {} points; operators from the {} nearest neighbours ({} triangles)",
+                cloud.n_points(),
+                ops.report.n_neighbours,
+                ops.report.n_triangles
+            ));
+            let report = LoadReport {
+                format: MeshFormat::Ply,
+                welded_vertices: 0,
+                triangulated_polygons: 0,
+                notes: vec!["point cloud".into()],
+            };
+            (ops.neighbourhood, report, Some(cloud))
+        }
+    };
     let file_vertices = mesh.n_vertices();
     let mut input = Input {
         mesh,
@@ -253,6 +314,8 @@ pub fn read_input(args: &MeshArgs) -> Result<Input, CliError> {
         repair: None,
         file_vertices,
         name,
+        cloud,
+        laplacian,
     };
     if !args.repair.is_empty() {
         let (repaired, report) = progress::run("repairing", || repair(&input.mesh, &opts))?;
@@ -296,8 +359,35 @@ fn report_repair(args: &MeshArgs, before: &TriMesh, after: &TriMesh, report: &Re
 /// Those of [`read_input`]; the first fatal problem of [`mesh_fem::validate`].
 pub fn read_usable(args: &MeshArgs) -> Result<Input, CliError> {
     let input = read_input(args)?;
-    let report = progress::run("validating", || mesh_fem::validate(&input.mesh).into_result())?;
+    if input.cloud.is_some() {
+        return Ok(input);
+    }
+    let report = progress::run("validating", || Ok::<_, CliError>(mesh_fem::validate(&input.mesh)))?;
+    let non_manifold = report
+        .warnings()
+        .filter(|p| {
+            matches!(
+                p,
+                mesh_fem::Problem::NonManifoldEdge { .. } | mesh_fem::Problem::NonManifoldVertex { .. }
+            )
+        })
+        .count();
+    let robust = matches!(input.laplacian, Laplacian::Robust(_));
+    if non_manifold > 0 && !robust {
+        progress::warn(&format!(
+            "{}: {non_manifold} non-manifold edges or vertices: the cotangent L can have positive off-diagonal \
+             entries there and heat can go negative; --laplacian {} gives an M-matrix",
+            input.name,
+            Laplacian::Robust(mesh_fem::RobustParams::default()).name()
+        ));
+    }
+    if robust {
+        // The robust Laplacian takes degenerate faces (mollified); only what it refuses is fatal.
+        say_warnings(&input.name, &report);
+        return Ok(input);
+    }
     say_warnings(&input.name, &report);
+    report.into_result()?;
     Ok(input)
 }
 

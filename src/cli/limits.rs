@@ -3,33 +3,18 @@
 
 use super::CliError;
 
-/// Diffusion times per run (`heat --t`, `hks --times`, `hks --scales`): each costs one solve
-/// (heat) or one n-vector (hks), and every output holds n × T values.
-pub const MAX_TIMES: usize = 1000;
-
 /// PNG figures per run (one per field; each is a ≈1 MB image rendered from four views).
 pub const MAX_FIGURES: usize = 64;
-
-/// `approx --scales`: each scale costs one K_t application and two n-vectors (paper: 5–10).
-pub const MAX_APPROX_SCALES: usize = 100;
 
 /// `demo --level`: level 8 has 655,362 vertices (the largest size of the benchmarks); level 9
 /// would need ≈ 10 GB for the spectral part of the demo.
 pub const MAX_DEMO_LEVEL: u32 = 8;
 
-/// Memory budget of the partial eigensolver (its Krylov basis and projected matrix).
-pub const EIGENSOLVER_MEMORY: u64 = 4 << 30;
-
-/// Meshes with at most this many vertices may ask for any number of eigenpairs up to n (every
-/// method takes well under a second there).
-pub const SMALL_MESH: usize = 1000;
-
-/// Above [`SMALL_MESH`], the spectral method takes at most n / `SPECTRAL_FRACTION` eigenpairs:
-/// beyond that the shift-invert Lanczos costs more than an exact method (5,000-vertex cat:
-/// k = 200 in 3 s, k = 500 in 27 s, k = 1000 in 175 s, the dense decomposition 20–45 s, and
-/// k = n took 24 min), so asking for more is refused with a pointer to `--method dense` or
-/// `--method fast` rather than silently switching method.
-pub const SPECTRAL_FRACTION: usize = 10;
+// The library's bounds (shared with Python), named here by their flags.
+pub use wfem_heat::limits::{
+    partial_eigensolver_bytes, EIGENSOLVER_MEMORY, MAX_APPROX_SCALES, MAX_TIMES, OUTPUT_MEMORY, SMALL_MESH,
+    SPECTRAL_FRACTION,
+};
 
 fn out_of_range(flag: &'static str, value: impl ToString, allowed: String, why: impl Into<String>) -> CliError {
     CliError::OutOfRange {
@@ -79,9 +64,6 @@ pub fn times(flag: &'static str, ts: &[f64]) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Memory budget of one n × T output array (the CLI holds it and its columns).
-pub const OUTPUT_MEMORY: u64 = 2 << 30;
-
 /// `count` output columns of n values each must fit [`OUTPUT_MEMORY`].
 pub fn columns(flag: &'static str, count: usize, n: usize) -> Result<(), CliError> {
     let bytes = 8 * count as u64 * n as u64;
@@ -114,24 +96,13 @@ pub fn descriptor_eigenpairs(k: usize, n: usize) -> Result<usize, CliError> {
     Ok(k)
 }
 
-/// Memory in bytes of [`wfem_heat::Eigenbasis::partial`] for k pairs of an n-vertex mesh: the
-/// basis V and MV (n × d each) and the projected matrix (d × d), d = min(n, max(6k, k + 200)).
-pub fn partial_eigensolver_bytes(n: usize, k: usize) -> u64 {
-    let d = (6 * k as u64).max(k as u64 + 200).min(n as u64);
-    8 * (2 * n as u64 * d + d * d)
-}
-
 /// A number of eigenpairs k for an n-vertex mesh computed by the partial eigensolver: in
 /// 1..=n and within [`EIGENSOLVER_MEMORY`].
 pub fn eigenpairs(flag: &'static str, k: usize, n: usize) -> Result<usize, CliError> {
     count(flag, k, 1, n, &format!("the mesh has {n} vertices"))?;
     let bytes = partial_eigensolver_bytes(n, k);
     if bytes > EIGENSOLVER_MEMORY {
-        let max = (1..=k)
-            .rev()
-            .step_by((k / 64).max(1))
-            .find(|&k| partial_eigensolver_bytes(n, k) <= EIGENSOLVER_MEMORY)
-            .unwrap_or(1);
+        let max = wfem_heat::limits::max_eigenpairs(n, k);
         return Err(out_of_range(
             flag,
             k,
@@ -166,12 +137,10 @@ pub fn spectral_eigenpairs(k: usize, n: usize) -> Result<usize, CliError> {
     Ok(k)
 }
 
-/// `retrieval build --eigs` (per shape; the descriptors need 100–300) and `--words`.
-pub const MAX_RETRIEVAL_EIGS: usize = 1000;
-/// `retrieval build --words`: the vocabulary size (Shape Google: 48 to a few thousand).
-pub const MAX_WORDS: usize = 65_536;
+pub use shape_retrieval::limits::{MAX_RETRIEVAL_EIGS, MAX_WORDS};
 
-/// The sizes of `retrieval build`.
+/// The sizes of `retrieval build` (the library's bounds, [`shape_retrieval::limits`], named
+/// by their flags).
 pub fn retrieval_sizes(eigs: usize, words: usize) -> Result<(), CliError> {
     count("--eigs", eigs, 1, MAX_RETRIEVAL_EIGS, "eigenpairs per shape")?;
     count("--words", words, 1, MAX_WORDS, "vocabulary size")?;

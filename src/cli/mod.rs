@@ -12,6 +12,7 @@
 mod approx;
 pub mod choice;
 mod demo;
+mod demo_approx;
 mod distance;
 mod heat;
 mod input;
@@ -30,7 +31,7 @@ pub use input::{load_usable, read_input, read_usable, MeshArgs};
 pub use output::{Output, OutputFormat};
 
 use clap::Args;
-use mesh_fem::{assemble, AssemblyParams, Lumping, Mass, MeshError};
+use mesh_fem::{Lumping, Mass, MeshError};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use wfem_choice::Choice;
@@ -264,10 +265,7 @@ pub fn operators(args: &OperatorsArgs, out: &mut dyn Write) -> Result<(), CliErr
     const FILES: [&str; 3] = ["stiffness.mtx", "mass.mtx", "lumped_mass.mtx"];
     output::check_out_dir(&args.out, &FILES, &[&args.input.mesh])?;
     let input = read_usable(&args.input)?;
-    let lumping = args.lumped;
-    let ops = progress::run("assembling L, B, D", || {
-        assemble(&input.mesh, &AssemblyParams { lumping })
-    })?;
+    let ops = progress::run("assembling L, B, D", || input.assemble(args.lumped))?;
     output::create_out_dir(&args.out)?;
     progress::run("writing Matrix Market files", || {
         mesh_fem::mtx::write_operators(&args.out, &ops)

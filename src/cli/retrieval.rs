@@ -5,23 +5,30 @@
 //!   meshes and saves it;
 //! * `build` indexes meshes: it trains a vocabulary on them (optimistic when the same shapes
 //!   are then evaluated) or reuses one (`--vocab`), and stores every bag;
+//! * `eval` indexes labelled meshes and reports leave-one-out retrieval measures
+//!   ([`shape_retrieval::eval`]);
 //! * `query` ranks the indexed meshes by distance to a query mesh: one descriptor computation
 //!   and one scan of the index.
 //!
-//! The defaults are [`shape_retrieval::RetrievalSettings::default`]: isolated spikes put back,
-//! rough (noisy) shapes smoothed by the heat kernel down to a roughness of 0.1 edge lengths and
-//! holes with rims up to 3√A closed by smooth patches that are not themselves described (clean,
-//! closed shapes are left as they are), then SI-HKS with times `t = A·2^τ`, τ ∈ [−12, 1]
-//! (A = surface area; exactly scale invariant), 5 Fourier magnitudes, k = 100, z-scored,
-//! 48 words, soft assignment, vertex areas capped at 3 medians, χ² distance. TOSCA-76 (76
-//! shapes, leave-one-out, `cargo xtask tosca-eval`): mAP 0.997 with the vocabulary trained on
-//! the 76 (optimistic), 0.998 with one trained on 54 other shapes. Everything is recorded in
+//! The defaults are [`shape_retrieval::RetrievalSettings::default`]: pinched vertices split,
+//! isolated spikes put back, rough and incoherent (noisy, not merely coarse) shapes smoothed by
+//! the heat kernel down to a roughness of 0.1 edge lengths, holes with rims up to 3√A closed by
+//! smooth patches that are not themselves described, thin handles (cycles up to 0.35√A) cut
+//! (clean, closed shapes of genus 0 are left as they are), then SI-HKS with times `t = A·2^τ`,
+//! τ ∈ [−12, 1] (A = surface area; exactly scale invariant), 5 Fourier magnitudes, k = 100,
+//! z-scored, 96 words, soft assignment, vertex areas capped at 3 medians, spatially sensitive
+//! bags (heat flow between words at t = A/256), χ² distance. SHREC'11 (600 shapes, 30 classes,
+//! `cargo xtask real-eval`, docs/RETRIEVAL-RESULTS.md): mAP 0.986 against 0.980 for Shape-DNA;
+//! TOSCA-76 0.996. Everything is recorded in
 //! the vocabulary and index files (JSON, see [`shape_retrieval::store`]).
 
 use super::choice::choice;
 use super::{check_output, load_usable, CliError, MeshArgs};
 use clap::{Args, Subcommand};
 use retrieval_store::SqliteIndex;
+use shape_retrieval::eval::ClassRule;
+use shape_retrieval::global::GlobalKind;
+use shape_retrieval::spatial::SpatialBag;
 use shape_retrieval::Descriptor;
 use shape_retrieval::{
     BagDistance, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexStore, JsonFile,
@@ -79,6 +86,9 @@ pub enum RetrievalAction {
         /// optimistic when those same meshes are then used to measure retrieval.
         #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
         vocab: Option<PathBuf>,
+        /// Replace `--out` if it exists (without it an existing index is never overwritten).
+        #[arg(long)]
+        force: bool,
         #[command(flatten)]
         #[allow(missing_docs)]
         descriptor: DescriptorArgs,
@@ -91,6 +101,44 @@ pub enum RetrievalAction {
         #[command(flatten)]
         #[allow(missing_docs)]
         strict: StrictArg,
+    },
+    /// Evaluate retrieval on labelled meshes: index them, rank every shape against all the
+    /// others from its stored signature (leave-one-out) and report mAP, nearest neighbour, first
+    /// and second tier, E-measure and DCG, overall and per class, with the most confused
+    /// classes.
+    ///
+    /// Classes come from `--labels` (lines `file,class`, paths relative to the label file) or
+    /// from each path (`--class-from`). Without `--vocab` the vocabulary is trained on the
+    /// evaluated shapes themselves, which is optimistic: for an honest number train one on
+    /// other shapes with `wfem retrieval vocab` and pass it with `--vocab`.
+    Eval {
+        /// Mesh files (with `--labels`: only these of the label file; default all of them).
+        files: Vec<PathBuf>,
+        /// Label file: one `file,class` per line (an optional `file,class` header).
+        #[arg(long)]
+        labels: Option<PathBuf>,
+        /// Without `--labels`, a file's class is the folder holding it (`folder`, default) or
+        /// its name without extension and digits (`stem`: cat10.off → cat).
+        #[arg(long, conflicts_with = "labels", value_parser = choice::<ClassRule>())]
+        class_from: Option<ClassRule>,
+        /// Reuse a vocabulary from `wfem retrieval vocab` (recommended: trained on other shapes).
+        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
+        vocab: Option<PathBuf>,
+        /// Also write the report (with every query) as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Also save the index (SQLite, or JSON for `.json`).
+        #[arg(long)]
+        index: Option<PathBuf>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        descriptor: DescriptorArgs,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        training: TrainingArgs,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        bags: BagArgs,
     },
     /// Add meshes to a SQLite index (their bags use the stored vocabulary; nothing is rebuilt).
     Add {
@@ -278,7 +326,7 @@ fn number_or_off(flag: &str, text: &Option<String>) -> Result<Option<Option<f64>
 #[derive(Args, Clone, Debug)]
 pub struct TrainingArgs {
     /// Vocabulary size V.
-    #[arg(long, default_value_t = 48)]
+    #[arg(long, default_value_t = shape_retrieval::DEFAULT_WORDS)]
     pub words: usize,
     /// k-means seed.
     #[arg(long, default_value_t = 0)]
@@ -298,9 +346,16 @@ pub struct BagArgs {
     /// inflated vertex areas (spikes, slivers) cannot dominate a bag; `off` for plain areas.
     #[arg(long, value_name = "C|off")]
     pub area_cap: Option<String>,
-    /// Fuse with the Shape-DNA ln(λ_i·A), i = 1…M, at weight W: `M:W` (e.g. `20:0.5`).
+    /// Spatially sensitive bags (Shape Google Sect. 4.2): the bag also holds the heat that
+    /// flows between words in time t = C·A (default 2⁻⁸ = 0.00390625); `off` for plain bags.
+    #[arg(long, value_name = "C|off")]
+    pub spatial: Option<String>,
+    /// Fuse with a global spectral signature of M eigenvalues at weight W: `M:W` (e.g. `40:0.3`).
     #[arg(long)]
     pub fusion: Option<String>,
+    /// The global signature of `--fusion`.
+    #[arg(long, requires = "fusion", value_parser = choice::<GlobalKind>(), default_value = GlobalKind::default_name())]
+    pub fusion_kind: GlobalKind,
 }
 
 fn missing_times(descriptor: Descriptor) -> CliError {
@@ -321,7 +376,10 @@ impl DescriptorArgs {
             settings.descriptor.hole_filling = v.map(|max_perimeter| HoleFilling { max_perimeter });
         }
         if let Some(v) = number_or_off("--denoise", &self.denoise)? {
-            settings.descriptor.denoising = v.map(|roughness| Denoising { roughness });
+            settings.descriptor.denoising = v.map(|roughness| Denoising {
+                roughness,
+                ..Default::default()
+            });
         }
         let sihks_only = [
             ("--tau-min", self.tau_min.is_some()),
@@ -378,12 +436,16 @@ impl BagArgs {
         if let Some(v) = number_or_off("--area-cap", &self.area_cap)? {
             settings.bags.weights = v.map_or(VertexWeights::Area, |factor| VertexWeights::CappedArea { factor });
         }
+        if let Some(v) = number_or_off("--spatial", &self.spatial)? {
+            settings.bags.spatial = v.map(|time| SpatialBag { time });
+        }
         settings.bags.global = match &self.fusion {
             None => None,
             Some(text) => {
                 let bad = || CliError::Usage(format!("--fusion {text:?}: expected M:W, e.g. 20:0.5"));
                 let (m, w) = text.split_once(':').ok_or_else(bad)?;
                 Some(GlobalSignature {
+                    kind: self.fusion_kind,
                     eigenvalues: m.trim().parse().map_err(|_| bad())?,
                     weight: w.trim().parse().map_err(|_| bad())?,
                 })
@@ -397,11 +459,13 @@ impl BagArgs {
 /// among them.
 fn load_all(
     files: &[PathBuf],
-    out: &std::path::Path,
+    outputs: &[&std::path::Path],
     refused: &mut Refused,
 ) -> Result<Vec<(String, mesh_fem::TriMesh)>, CliError> {
     for f in files {
-        check_output(f, out)?;
+        for out in outputs {
+            check_output(f, out)?;
+        }
     }
     let bar = super::progress::bar(files.len(), "reading shapes");
     let mut meshes = Vec::with_capacity(files.len());
@@ -433,7 +497,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             descriptor.apply(&mut settings)?;
             training.apply(&mut settings);
             let mut refused = Refused::new(*strict);
-            let meshes = load_all(files, path, &mut refused)?;
+            let meshes = load_all(files, &[path], &mut refused)?;
             let features = describe_all(&meshes, &settings.descriptor, &settings.bags, &mut refused)?;
             let vocabulary = VocabularyModel::train(&settings.descriptor, &settings.training, &features)?;
             JsonFile::new(path).save_vocabulary(&vocabulary)?;
@@ -452,33 +516,22 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             files,
             out: path,
             vocab,
+            force,
             descriptor,
             training,
             bags,
             strict,
         } => {
-            let mut settings = RetrievalSettings::default();
-            bags.apply(&mut settings)?;
-            let vocabulary = match vocab {
-                Some(v) => {
-                    check_output(v, path)?;
-                    let vocabulary = JsonFile::new(v).load_vocabulary()?;
-                    super::limits::retrieval_sizes(vocabulary.descriptor().eigenpairs, vocabulary.vocabulary().size())?;
-                    Some(vocabulary)
-                }
-                None => {
-                    super::limits::retrieval_sizes(descriptor.eigs, training.words)?;
-                    descriptor.apply(&mut settings)?;
-                    training.apply(&mut settings);
-                    None
-                }
-            };
+            let inputs: Vec<&std::path::Path> = files.iter().chain(vocab).map(PathBuf::as_path).collect();
+            shape_retrieval::check_index_output(path, &inputs, *force)?;
+            let (settings, vocabulary) =
+                settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &[path])?;
             let from = match vocab {
                 Some(v) => format!("the vocabulary of {}", v.display()),
                 None => "a vocabulary trained on these shapes (optimistic if they are also the test set)".into(),
             };
             let mut refused = Refused::new(*strict);
-            let meshes = load_all(files, path, &mut refused)?;
+            let meshes = load_all(files, &[path], &mut refused)?;
             // RetrievalIndex::build, shape by shape: a bar per shape, refused shapes left out.
             let descriptor = vocabulary.as_ref().map_or(&settings.descriptor, |v| v.descriptor());
             let features = describe_all(&meshes, descriptor, &settings.bags, &mut refused)?;
@@ -504,6 +557,42 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             )?;
             refused.report(files.len(), "the index was built")?;
         }
+        RetrievalAction::Eval {
+            files,
+            labels,
+            class_from,
+            vocab,
+            json,
+            index,
+            descriptor,
+            training,
+            bags,
+        } => {
+            let outputs: Vec<&std::path::Path> = json.iter().chain(index).map(PathBuf::as_path).collect();
+            let labelled = labelled_files(files, labels.as_deref(), class_from.unwrap_or_default())?;
+            let (settings, vocabulary) =
+                settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &outputs)?;
+            let paths: Vec<PathBuf> = labelled.iter().map(|(f, _)| f.clone()).collect();
+            // Every labelled shape is needed: one that cannot be read is an error.
+            let meshes = load_all(&paths, &outputs, &mut Refused::new(StrictArg { strict: true }))?;
+            let classes: Vec<String> = labelled.into_iter().map(|(_, c)| c).collect();
+            let run = shape_retrieval::eval::evaluate_collection(&meshes, &classes, &settings, vocabulary)?;
+            if let Some(p) = json {
+                let text = serde_json::to_string_pretty(&run.report)
+                    .map_err(|e| CliError::Usage(format!("{}: {e}", p.display())))?;
+                mesh_fem::io::write_atomic(p, |w| w.write_all(text.as_bytes()))?;
+            }
+            if let Some(p) = index {
+                index_file(p).save_index(&run.index)?;
+            }
+            write!(out, "{}", run.report.to_text())?;
+            if vocab.is_none() {
+                super::progress::note(
+                    "for an honest evaluation train a vocabulary on other shapes \
+                     (`wfem retrieval vocab OTHER... --out vocab.json`) and pass `--vocab vocab.json`",
+                );
+            }
+        }
         RetrievalAction::Add {
             index: path,
             files,
@@ -519,7 +608,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             let (settings, _) = store.open()?;
             stored_sizes(&settings)?;
             let mut refused = Refused::new(*strict);
-            let meshes = load_all(files, path, &mut refused)?;
+            let meshes = load_all(files, &[path], &mut refused)?;
             let bar = super::progress::bar(meshes.len(), "describing shapes");
             let mut entries = Vec::with_capacity(meshes.len());
             for (name, mesh) in &meshes {
@@ -529,7 +618,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             }
             bar.done();
             refused.check_some(entries.len(), files.len())?;
-            store.append(&entries)?;
+            store.append(&settings, &entries)?;
             writeln!(
                 out,
                 "added {} to {}",
@@ -578,6 +667,73 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
     Ok(())
 }
 
+/// The settings of `build`/`eval` and the vocabulary to use: the one of `--vocab` (its
+/// descriptor settings win), or none (trained on the indexed shapes with the given options).
+fn settings_and_vocabulary(
+    vocab: Option<&std::path::Path>,
+    descriptor: &DescriptorArgs,
+    training: &TrainingArgs,
+    bags: &BagArgs,
+    outputs: &[&std::path::Path],
+) -> Result<(RetrievalSettings, Option<VocabularyModel>), CliError> {
+    let mut settings = RetrievalSettings::default();
+    bags.apply(&mut settings)?;
+    match vocab {
+        Some(v) => {
+            for out in outputs {
+                check_output(v, out)?;
+            }
+            let vocabulary = JsonFile::new(v).load_vocabulary()?;
+            super::limits::retrieval_sizes(vocabulary.descriptor().eigenpairs, vocabulary.vocabulary().size())?;
+            Ok((settings, Some(vocabulary)))
+        }
+        None => {
+            super::limits::retrieval_sizes(descriptor.eigs, training.words)?;
+            descriptor.apply(&mut settings)?;
+            training.apply(&mut settings);
+            Ok((settings, None))
+        }
+    }
+}
+
+/// The files of `eval` with their classes: from the label file (restricted to `files` if any
+/// are given) or from each path by the class rule.
+fn labelled_files(
+    files: &[PathBuf],
+    labels: Option<&std::path::Path>,
+    rule: ClassRule,
+) -> Result<Vec<(PathBuf, String)>, CliError> {
+    use shape_retrieval::eval::read_label_file;
+    match labels {
+        Some(l) => {
+            let all = read_label_file(l)?;
+            if files.is_empty() {
+                return Ok(all);
+            }
+            files
+                .iter()
+                .map(|f| {
+                    all.iter()
+                        .find(|(g, _)| {
+                            g == f || matches!((g.canonicalize(), f.canonicalize()), (Ok(a), Ok(b)) if a == b)
+                        })
+                        .cloned()
+                        .ok_or_else(|| CliError::Usage(format!("{} is not in {}", f.display(), l.display())))
+                })
+                .collect()
+        }
+        None => {
+            if files.is_empty() {
+                return Err(CliError::Usage("give mesh files, or --labels with a label file".into()));
+            }
+            Ok(files
+                .iter()
+                .map(|f| rule.class_of(f).map(|c| (f.clone(), c)))
+                .collect::<Result<_, _>>()?)
+        }
+    }
+}
+
 /// The stored settings pass the same bounds as `build`'s options (a hand-edited k would
 /// otherwise start an eigensolve of any size).
 fn stored_sizes(index: &RetrievalIndex) -> Result<(), CliError> {
@@ -600,14 +756,39 @@ fn index_file(path: &std::path::Path) -> Box<dyn IndexStore> {
     }
 }
 
-/// Whether an existing index file is SQLite (by its 16-byte header), else JSON. Regular files
-/// only: a FIFO is refused, not waited on.
+/// Whether an existing index file is SQLite (by its 16-byte header) or JSON (a `.json` name
+/// or a document starting with `{`); anything else is refused here rather than parsed as JSON.
+/// Regular files only: a FIFO is refused, not waited on.
 fn is_sqlite(path: &std::path::Path) -> Result<bool, CliError> {
     use std::io::Read;
     let mut file = mesh_fem::io::open_regular_file(path)?;
     let mut head = [0u8; 16];
-    let n = file
-        .read(&mut head)
-        .map_err(|e| CliError::Usage(format!("{}: {e}", path.display())))?;
-    Ok(n == 16 && &head == b"SQLite format 3\0")
+    let mut n = 0;
+    while n < head.len() {
+        match file.read(&mut head[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) => return Err(CliError::Usage(format!("{}: {e}", path.display()))),
+        }
+    }
+    if n == 16 && &head == b"SQLite format 3\0" {
+        return Ok(true);
+    }
+    let json_name = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    let json_text = head[..n].iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'{');
+    if json_name || json_text {
+        return Ok(false);
+    }
+    Err(CliError::Usage(format!(
+        "{} is not a wfem index: {} (an index is an SQLite file or a JSON document written by `wfem retrieval build`)",
+        path.display(),
+        if n == 0 {
+            "the file is empty".to_string()
+        } else {
+            "neither SQLite nor JSON".to_string()
+        }
+    )))
 }

@@ -59,11 +59,17 @@ fn errors_print_one_line_and_exit_nonzero() {
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.starts_with("wfem: error:"), "{err}");
 
-    let unknown = dir.path().join("mesh.xyz");
+    let unknown = dir.path().join("mesh.abc");
     std::fs::write(&unknown, "1 2 3\n").unwrap();
     let o = wfem(&["info", unknown.to_str().unwrap()]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("unknown mesh format"), "{}", stderr(&o));
+    // .xyz is a point cloud (issue #27); one point is too few.
+    let cloud = dir.path().join("mesh.xyz");
+    std::fs::write(&cloud, "1 2 3\n").unwrap();
+    let o = wfem(&["info", cloud.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("at least 3"), "{}", stderr(&o));
 }
 
 #[test]
@@ -236,9 +242,15 @@ fn demo_writes_ply_png_and_report() {
         .unwrap()
         .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "png"))
         .count();
-    assert_eq!(pngs, 4);
+    // Four K_t e_i figures, then f, f_glob, f_loc and f_glob at four persistences (Fig. 12–13).
+    assert_eq!(pngs, 4 + 7);
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| 0.25 |"), "{report}");
+    assert!(report.contains("## Feature-driven approximation"), "{report}");
+    assert!(
+        report.contains("![f_glob](approx_glob.png)") && report.contains("| 40 % |"),
+        "{report}"
+    );
 }
 
 /// `--backend` selects how the rational method solves its shifted systems; every backend gives

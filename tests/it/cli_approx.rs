@@ -2,6 +2,7 @@
 
 use std::path::Path;
 use std::process::Command;
+use wfem_choice::Choice;
 
 fn wfem(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_wfem"))
@@ -175,4 +176,90 @@ fn approx_rejects_bad_input() {
     ]);
     assert!(!o.status.success());
     assert!(stderr(&o).starts_with("wfem: error:"), "{}", stderr(&o));
+}
+
+/// Issue #24: `wfem approx MESH --field F -o OUT` with no other option runs the library's
+/// default decomposition (the same numbers as `feature_approximation` with
+/// `ApproxParams::default()`) and meets the paper's 2 % at the finest scale on the
+/// benchmark's small cases (docs/APPROX-RESULTS.md); the sidecar records the scales, the
+/// anchors and the coefficients; a noisy field gets a warning naming the options.
+#[test]
+fn issue_24_defaults_on_the_benchmark_small_cases() {
+    use shrec_bench::approx_eval::{load_case, noise, BenchField, SMALL_CASES};
+    use wfem_heat::approx::{feature_approximation, ApproxParams};
+    let meshes = mesh_fem::corpus::meshes_dir().expect("the mesh corpus is required (or set WFEM_MESHES)");
+    let dir = tempfile::tempdir().unwrap();
+    for case in SMALL_CASES {
+        let (mesh, kernel, lambda_k) = load_case(&meshes, &case).unwrap();
+        let fields: &[BenchField] = if case.mesh.contains("398") {
+            &BenchField::ALL
+        } else {
+            &[BenchField::Coordinate]
+        };
+        for field in fields {
+            let f = field.values(&mesh, &kernel, lambda_k).unwrap();
+            let csv = dir.path().join("f.csv");
+            std::fs::write(&csv, f.iter().map(|v| format!("{v:.17e}\n")).collect::<String>()).unwrap();
+            let out = dir.path().join("a.npy");
+            let path = meshes.join(case.mesh);
+            let o = wfem(&[
+                "approx",
+                path.to_str().unwrap(),
+                "--field",
+                csv.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ]);
+            assert!(o.status.success(), "{}: {}", case.name, stderr(&o));
+            assert!(!stderr(&o).contains("warning"), "{}: {}", case.name, stderr(&o));
+            let meta: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(dir.path().join("a.json")).unwrap()).unwrap();
+            let record = &meta["approximation"];
+            let library = feature_approximation(&mesh, &kernel, &f, &ApproxParams::default()).unwrap();
+            assert_eq!(record["coefficients"], library.coefficients.name());
+            assert_eq!(record["sampling"], library.sampling.name());
+            assert_eq!(record["anchors"], serde_json::json!(library.anchors));
+            let scales = record["scales"].as_array().unwrap();
+            assert_eq!(scales.len(), library.scales.len());
+            for (s, l) in scales.iter().zip(&library.scales) {
+                assert!((s["t"].as_f64().unwrap() - l.t).abs() <= 1e-12 * l.t);
+                assert_eq!(s["anchors"], serde_json::json!(l.anchors));
+                let c: Vec<f64> = serde_json::from_value(s["coefficients"].clone()).unwrap();
+                assert_eq!(c.len(), l.coefficients.len());
+                for (a, b) in c.iter().zip(&l.coefficients) {
+                    assert!((a - b).abs() <= 1e-9 * (1.0 + b.abs()), "{}: {a} vs {b}", case.name);
+                }
+                let e = s["relative_linf_error"].as_f64().unwrap();
+                assert!((e - l.relative_linf_error).abs() <= 1e-9, "{} {field:?}", case.name);
+                if l.anchors.len() == library.anchors.len() {
+                    assert!(s["anchor_error"].as_f64().unwrap() < 1e-6, "{} {field:?}", case.name);
+                }
+            }
+            let finest = scales[0]["relative_linf_error"].as_f64().unwrap();
+            assert!(finest < 0.02, "{} {field:?}: {finest}", case.name);
+        }
+        // The noisy coordinate: the warning names the persistence and the smooth rule.
+        let z: Vec<f64> = mesh.positions().iter().map(|p| p[2]).collect();
+        let range = z.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)) - z.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+        let noisy: Vec<f64> = z.iter().zip(noise(z.len(), range, 0.05)).map(|(a, b)| a + b).collect();
+        let csv = dir.path().join("noisy.csv");
+        std::fs::write(&csv, noisy.iter().map(|v| format!("{v:.17e}\n")).collect::<String>()).unwrap();
+        let out = dir.path().join("n.npy");
+        let path = meshes.join(case.mesh);
+        let o = wfem(&[
+            "approx",
+            path.to_str().unwrap(),
+            "--field",
+            csv.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains("wfem: warning:") && err.contains("--persistence") && err.contains("--coefficients smooth"),
+            "{}: {err}",
+            case.name
+        );
+    }
 }

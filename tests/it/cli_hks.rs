@@ -77,6 +77,7 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
         &mesh,
         &AssemblyParams {
             lumping: Lumping::Voronoi,
+            ..Default::default()
         },
     )
     .unwrap();
@@ -382,7 +383,10 @@ fn retrieval_cleaning_is_selectable_and_checked() {
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&vocab).unwrap()).unwrap();
     // Written as null (a missing field would read as the default, on).
     assert!(v["descriptor"]["despiking"].is_null(), "{}", v["descriptor"]);
-    assert_eq!(v["descriptor"]["denoising"], serde_json::json!({"roughness": 0.2}));
+    assert_eq!(
+        v["descriptor"]["denoising"],
+        serde_json::json!({"roughness": 0.2, "max_coherence": 0.1})
+    );
     assert_eq!(
         v["descriptor"]["hole_filling"],
         serde_json::json!({"max_perimeter": 1.5})
@@ -413,9 +417,10 @@ fn retrieval_cleaning_is_selectable_and_checked() {
 fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     // `vocab` and `build` with no option write the documented defaults (issue #13): SI-HKS of the
     // wFEM kernel, area time unit, τ ∈ [−12, 1] step 1/8, α = 2, K = 5, k = 100, isolated
-    // spikes put back (threshold 3), holes up to 3√A closed, rough shapes denoised to roughness
-    // 0.1, z-scored, 48 words, soft assignment, areas capped at 3 medians, χ², no fusion; `build --vocab` reuses the
-    // vocabulary as it was written.
+    // spikes put back (threshold 3), rough and incoherent shapes denoised to roughness 0.1,
+    // holes up to 3√A closed, handles up to 0.35√A cut, z-scored, 96 words, soft assignment,
+    // areas capped at 3 medians, spatially sensitive bags at t = A/256, χ², no fusion; `build
+    // --vocab` reuses the vocabulary as it was written.
     let dir = tempfile::tempdir().unwrap();
     let mut files = Vec::new();
     for (name, mesh) in [
@@ -445,13 +450,14 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
             "descriptor": {"kind": "si-hks", "alpha": 2.0, "tau_min": -12.0, "tau_max": 1.0,
                            "tau_step": 0.125, "frequencies": 5},
             "despiking": {"threshold": 3.0},
-            "denoising": {"roughness": 0.1},
-            "hole_filling": {"max_perimeter": 3.0}
+            "denoising": {"roughness": 0.1, "max_coherence": 0.1},
+            "hole_filling": {"max_perimeter": 3.0},
+            "topology_repair": {"max_handle": 0.35}
         })
     );
-    assert_eq!(v["training"]["words"], 48);
+    assert_eq!(v["training"]["words"], 96);
     assert_eq!(v["training"]["standardize"], true);
-    assert_eq!(v["words"].as_array().unwrap().len(), 48);
+    assert_eq!(v["words"].as_array().unwrap().len(), 96);
     assert!(v["words"]
         .as_array()
         .unwrap()
@@ -475,7 +481,7 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     assert_eq!(
         i["bags"],
         serde_json::json!({"weights": {"kind": "capped-area", "factor": 3.0}, "assignment": "normalized",
-                           "distance": "chi-squared", "global": null})
+                           "distance": "chi-squared", "global": null, "spatial": {"time": 0.00390625}})
     );
     assert_eq!(i["entries"].as_array().unwrap().len(), 3);
     for e in i["entries"].as_array().unwrap() {
@@ -485,7 +491,8 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
             .iter()
             .map(|x| x.as_f64().unwrap())
             .collect();
-        assert_eq!(bag.len(), 48);
+        // 96 words and the 96·97/2 pairs of the spatial histogram.
+        assert_eq!(bag.len(), 96 + 96 * 97 / 2);
         assert!((bag.iter().sum::<f64>() - 1.0).abs() < 1e-12);
     }
     // `--area-cap off`: plain vertex areas; a cap that is not a positive number is refused.
@@ -498,7 +505,7 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
         let plain = dir.path().join("plain.json");
         let mut args = vec!["retrieval", "build"];
         args.extend(files.iter().map(|s| s.as_str()));
-        args.extend(["--out", plain.to_str().unwrap(), "--area-cap", cap]);
+        args.extend(["--out", plain.to_str().unwrap(), "--area-cap", cap, "--force"]);
         let o = wfem(&args);
         match expected {
             Some(weights) => {

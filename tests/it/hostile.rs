@@ -317,7 +317,7 @@ fn fixture() -> Fixture {
     // A retrieval index built by the CLI, and hand-edited ones.
     let built = run(
         &expand(
-            "retrieval build {d}/sphere.off {d}/small.off --out {d}/index.json --words 4",
+            "retrieval build {d}/sphere.off {d}/small.off --out {d}/index.json --words 4 --spatial off",
             &d,
             &d,
         ),
@@ -845,13 +845,21 @@ fn approx_rows() -> Vec<Row> {
             "--field {d}/f.csv --persistence 0.1 --coefficients interpolate -o {o}/a.csv",
             ok(&[Csv("a.csv", N, 21)]),
         ),
-        // The least-squares global component overshoots a constant field of 1e308 by ≈2× at
-        // the anchors (consistent-mass projection), beyond the largest double: a typed refusal
-        // saying so; the proportional rule (feature values) stays below |f| and is written.
+        // A field of 1e308 is decomposed at a scale 2^−e and scaled back, so even the
+        // least-squares rule stays finite: written, with the warning that it is far from f
+        // (the proportional rule and the anchored default are written too).
         approx(
-            "--field {d}/big.csv --persistence 0.1 -o {o}/a.csv",
-            Typed(&["f_glob", "beyond the largest finite number"]),
+            "--field {d}/big.csv --persistence 0.1 --coefficients least-squares -o {o}/a.csv",
+            ok(&[Csv("a.csv", N, 21)]),
         ),
+        approx("--field {d}/big.csv -o {o}/a.csv", ok(&[Csv("a.csv", N, 21)])),
+        // The library's defaults without options; --absolute needs a value.
+        approx("--field {d}/f.csv -o {o}/a.csv", ok(&[Csv("a.csv", N, 21)])),
+        approx(
+            "--field {d}/f.csv --absolute -o {o}/a.csv",
+            Typed(&["--absolute needs --persistence"]),
+        ),
+        approx("--field {d}/f.csv --coefficients magic -o {o}/a.csv", Clap),
         approx(
             "--field {d}/big.csv --persistence 0.1 --coefficients feature-values -o {o}/a.csv",
             ok(&[Csv("a.csv", N, 21)]),
@@ -1114,7 +1122,7 @@ fn retrieval_rows() -> Vec<Row> {
         ),
         row(
             "retrieval query {d}/f.csv {d}/sphere.off",
-            Typed(&["not a wfem-retrieval-index file"]),
+            Typed(&["is not a wfem index"]),
         ),
         row("retrieval bogus", Clap),
     ]

@@ -3,8 +3,10 @@
 
 #![warn(missing_docs)]
 
+pub mod approx;
 pub mod bench;
 pub mod lab;
 pub mod peers;
+pub mod real_eval;
 pub mod test_all;
 pub mod wheel;

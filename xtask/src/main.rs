@@ -86,6 +86,29 @@ enum Cmd {
         #[arg(long)]
         cache: Option<PathBuf>,
     },
+    /// Retrieval on real labelled collections (SHREC'11 500-face copy, TOSCA-76) with the
+    /// defaults (or --variants) beside the Shape-DNA baseline; writes docs/RETRIEVAL-RESULTS.md.
+    RealEval {
+        /// Mesh corpus folder.
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Cache eigenbases in this folder.
+        #[arg(long)]
+        cache: Option<PathBuf>,
+        /// Variants: JSON array of {"name": …, "settings": {…}} (partial settings laid over the
+        /// defaults); without it, the defaults alone.
+        #[arg(long)]
+        variants: Option<PathBuf>,
+        /// Comma-separated collections: shrec11, tosca76, shrec11-fourleg.
+        #[arg(long, value_delimiter = ',', default_value = "shrec11,tosca76")]
+        collections: Vec<String>,
+        /// Also evaluate with a vocabulary trained on shapes outside the collection.
+        #[arg(long)]
+        outside: bool,
+        /// Report file whose generated part is rewritten (default: print only).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Measure and write the benchmark report: DIR/BENCHMARKS.md (generated section) and
     /// DIR/bench/*.svg. Full run: 10K/41K/164K vertices (see docs/BENCHMARKS.md), then the
     /// peers table: wfem's CLI against scipy/libigl, whole process (xtask/src/peers.rs).
@@ -113,6 +136,20 @@ enum Cmd {
     /// The `wfem` Python wheel (abi3: one wheel for CPython >= 3.10; maturin, release profile)
     /// into target/wheels: `pip install target/wheels/wfem-*.whl`.
     Wheel,
+    /// The feature-driven approximation f = f_glob + f_loc (paper Sect. 4.2, Fig. 12–13) on
+    /// real meshes, smooth and noisy maps, default beside the paper's formula; writes
+    /// docs/APPROX-RESULTS.md.
+    ApproxEval {
+        /// Mesh corpus folder.
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Report file (default: print to stdout).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Only the small cases (the ones the test suites use).
+        #[arg(long)]
+        small: bool,
+    },
     /// The whole test suite, Rust and Python (`cargo test-all`, README's test command):
     /// `cargo test --workspace --locked`, then the `wfem` Python package built into a venv
     /// under the target directory and its pytest suite.
@@ -252,6 +289,47 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 xtask::lab::run_variant(v, &meshes_dir, shrec.as_deref(), &cache, seeds)?;
             }
         }
+        Cmd::RealEval {
+            meshes,
+            cache,
+            variants,
+            collections,
+            outside,
+            out,
+        } => {
+            use xtask::real_eval::{self, Collection, RealEvalOptions};
+            let meshes_dir = match meshes {
+                Some(d) => d,
+                None => mesh_fem::corpus::meshes_dir()?,
+            };
+            let variants: Vec<xtask::lab::Variant> = match variants {
+                Some(p) => serde_json::from_str(&std::fs::read_to_string(&p)?)?,
+                None => serde_json::from_str(r#"[{"name": "default"}]"#)?,
+            };
+            let collections = collections
+                .iter()
+                .map(|c| {
+                    Collection::from_name(c)
+                        .ok_or_else(|| format!("unknown collection {c:?}: one of {}", Collection::NAMES.join(", ")))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let cache = eigen_cache(cache)?;
+            let results = real_eval::run(&RealEvalOptions {
+                meshes_dir: &meshes_dir,
+                cache: &cache,
+                variants: &variants,
+                collections: &collections,
+                outside,
+            })?;
+            let text = real_eval::markdown(&results);
+            match out {
+                Some(path) => {
+                    real_eval::write_generated(&path, &text)?;
+                    println!("wrote {}", path.display());
+                }
+                None => print!("{text}"),
+            }
+        }
         Cmd::Bench {
             quick,
             smoke,
@@ -292,6 +370,27 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 wheel.display(),
                 wheel.display()
             );
+        }
+        Cmd::ApproxEval { meshes, out, small } => {
+            let meshes_dir = match meshes {
+                Some(d) => d,
+                None => mesh_fem::corpus::meshes_dir()?,
+            };
+            let cases: &[shrec_bench::approx_eval::ApproxCase] = if small {
+                &shrec_bench::approx_eval::SMALL_CASES
+            } else {
+                &shrec_bench::approx_eval::APPROX_CASES
+            };
+            let machine = xtask::bench::Machine::probe();
+            let start = std::time::Instant::now();
+            let mut results = Vec::new();
+            for case in cases {
+                let t0 = std::time::Instant::now();
+                results.push(shrec_bench::approx_eval::evaluate_case(&meshes_dir, case)?);
+                eprintln!("{}: {:.1} s", case.name, t0.elapsed().as_secs_f64());
+            }
+            let text = xtask::approx::markdown(&results, &machine, start.elapsed().as_secs_f64());
+            emit(&text, out)?;
         }
         Cmd::TestAll {
             python_only,

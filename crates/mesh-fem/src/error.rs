@@ -198,4 +198,77 @@ pub enum MeshError {
         message: String,
     },
     // ---- end of variants added by the validate/stats/mtx work ----
+
+    // ---- variants added by the robust Laplacian and point-cloud work (branch `robust-points`) ----
+    /// A numeric parameter is out of its range.
+    #[error("parameter {name} = {value} is invalid: expected {expected}")]
+    InvalidParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// The allowed range, in words.
+        expected: &'static str,
+    },
+    /// The intrinsic triangulation became numerically degenerate (a triangle of zero or
+    /// non-finite area), e.g. with mollification turned off on a mesh with a flat face.
+    #[error("intrinsic triangle {triangle} has edge lengths {lengths:?}, not a valid triangle; use a mollification factor > 0")]
+    DegenerateIntrinsicTriangle {
+        /// Triangle of the intrinsic triangulation.
+        triangle: usize,
+        /// Its three edge lengths.
+        lengths: [f64; 3],
+    },
+    /// The intrinsic Delaunay flips did not finish within their bound (a safety net against
+    /// rounding cycles; not expected to happen).
+    #[error("intrinsic Delaunay flipping did not finish after {flips} flips on {n_edges} edges")]
+    FlipLimit {
+        /// Flips done.
+        flips: usize,
+        /// Edges of the triangulation.
+        n_edges: usize,
+    },
+    /// A point cloud has too few points.
+    #[error("the point cloud has {n_points} points; at least {minimum} are needed")]
+    TooFewPoints {
+        /// Points found.
+        n_points: usize,
+        /// The minimum.
+        minimum: usize,
+    },
+    /// A point's coordinate or normal is NaN or infinite.
+    #[error("point {point} has a non-finite {what} {position:?}")]
+    NonFinitePoint {
+        /// Point index (0-based).
+        point: usize,
+        /// The offending vector as read.
+        position: [f64; 3],
+        /// "coordinate" or "normal".
+        what: &'static str,
+    },
+    /// The normals of a point cloud are not one per point.
+    #[error("the point cloud has {expected} points but {found} normals")]
+    NormalsLength {
+        /// Normals given.
+        found: usize,
+        /// Points.
+        expected: usize,
+    },
+    /// Two points of a cloud have identical coordinates.
+    #[error("point {point} has the same coordinates as point {duplicate_of}; merge duplicate points first (repair duplicate-vertices)")]
+    DuplicatePoint {
+        /// The later point.
+        point: usize,
+        /// The earlier point with the same coordinates.
+        duplicate_of: usize,
+    },
+    /// A point of a cloud is in no local triangle.
+    #[error("point {point} is in no local triangle: its {n_neighbours} nearest neighbours are collinear with it or project onto it; use more neighbours or drop the point")]
+    DegenerateNeighbourhood {
+        /// Point index (0-based).
+        point: usize,
+        /// Neighbours used.
+        n_neighbours: usize,
+    },
+    // ---- end of the robust Laplacian and point-cloud block ----
 }

@@ -3,7 +3,9 @@
 //! * [`despike`]: finds isolated spikes (impulsive "shot" noise: single vertices pulled far off
 //!   the surface) and puts them back, as the harmonic fill of their neighbours.
 //! * [`roughness`]: how rough a surface is at the scale of its edges, curvature and resolution
-//!   aside (what decides whether shape retrieval denoises a shape).
+//!   aside, and [`surface_noise`]: the same with the coherence of the heights, which tells
+//!   noise from a coarse clean mesh (together they decide whether shape retrieval denoises a
+//!   shape).
 
 use crate::{MeshError, TriMesh};
 
@@ -181,6 +183,30 @@ impl Links {
 /// on the TOSCA shapes of 5K vertices, 0.17 and 0.4 under additive noise of 0.1 and 0.5 mean
 /// edge lengths. 0 when no vertex qualifies (a mesh that is all boundary).
 pub fn roughness(mesh: &TriMesh) -> f64 {
+    surface_noise(mesh).roughness
+}
+
+/// The edge-scale heights of a surface summarised: [`roughness`] and coherence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceNoise {
+    /// [`roughness`]: the median of `|s_i − mean_j s_j|`, in local edge lengths.
+    pub roughness: f64,
+    /// The correlation coefficient, over the interior vertices, between the height `s_i` and
+    /// the mean height of its neighbours `mean_j s_j` (0 when it is undefined).
+    pub coherence: f64,
+}
+
+/// The roughness and the coherence of the edge-scale heights `s_i` (defined at [`roughness`]).
+///
+/// On a smooth surface, however coarse, the heights follow the curvature, which changes slowly
+/// from a vertex to its neighbours: the coherence is clearly positive (0.4–0.75 on the TOSCA
+/// shapes of 5K vertices, 0.16–0.75 on the 600 SHREC'11 shapes of ~250 vertices, whose
+/// roughness is 0.05–0.18, half of them above 0.1). Noise makes the heights independent from
+/// vertex to vertex, and a vertex pushed up lowers the heights of its neighbours, so noise
+/// makes the coherence small or negative: −0.33 … 0.02 on TOSCA shapes with additive noise of
+/// 0.2–0.5 mean edge lengths (roughness 0.18–0.30), −0.07 … 0.17 at 0.1. A coarse clean mesh
+/// can be as rough as a noisy one, never as incoherent.
+pub fn surface_noise(mesh: &TriMesh) -> SurfaceNoise {
     let links = Links::new(mesh.faces(), mesh.n_vertices());
     let p = mesh.positions();
     let mut normals = vec![[0.0f64; 3]; mesh.n_vertices()];
@@ -205,19 +231,42 @@ pub fn roughness(mesh: &TriMesh) -> f64 {
             Some(crate::vec3::dot(d, normals[i]) / length / h).filter(|s| s.is_finite())
         })
         .collect();
-    let mut variation: Vec<f64> = (0..links.n())
+    let pairs: Vec<(f64, f64)> = (0..links.n())
         .filter_map(|i| {
             let s = heights[i]?;
             let around: Vec<f64> = links.neighbours(i).filter_map(|j| heights[j]).collect();
             if around.is_empty() {
                 return None;
             }
-            Some((s - around.iter().sum::<f64>() / around.len() as f64).abs())
+            Some((s, around.iter().sum::<f64>() / around.len() as f64))
         })
         .collect();
+    let mut variation: Vec<f64> = pairs.iter().map(|(s, m)| (s - m).abs()).collect();
     if variation.is_empty() {
-        return 0.0;
+        return SurfaceNoise {
+            roughness: 0.0,
+            coherence: 0.0,
+        };
     }
     variation.sort_unstable_by(f64::total_cmp);
-    variation[variation.len() / 2]
+    let k = pairs.len() as f64;
+    let (ms, mm) = (
+        pairs.iter().map(|p| p.0).sum::<f64>() / k,
+        pairs.iter().map(|p| p.1).sum::<f64>() / k,
+    );
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (x, y) in &pairs {
+        sxy += (x - ms) * (y - mm);
+        sxx += (x - ms) * (x - ms);
+        syy += (y - mm) * (y - mm);
+    }
+    let coherence = if sxx > 0.0 && syy > 0.0 {
+        sxy / (sxx * syy).sqrt()
+    } else {
+        0.0
+    };
+    SurfaceNoise {
+        roughness: variation[variation.len() / 2],
+        coherence,
+    }
 }

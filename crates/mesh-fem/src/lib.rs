@@ -10,10 +10,16 @@
 //! * [`mtx`]: Matrix Market reading and writing (atomic, shortest round-trip decimals) and `nalgebra-sparse`
 //!   conversions.
 //! * [`filter`]: geometric filters (removal of isolated spikes).
+//! * [`handles`]: thin handles (short non-separating cycles) found and cut.
 //! * [`holes`]: boundary loops and hole filling (smooth patches of new vertices).
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
 //! * [`operators`]: the cotangent stiffness L, the consistent mass B and the lumped mass D of
 //!   the paper's Eq. (3) and Eq. (7), assembled in parallel into faer sparse matrices.
+//! * [`laplacian`]: the registry of Laplacians ([`Laplacian`]: `cotan`, the default, or
+//!   `robust`); [`intrinsic`]: the robust one, the intrinsic Delaunay Laplacian of the tufted
+//!   cover (Sharp & Crane 2020) with B and D on the intrinsic triangulation.
+//! * [`cloud`]: point clouds ([`PointCloud`]) and their robust L, B, D from local
+//!   triangulations of the k nearest neighbours ([`assemble_cloud`]).
 //!
 //! **Sign convention.** Throughout wfem the stiffness matrix L is symmetric positive
 //! semidefinite: positive diagonal, non-positive off-diagonal entries on well-shaped meshes,
@@ -29,11 +35,15 @@ mod error;
 mod mesh;
 mod topology;
 
+pub mod cloud;
 pub mod corpus;
 pub mod filter;
 pub mod generate;
+pub mod handles;
 pub mod holes;
+pub mod intrinsic;
 pub mod io;
+pub mod laplacian;
 pub mod morse;
 pub mod mtx;
 pub mod operators;
@@ -41,7 +51,10 @@ pub mod stats;
 pub mod validate;
 pub mod vec3;
 
+pub use cloud::{assemble_cloud, CloudOperators, CloudParams, CloudReport, PointCloud};
 pub use error::MeshError;
+pub use intrinsic::IntrinsicTriangulation;
+pub use laplacian::{Laplacian, RobustParams};
 pub use mesh::TriMesh;
 pub use mtx::{read_matrix_market, write_matrix_market, write_operators};
 pub use operators::{assemble, AssemblyParams, FemOperators, Lumping, Mass};

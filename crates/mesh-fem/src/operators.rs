@@ -19,6 +19,7 @@
 //! the elements in parallel over faces, a counting sort of the faces around each vertex, then
 //! a parallel (rayon) merge per column.
 
+use crate::laplacian::Laplacian;
 use crate::mesh::{dot, mul_pow2, neg, ScaledTriangle};
 use crate::{MeshError, TriMesh};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
@@ -100,13 +101,17 @@ impl Mass {
 pub struct AssemblyParams {
     /// Which lumped mass D to assemble.
     pub lumping: Lumping,
+    /// Which Laplacian (and so which triangulation B and D live on): the mesh's cotangent L
+    /// (the default) or the robust intrinsic Delaunay L of its tufted cover.
+    pub laplacian: Laplacian,
 }
 
 impl AssemblyParams {
-    /// The assembly that provides `mass` ([`Mass::lumping`]).
+    /// The assembly that provides `mass` ([`Mass::lumping`]), with the default Laplacian.
     pub fn for_mass(mass: Mass) -> Self {
         Self {
             lumping: mass.lumping(),
+            laplacian: Laplacian::default(),
         }
     }
 }
@@ -214,10 +219,12 @@ fn face_element(p: [[f64; 3]; 3], voronoi: bool) -> Option<(FaceElement, [f64; 3
 /// large enough to amortise the task and slice bookkeeping, small enough to balance the load
 /// on a few cores.
 const FACES_PER_CHUNK: usize = 8192;
-const COLUMNS_PER_CHUNK: usize = 2048;
+pub(crate) const COLUMNS_PER_CHUNK: usize = 2048;
 
 /// Assembles the stiffness L, the consistent mass B and the lumped mass D of `mesh`
-/// (paper, Eq. (3) and Eq. (7)).
+/// (paper, Eq. (3) and Eq. (7)) with the Laplacian of `params.laplacian`: the cotangent
+/// operators of the mesh itself (below; the default), or the robust operators of
+/// [`crate::intrinsic::assemble_robust`] (whose errors it returns instead of these).
 ///
 /// Runs in O(#faces) time and memory, in parallel (rayon), in three passes:
 /// 1. every face's element (area and cotangents, measured once) in parallel over faces;
@@ -241,6 +248,14 @@ const COLUMNS_PER_CHUNK: usize = 2048;
 ///   ~1e154): B and D would hold infinities; scale the mesh down first.
 /// * [`MeshError::Invalid`] for a mesh of 2³² faces or more.
 pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
+    match params.laplacian {
+        Laplacian::Cotan => assemble_cotan(mesh, params),
+        Laplacian::Robust(robust) => crate::intrinsic::assemble_robust(mesh, &robust, params).map(|(ops, _)| ops),
+    }
+}
+
+/// [`assemble`] with the cotangent Laplacian.
+fn assemble_cotan(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
     let n = mesh.n_vertices();
     let faces = mesh.faces();
     if u32::try_from(faces.len()).is_err() {
@@ -333,7 +348,7 @@ fn face_elements(mesh: &TriMesh, voronoi: bool) -> Result<(Vec<FaceElement>, Vec
 /// `first[j]..first[j + 1]`, in face order, in parallel over vertex ranges of about equal
 /// corner counts (one per thread): each range scans all faces (cheap, sequential) and records
 /// the corners it owns, so every task writes only its own slice.
-fn faces_around_vertices(faces: &[[u32; 3]], first: &[usize]) -> Vec<u32> {
+pub(crate) fn faces_around_vertices(faces: &[[u32; 3]], first: &[usize]) -> Vec<u32> {
     let n = first.len() - 1;
     let n_corners = first[n];
     let n_ranges = rayon::current_num_threads().clamp(1, n);
@@ -518,7 +533,7 @@ fn merge_columns(
 
 /// Splits `v` into consecutive pieces ending at the increasing offsets `bounds` (the last
 /// bound must be `v.len()`).
-fn split_at_bounds<'a, T>(mut v: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [T]> {
+pub(crate) fn split_at_bounds<'a, T>(mut v: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [T]> {
     let mut pieces = Vec::with_capacity(bounds.len());
     let mut done = 0;
     for &end in bounds {

@@ -106,6 +106,39 @@ pub enum StoreError {
         /// Which invariant failed.
         reason: String,
     },
+    /// The path is a directory, FIFO, socket or device, not a store file.
+    #[error("{path} is {kind}, not a store file")]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+        /// What it is ("a directory", "a FIFO", …).
+        kind: &'static str,
+    },
+    /// The store file was replaced (e.g. by a `build` of the same path) after this writer
+    /// opened it: nothing was written.
+    #[error("{path} was replaced by another process since it was opened; nothing was added (open it again)")]
+    Replaced {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A stored vector cannot be used by the distance (e.g. a negative bin for χ²).
+    #[error("{path}: stored shape {id}: {reason}")]
+    InvalidRow {
+        /// The file.
+        path: PathBuf,
+        /// The shape's id.
+        id: u64,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A read would need more memory than can be allocated.
+    #[error("{path}: {what} do not fit in memory")]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// What was to be read.
+        what: String,
+    },
     /// The distance function returned NaN for a stored shape (a query must never rank NaN).
     #[error("the distance to shape {id} is not a number")]
     NanDistance {

@@ -76,7 +76,13 @@ impl SqliteIndex {
             .ok_or_else(|| self.storage("a vector store, but not a wfem retrieval index (no settings)"))?;
         let text = String::from_utf8(text).map_err(|_| self.storage("the index settings are not UTF-8"))?;
         let index = index_from_settings(&text, Vec::new()).map_err(|e| self.located(e))?;
-        let width = index.vocabulary().vocabulary().size() + index.bags().global.map_or(0, |g| g.eigenvalues);
+        // A hand-edited size must not start an eigensolve or a vocabulary of any size.
+        shape_retrieval::limits::check_sizes(
+            index.vocabulary().descriptor().eigenpairs,
+            index.vocabulary().vocabulary().size(),
+        )?;
+        let width =
+            index.bags().bag_len(index.vocabulary().vocabulary().size()) + index.bags().global.map_or(0, |g| g.len());
         if store.dimension() != width {
             return Err(self.storage(format!(
                 "vectors of {} values, the settings describe {width}",
@@ -116,14 +122,20 @@ impl SqliteIndex {
             // One f64 copy of the current row per scanning thread (no allocation per row).
             static ROW: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
         }
+        let words = settings.vocabulary().vocabulary().size();
         let hits = store
-            .search(k, |row| {
-                ROW.with(|buffer| {
+            .search_checked(k, |row| {
+                // A bag is a histogram: a negative bin (a tampered file) would make χ² zero
+                // between different bags, so it is refused, naming the shape.
+                if let Some(i) = row[..words.min(row.len())].iter().position(|&x| x < 0.0) {
+                    return Err(format!("bag bin {i} is {}; bags are non-negative histograms", row[i]));
+                }
+                Ok(ROW.with(|buffer| {
                     let mut buffer = buffer.borrow_mut();
                     buffer.clear();
                     buffer.extend(row.iter().map(|&x| f64::from(x)));
                     settings.row_distance(query, &buffer)
-                })
+                }))
             })
             .map_err(|e| self.storage(e))?;
         Ok(hits
@@ -136,15 +148,28 @@ impl SqliteIndex {
             .collect())
     }
 
-    /// Appends shapes (their signatures computed with this index's settings, e.g. by
-    /// [`RetrievalIndex::signature`]) in one transaction; nothing else is rewritten.
+    /// Appends shapes whose signatures were computed with `opened` (the settings of
+    /// [`SqliteIndex::open`], e.g. by [`RetrievalIndex::describe`]) in one transaction;
+    /// nothing else is rewritten.
+    ///
+    /// The stored settings must still be `opened`'s and the file the one opened here: an
+    /// index rebuilt or replaced meanwhile (another vocabulary) is refused rather than given
+    /// bags it cannot compare.
     ///
     /// # Errors
     /// [`RetrievalError::InvalidModel`] for a signature that does not fit the settings;
-    /// [`RetrievalError::Storage`] (a name already indexed, store errors).
-    pub fn append(&self, entries: &[IndexEntry]) -> Result<(), RetrievalError> {
+    /// [`RetrievalError::Storage`] (settings changed, file replaced, a name already indexed,
+    /// store errors).
+    pub fn append(&self, opened: &RetrievalIndex, entries: &[IndexEntry]) -> Result<(), RetrievalError> {
         let mut store = Store::open(&self.path).map_err(|e| self.storage(e))?;
         let settings = self.settings(&store)?;
+        if index_settings(&settings).map_err(|e| self.located(e))?
+            != index_settings(opened).map_err(|e| self.located(e))?
+        {
+            return Err(self.storage(
+                "the index was rebuilt with other settings since these shapes were described; nothing was added",
+            ));
+        }
         // The same checks as a loaded index, on the new entries.
         index_from_settings(
             &index_settings(&settings).map_err(|e| self.located(e))?,
@@ -164,7 +189,10 @@ impl SqliteIndex {
 /// A stored vector as a signature: the bag (renormalised when within f32 rounding of sum 1)
 /// and the global part.
 fn signature(settings: &RetrievalIndex, row: &[f32]) -> ShapeSignature {
-    let v = settings.vocabulary().vocabulary().size().min(row.len());
+    let v = settings
+        .bags()
+        .bag_len(settings.vocabulary().vocabulary().size())
+        .min(row.len());
     let mut bag: Vec<f64> = row[..v].iter().map(|&x| f64::from(x)).collect();
     let sum: f64 = bag.iter().sum();
     if (sum - 1.0).abs() <= 1e-4 && sum > 0.0 {
@@ -206,7 +234,8 @@ impl IndexStore for SqliteIndex {
 
     fn save_index(&self, index: &RetrievalIndex) -> Result<(), RetrievalError> {
         let settings = index_settings(index).map_err(|e| self.located(e))?;
-        let width = index.vocabulary().vocabulary().size() + index.bags().global.map_or(0, |g| g.eigenvalues);
+        let width =
+            index.bags().bag_len(index.vocabulary().vocabulary().size()) + index.bags().global.map_or(0, |g| g.len());
         let dir = match self.path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
@@ -216,6 +245,7 @@ impl IndexStore for SqliteIndex {
             .file_name()
             .map(|s| s.to_string_lossy().into_owned())
             .ok_or_else(|| self.storage("no file name"))?;
+        crate::store::regular_or_absent(&self.path).map_err(|e| self.storage(e))?;
         // The whole index is built under a temporary name, then renamed into place.
         let tmp = dir.join(format!(".{name}.{}.build", std::process::id()));
         let build = || -> Result<(), StoreError> {
@@ -231,10 +261,16 @@ impl IndexStore for SqliteIndex {
             store.add(&batch)?;
             // Closing the last connection checkpoints the log: one self-contained file.
             drop(store);
-            std::fs::rename(&tmp, &self.path).map_err(|source| StoreError::Io {
+            // The rename happens under the replaced store's write lock, so an `append` to it
+            // either commits before (and is replaced, as asked) or sees the new file and
+            // refuses (StoreError::Replaced): the two never interleave.
+            let lock = Store::lock_for_replace(&self.path)?;
+            let renamed = std::fs::rename(&tmp, &self.path).map_err(|source| StoreError::Io {
                 path: self.path.clone(),
                 source,
-            })
+            });
+            drop(lock);
+            renamed
         };
         let result = build();
         if result.is_err() {

@@ -52,4 +52,7 @@ mod store;
 
 pub use error::StoreError;
 pub use index::{IndexHit, SqliteIndex};
-pub use store::{Entry, Hit, Metric, ShapeRow, Store, StoreParams, DEFAULT_CHUNK_ROWS, FORMAT, FORMAT_VERSION};
+pub use store::{
+    Entry, Hit, Metric, ShapeRow, Store, StoreParams, DEFAULT_CHUNK_ROWS, FORMAT, FORMAT_VERSION, MAX_CHUNK_BYTES,
+    MAX_DIMENSION,
+};

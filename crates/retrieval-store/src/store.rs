@@ -20,6 +20,13 @@ pub const DEFAULT_CHUNK_ROWS: usize = 4096;
 /// Reserved metadata keys (written by [`Store::create`], refused by [`Store::set_meta`]).
 const RESERVED: [&str; 4] = ["format", "version", "dimension", "chunk_rows"];
 
+/// Largest vector length a store accepts (4 MiB of f32 per shape; a retrieval index needs
+/// its words plus the global eigenvalues, at most 66,536). Checked on create and on open, so a
+/// tampered `dimension` cannot size an allocation.
+pub const MAX_DIMENSION: usize = 1 << 20;
+/// Largest chunk, in bytes (`chunk_rows × dimension × 4`): a chunk is read whole by the scan.
+pub const MAX_CHUNK_BYTES: usize = 256 << 20;
+
 /// How long a connection waits for a lock held by another writer before giving up.
 const BUSY_TIMEOUT: Duration = Duration::from_secs(30);
 
@@ -39,6 +46,30 @@ impl StoreParams {
             dimension,
             chunk_rows: DEFAULT_CHUNK_ROWS,
         }
+    }
+
+    /// The sizes are in range: `dimension` in 1..=[`MAX_DIMENSION`], `chunk_rows` ≥ 1 and one
+    /// chunk within [`MAX_CHUNK_BYTES`]; on failure, the parameter and the reason.
+    fn check(&self) -> Result<(), (&'static str, String)> {
+        if !(1..=MAX_DIMENSION).contains(&self.dimension) {
+            return Err(("dimension", format!("{} is not in 1..={MAX_DIMENSION}", self.dimension)));
+        }
+        if self.chunk_rows == 0 {
+            return Err(("chunk_rows", "must be at least 1".into()));
+        }
+        let bytes = self.chunk_rows.saturating_mul(self.dimension * 4);
+        if bytes > MAX_CHUNK_BYTES {
+            return Err((
+                "chunk_rows",
+                format!(
+                    "{} rows of {} values make a chunk of {bytes} bytes (at most {MAX_CHUNK_BYTES}); use at most {} rows",
+                    self.chunk_rows,
+                    self.dimension,
+                    MAX_CHUNK_BYTES / (self.dimension * 4)
+                ),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -119,6 +150,15 @@ impl Metric {
     }
 }
 
+/// The write lock of a store being replaced ([`Store::lock_for_replace`]); released on drop.
+pub(crate) struct ReplaceLock(Connection);
+
+impl Drop for ReplaceLock {
+    fn drop(&mut self) {
+        let _ = self.0.execute_batch("ROLLBACK");
+    }
+}
+
 /// An open store (one SQLite connection; see the crate documentation).
 #[derive(Debug)]
 pub struct Store {
@@ -127,6 +167,61 @@ pub struct Store {
     dimension: usize,
     chunk_rows: usize,
     read_only: bool,
+    /// The file opened (device and inode), to detect a store replaced under an open writer.
+    identity: Option<(u64, u64)>,
+}
+
+/// Device and inode of the file at `path` (None where the platform has none, or on error).
+fn file_identity(path: &Path) -> Option<(u64, u64)> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        None
+    }
+}
+
+/// What kind of file system object `meta` is, for errors ("a directory", "a FIFO", …).
+fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    let t = meta.file_type();
+    if t.is_dir() {
+        return "a directory";
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+        if t.is_block_device() || t.is_char_device() {
+            return "a device";
+        }
+    }
+    "not a regular file"
+}
+
+/// `path` must be absent (Ok(false)) or a regular file (Ok(true)); a directory, FIFO, socket
+/// or device is refused ([`StoreError::NotAFile`]).
+pub(crate) fn regular_or_absent(path: &Path) -> Result<bool, StoreError> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() => Ok(true),
+        Ok(m) => Err(StoreError::NotAFile {
+            path: path.to_path_buf(),
+            kind: kind_of(&m),
+        }),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(false),
+        Err(source) => Err(StoreError::Io {
+            path: path.to_path_buf(),
+            source,
+        }),
+    }
 }
 
 fn wal_path(path: &Path) -> PathBuf {
@@ -154,22 +249,14 @@ impl Store {
     /// write-ahead log is not empty ([`StoreError::InUse`]).
     ///
     /// # Errors
-    /// [`StoreError::InvalidParameter`] for a zero dimension or chunk size;
+    /// [`StoreError::InvalidParameter`] for sizes out of range ([`MAX_DIMENSION`],
+    /// [`MAX_CHUNK_BYTES`]); [`StoreError::NotAFile`] for a directory, FIFO, …;
     /// [`StoreError::Exists`]; [`StoreError::InUse`]; [`StoreError::Io`], [`StoreError::Sqlite`].
     pub fn create(path: &Path, params: &StoreParams, overwrite: bool) -> Result<Self, StoreError> {
-        if params.dimension == 0 {
-            return Err(StoreError::InvalidParameter {
-                name: "dimension",
-                reason: "must be at least 1".into(),
-            });
-        }
-        if params.chunk_rows == 0 {
-            return Err(StoreError::InvalidParameter {
-                name: "chunk_rows",
-                reason: "must be at least 1".into(),
-            });
-        }
-        if path.exists() {
+        params
+            .check()
+            .map_err(|(name, reason)| StoreError::InvalidParameter { name, reason })?;
+        if regular_or_absent(path)? {
             if !overwrite {
                 return Err(StoreError::Exists { path: path.into() });
             }
@@ -267,6 +354,7 @@ impl Store {
             dimension: 0,
             chunk_rows: 0,
             read_only,
+            identity: file_identity(path),
         };
         let not_a_store = |reason: String| StoreError::NotAStore {
             path: path.to_path_buf(),
@@ -310,36 +398,80 @@ impl Store {
         let (dimension, chunk_rows) = (number("dimension")?, number("chunk_rows")?);
         store.dimension = dimension;
         store.chunk_rows = chunk_rows;
-        if store.dimension == 0 || store.chunk_rows == 0 {
-            return Err(StoreError::Corrupt {
+        StoreParams { dimension, chunk_rows }
+            .check()
+            .map_err(|(name, reason)| StoreError::Corrupt {
                 path: path.to_path_buf(),
-                reason: "dimension and chunk_rows must be positive".into(),
-            });
-        }
+                reason: format!("{name}: {reason}"),
+            })?;
         store.check_counts()?;
         Ok(store)
     }
 
-    /// The ids must be 0..n and the chunks must hold exactly n rows (cheap: rowid bounds and
-    /// the chunk table, not a scan of the shapes).
+    /// The ids must be 0..n, the chunks 0, 1, … hold exactly n rows (full but the last), and
+    /// every chunk blob is exactly `rows × dimension × 4` bytes (a `dimension` edited to 47
+    /// over 48-wide blobs is refused, not read misaligned). Cheap: the chunk table and rowid
+    /// bounds, not the blobs' contents.
     fn check_counts(&self) -> Result<(), StoreError> {
-        // One statement, so one snapshot: two queries could straddle a writer's commit (a
-        // reader opened during appends saw 50 ids but 100 rows and called the file corrupt).
-        let (shapes, min_id, rows, chunks): (i64, i64, i64, i64) = self
-            .conn
+        let corrupt = |reason: String| StoreError::Corrupt {
+            path: self.path.clone(),
+            reason,
+        };
+        // One read transaction, so one snapshot: queries could otherwise straddle a writer's
+        // commit (a reader opened during appends saw 50 ids but 100 rows and called the file
+        // corrupt).
+        let tx = self.conn.unchecked_transaction().map_err(self.sql())?;
+        let (shapes, min_id): (i64, i64) = tx
             .query_row(
-                "SELECT (SELECT COALESCE(MAX(id) + 1, 0) FROM shapes), (SELECT COALESCE(MIN(id), 0) FROM shapes), \
-                 (SELECT COALESCE(SUM(rows), 0) FROM chunks), (SELECT COUNT(*) FROM chunks)",
+                "SELECT COALESCE(MAX(id) + 1, 0), COALESCE(MIN(id), 0) FROM shapes",
                 [],
-                |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?)),
+                |r| Ok((r.get(0)?, r.get(1)?)),
             )
             .map_err(self.sql())?;
-        let expected_chunks = (shapes as usize).div_ceil(self.chunk_rows) as i64;
-        if min_id != 0 || rows != shapes || chunks != expected_chunks {
-            return Err(StoreError::Corrupt {
-                path: self.path.clone(),
-                reason: format!("{shapes} shape ids (lowest {min_id}) but {rows} vector rows in {chunks} chunks"),
-            });
+        let mut stmt = tx
+            .prepare("SELECT chunk, rows, length(data), typeof(data) FROM chunks ORDER BY chunk")
+            .map_err(self.sql())?;
+        let chunks = stmt
+            .query_map([], |r| {
+                Ok((
+                    r.get::<_, i64>(0)?,
+                    r.get::<_, i64>(1)?,
+                    r.get::<_, i64>(2)?,
+                    r.get::<_, String>(3)?,
+                ))
+            })
+            .map_err(self.sql())?
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(self.sql())?;
+        let expected_chunks = (shapes.max(0) as usize).div_ceil(self.chunk_rows);
+        let rows: i64 = chunks.iter().map(|c| c.1.max(0)).sum();
+        if min_id != 0 || rows != shapes || chunks.len() != expected_chunks {
+            return Err(corrupt(format!(
+                "{shapes} shape ids (lowest {min_id}) but {rows} vector rows in {} chunks",
+                chunks.len()
+            )));
+        }
+        let last = chunks.len().saturating_sub(1);
+        for (i, (chunk, rows, bytes, kind)) in chunks.iter().enumerate() {
+            let full = i < last;
+            let rows_ok = if full {
+                *rows == self.chunk_rows as i64
+            } else {
+                (1..=self.chunk_rows as i64).contains(rows)
+            };
+            if *chunk != i as i64 || !rows_ok {
+                return Err(corrupt(format!(
+                    "chunk {chunk} (position {i}) holds {rows} rows of {} per chunk",
+                    self.chunk_rows
+                )));
+            }
+            let expected = rows * self.dimension as i64 * 4;
+            if kind != "blob" || *bytes != expected {
+                return Err(corrupt(format!(
+                    "chunk {chunk} has {bytes} bytes ({kind}), but {rows} vectors of {} values need {expected}",
+                    self.dimension
+                )));
+            }
         }
         Ok(())
     }
@@ -417,6 +549,26 @@ impl Store {
         tx.commit().map_err(sql)
     }
 
+    /// Holds the write lock of the store at `path` (if it is one) while the caller replaces the
+    /// file: a writer that opened the old file then fails with [`StoreError::Replaced`]. None
+    /// when there is no store there (absent, or another kind of file).
+    pub(crate) fn lock_for_replace(path: &Path) -> Result<Option<ReplaceLock>, StoreError> {
+        if !regular_or_absent(path)? {
+            return Ok(None);
+        }
+        let flags = OpenFlags::SQLITE_OPEN_READ_WRITE | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+        let Ok(conn) = Connection::open_with_flags(path, flags) else {
+            return Ok(None);
+        };
+        conn.busy_timeout(BUSY_TIMEOUT).map_err(|e| sqlite_error(path, e))?;
+        match conn.execute_batch("BEGIN IMMEDIATE") {
+            Ok(()) => Ok(Some(ReplaceLock(conn))),
+            // Not a database (e.g. a JSON index replaced by --force): nothing to lock.
+            Err(rusqlite::Error::SqliteFailure(f, _)) if f.code == rusqlite::ErrorCode::NotADatabase => Ok(None),
+            Err(e) => Err(sqlite_error(path, e)),
+        }
+    }
+
     fn writable(&self) -> Result<(), StoreError> {
         if self.read_only {
             return Err(StoreError::InvalidParameter {
@@ -445,6 +597,29 @@ impl Store {
             .conn
             .transaction_with_behavior(TransactionBehavior::Immediate)
             .map_err(sql)?;
+        // Under the write lock: the file at `path` must still be the one opened (a `build` that
+        // replaced it holds this lock while renaming), else these shapes would go to a file
+        // no one will read again.
+        if self.identity.is_some() && file_identity(&self.path) != self.identity {
+            return Err(StoreError::Replaced {
+                path: self.path.clone(),
+            });
+        }
+        // Nothing is added to a store whose stored vectors are not finite (a scan would fail on
+        // them later; refuse now, naming the shape).
+        {
+            let mut stmt = tx
+                .prepare("SELECT chunk, rows FROM chunks ORDER BY chunk")
+                .map_err(sql)?;
+            let plan = stmt
+                .query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, i64>(1)? as usize)))
+                .map_err(sql)?
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(sql)?;
+            for (chunk, rows) in plan {
+                read_chunk(&tx, &self.path, chunk, rows.min(chunk_rows), dim, chunk_rows)?;
+            }
+        }
         for e in entries {
             let taken: Option<i64> = tx
                 .query_row("SELECT id FROM shapes WHERE name = ?1", [e.name], |r| r.get(0))
@@ -597,7 +772,14 @@ impl Store {
         }
         let chunk = (id as usize / self.chunk_rows) as i64;
         let offset = id as usize % self.chunk_rows;
-        let values = read_chunk(&self.conn, &self.path, chunk, offset + 1, self.dimension)?;
+        let values = read_chunk(
+            &self.conn,
+            &self.path,
+            chunk,
+            offset + 1,
+            self.dimension,
+            self.chunk_rows,
+        )?;
         Ok(Some(values[offset * self.dimension..].to_vec()))
     }
 
@@ -607,9 +789,21 @@ impl Store {
     /// [`StoreError::Sqlite`], [`StoreError::Corrupt`].
     pub fn vectors(&self) -> Result<Vec<f32>, StoreError> {
         let plan = self.plan()?;
-        let mut out = Vec::with_capacity(plan.iter().map(|p| p.1).sum::<usize>() * self.dimension);
+        let total = plan.iter().map(|p| p.1).sum::<usize>().saturating_mul(self.dimension);
+        let mut out = Vec::new();
+        out.try_reserve_exact(total).map_err(|_| StoreError::TooLarge {
+            path: self.path.clone(),
+            what: format!("{total} stored values"),
+        })?;
         for (chunk, rows) in plan {
-            out.extend(read_chunk(&self.conn, &self.path, chunk, rows, self.dimension)?);
+            out.extend(read_chunk(
+                &self.conn,
+                &self.path,
+                chunk,
+                rows,
+                self.dimension,
+                self.chunk_rows,
+            )?);
         }
         Ok(out)
     }
@@ -623,7 +817,14 @@ impl Store {
         let rows = stmt
             .query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, i64>(1)? as usize)))
             .map_err(self.sql())?;
-        rows.collect::<Result<Vec<_>, _>>().map_err(self.sql())
+        let plan = rows.collect::<Result<Vec<_>, _>>().map_err(self.sql())?;
+        if let Some(&(chunk, rows)) = plan.iter().find(|p| p.1 > self.chunk_rows) {
+            return Err(StoreError::Corrupt {
+                path: self.path.clone(),
+                reason: format!("chunk {chunk} holds {rows} rows of {} per chunk", self.chunk_rows),
+            });
+        }
+        Ok(plan)
     }
 
     /// The `k` stored shapes nearest to a query under `metric` (exact, parallel; see
@@ -647,6 +848,24 @@ impl Store {
                 value: query[index],
             });
         }
+        if metric == Metric::ChiSquared {
+            if let Some(index) = query.iter().position(|&x| x < 0.0) {
+                return Err(StoreError::InvalidParameter {
+                    name: "query",
+                    reason: format!(
+                        "value {} at index {index} is negative; chi-squared compares histograms",
+                        query[index]
+                    ),
+                });
+            }
+            return self.search_checked(k, |row| match row.iter().position(|&x| x < 0.0) {
+                Some(i) => Err(format!(
+                    "value {} at index {i} is negative; chi-squared compares histograms",
+                    row[i]
+                )),
+                None => Ok(metric.eval(query, row)),
+            });
+        }
         self.search(k, |row| metric.eval(query, row))
     }
 
@@ -662,10 +881,25 @@ impl Store {
     where
         F: Fn(&[f32]) -> f64 + Sync,
     {
+        self.search_checked(k, |row| Ok(distance(row)))
+    }
+
+    /// [`Store::search`] with a distance that may refuse a stored row (`Err(reason)`: e.g. a
+    /// negative bin where the distance needs histograms), which fails the search with
+    /// [`StoreError::InvalidRow`] naming the shape.
+    ///
+    /// # Errors
+    /// [`StoreError::InvalidRow`]; as [`Store::search`].
+    pub fn search_checked<F>(&self, k: usize, distance: F) -> Result<Vec<Hit>, StoreError>
+    where
+        F: Fn(&[f32]) -> Result<f64, String> + Sync,
+    {
+        let plan = self.plan()?;
+        // No more hits than stored rows: k = 2⁶² must not size a heap.
+        let k = k.min(plan.iter().map(|p| p.1).sum());
         if k == 0 {
             return Ok(Vec::new());
         }
-        let plan = self.plan()?;
         let next = AtomicUsize::new(0);
         let workers = rayon::current_num_threads().clamp(1, plan.len().max(1));
         let dim = self.dimension;
@@ -679,11 +913,15 @@ impl Store {
                 loop {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(&(chunk, rows)) = plan.get(i) else { break };
-                    let values = read_chunk(&conn, path, chunk, rows, dim)?;
+                    let values = read_chunk(&conn, path, chunk, rows, dim, chunk_rows)?;
                     let first = chunk as u64 * chunk_rows as u64;
                     for (r, row) in values.chunks_exact(dim).enumerate() {
-                        let d = distance(row);
                         let id = first + r as u64;
+                        let d = distance(row).map_err(|reason| StoreError::InvalidRow {
+                            path: path.to_path_buf(),
+                            id,
+                            reason,
+                        })?;
                         if d.is_nan() {
                             return Err(StoreError::NanDistance { id });
                         }
@@ -729,7 +967,7 @@ fn sqlite_error(path: &Path, source: rusqlite::Error) -> StoreError {
 
 fn connect(path: &Path, read_only: bool) -> Result<Connection, StoreError> {
     let sql = |source| sqlite_error(path, source);
-    if !path.is_file() {
+    if !regular_or_absent(path)? {
         return Err(StoreError::Io {
             path: path.to_path_buf(),
             source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such store file"),
@@ -744,30 +982,113 @@ fn connect(path: &Path, read_only: bool) -> Result<Connection, StoreError> {
     conn.busy_timeout(BUSY_TIMEOUT).map_err(sql)?;
     if !read_only {
         conn.pragma_update(None, "synchronous", "FULL").map_err(sql)?;
+        return Ok(conn);
     }
-    Ok(conn)
+    // A reader of a WAL file needs its shared-memory index (`-shm`), which it cannot create on
+    // read-only media or in a read-only folder: there no writer can exist either, so the file
+    // is opened as immutable (no locks, no log).
+    match conn.query_row("SELECT COUNT(*) FROM sqlite_master", [], |r| r.get::<_, i64>(0)) {
+        Ok(_) => Ok(conn),
+        Err(rusqlite::Error::SqliteFailure(f, _))
+            if matches!(
+                f.code,
+                rusqlite::ErrorCode::CannotOpen | rusqlite::ErrorCode::ReadOnly | rusqlite::ErrorCode::PermissionDenied
+            ) =>
+        {
+            drop(conn);
+            let conn =
+                Connection::open_with_flags(immutable_uri(path), flags | OpenFlags::SQLITE_OPEN_URI).map_err(sql)?;
+            Ok(conn)
+        }
+        Err(e) => Err(sql(e)),
+    }
 }
 
-/// The first `rows` vectors of a chunk, decoded.
-fn read_chunk(conn: &Connection, path: &Path, chunk: i64, rows: usize, dim: usize) -> Result<Vec<f32>, StoreError> {
+/// `file:PATH?immutable=1`, with the characters URIs reserve escaped.
+fn immutable_uri(path: &Path) -> String {
+    let mut uri = String::from("file:");
+    for c in path.to_string_lossy().chars() {
+        match c {
+            '%' | '?' | '#' => uri.push_str(&format!("%{:02X}", c as u32)),
+            c => uri.push(c),
+        }
+    }
+    uri.push_str("?immutable=1");
+    uri
+}
+
+impl Drop for Store {
+    /// A read-only connection cannot remove the log and shared-memory files when it is the
+    /// last one, so after closing it a brief read-write connection does (when the folder is
+    /// writable and no one else has the file open): a closed store leaves no `-wal`/`-shm`.
+    fn drop(&mut self) {
+        if !self.read_only || !(wal_path(&self.path).exists() || shm_path(&self.path).exists()) {
+            return;
+        }
+        let Ok(placeholder) = Connection::open_in_memory() else {
+            return;
+        };
+        drop(std::mem::replace(&mut self.conn, placeholder));
+        if file_identity(&self.path) != self.identity {
+            return;
+        }
+        let flags = OpenFlags::SQLITE_OPEN_READ_WRITE | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+        if let Ok(conn) = Connection::open_with_flags(&self.path, flags) {
+            // Reading the schema opens the log; closing the last connection checkpoints it and
+            // removes both files.
+            let _ = conn.query_row("SELECT COUNT(*) FROM sqlite_master", [], |r| r.get::<_, i64>(0));
+            let _ = conn.close();
+        }
+    }
+}
+
+/// The first `rows` vectors of a chunk, decoded; every value must be finite (a tampered or
+/// damaged blob is refused naming the shape, never ranked).
+fn read_chunk(
+    conn: &Connection,
+    path: &Path,
+    chunk: i64,
+    rows: usize,
+    dim: usize,
+    chunk_rows: usize,
+) -> Result<Vec<f32>, StoreError> {
     let sql = |source| sqlite_error(path, source);
+    let corrupt = |reason: String| StoreError::Corrupt {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if rows > chunk_rows {
+        return Err(corrupt(format!(
+            "chunk {chunk} holds {rows} rows of {chunk_rows} per chunk"
+        )));
+    }
     let mut blob = conn.blob_open(MAIN_DB, "chunks", "data", chunk, true).map_err(sql)?;
+    // invariant: rows ≤ chunk_rows and chunk_rows × dim × 4 ≤ MAX_CHUNK_BYTES (checked on open).
     let bytes = rows * dim * 4;
     if blob.len() < bytes {
-        return Err(StoreError::Corrupt {
-            path: path.to_path_buf(),
-            reason: format!("chunk {chunk} has {} bytes, expected at least {bytes}", blob.len()),
-        });
+        return Err(corrupt(format!(
+            "chunk {chunk} has {} bytes, expected at least {bytes}",
+            blob.len()
+        )));
     }
     let mut buf = vec![0u8; bytes];
     blob.read_exact(&mut buf).map_err(|source| StoreError::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    Ok(buf
+    let values: Vec<f32> = buf
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect())
+        .collect();
+    if let Some(i) = values.iter().position(|x| !x.is_finite()) {
+        let id = chunk as u64 * chunk_rows as u64 + (i / dim) as u64;
+        return Err(corrupt(format!(
+            "shape {id} has the value {} at index {}: stored vectors must be finite",
+            values[i],
+            i % dim
+        )));
+    }
+    Ok(values)
 }
 
 /// The k smallest (distance, id) pairs seen, as a max-heap on (distance, id).

@@ -175,10 +175,13 @@ impl ShapeDescriptors {
     /// [`RetrievalError::Mesh`] if assembly fails, [`RetrievalError::InvalidParameter`] for
     /// k = 0 or bad feature parameters.
     pub fn new(mesh: &TriMesh, params: &DescriptorParams) -> Result<Self, RetrievalError> {
+        // Sizes first (a huge T or k must not cost an assembly, let alone an allocation).
+        params.times.check_size(mesh.n_vertices())?;
         let operators = assemble(
             mesh,
             &AssemblyParams {
                 lumping: Lumping::Voronoi,
+                ..Default::default()
             },
         )?;
         Self::from_operators(mesh, operators, params)
@@ -202,6 +205,9 @@ impl ShapeDescriptors {
                 reason: "must be at least 1",
             });
         }
+        let n = mesh.n_vertices().max(1);
+        wfem_heat::limits::eigenpairs("eigenpairs", params.eigenpairs.min(n), n)?;
+        params.times.check_size(n)?;
         crate::check::positive("feature_time_factor", params.feature_time_factor)?;
         if params.feature_rings == 0 {
             return Err(RetrievalError::InvalidParameter {

@@ -150,6 +150,14 @@ pub enum RetrievalError {
         /// What is wrong, naming the field (e.g. the entry and the bin).
         reason: String,
     },
+    /// A label file or a class rule cannot give a shape its class.
+    #[error("{location}: {reason}")]
+    Labels {
+        /// The label file and line, or the shape's path.
+        location: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// Reading or writing a stored vocabulary or index failed.
     #[error("{}: {reason}", path.display())]
     Storage {

@@ -257,6 +257,39 @@ pub enum TimeSampling {
     Explicit(Vec<f64>),
 }
 
+impl TimeSampling {
+    /// Number of times T.
+    pub fn len(&self) -> usize {
+        match self {
+            Self::Auto { num_times } => *num_times,
+            Self::Explicit(times) => times.len(),
+        }
+    }
+
+    /// Whether there is no time.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The bounds of [`wfem_heat::limits`], checked before anything is computed: at most
+    /// [`wfem_heat::limits::MAX_TIMES`] times, and n × T values within
+    /// [`wfem_heat::limits::OUTPUT_MEMORY`] on an n-vertex mesh.
+    ///
+    /// # Errors
+    /// [`RetrievalError::Heat`] with [`wfem_heat::HeatError::InvalidParameter`] naming the times.
+    pub fn check_size(&self, n: usize) -> Result<(), RetrievalError> {
+        let name = match self {
+            Self::Auto { .. } => "num_times",
+            Self::Explicit(_) => "times",
+        };
+        if !self.is_empty() {
+            wfem_heat::limits::times(name, self.len())?;
+        }
+        wfem_heat::limits::columns(name, self.len(), n)?;
+        Ok(())
+    }
+}
+
 impl Default for TimeSampling {
     fn default() -> Self {
         Self::Auto {
@@ -319,6 +352,7 @@ pub fn heat_kernel_signature(
     spectrum: &Spectrum<'_>,
     params: &HksParams,
 ) -> Result<HeatKernelSignature, RetrievalError> {
+    params.times.check_size(spectrum.eigenvectors.nrows())?;
     let (eigenvalues, factor) = normalized_spectrum(spectrum, params.normalization, params.convention)?;
     let times = match &params.times {
         TimeSampling::Auto { num_times } => auto_times(&eigenvalues, *num_times)?,

@@ -15,6 +15,8 @@
 //! * [`sihks`]: the scale-invariant HKS of Bronstein & Kokkinos;
 //! * [`kmeans`](mod@kmeans), [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;
 //! * [`retrieval`]: ranking, average precision, mAP, precision/recall;
+//! * [`eval`](mod@eval): a labelled collection evaluated leave-one-out (mAP, NN, tiers,
+//!   E-measure, DCG, per class, confused pairs);
 //! * [`descriptor`]: from a mesh to DHK1–DHK3, SI-HKS and the SHK1/SHK2 feature points;
 //! * [`features`]: feature points (local maxima), their repeatability, and robustness of
 //!   dense descriptors.
@@ -29,14 +31,19 @@ mod check;
 pub mod descriptor;
 pub mod distance;
 mod error;
+pub mod eval;
 pub mod exact;
 pub mod features;
+pub mod global;
 pub mod hks;
 pub mod kmeans;
+pub mod limits;
 pub mod mesh_hks;
 pub mod model;
+mod output;
 pub mod retrieval;
 pub mod sihks;
+pub mod spatial;
 pub mod standardize;
 pub mod store;
 
@@ -57,13 +64,14 @@ pub use hks::{
     DEFAULT_NUM_TIMES,
 };
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
-pub use mesh_hks::{mesh_hks, HksStep, MeshHks, MeshHksParams};
+pub use mesh_hks::{mesh_hks, operators_hks, HksStep, MeshHks, MeshHksParams};
 pub use model::{
     BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexEntry,
-    Ranked, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TrainingInfo, TrainingParams,
-    VertexWeights, VocabularyModel,
+    Ranked, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TopologyRepair, TrainingInfo,
+    TrainingParams, VertexWeights, VocabularyModel,
 };
-pub use model::{DEFAULT_AREA_CAP, DEFAULT_TARGET_ROUGHNESS};
+pub use model::{DEFAULT_AREA_CAP, DEFAULT_MAX_COHERENCE, DEFAULT_TARGET_ROUGHNESS, DEFAULT_WORDS};
+pub use output::check_index_output;
 pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
 pub use sihks::{scale_invariant_hks, MeshLengths, SihksParams, TimeUnit};
 pub use standardize::Standardizer;

@@ -13,7 +13,7 @@ use crate::exact::{exact_signature, signature_by_method, truncation_bound, trunc
 use crate::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalization, TimeSampling};
 use crate::RetrievalError;
 use faer::Mat;
-use mesh_fem::{assemble, AssemblyParams, FemOperators, Mass, TriMesh};
+use mesh_fem::{assemble, AssemblyParams, FemOperators, Laplacian, Mass, TriMesh};
 use wfem_choice::Choice;
 use wfem_heat::{DiagonalParams, EigenParams, Eigenbasis, HeatKernel, HeatParams, KernelDiagonal, Method, Operators};
 
@@ -39,6 +39,8 @@ pub struct MeshHksParams {
     pub normalization: SpectrumNormalization,
     /// How the exact diagonal is computed (default selected inversion).
     pub diagonal: DiagonalParams,
+    /// Which Laplacian [`mesh_hks`] assembles (default the cotangent L).
+    pub laplacian: Laplacian,
 }
 
 impl Default for MeshHksParams {
@@ -53,6 +55,7 @@ impl Default for MeshHksParams {
             scaled: false,
             normalization: SpectrumNormalization::None,
             diagonal: DiagonalParams::default(),
+            laplacian: Laplacian::default(),
         }
     }
 }
@@ -103,24 +106,33 @@ pub fn mesh_hks(
     basis: Option<Eigenbasis>,
     step: &mut dyn FnMut(HksStep),
 ) -> Result<MeshHks, RetrievalError> {
-    let spectral_only = params.scaled || params.normalization != SpectrumNormalization::None;
-    if spectral_only && params.method == HksMethod::Exact {
-        return Err(RetrievalError::InvalidParameter {
-            name: "method",
-            value: 0.0,
-            reason: "the exact diagonal has no scaled or normalized form: use the spectral method",
-        });
-    }
-    if params.eigenpairs == 0 {
-        return Err(RetrievalError::InvalidParameter {
-            name: "eigenpairs",
-            value: 0.0,
-            reason: "must be at least 1",
-        });
-    }
+    check_hks_params(params)?;
+    check_hks_sizes(params, mesh.n_vertices())?;
     step(HksStep::Assembly);
-    let fem = assemble(mesh, &AssemblyParams::for_mass(params.mass))?;
-    let ops = Operators::new(&fem, params.mass)?;
+    let assembly = AssemblyParams {
+        laplacian: params.laplacian,
+        ..AssemblyParams::for_mass(params.mass)
+    };
+    let fem = assemble(mesh, &assembly)?;
+    operators_hks(&fem, params, basis, step)
+}
+
+/// [`mesh_hks`] on operators already assembled (of a mesh with any Laplacian, or of a point
+/// cloud, [`mesh_fem::assemble_cloud`]); they must hold the lumped mass of `params.mass`.
+/// `params.laplacian` is not used.
+///
+/// # Errors
+/// As [`mesh_hks`], and [`RetrievalError::Heat`] if the operators lack the lumping of the mass.
+pub fn operators_hks(
+    fem: &FemOperators,
+    params: &MeshHksParams,
+    basis: Option<Eigenbasis>,
+    step: &mut dyn FnMut(HksStep),
+) -> Result<MeshHks, RetrievalError> {
+    check_hks_params(params)?;
+    check_hks_sizes(params, fem.n())?;
+    let spectral_only = params.scaled || params.normalization != SpectrumNormalization::None;
+    let ops = Operators::new(fem, params.mass)?;
     let explicit = matches!(params.times, TimeSampling::Explicit(_));
     // The eigenpairs serve the spectral sum and the automatic times; exact values at given
     // times need none.
@@ -129,7 +141,7 @@ pub fn mesh_hks(
             return Err(RetrievalError::Empty { what: "times" });
         };
         step(HksStep::Analysis);
-        let kernel = heat_kernel(&fem, params.mass)?;
+        let kernel = heat_kernel(fem, params.mass)?;
         step(HksStep::ExactDiagonal);
         let series = exact_signature(&kernel, times, params.convention, &params.diagonal)?;
         let sources = vec![
@@ -187,7 +199,7 @@ pub fn mesh_hks(
         (spectral.values, sources)
     } else {
         step(HksStep::Analysis);
-        let kernel = heat_kernel(&fem, params.mass)?;
+        let kernel = heat_kernel(fem, params.mass)?;
         step(HksStep::ExactDiagonal);
         signature_by_method(
             &kernel,
@@ -241,4 +253,33 @@ impl MeshHks {
     pub fn source_name(&self, j: usize) -> &'static str {
         self.sources.get(j).map_or("", |s| s.method().name())
     }
+}
+
+/// The options of [`mesh_hks`] that do not fit together, refused before any work.
+fn check_hks_params(params: &MeshHksParams) -> Result<(), RetrievalError> {
+    let spectral_only = params.scaled || params.normalization != SpectrumNormalization::None;
+    if spectral_only && params.method == HksMethod::Exact {
+        return Err(RetrievalError::InvalidParameter {
+            name: "method",
+            value: 0.0,
+            reason: "the exact diagonal has no scaled or normalized form: use the spectral method",
+        });
+    }
+    if params.eigenpairs == 0 {
+        return Err(RetrievalError::InvalidParameter {
+            name: "eigenpairs",
+            value: 0.0,
+            reason: "must be at least 1",
+        });
+    }
+    Ok(())
+}
+
+/// The sizes of [`mesh_hks`] on n vertices within the shared limits (the n × T output, the
+/// eigenpairs), checked before anything is allocated.
+fn check_hks_sizes(params: &MeshHksParams, n: usize) -> Result<(), RetrievalError> {
+    params.times.check_size(n)?;
+    let n = n.max(1);
+    wfem_heat::limits::eigenpairs("eigenpairs", params.eigenpairs.min(n), n)?;
+    Ok(())
 }

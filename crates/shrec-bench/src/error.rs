@@ -9,6 +9,9 @@ pub enum BenchError {
     /// A mesh routine failed (reading, writing, building a mesh, assembly).
     #[error(transparent)]
     Mesh(#[from] mesh_fem::MeshError),
+    /// A heat-kernel routine failed (kernel, eigenpairs, decomposition).
+    #[error(transparent)]
+    Heat(#[from] wfem_heat::HeatError),
     /// A per-vertex mask does not have one entry per vertex.
     #[error("the vertex mask has {len} entries, but the mesh has {n_vertices} vertices")]
     MaskLength {

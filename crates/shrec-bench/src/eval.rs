@@ -176,8 +176,11 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
                 despiking: None,
                 denoising: None,
                 hole_filling: None,
+                topology_repair: None,
             },
+            // Shape Google: 48 words, raw descriptors, plain area-weighted bags, L1.
             training: TrainingParams {
+                words: 48,
                 standardize: false,
                 ..Default::default()
             },
@@ -186,6 +189,7 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
                 assignment: Assignment::Normalized,
                 distance: BagDistance::L1,
                 global: None,
+                spatial: None,
             },
         })
     };
@@ -299,6 +303,7 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
             "default fused with ln(λ_i A), i = 1…20, weight 1",
             variant(&|s| {
                 s.bags.global = Some(GlobalSignature {
+                    kind: Default::default(),
                     eigenvalues: 20,
                     weight: 1.0,
                 })
@@ -535,6 +540,7 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
         denoising: None,
         smoothing: None,
         hole_filling: None,
+        topology_repair: None,
         ..Default::default()
     };
     let mut shapes = protocol::load_shapes(files.clone(), &plain, &opts.cache)?;
@@ -602,6 +608,7 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
         denoising: m.settings.descriptor.denoising,
         smoothing: m.settings.descriptor.smoothing,
         hole_filling: m.settings.descriptor.hole_filling,
+        topology_repair: m.settings.descriptor.topology_repair,
         ..plain.clone()
     };
     let mut groups: Vec<DescriptorSettings> = vec![plain.clone()];

@@ -9,7 +9,10 @@
 //! * [`eval`]: the feature and dense-descriptor tables (repeatability, robustness; Tables 3–4);
 //! * [`protocol`]: the retrieval protocols — SHREC'10's cumulative "strength ≤ s" mAP beside the
 //!   paper's Table 5, queries against a clean collection, and TOSCA-76 leave-one-out
-//!   (`cargo xtask shrec-eval`, `cargo xtask tosca-eval`, docs/SHREC-RESULTS.md).
+//!   (`cargo xtask shrec-eval`, `cargo xtask tosca-eval`, docs/SHREC-RESULTS.md);
+//! * [`approx_eval`]: the feature-driven approximation f = f_glob + f_loc (Sect. 4.2,
+//!   Fig. 12–13) on real meshes, smooth and noisy (`cargo xtask approx-eval`,
+//!   docs/APPROX-RESULTS.md).
 //!
 //! `xtask` is a thin command line over this crate. All randomness comes from the one seeded
 //! generator [`wfem_heat::rng::SplitMix64`].
@@ -17,9 +20,12 @@
 #![warn(missing_docs)]
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod approx_eval;
 mod error;
 pub mod eval;
+pub mod handles;
 pub mod protocol;
+pub mod real;
 pub mod synth;
 pub mod transform;
 

@@ -398,7 +398,11 @@ pub fn features(
                 Some(g) => g.compute(&mut s.shape).map_err(wrap)?,
                 None => Vec::new(),
             };
-            ShapeFeatures::new(&s.file.name, &s.shape, descriptors, weights, global).map_err(wrap)
+            let mut f = ShapeFeatures::new(&s.file.name, &s.shape, descriptors, weights, global).map_err(wrap)?;
+            if settings.bags.spatial.is_some() {
+                f.attach_spectrum(&mut s.shape).map_err(wrap)?;
+            }
+            Ok(f)
         })
         .collect()
 }

@@ -56,6 +56,9 @@ pub enum Class {
     Isometry,
     /// Welding of vertices close in space but far along the surface.
     Topology,
+    /// Tubes (handles) between points close in space but far along the surface
+    /// ([`crate::handles`]).
+    Handles,
     /// Many small holes (a vertex and its 1-ring).
     MicroHoles,
     /// A few big holes (geodesic balls).
@@ -77,9 +80,10 @@ pub enum Class {
 
 impl Class {
     /// All classes: the nine synthetic ones, then [`Class::Pose`] (needs TOSCA pose files).
-    pub const ALL: [Class; 10] = [
+    pub const ALL: [Class; 11] = [
         Class::Isometry,
         Class::Topology,
+        Class::Handles,
         Class::MicroHoles,
         Class::Holes,
         Class::Scale,
@@ -90,10 +94,12 @@ impl Class {
         Class::Pose,
     ];
 
-    /// The nine synthetic classes, in SHREC'10 order; they work on any mesh.
-    pub const SYNTHETIC: [Class; 9] = [
+    /// The ten synthetic classes, in SHREC'10 order (handles after topology); they work on any
+    /// mesh.
+    pub const SYNTHETIC: [Class; 10] = [
         Class::Isometry,
         Class::Topology,
+        Class::Handles,
         Class::MicroHoles,
         Class::Holes,
         Class::Scale,
@@ -108,6 +114,7 @@ impl Class {
         match self {
             Class::Isometry => "isometry",
             Class::Topology => "topology",
+            Class::Handles => "handles",
             Class::MicroHoles => "microholes",
             Class::Holes => "holes",
             Class::Scale => "scale",
@@ -197,6 +204,7 @@ pub fn parameter_table() -> serde_json::Value {
         "units": "D = bounding-box diagonal of the base mesh, mean_edge = mean edge length of the base mesh",
         "isometry": {"recipe": "skinning bend about a random joint plane through a random vertex; smoothstep weight over the band |signed distance| < half_width; rotation by w*theta about a random axis in the plane", "half_width_D": BEND_HALF_WIDTH, "theta_deg": per(&|s| json!(bend_angle_deg(s)))},
         "topology": {"recipe": "among vertex pairs closer than max_distance whose edge-graph distance exceeds min_graph_distance, weld the `pairs` closest ones, skipping pairs whose weld would leave a face of area < 1e-6 mean face area (union-find, smallest id survives with its position)", "min_graph_distance_D": WELD_MIN_GRAPH_DISTANCE, "max_distance_D": WELD_MAX_DISTANCE, "pairs": per(&|s| json!(weld_pair_count(s)))},
+        "handles": {"recipe": "remove the edge-graph balls of ball_hops hops around two vertices closer than max_distance whose edge-graph distance exceeds min_graph_distance and whose normals face each other; join the two rims by a tube of rings about one mean edge apart (shrec_bench::handles)", "ball_hops": crate::handles::HANDLE_BALL_HOPS, "max_distance_D": crate::handles::HANDLE_MAX_DISTANCE, "min_graph_distance_D": crate::handles::HANDLE_MIN_GRAPH_DISTANCE, "handles": per(&|s| json!(crate::handles::handle_count(s)))},
         "microholes": {"recipe": "delete random seed vertices with their 1-ring vertices (seeds at least `separation_hops` apart), keep the largest connected piece", "separation_hops": MICRO_HOLE_SEPARATION, "holes": per(&|s| json!(micro_hole_count(s)))},
         "holes": {"recipe": "delete edge-graph geodesic balls around random seeds at least separation apart, keep the largest connected piece", "seeds": BIG_HOLE_COUNT, "separation_D": BIG_HOLE_SEPARATION, "radius_D": per(&|s| json!(big_hole_radius(s)))},
         "scale": {"recipe": "x <- beta x", "beta": SCALE_FACTORS},
@@ -546,6 +554,7 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
                        "max_distance": radius, "min_graph_distance": min_graph, "vertices_merged": merged}),
             ))
         }
+        Class::Handles => crate::handles::add_handles(base, crate::handles::handle_count(s), &mut rng),
         Class::MicroHoles => {
             let wanted = micro_hole_count(s);
             let mut blocked = vec![false; n];

@@ -92,11 +92,19 @@ impl DiffusionDistance {
     /// Distances of `kind` at time t through `kernel` (cloned; shared).
     ///
     /// # Errors
-    /// [`HeatError::InvalidTime`], [`HeatError::InvalidParameter`] (block, diagonal tol).
+    /// [`HeatError::InvalidTime`], [`HeatError::InvalidParameter`] (block, diagonal tol, a t
+    /// whose 2t overflows).
     pub fn new(kernel: &HeatKernel, kind: DistanceKind, t: f64, params: &DistanceParams) -> Result<Self, HeatError> {
         check::time(t)?;
-        if kind == DistanceKind::Diffusion {
-            check::time(2.0 * t)?;
+        if kind == DistanceKind::Diffusion && !(2.0 * t).is_finite() {
+            // The error names the time given, not the overflowed 2t.
+            return Err(HeatError::InvalidParameter {
+                name: "t",
+                reason: format!(
+                    "t = {t:e} is too large: the diffusion distance applies K_2t, and 2t overflows (t ≤ {:e})",
+                    f64::MAX / 2.0
+                ),
+            });
         }
         params.diagonal.validate()?;
         if params.block == 0 {

@@ -54,6 +54,7 @@ pub mod diagonal;
 pub mod distance;
 mod error;
 pub mod kernel;
+pub mod limits;
 pub mod method;
 mod null_space;
 mod operators;

@@ -116,7 +116,9 @@ impl Operators {
                 &diagonal
             }
         };
-        let mut ops = Self::from_matrices(fem.stiffness.as_ref(), matrix.as_ref())?;
+        // Assembled here: symmetric by construction, so the entry-wise checks of given
+        // matrices are skipped.
+        let mut ops = Self::from_pair(fem.stiffness.as_ref(), matrix.as_ref())?;
         ops.mass = Some(mass);
         ops.fem = true;
         Ok(ops)
@@ -128,9 +130,23 @@ impl Operators {
     ///
     /// # Errors
     /// [`HeatError::InvalidOperatorEntry`] for a NaN/∞ entry, a non-positive diagonal entry of
-    /// M or a negative one of L; [`HeatError::InconsistentOperators`] for sizes, emptiness or
-    /// asymmetry.
+    /// M or a negative one of L, an entry that differs from its transpose (relative 1e−12), or
+    /// one with `|a_ij| > √(a_ii a_jj)` (an indefinite matrix; strict for M), naming the row and
+    /// column; [`HeatError::InconsistentOperators`] for sizes or emptiness.
     pub fn from_matrices(
+        stiffness: SparseColMatRef<'_, usize, f64>,
+        mass: SparseColMatRef<'_, usize, f64>,
+    ) -> Result<Self, HeatError> {
+        if stiffness.nrows() == stiffness.ncols() && stiffness.nrows() == mass.nrows() && mass.nrows() == mass.ncols() {
+            check_symmetric("stiffness L", stiffness, false)?;
+            check_symmetric("mass M", mass, true)?;
+        }
+        Self::from_pair(stiffness, mass)
+    }
+
+    /// [`Self::from_matrices`] without the entry-wise symmetry checks (for operators assembled
+    /// by mesh-fem).
+    fn from_pair(
         stiffness: SparseColMatRef<'_, usize, f64>,
         mass: SparseColMatRef<'_, usize, f64>,
     ) -> Result<Self, HeatError> {
@@ -248,7 +264,7 @@ impl Operators {
                 reason: format!("restriction to {k} vertices: {e:?}"),
             })
         };
-        let mut ops = Self::from_matrices(build(&lt)?.as_ref(), build(&mt)?.as_ref())?;
+        let mut ops = Self::from_pair(build(&lt)?.as_ref(), build(&mt)?.as_ref())?;
         ops.mass = self.mass;
         ops.fem = self.fem;
         Ok(ops)
@@ -401,4 +417,103 @@ impl<T: AsSparse + ?Sized> AsSparse for &T {
 
 pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// A given matrix must be symmetric (`a_ij = a_ji` up to 1e−12 relative) and pass the 2 × 2
+/// principal-minor test of a positive (semi)definite matrix, `|a_ij| ≤ √(a_ii a_jj)` (strict
+/// for the mass): necessary conditions, cheap (one pass over the entries), and enough to refuse
+/// the usual mistakes — an unsymmetric matrix (whose lower triangle alone would otherwise be
+/// used) or an indefinite one such as `[[1, 2], [2, 1]]`. L is symmetric positive
+/// semidefinite throughout wfem.
+fn check_symmetric(matrix: &'static str, a: SparseColMatRef<'_, usize, f64>, strict: bool) -> Result<(), HeatError> {
+    let n = a.ncols();
+    let mut entries: std::collections::HashMap<(usize, usize), f64> =
+        std::collections::HashMap::with_capacity(a.compute_nnz());
+    for j in 0..n {
+        for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+            if !v.is_finite() {
+                return Err(HeatError::InvalidOperatorEntry {
+                    matrix,
+                    row: i,
+                    col: j,
+                    value: v,
+                    requirement: "finite",
+                });
+            }
+            *entries.entry((i, j)).or_insert(0.0) += v;
+        }
+    }
+    let diagonal = |i: usize| entries.get(&(i, i)).copied().unwrap_or(0.0).max(0.0);
+    let mut culprits: Vec<(&(usize, usize), &f64)> = entries.iter().filter(|((i, j), _)| i != j).collect();
+    // The first culprit in (column, row) order, whatever the hash order.
+    culprits.sort_by_key(|((i, j), _)| (*j, *i));
+    for (&(i, j), &v) in culprits {
+        let w = entries.get(&(j, i)).copied().unwrap_or(0.0);
+        if (v - w).abs() > 1e-12 * v.abs().max(w.abs()) {
+            return Err(HeatError::InvalidOperatorEntry {
+                matrix,
+                row: i,
+                col: j,
+                value: v,
+                requirement: "symmetric: equal to the entry at (col, row)",
+            });
+        }
+        // √a_ii·√a_jj, not √(a_ii a_jj): no underflow at 1e−200 entries.
+        let bound = diagonal(i).sqrt() * diagonal(j).sqrt();
+        let singular = strict && v != 0.0 && v.abs() >= bound * (1.0 - 1e-12);
+        if v.abs() > bound * (1.0 + 1e-12) || singular {
+            return Err(HeatError::InvalidOperatorEntry {
+                matrix,
+                row: i,
+                col: j,
+                value: v,
+                requirement: "|a_ij| ≤ √(a_ii a_jj), as in a positive (semi)definite matrix (this one is indefinite)",
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::sparse::Triplet;
+
+    fn matrix(entries: &[(usize, usize, f64)]) -> SparseColMat<usize, f64> {
+        let t: Vec<Triplet<usize, usize, f64>> = entries.iter().map(|&(i, j, v)| Triplet::new(i, j, v)).collect();
+        SparseColMat::try_new_from_triplets(2, 2, &t).unwrap()
+    }
+
+    #[test]
+    fn given_matrices_must_be_symmetric_and_pass_the_minor_test() {
+        let identity = matrix(&[(0, 0, 1.0), (1, 1, 1.0)]);
+        let laplacian = matrix(&[(0, 0, 1.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 1.0)]);
+        assert!(Operators::from_matrices(laplacian.as_ref(), identity.as_ref()).is_ok());
+        let unsymmetric = matrix(&[(0, 0, 1.0), (0, 1, -1.0), (1, 0, -0.5), (1, 1, 1.0)]);
+        let e = Operators::from_matrices(unsymmetric.as_ref(), identity.as_ref()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                HeatError::InvalidOperatorEntry {
+                    matrix: "stiffness L",
+                    row: 1,
+                    col: 0,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let indefinite = matrix(&[(0, 0, 1.0), (0, 1, 2.0), (1, 0, 2.0), (1, 1, 1.0)]);
+        let e = Operators::from_matrices(indefinite.as_ref(), identity.as_ref()).unwrap_err();
+        assert!(e.to_string().contains("indefinite"), "{e}");
+        // A singular mass (|m_01| = √(m_00 m_11)) is refused; tiny entries do not underflow.
+        let singular = matrix(&[(0, 0, 1.0), (0, 1, 1.0), (1, 0, 1.0), (1, 1, 1.0)]);
+        let e = Operators::from_matrices(laplacian.as_ref(), singular.as_ref()).unwrap_err();
+        assert!(
+            matches!(e, HeatError::InvalidOperatorEntry { matrix: "mass M", .. }),
+            "{e}"
+        );
+        let tiny = matrix(&[(0, 0, 1e-200), (0, 1, -1e-200), (1, 0, -1e-200), (1, 1, 1e-200)]);
+        assert!(Operators::from_matrices(tiny.as_ref(), identity.as_ref()).is_ok());
+    }
 }

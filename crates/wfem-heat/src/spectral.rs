@@ -193,6 +193,7 @@ impl Eigenbasis {
                 reason: format!("k = {k} must be in 1..={n}"),
             });
         }
+        crate::limits::eigenpairs("k", k, n)?;
         per_component(ops, k, &|sub, kc| {
             // A component with fewer vertices than a Lanczos block or than the pairs asked of
             // it is solved densely (exact and cheap).

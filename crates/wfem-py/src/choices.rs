@@ -64,12 +64,14 @@ macro_rules! registries {
 registries! {
     "mass" => mesh_fem::Mass,
     "lumped_mass" => mesh_fem::Lumping,
+    "laplacian" => mesh_fem::Laplacian,
     "method" => wfem_heat::Method,
     "backend" => shifted_solve::Backend,
     "convention" => wfem_heat::KernelDiagonal,
     "diagonal" => wfem_heat::diagonal::DiagonalMethod,
     "distance" => wfem_heat::DistanceKind,
     "coefficients" => wfem_heat::approx::Coefficients,
+    "sampling" => wfem_heat::approx::ScaleSampling,
     "hks_method" => shape_retrieval::HksMethod,
     "normalization" => shape_retrieval::SpectrumNormalization,
     "descriptor" => shape_retrieval::Descriptor,
@@ -77,6 +79,7 @@ registries! {
     "bag_distance" => shape_retrieval::BagDistance,
     "metric" => retrieval_store::Metric,
     "time_unit" => shape_retrieval::TimeUnit,
+    "class_from" => shape_retrieval::eval::ClassRule,
 }
 
 /// Registers `choices` and `canonical`.

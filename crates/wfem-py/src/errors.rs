@@ -539,10 +539,17 @@ pub fn retrieval(py: Python<'_>, e: &RetrievalError) -> PyErr {
         ),
         RetrievalError::ZeroDescriptor { vertex } => (Class::Retrieval, "ZeroDescriptor", fields!(vertex = *vertex)),
         RetrievalError::NothingToAverage { what } => (Class::Retrieval, "NothingToAverage", fields!(what = *what)),
+        // The index file (README: RetrievalIndex raises StoreError for its file).
+        RetrievalError::Storage { path, reason } => (Class::Store, "Storage", fields!(path = path, reason = reason)),
         RetrievalError::InvalidDistance { from, to, value } => (
             Class::Retrieval,
             "InvalidDistance",
             fields!(source = *from, target = *to, value = *value),
+        ),
+        RetrievalError::Labels { location, reason } => (
+            Class::InvalidInput,
+            "Labels",
+            fields!(location = location, reason = reason),
         ),
         other => {
             let kind = variant_name(&format!("{other:?}"));
@@ -591,6 +598,14 @@ pub fn store(py: Python<'_>, e: &StoreError) -> PyErr {
         ),
         StoreError::Corrupt { path, reason } => (Class::Store, "Corrupt", fields!(path = path, reason = reason)),
         StoreError::NanDistance { id } => (Class::Retrieval, "NanDistance", fields!(id = *id)),
+        StoreError::NotAFile { path, kind } => (Class::Store, "NotAFile", fields!(path = path, reason = *kind)),
+        StoreError::Replaced { path } => (Class::Store, "Replaced", fields!(path = path)),
+        StoreError::InvalidRow { path, id, reason } => (
+            Class::Store,
+            "InvalidRow",
+            fields!(path = path, id = *id, reason = reason),
+        ),
+        StoreError::TooLarge { path, what } => (Class::Store, "TooLarge", fields!(path = path, reason = what)),
         other => {
             let kind = variant_name(&format!("{other:?}"));
             return raise(py, Class::Store, &kind, message, Vec::new());

@@ -87,7 +87,7 @@ pub struct PyHeatKernel {
 #[pymethods]
 impl PyHeatKernel {
     #[staticmethod]
-    #[pyo3(signature = (v, f, mass=None, method_name=None, degree=None, k=None, backend=None))]
+    #[pyo3(signature = (v, f, mass=None, method_name=None, degree=None, k=None, backend=None, laplacian=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_mesh(
         py: Python<'_>,
@@ -98,12 +98,18 @@ impl PyHeatKernel {
         degree: Option<usize>,
         k: Option<usize>,
         backend: Option<&str>,
+        laplacian: Option<&str>,
     ) -> PyResult<Self> {
         let mesh = mesh_in(py, &v, &f)?;
         let mass: Mass = choices::parse(py, "mass", mass)?;
         let method = method(py, method_name, degree, k, backend)?;
+        let laplacian = crate::cloud::assembly_laplacian(py, laplacian, None)?;
         run(py, move |_| {
-            let fem = assemble(&mesh, &AssemblyParams::for_mass(mass))?;
+            let assembly = AssemblyParams {
+                laplacian,
+                ..AssemblyParams::for_mass(mass)
+            };
+            let fem = assemble(&mesh, &assembly)?;
             let kernel = HeatKernel::new(&fem, HeatParams { mass, method })?;
             Ok(Self {
                 kernel,
@@ -471,20 +477,22 @@ impl PyHeatKernel {
         run(py, move |_| Ok(largest_eigenvalue(kernel.operators(), &params)?))
     }
 
-    /// The feature-driven approximation (Sect. 4.2) of f on the kernel's mesh.
-    #[pyo3(signature = (f, k=20, scales=10, persistence=0.1, absolute=false, interpolate=false))]
+    /// The feature-driven approximation (Sect. 4.2) of f on the kernel's mesh; `None` takes the
+    /// library's default ([`wfem_heat::approx::ApproxParams`]).
+    #[pyo3(signature = (f, k=None, scales=None, persistence=None, absolute=false, coefficients=None, sampling=None))]
     #[allow(clippy::too_many_arguments)]
     fn feature_approximation<'py>(
         &self,
         py: Python<'py>,
         f: PyReadonlyArray1<'py, f64>,
-        k: usize,
-        scales: usize,
-        persistence: f64,
+        k: Option<usize>,
+        scales: Option<usize>,
+        persistence: Option<f64>,
         absolute: bool,
-        interpolate: bool,
+        coefficients: Option<&str>,
+        sampling: Option<&str>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        use wfem_heat::approx::{feature_approximation, ApproxParams, Coefficients, Persistence};
+        use wfem_heat::approx::{feature_approximation, ApproxParams, Coefficients, Persistence, ScaleSampling};
         let mesh = self.mesh.clone().ok_or_else(|| {
             invalid(
                 py,
@@ -492,38 +500,56 @@ impl PyHeatKernel {
                 "the feature-driven approximation needs the mesh (build the kernel from V, F, not from operators)",
             )
         })?;
+        let defaults = ApproxParams::default();
+        let persistence = match (persistence, absolute) {
+            (Some(x), true) => Persistence::Absolute(x),
+            (Some(x), false) => Persistence::Relative(x),
+            (None, true) => return Err(invalid_param(py, "absolute", "absolute=True needs a persistence")),
+            (None, false) => defaults.persistence,
+        };
+        let coefficients: Coefficients = choices::parse(py, "coefficients", coefficients)?;
+        let sampling: ScaleSampling = choices::parse(py, "sampling", sampling)?;
         let f = vec_in(&f);
         let kernel = self.kernel.clone();
         let params = ApproxParams {
-            k,
-            scales,
-            persistence: if absolute {
-                Persistence::Absolute(persistence)
-            } else {
-                Persistence::Relative(persistence)
-            },
-            coefficients: if interpolate {
-                Coefficients::Interpolate
-            } else {
-                Coefficients::FeatureValues
-            },
-            ..Default::default()
+            k: k.unwrap_or(defaults.k),
+            scales: scales.unwrap_or(defaults.scales),
+            persistence,
+            coefficients,
+            sampling,
+            ..defaults
         };
         let result = run(py, move |_| Ok(feature_approximation(&mesh, &kernel, &f, &params)?))?;
         let d = PyDict::new(py);
+        d.set_item("coefficients", result.coefficients.name())?;
+        d.set_item("formula", result.coefficients.formula())?;
+        d.set_item("sampling", result.sampling.name())?;
         d.set_item("anchors", result.anchors.clone())?;
+        d.set_item("anchor_persistence", result.anchor_persistence.clone())?;
+        d.set_item("threshold", result.threshold)?;
+        d.set_item("range", result.range)?;
         d.set_item("lambda_k", result.lambda_k)?;
+        d.set_item("lambda_max", result.lambda_max)?;
         d.set_item("input_critical_points", result.input_critical_points)?;
+        d.set_item("persistent_extrema", result.persistent_extrema)?;
+        let warning = result
+            .warning()
+            .map(|w| w.message(&|p, v| v.map_or_else(|| format!("{p}=…"), |v| format!("{p}={v:?}"))));
+        d.set_item("warning", warning)?;
         let scales = pyo3::types::PyList::empty(py);
         for s in result.scales {
             let e = PyDict::new(py);
             e.set_item("t", s.t)?;
             e.set_item("global_", vec_out(py, s.global))?;
             e.set_item("local", vec_out(py, s.local))?;
+            e.set_item("anchors", s.anchors)?;
+            e.set_item("coefficients", vec_out(py, s.coefficients))?;
             e.set_item("linf_error", s.linf_error)?;
             e.set_item("relative_linf_error", s.relative_linf_error)?;
+            e.set_item("anchor_error", s.anchor_error)?;
             e.set_item("critical_points", s.critical_points)?;
             e.set_item("significant_critical_points", s.significant_critical_points)?;
+            e.set_item("persistent_extrema", s.persistent_extrema)?;
             scales.append(e)?;
         }
         d.set_item("scales", scales)?;

@@ -10,6 +10,7 @@ use mesh_fem::TriMesh;
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use retrieval_store::SqliteIndex;
+use shape_retrieval::eval::{evaluate_index, vocabulary_source, ClassRule};
 use shape_retrieval::{IndexStore, JsonFile, RetrievalIndex, RetrievalSettings, VocabularyStore};
 use std::path::PathBuf;
 
@@ -32,17 +33,19 @@ fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
 
 #[pymethods]
 impl PyRetrievalIndex {
-    /// Indexes mesh files with the default recipe (spikes put back, rough shapes denoised,
-    /// holes closed, SI-HKS in area units, z-scored, 48 words, soft assignment, capped area
-    /// weights, χ²) into a new SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
+    /// Indexes mesh files with the default recipe (spikes put back, rough and incoherent shapes
+    /// denoised, holes closed, thin handles cut, SI-HKS in area units, z-scored, 96 words, soft
+    /// assignment, capped area weights, spatially sensitive bags, χ²) into a new SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
     /// of training on these shapes (its descriptor settings, cleaning included, are used);
     /// `despike` / `fill_holes` / `denoise`: the spike threshold, the largest hole perimeter
-    /// (in √area) and the target roughness, `None` for off.
+    /// (in √area) and the target roughness, `None` for off; `overwrite`: replace an existing
+    /// `out` (never an input).
     #[staticmethod]
     #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0,
         despike=Some(mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD),
         fill_holes=Some(mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER),
-        denoise=Some(shape_retrieval::DEFAULT_TARGET_ROUGHNESS)))]
+        denoise=Some(shape_retrieval::DEFAULT_TARGET_ROUGHNESS), overwrite=false,
+        spatial=Some(shape_retrieval::spatial::DEFAULT_SPATIAL_TIME)))]
     #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
@@ -54,9 +57,13 @@ impl PyRetrievalIndex {
         despike: Option<f64>,
         fill_holes: Option<f64>,
         denoise: Option<f64>,
+        overwrite: bool,
+        spatial: Option<f64>,
     ) -> PyResult<Self> {
         let path = out.clone();
         run(py, move |_| {
+            let inputs: Vec<&std::path::Path> = paths.iter().chain(&vocabulary).map(PathBuf::as_path).collect();
+            shape_retrieval::check_index_output(&out, &inputs, overwrite)?;
             let mut settings = RetrievalSettings::default();
             if let Some(w) = words {
                 settings.training.words = w;
@@ -65,8 +72,16 @@ impl PyRetrievalIndex {
             settings.descriptor.despiking = despike.map(|threshold| shape_retrieval::Despiking { threshold });
             settings.descriptor.hole_filling =
                 fill_holes.map(|max_perimeter| shape_retrieval::HoleFilling { max_perimeter });
-            settings.descriptor.denoising = denoise.map(|roughness| shape_retrieval::Denoising { roughness });
+            settings.descriptor.denoising = denoise.map(|roughness| shape_retrieval::Denoising {
+                roughness,
+                ..Default::default()
+            });
+            settings.bags.spatial = spatial.map(|time| shape_retrieval::spatial::SpatialBag { time });
             let vocabulary = vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?;
+            match &vocabulary {
+                Some(v) => shape_retrieval::limits::check_sizes(v.descriptor().eigenpairs, v.vocabulary().size())?,
+                None => shape_retrieval::limits::check_sizes(settings.descriptor.eigenpairs, settings.training.words)?,
+            }
             let meshes = read_all(&paths)?;
             let index = RetrievalIndex::build(&meshes, &settings, vocabulary)?;
             SqliteIndex::new(&out).save_index(&index)?;
@@ -114,7 +129,7 @@ impl PyRetrievalIndex {
                 .iter()
                 .map(|(name, mesh)| settings.describe(name, mesh))
                 .collect::<Result<Vec<_>, _>>()?;
-            index.append(&entries)?;
+            index.append(&settings, &entries)?;
             Ok(entries.len())
         })
     }
@@ -139,6 +154,38 @@ impl PyRetrievalIndex {
                 .into_iter()
                 .map(|h| (h.name, h.distance))
                 .collect())
+        })
+    }
+
+    /// Leave-one-out evaluation of the indexed shapes from their stored signatures
+    /// (`shape_retrieval::eval`): `classes[i]` labels the i-th indexed name, or, without
+    /// `classes`, each name's class by `class_from` (a `ClassRule`). Returns the report as JSON
+    /// and as the text of `wfem retrieval eval`.
+    #[pyo3(signature = (classes=None, class_from=None))]
+    fn evaluate(
+        &self,
+        py: Python<'_>,
+        classes: Option<Vec<String>>,
+        class_from: Option<String>,
+    ) -> PyResult<(String, String)> {
+        let rule: ClassRule = crate::choices::parse(py, "class_from", class_from.as_deref())?;
+        let path = self.path.clone();
+        run(py, move |_| {
+            let index = SqliteIndex::new(&path).load_index()?;
+            let classes = match classes {
+                Some(c) => c,
+                None => index
+                    .entries()
+                    .iter()
+                    .map(|e| rule.class_of(std::path::Path::new(&e.name)))
+                    .collect::<Result<_, _>>()?,
+            };
+            let report = evaluate_index(&index, &classes, &vocabulary_source(&index))?;
+            let json = serde_json::to_string(&report).map_err(|e| shape_retrieval::RetrievalError::Storage {
+                path: path.clone(),
+                reason: e.to_string(),
+            })?;
+            Ok((json, report.to_text()))
         })
     }
 

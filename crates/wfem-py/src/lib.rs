@@ -5,6 +5,7 @@
 //! Rust error becomes an exception of `wfem._errors` keeping the culprit (`errors.rs`).
 
 mod choices;
+mod cloud;
 mod convert;
 mod errors;
 mod heat;
@@ -30,6 +31,7 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
         mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER,
     )?;
     m.add("DEFAULT_TARGET_ROUGHNESS", shape_retrieval::DEFAULT_TARGET_ROUGHNESS)?;
+    m.add("DEFAULT_SPATIAL_TIME", shape_retrieval::spatial::DEFAULT_SPATIAL_TIME)?;
     m.add("SHIPPED_DEGREES", shifted_solve::SHIPPED_DEGREES.to_vec())?;
     m.add(
         "PAPER_DESCRIPTORS",
@@ -40,6 +42,7 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DEFAULT_NUM_TIMES", shape_retrieval::DEFAULT_NUM_TIMES)?;
     choices::register(m)?;
     mesh::register(m)?;
+    cloud::register(m)?;
     heat::register(m)?;
     spectral::register(m)?;
     retrieval::register(m)?;

@@ -138,20 +138,24 @@ pub fn mesh_stats(py: Python<'_>, v: PyReadonlyArray2<'_, f64>, f: PyReadonlyArr
     json(py, &s)
 }
 
-/// `operators(V, F, lumped_mass) -> (L, B, D)` as CSC arrays; D is the given lumped mass
-/// (default barycentric).
+/// `operators(V, F, lumped_mass=None, laplacian=None, mollify_factor=None) -> (L, B, D)` as
+/// CSC arrays; D is the given lumped mass (default barycentric), L the given Laplacian
+/// (default the cotangent L).
 #[pyfunction]
-#[pyo3(signature = (v, f, lumped_mass=None))]
+#[pyo3(signature = (v, f, lumped_mass=None, laplacian=None, mollify_factor=None))]
 pub fn operators<'py>(
     py: Python<'py>,
     v: PyReadonlyArray2<'py, f64>,
     f: PyReadonlyArray2<'py, i64>,
     lumped_mass: Option<&str>,
+    laplacian: Option<&str>,
+    mollify_factor: Option<f64>,
 ) -> PyResult<(SparseOut<'py>, SparseOut<'py>, SparseOut<'py>)> {
     let mesh = mesh_in(py, &v, &f)?;
     let lumping: Lumping = crate::choices::parse(py, "lumped_mass", lumped_mass)?;
+    let laplacian = crate::cloud::assembly_laplacian(py, laplacian, mollify_factor)?;
     let fem = run(py, move |_| {
-        assemble(&mesh, &AssemblyParams { lumping }).map_err(Error::from)
+        assemble(&mesh, &AssemblyParams { lumping, laplacian }).map_err(Error::from)
     })?;
     Ok((
         sparse_out(py, fem.stiffness.as_ref()),

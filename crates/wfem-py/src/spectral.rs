@@ -73,7 +73,7 @@ fn truncation<'py>(py: Python<'py>, r: &TruncationReport) -> PyResult<Bound<'py,
 #[pymethods]
 impl PyEigenbasis {
     #[staticmethod]
-    #[pyo3(signature = (v, f, k=None, mass=None, tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None, max_restarts=100))]
+    #[pyo3(signature = (v, f, k=None, mass=None, tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None, max_restarts=100, laplacian=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_mesh(
         py: Python<'_>,
@@ -87,12 +87,18 @@ impl PyEigenbasis {
         seed: u64,
         shift: Option<f64>,
         max_restarts: usize,
+        laplacian: Option<&str>,
     ) -> PyResult<Self> {
         let mesh = mesh_in(py, &v, &f)?;
         let mass: Mass = choices::parse(py, "mass", mass)?;
+        let laplacian = crate::cloud::assembly_laplacian(py, laplacian, None)?;
         let params = eigen_params(py, tol, block_size, max_dim, seed, shift, max_restarts)?;
         run(py, move |_| {
-            let fem = assemble(&mesh, &AssemblyParams::for_mass(mass))?;
+            let assembly = AssemblyParams {
+                laplacian,
+                ..AssemblyParams::for_mass(mass)
+            };
+            let fem = assemble(&mesh, &assembly)?;
             let ops = Operators::new(&fem, mass)?;
             let basis = compute(&ops, k, &params)?;
             Ok(Self {
@@ -344,12 +350,12 @@ type MeshHksOut<'py> = (
 /// The heat kernel signature of a mesh: shape_retrieval's one orchestration (auto / exact /
 /// spectral), as `wfem hks` runs it.
 #[pyfunction]
-#[pyo3(signature = (v, f, times=None, num_times=None, k=shape_retrieval::DEFAULT_EIGENPAIRS, mass=None, method=None, convention=None, scaled=false, normalization=None, basis=None, tol=shape_retrieval::DEFAULT_TRUNCATION_TOL))]
+#[pyo3(signature = (v, f, times=None, num_times=None, k=shape_retrieval::DEFAULT_EIGENPAIRS, mass=None, method=None, convention=None, scaled=false, normalization=None, basis=None, tol=shape_retrieval::DEFAULT_TRUNCATION_TOL, laplacian=None, n_neighbors=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn mesh_hks<'py>(
     py: Python<'py>,
     v: PyReadonlyArray2<'py, f64>,
-    f: PyReadonlyArray2<'py, i64>,
+    f: Option<PyReadonlyArray2<'py, i64>>,
     times: Option<Vec<f64>>,
     num_times: Option<usize>,
     k: usize,
@@ -360,9 +366,16 @@ pub fn mesh_hks<'py>(
     normalization: Option<&str>,
     basis: Option<PyRef<'py, PyEigenbasis>>,
     tol: f64,
+    laplacian: Option<&str>,
+    n_neighbors: Option<usize>,
 ) -> PyResult<MeshHksOut<'py>> {
     use shape_retrieval::{HksMethod, HksSource, MeshHksParams};
-    let mesh = mesh_in(py, &v, &f)?;
+    // A mesh, or (no F) a point cloud with its neighbourhood size.
+    let shape = match &f {
+        Some(f) => Ok(mesh_in(py, &v, f)?),
+        None => Err(crate::cloud::cloud_in(py, &v, n_neighbors)?),
+    };
+    let laplacian = crate::cloud::assembly_laplacian(py, laplacian, None)?;
     let method = match choices::parse::<HksMethod>(py, "method", method)? {
         HksMethod::Auto { .. } => HksMethod::Auto { tol },
         other => other,
@@ -380,6 +393,7 @@ pub fn mesh_hks<'py>(
         convention: choices::parse(py, "convention", convention)?,
         scaled,
         normalization: choices::parse(py, "normalization", normalization)?,
+        laplacian,
         ..Default::default()
     };
     if let Some(b) = &basis {
@@ -396,8 +410,13 @@ pub fn mesh_hks<'py>(
         }
     }
     let basis = basis.map(|b| (*b.basis).clone());
-    let hks = run(py, move |_| {
-        Ok(shape_retrieval::mesh_hks(&mesh, &params, basis, &mut |_| {})?)
+    let hks = run(py, move |_| match shape {
+        Ok(mesh) => Ok(shape_retrieval::mesh_hks(&mesh, &params, basis, &mut |_| {})?),
+        Err((cloud, cloud_params)) => {
+            let assembly = mesh_fem::AssemblyParams::for_mass(params.mass);
+            let fem = mesh_fem::assemble_cloud(&cloud, &cloud_params, &assembly)?.operators;
+            Ok(shape_retrieval::operators_hks(&fem, &params, basis, &mut |_| {})?)
+        }
     })?;
     let sources = hks
         .sources

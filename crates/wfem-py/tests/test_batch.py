@@ -110,3 +110,91 @@ def test_default_process_pool(collection, vocabulary):
     np.testing.assert_allclose(
         np.array([r["bag"] for r in _rows(table)]), np.array([r["bag"] for r in _rows(serial)]), rtol=1e-12
     )
+
+
+def _serial(paths, out, **kw):
+    return wfem.batch.descriptors(paths, out, executor=wfem.batch.SerialExecutor(), shard_size=2,
+                                  **{**OPTIONS, **kw})
+
+
+def test_a_rerun_into_a_run_folder_is_refused_unless_replace_or_resume(collection, tmp_path):
+    out = tmp_path / "run"
+    first = _serial(collection[:5], out)
+    assert sorted(os.listdir(out)) == ["manifest.json", "part-00000.parquet", "part-00001.parquet",
+                                       "part-00002.parquet", "run.json"]
+    with pytest.raises(wfem.InvalidInputError) as e:
+        _serial(collection[:2], out)
+    assert e.value.kind == "OutputExists" and "replace=True" in str(e.value)
+    assert wfem.batch.read(out).equals(first)
+    # replace: a shorter run leaves none of the earlier shards behind.
+    second = _serial(collection[:2], out, replace=True)
+    assert sorted(os.listdir(out)) == ["manifest.json", "part-00000.parquet", "run.json"]
+    assert wfem.batch.read(out).equals(second)
+    assert not [f for f in os.listdir(tmp_path) if f.startswith(".")]
+
+
+def test_an_interrupted_replace_leaves_the_old_run_readable(collection, tmp_path):
+    out = tmp_path / "run"
+    first = _serial(collection[:3], out)
+
+    class Interrupted(Exception):
+        pass
+
+    class Crashing(wfem.batch.SerialExecutor):
+        def submit(self, fn, /, *args, **kwargs):
+            raise Interrupted()
+
+    with pytest.raises(Interrupted):
+        wfem.batch.descriptors(collection[:3], out, executor=Crashing(), replace=True, **OPTIONS)
+    assert wfem.batch.read(out).equals(first)
+    assert not [f for f in os.listdir(tmp_path) if f.startswith(".")]
+
+
+def test_resume_skips_written_shapes_and_refuses_other_settings(collection, tmp_path):
+    out = tmp_path / "run"
+    paths = collection[:6]
+    full = _serial(paths, tmp_path / "reference")
+    _serial(paths[:4], out)
+    os.remove(out / "manifest.json")  # as if killed after its second shard
+    with pytest.raises(wfem.InvalidInputError) as e:
+        wfem.batch.read(out)
+    assert e.value.kind == "Interrupted" and "resume=True" in str(e.value)
+    seen = []
+
+    class Counting(wfem.batch.SerialExecutor):
+        def submit(self, fn, /, *args, **kwargs):
+            seen.append(args[0])
+            return super().submit(fn, *args, **kwargs)
+
+    resumed = wfem.batch.descriptors(paths, out, executor=Counting(), shard_size=2, resume=True, **OPTIONS)
+    assert seen == paths[4:]
+    assert resumed.equals(full) and wfem.batch.read(out).equals(full)
+    # Other settings, another shard size or other paths are refused, naming the difference.
+    for kw, culprit in [(dict(k=20), "options"), (dict(shard_size=3), "shard_size")]:
+        with pytest.raises(wfem.InvalidInputError) as e:
+            wfem.batch.descriptors(paths, out, executor=wfem.batch.SerialExecutor(), resume=True,
+                                   **{**OPTIONS, "shard_size": 2, **kw})
+        assert e.value.kind == "ResumeMismatch" and culprit in str(e.value), str(e.value)
+    with pytest.raises(wfem.InvalidInputError) as e:
+        _serial(paths[::-1], out, resume=True)
+    assert e.value.kind == "ResumeMismatch"
+
+
+def test_read_says_exactly_what_is_wrong(collection, tmp_path):
+    out = tmp_path / "run"
+    _serial(collection[:4], out)
+    (out / "part-00007.parquet").write_bytes(b"left by another run")
+    with pytest.raises(wfem.InvalidInputError, match="part-00007.parquet is not listed"):
+        wfem.batch.read(out)
+    os.remove(out / "part-00007.parquet")
+    os.remove(out / "part-00001.parquet")
+    with pytest.raises(wfem.InvalidInputError, match="lists part-00001.parquet, which is missing"):
+        wfem.batch.read(out)
+    (out / "part-00001.parquet").write_bytes(b"not parquet")
+    with pytest.raises(wfem.InvalidInputError, match="shard part-00001.parquet cannot be read"):
+        wfem.batch.read(out)
+    (out / "manifest.json").write_text("{")
+    with pytest.raises(wfem.InvalidInputError, match="is not a wfem.batch manifest"):
+        wfem.batch.read(out)
+    with pytest.raises(wfem.InvalidInputError, match="no such folder"):
+        wfem.batch.read(tmp_path / "absent")

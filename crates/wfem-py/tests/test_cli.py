@@ -87,3 +87,24 @@ def test_retrieval_index_is_shared_with_the_cli(cli, tmp_path):
         capture_output=True, text=True, check=True,
     ).stdout
     assert [line.split("\t")[2] for line in out.splitlines()] == [n for n, _ in a]
+
+
+def test_approx_matches_the_cli(cli, mesh_file, tmp_path):
+    # Issue #24: the defaults of `wfem approx` and of HeatKernel.feature_approximation are the
+    # same library call; the sidecar records what the Python dict does.
+    import json
+
+    V, F = wfem.read_mesh(mesh_file)
+    f = V[:, 2] + 0.3 * np.sin(4 * V[:, 0])
+    np.save(tmp_path / "f.npy", f)
+    out = tmp_path / "a.npy"
+    run(cli, "approx", mesh_file, "--field", tmp_path / "f.npy", "-o", out)
+    record = json.loads((tmp_path / "a.json").read_text())["approximation"]
+    mine = wfem.HeatKernel(V, F).feature_approximation(f)
+    for key in ("coefficients", "sampling", "anchors"):
+        assert record[key] == mine[key], key
+    for a, b in zip(record["scales"], mine["scales"]):
+        assert abs(a["t"] - b["t"]) <= 1e-12 * b["t"]
+        assert a["anchors"] == b["anchors"]
+        np.testing.assert_allclose(a["coefficients"], b["coefficients"], rtol=1e-9, atol=1e-12)
+        assert abs(a["relative_linf_error"] - b["relative_linf_error"]) <= 1e-9

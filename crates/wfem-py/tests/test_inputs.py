@@ -64,8 +64,8 @@ def test_refused_dtypes_and_shapes(sphere):
         wfem.operators(V[:, :2], F)
     with pytest.raises(wfem.InvalidInputError, match="triangles"):
         wfem.operators(V, np.column_stack([F, F[:, :1]]))
-    with pytest.raises(wfem.InvalidInputError):
-        wfem.operators(V)  # no F and no .faces
+    with pytest.raises(wfem.InvalidInputError, match=r"\(n, 3\)"):
+        wfem.operators(V[:, :2])  # no F: a point cloud (issue #27), which must be (n, 3)
     with pytest.raises(wfem.MeshError) as e:
         wfem.operators(np.zeros((0, 3)), np.zeros((0, 3), dtype=int))
     assert e.value.kind == "Empty"

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import threading
@@ -149,14 +150,17 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
     default = wfem.RetrievalIndex.build(paths, tmp_path / "a.sqlite", words=4)
     descriptor = default.settings["vocabulary"]["descriptor"]
     assert descriptor["despiking"] == {"threshold": 3.0}
-    assert descriptor["denoising"] == {"roughness": 0.1}
+    assert descriptor["denoising"] == {"roughness": 0.1, "max_coherence": 0.1}
+    assert descriptor["topology_repair"] == {"max_handle": 0.35}
     assert descriptor["hole_filling"] == {"max_perimeter": wfem._wfem.DEFAULT_MAX_HOLE_PERIMETER} == {"max_perimeter": 3.0}
     assert default.settings["bags"]["weights"] == {"kind": "capped-area", "factor": 3.0}
+    assert default.settings["bags"]["spatial"] == {"time": wfem._wfem.DEFAULT_SPATIAL_TIME} == {"time": 2.0**-8}
     off = wfem.RetrievalIndex.build(
-        paths, tmp_path / "b.sqlite", words=4, despike=None, fill_holes=None, denoise=0.2
+        paths, tmp_path / "b.sqlite", words=4, despike=None, fill_holes=None, denoise=0.2, spatial=None
     )
     descriptor = off.settings["vocabulary"]["descriptor"]
-    assert descriptor["despiking"] is None and descriptor["denoising"] == {"roughness": 0.2}
+    assert descriptor["despiking"] is None and descriptor["denoising"] == {"roughness": 0.2, "max_coherence": 0.1}
+    assert "spatial" not in off.settings["bags"]
     assert descriptor["hole_filling"] is None
     for bad in (
         {"despike": -1.0},
@@ -165,9 +169,75 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
         {"fill_holes": -1.0},
         {"fill_holes": 0.0},
         {"fill_holes": float("inf")},
+        {"spatial": 0.0},
     ):
         with pytest.raises(
-            wfem.InvalidInputError, match="spike threshold|target roughness|largest hole perimeter"
+            wfem.InvalidInputError,
+            match="spike threshold|target roughness|largest hole perimeter|spatial bag time",
         ):
             wfem.RetrievalIndex.build(paths, tmp_path / "c.sqlite", words=4, **bad)
     assert not (tmp_path / "c.sqlite").exists()
+
+
+def _measures(rel):
+    """AP, NN, FT, ST, E (first 32), normalised DCG of one relevance list, by definition."""
+    rel = np.asarray(rel, dtype=bool)
+    r = int(rel.sum())
+    hits = np.cumsum(rel)
+    ap = float(np.sum(hits[rel] / (np.flatnonzero(rel) + 1))) / r
+    k = min(32, len(rel))
+    p, rc = hits[k - 1] / k, hits[k - 1] / r
+    e = 2 * p * rc / (p + rc) if p + rc > 0 else 0.0
+    gain = np.array([1.0] + [1 / np.log2(j + 1) for j in range(1, len(rel))])
+    ideal = gain[:r].sum()
+    return {
+        "map": ap,
+        "nn": float(rel[0]),
+        "first_tier": hits[r - 1] / r,
+        "second_tier": hits[min(2 * r, len(rel)) - 1] / r,
+        "e_measure": e,
+        "dcg": float(gain[rel].sum() / ideal),
+    }
+
+
+def test_retrieval_index_evaluate(tmp_path):
+    # Three classes of two shapes (each shape at scales 1 and 1.5), in class folders.
+    paths = []
+    shapes = {"ico": wfem.generate.icosphere(2), "bumpy": wfem.generate.bumpy(2), "torus": wfem.generate.torus()}
+    for kind, (V, F) in shapes.items():
+        folder = tmp_path / f"{kind}s"
+        folder.mkdir()
+        for j, s in enumerate((1.0, 1.5)):
+            p = folder / f"{kind}{j}.off"
+            write_off(p, V * s, F)
+            paths.append(p)
+    index = wfem.RetrievalIndex.build(paths, tmp_path / "idx.sqlite", words=8)
+    report = index.evaluate()
+    assert report["shapes"] == 6 and report["classes"] == 3 and report["queries"] == 6
+    assert "optimistic" in report["vocabulary"] and report["text"].startswith("6 shapes, 3 classes")
+    # Rankings obtained independently (one query per shape, itself dropped), measures by
+    # definition: the report's per-query and overall values.
+    names = index.names
+    classes = [os.path.basename(os.path.dirname(n)) for n in names]
+    total = {}
+    for q, name in enumerate(names):
+        V, F = wfem.read_mesh(name)
+        ranked = [n for n, _ in index.query_mesh(V, F, k=6) if n != name]
+        assert len(ranked) == 5
+        m = _measures([classes[names.index(n)] == classes[q] for n in ranked])
+        for key, value in m.items():
+            assert report["per_query"][q]["measures"][key] == pytest.approx(value, abs=1e-12), (name, key)
+            total[key] = total.get(key, 0.0) + value
+    for key, value in total.items():
+        assert report["overall"][key] == pytest.approx(value / 6, abs=1e-12)
+    # The same from explicit classes (a list or a mapping) and from the stems.
+    assert index.evaluate(classes)["overall"] == report["overall"]
+    assert index.evaluate(dict(zip(names, classes)))["overall"] == report["overall"]
+    stems = index.evaluate(class_from="stem")
+    assert stems["classes"] == 3 and stems["overall"] == report["overall"]
+    with pytest.raises(wfem.InvalidInputError):
+        index.evaluate(class_from="grandparent")
+    with pytest.raises(wfem.InvalidInputError):
+        index.evaluate(classes[:3])
+    with pytest.raises(wfem.InvalidInputError):
+        index.evaluate({names[0]: "a"})

@@ -377,6 +377,20 @@ fn npy_entry<'a>(header: &'a str, key: &str) -> Option<&'a str> {
 }
 
 fn parse_npy(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {
+    let (values, dims) = parse_npy_array(bytes, path)?;
+    match dims.as_slice() {
+        [_] | [_, 1] => Ok(values),
+        _ => Err(parse_error(
+            path,
+            0,
+            format!("NPY: shape {dims:?} is not (n,) or (n, 1)"),
+        )),
+    }
+}
+
+/// A float64/float32 NPY array (either byte order) as its values in C order and its shape
+/// (a Fortran-order array is transposed into C order).
+pub(crate) fn parse_npy_array(bytes: &[u8], path: &Path) -> Result<(Vec<f64>, Vec<usize>), MeshError> {
     let bad = |m: String| parse_error(path, 0, format!("NPY: {m}"));
     if !bytes.starts_with(b"\x93NUMPY") {
         return Err(bad("missing the \\x93NUMPY magic".into()));
@@ -415,11 +429,12 @@ fn parse_npy(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {
         .filter(|s| !s.is_empty())
         .map(|s| s.parse::<usize>().map_err(|_| bad(format!("bad shape {shape}"))))
         .collect::<Result<_, _>>()?;
-    let n = match dims.as_slice() {
-        [n] | [n, 1] => *n,
-        _ => return Err(bad(format!("shape {shape} is not (n,) or (n, 1)"))),
-    };
-    let data = &bytes[start + len..];
+    let fortran = npy_entry(header, "fortran_order").is_some_and(|v| v.starts_with("True"));
+    let n = dims
+        .iter()
+        .try_fold(1usize, |acc, &d| acc.checked_mul(d))
+        .ok_or_else(|| bad(format!("shape {shape} is too large")))?;
+    let data = bytes.get(start + len..).unwrap_or(&[]);
     let needed = n
         .checked_mul(width)
         .ok_or_else(|| bad(format!("shape {shape} is too large")))?;
@@ -429,7 +444,7 @@ fn parse_npy(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {
             data.len()
         )));
     }
-    let values = data[..needed]
+    let values: Vec<f64> = data[..needed]
         .chunks_exact(width)
         .map(|c| match (width, little) {
             (8, true) => f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]),
@@ -438,7 +453,15 @@ fn parse_npy(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {
             (_, false) => f64::from(f32::from_be_bytes([c[0], c[1], c[2], c[3]])),
         })
         .collect();
-    Ok(values)
+    if fortran && dims.len() == 2 {
+        let (rows, cols) = (dims[0], dims[1]);
+        let values: Vec<f64> = (0..rows * cols).map(|k| values[(k % cols) * rows + k / cols]).collect();
+        return Ok((values, dims));
+    }
+    if fortran && dims.len() > 2 {
+        return Err(bad(format!("a Fortran-order array of shape {shape} is not supported")));
+    }
+    Ok((values, dims))
 }
 
 fn parse_csv(bytes: &[u8], path: &Path) -> Result<Vec<f64>, MeshError> {

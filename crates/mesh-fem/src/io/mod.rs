@@ -1,4 +1,6 @@
-//! Reading triangle meshes (OBJ, PLY, OFF, STL) and writing meshes and per-vertex fields.
+//! Reading triangle meshes (OBJ, PLY, OFF, STL) and point clouds (PLY without faces, XYZ,
+//! PTS, CSV, NPY: [`load_points`], and [`load_shape`] for either), and writing meshes and
+//! per-vertex fields.
 //!
 //! # Reading
 //! [`load`] picks the format from the file extension (case-insensitive) and returns the mesh
@@ -35,11 +37,13 @@ mod field;
 mod obj;
 mod off;
 mod ply;
+mod points;
 mod stl;
 mod text;
 
 pub use atomic::{write_atomic, AtomicSet};
 pub use field::{read_field, stage_field, write_field, write_mesh, FieldFormat};
+pub use points::{load_points, load_shape, read_points, PointFormat, Shape};
 
 /// A supported mesh file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -11,27 +11,33 @@ use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType};
 use std::path::Path;
 
-/// One PLY vertex: the coordinates and which of them were present.
+/// One PLY vertex: the coordinates (and the normal, read for point clouds).
 struct Vertex {
     p: [f64; 3],
+    n: [f64; 3],
 }
 
 impl Vertex {
     fn set(&mut self, name: &str, value: f64) -> PropertyAccessResult {
-        let k = match name {
-            "x" => 0,
-            "y" => 1,
-            "z" => 2,
+        match name {
+            "x" => self.p[0] = value,
+            "y" => self.p[1] = value,
+            "z" => self.p[2] = value,
+            "nx" => self.n[0] = value,
+            "ny" => self.n[1] = value,
+            "nz" => self.n[2] = value,
             _ => return PropertyAccessResult::Ignored,
-        };
-        self.p[k] = value;
+        }
         PropertyAccessResult::Set
     }
 }
 
 impl PropertyAccess for Vertex {
     fn new() -> Self {
-        Self { p: [0.0; 3] }
+        Self {
+            p: [0.0; 3],
+            n: [0.0; 3],
+        }
     }
     fn set_char(&mut self, name: &str, v: i8) -> PropertyAccessResult {
         self.set(name, f64::from(v))
@@ -115,7 +121,55 @@ fn ply_error(path: &Path, header: &Header, e: &ply_rs_bw::parser::ParseError) ->
     parse_error(path, line, e.to_string())
 }
 
-fn check_header(path: &Path, header: &Header) -> Result<(), MeshError> {
+/// Whether a PLY file declares faces (a `face` element with at least one record): a mesh;
+/// otherwise a point cloud. `None` if the header cannot be read.
+pub(crate) fn has_faces(bytes: &[u8]) -> Option<bool> {
+    let mut reader = Reader::new(bytes);
+    let header = Parser::<Skip>::new().read_header(&mut reader).ok()?;
+    Some(header.elements.get("face").is_some_and(|f| f.count > 0))
+}
+
+/// Reads the `vertex` element of a PLY file as a point cloud: positions, and normals when
+/// the vertices have `nx`, `ny`, `nz`. Other elements are skipped; a `face` element with
+/// records is refused (the file is a mesh).
+pub(crate) fn read_points(bytes: &[u8], path: &Path) -> Result<crate::PointCloud, MeshError> {
+    let mut reader = Reader::new(bytes);
+    let header = Parser::<Skip>::new()
+        .read_header(&mut reader)
+        .map_err(|e| parse_error(path, e.line().unwrap_or(0), format!("PLY header: {e}")))?;
+    check_vertex_header(path, &header)?;
+    let vertex_def = &header.elements["vertex"];
+    let with_normals = ["nx", "ny", "nz"].iter().all(|c| {
+        matches!(
+            vertex_def.properties.get(*c).map(|p| &p.data_type),
+            Some(PropertyType::Scalar(_))
+        )
+    });
+    let mut points: Vec<Vertex> = Vec::new();
+    let elements: Vec<&ElementDef> = header.elements.iter().map(|(_, e)| e).collect();
+    for def in elements {
+        if def.name == "face" && def.count > 0 {
+            return Err(parse_error(
+                path,
+                0,
+                format!("the file has {} faces: read it as a mesh", def.count),
+            ));
+        }
+        if def.name == "vertex" {
+            points = Parser::<Vertex>::new()
+                .read_payload_for_element(&mut reader, def, &header)
+                .map_err(|e| ply_error(path, &header, &e))?;
+        } else {
+            Parser::<Skip>::new()
+                .read_payload_for_element(&mut reader, def, &header)
+                .map_err(|e| ply_error(path, &header, &e))?;
+        }
+    }
+    let normals = with_normals.then(|| points.iter().map(|v| v.n).collect());
+    crate::PointCloud::new(points.into_iter().map(|v| v.p).collect(), normals)
+}
+
+fn check_vertex_header(path: &Path, header: &Header) -> Result<(), MeshError> {
     let vertex = header
         .elements
         .get("vertex")
@@ -139,6 +193,11 @@ fn check_header(path: &Path, header: &Header) -> Result<(), MeshError> {
             }
         }
     }
+    Ok(())
+}
+
+fn check_header(path: &Path, header: &Header) -> Result<(), MeshError> {
+    check_vertex_header(path, header)?;
     let face = header
         .elements
         .get("face")

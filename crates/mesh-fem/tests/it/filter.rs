@@ -155,3 +155,47 @@ fn roughness_ignores_curvature_and_resolution_and_grows_with_noise() {
     let triangle = TriMesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();
     assert_eq!(roughness(&triangle), 0.0);
 }
+
+#[test]
+fn coherence_tells_noise_from_a_coarse_clean_mesh() {
+    use mesh_fem::filter::surface_noise;
+    use mesh_fem::generate::torus;
+    // Coarse clean meshes: the heights follow the curvature from vertex to vertex.
+    for (name, mesh) in [
+        ("bumpy(1)", bumpy(1)),
+        ("torus 10×5", torus(1.0, 0.3, 10, 5)),
+        ("bumpy(4)", bumpy(4)),
+    ] {
+        let n = surface_noise(&mesh);
+        assert!(n.coherence > 0.3, "{name}: {n:?}");
+    }
+    // Noise of 0.2–0.5 mean edge lengths on fine meshes (2562 vertices): rough and incoherent
+    // (measured −0.65 … 0.05).
+    for mesh in [icosphere(4), bumpy(4)] {
+        let h = mean_edge(&mesh);
+        for sigma in [0.2, 0.3, 0.5] {
+            let n = surface_noise(&noisy(&mesh, sigma * h));
+            assert!(n.roughness > 0.1 && n.coherence < 0.1, "σ = {sigma}: {n:?}");
+        }
+    }
+    // On a 162-vertex bumpy sphere the bumps span a few edges, so noise of 0.2 edge lengths
+    // reads incoherent (0.02) but 0.3 and 0.5 still 0.12: the gate errs on the side of leaving
+    // a coarse shape as it is. Still far below the clean meshes above.
+    let coarse = bumpy(2);
+    let h = mean_edge(&coarse);
+    assert!(surface_noise(&noisy(&coarse, 0.2 * h)).coherence < 0.1);
+    for sigma in [0.3, 0.5] {
+        let n = surface_noise(&noisy(&coarse, sigma * h));
+        assert!(n.roughness > 0.1 && n.coherence < 0.2, "σ = {sigma}: {n:?}");
+    }
+    // A correlation coefficient: in [−1, 1], scale invariant, 0 when undefined.
+    let rough = noisy(&bumpy(3), 0.3 * mean_edge(&bumpy(3)));
+    let (a, b) = (surface_noise(&rough), surface_noise(&rough.scaled(1e-4).unwrap()));
+    assert!((-1.0..=1.0).contains(&a.coherence));
+    assert!((a.coherence - b.coherence).abs() < 1e-9, "{a:?} vs {b:?}");
+    assert_eq!(a.roughness, mesh_fem::filter::roughness(&rough));
+    let triangle = TriMesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();
+    assert_eq!(surface_noise(&triangle).coherence, 0.0);
+    // A round sphere: every height the same, so the correlation is undefined (0).
+    assert!(surface_noise(&icosphere(3)).coherence.abs() < 1.0);
+}

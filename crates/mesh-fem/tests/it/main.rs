@@ -3,15 +3,19 @@
 
 mod minimal_reader;
 
+mod cloud;
 mod corpus;
 mod filter;
 mod generate;
+mod handles;
 mod io_obj_oracle;
+mod io_points;
 mod io_readers;
 mod io_special_files;
 mod io_writers;
 mod morse;
 mod mtx;
 mod operators;
+mod robust;
 mod stats;
 mod validate;

@@ -27,12 +27,13 @@ fn ops(mesh: &TriMesh) -> FemOperators {
 fn voronoi_ops(mesh: &TriMesh) -> FemOperators {
     let params = AssemblyParams {
         lumping: Lumping::Voronoi,
+        ..Default::default()
     };
     assemble(mesh, &params).expect("generated meshes assemble")
 }
 
 /// All stored entries `(row, col, value)` of a CSC matrix.
-fn entries(a: &faer::sparse::SparseColMat<usize, f64>) -> Vec<(usize, usize, f64)> {
+pub(crate) fn entries(a: &faer::sparse::SparseColMat<usize, f64>) -> Vec<(usize, usize, f64)> {
     let sym = a.symbolic();
     let mut out = Vec::with_capacity(a.val().len());
     for j in 0..a.ncols() {
@@ -44,16 +45,16 @@ fn entries(a: &faer::sparse::SparseColMat<usize, f64>) -> Vec<(usize, usize, f64
 }
 
 /// Entry map `(row, col) → value` of a CSC matrix.
-fn entry_map(a: &faer::sparse::SparseColMat<usize, f64>) -> HashMap<(usize, usize), f64> {
+pub(crate) fn entry_map(a: &faer::sparse::SparseColMat<usize, f64>) -> HashMap<(usize, usize), f64> {
     entries(a).into_iter().map(|(i, j, v)| ((i, j), v)).collect()
 }
 
-fn max_abs(v: &[f64]) -> f64 {
+pub(crate) fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
 /// y = A x for a CSC matrix.
-fn matvec(a: &faer::sparse::SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
+pub(crate) fn matvec(a: &faer::sparse::SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; a.nrows()];
     for (i, j, v) in entries(a) {
         y[i] += v * x[j];
@@ -62,7 +63,7 @@ fn matvec(a: &faer::sparse::SparseColMat<usize, f64>, x: &[f64]) -> Vec<f64> {
 }
 
 /// Max |A − Aᵀ| over the stored entries (a missing transposed entry counts as zero).
-fn asymmetry(a: &faer::sparse::SparseColMat<usize, f64>) -> f64 {
+pub(crate) fn asymmetry(a: &faer::sparse::SparseColMat<usize, f64>) -> f64 {
     let m = entry_map(a);
     m.iter()
         .map(|(&(i, j), &v)| (v - m.get(&(j, i)).copied().unwrap_or(0.0)).abs())
@@ -566,7 +567,7 @@ fn unit_square_two_triangles_by_hand() {
 // Spectra against analytic eigenvalues
 // ---------------------------------------------------------------------------------------
 
-fn dense(a: &faer::sparse::SparseColMat<usize, f64>) -> Mat<f64> {
+pub(crate) fn dense(a: &faer::sparse::SparseColMat<usize, f64>) -> Mat<f64> {
     let mut m = Mat::zeros(a.nrows(), a.ncols());
     for (i, j, v) in entries(a) {
         m[(i, j)] = v;
@@ -576,7 +577,7 @@ fn dense(a: &faer::sparse::SparseColMat<usize, f64>) -> Mat<f64> {
 
 /// Eigenvalues of the symmetric-definite pencil (L, B), ascending: with B = RRᵀ (Cholesky),
 /// L x = λ B x ⇔ C y = λ y for C = R⁻¹ L R⁻ᵀ, y = Rᵀx.
-fn generalized_eigenvalues(l: &Mat<f64>, b: &Mat<f64>) -> Vec<f64> {
+pub(crate) fn generalized_eigenvalues(l: &Mat<f64>, b: &Mat<f64>) -> Vec<f64> {
     let r = b.llt(Side::Lower).expect("B is positive definite");
     let r = r.L();
     // X = R⁻¹ L, then C = R⁻¹ Xᵀ = R⁻¹ L R⁻ᵀ (L symmetric).
@@ -680,7 +681,7 @@ fn reference_dir() -> Option<PathBuf> {
 }
 
 /// Minimal OBJ reader: `v x y z` and `f a b c` (1-based; `a/t/n` forms allowed).
-fn read_obj(path: &std::path::Path) -> TriMesh {
+pub(crate) fn read_obj(path: &std::path::Path) -> TriMesh {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
     let (mut positions, mut faces) = (Vec::new(), Vec::new());
     for line in text.lines() {
@@ -704,7 +705,7 @@ fn read_obj(path: &std::path::Path) -> TriMesh {
 }
 
 /// Minimal Matrix Market reader (coordinate real, general or symmetric) into a full entry map.
-fn read_mtx(path: &std::path::Path) -> (usize, HashMap<(usize, usize), f64>) {
+pub(crate) fn read_mtx(path: &std::path::Path) -> (usize, HashMap<(usize, usize), f64>) {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
     let mut lines = text.lines();
     let header = lines.next().unwrap().to_lowercase();
@@ -733,7 +734,7 @@ fn read_mtx(path: &std::path::Path) -> (usize, HashMap<(usize, usize), f64>) {
 }
 
 /// Max |ours − reference| over the union of both patterns, and max |reference|.
-fn compare(ours: &HashMap<(usize, usize), f64>, reference: &HashMap<(usize, usize), f64>) -> (f64, f64) {
+pub(crate) fn compare(ours: &HashMap<(usize, usize), f64>, reference: &HashMap<(usize, usize), f64>) -> (f64, f64) {
     let mut diff = 0.0f64;
     for (k, v) in ours {
         diff = diff.max((v - reference.get(k).copied().unwrap_or(0.0)).abs());

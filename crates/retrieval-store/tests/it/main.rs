@@ -1,4 +1,5 @@
 //! The integration tests of retrieval-store, in one test binary.
 
 mod crash;
+mod faults;
 mod store;

@@ -67,6 +67,7 @@ fn dhk1_matches_dense_voronoi_lumped_spectrum() {
         &mesh,
         &AssemblyParams {
             lumping: Lumping::Voronoi,
+            ..Default::default()
         },
     )
     .unwrap();

@@ -201,6 +201,7 @@ fn kernel_assignment_matches_its_definition() {
 #[test]
 fn shape_dna_is_scale_invariant_and_its_distance_is_the_mean_log_gap() {
     let g = GlobalSignature {
+        kind: Default::default(),
         eigenvalues: 8,
         weight: 1.0,
     };
@@ -227,6 +228,7 @@ fn fused_distance_adds_the_weighted_shape_dna_gap() {
     let shapes = small_collection();
     let mut settings = small_settings();
     settings.bags.global = Some(GlobalSignature {
+        kind: Default::default(),
         eigenvalues: 10,
         weight: 0.5,
     });
@@ -324,7 +326,11 @@ fn denoising_leaves_smooth_shapes_alone_and_smooths_noisy_ones_back() {
         }
     }
     assert!(matches!(
-        Denoising { roughness: 0.0 }.apply(&sphere),
+        Denoising {
+            roughness: 0.0,
+            ..Default::default()
+        }
+        .apply(&sphere),
         Err(RetrievalError::InvalidParameter { .. })
     ));
 }
@@ -340,6 +346,7 @@ fn invalid_settings_and_inputs_are_typed_errors() {
     ));
     let mut settings = small_settings();
     settings.bags.global = Some(GlobalSignature {
+        kind: Default::default(),
         eigenvalues: 30,
         weight: 1.0,
     });
@@ -351,6 +358,7 @@ fn invalid_settings_and_inputs_are_typed_errors() {
         })
     ));
     settings.bags.global = Some(GlobalSignature {
+        kind: Default::default(),
         eigenvalues: 3,
         weight: f64::NAN,
     });
@@ -420,6 +428,7 @@ fn invalid_settings_and_inputs_are_typed_errors() {
     let two = TriMesh::new(positions, faces).unwrap();
     let mut settings = small_settings();
     settings.bags.global = Some(GlobalSignature {
+        kind: Default::default(),
         eigenvalues: 3,
         weight: 1.0,
     });
@@ -440,7 +449,7 @@ fn stored_parts_are_validated() {
         name: "bad.off".into(),
         signature: ShapeSignature { bag, global },
     };
-    let v = vocabulary.vocabulary().size();
+    let v = index.bags().bag_len(vocabulary.vocabulary().size());
     let mut huge = vec![0.0; v];
     huge[2] = 1e308;
     for (bad, what) in [

@@ -6,7 +6,7 @@ use faer::Mat;
 use mesh_fem::{generate, morse};
 use wfem_heat::approx::{
     eigenfunction_features, extrema, feature_approximation, global_component, multiscale_times, ApproxParams,
-    Coefficients, Persistence,
+    Coefficients, Persistence, ScaleSampling,
 };
 use wfem_heat::basis::{canonical_basis, canonical_limit};
 use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, Mass, Method};
@@ -303,6 +303,7 @@ fn feature_approximation_separates_noise() {
         let params = ApproxParams {
             persistence: Persistence::Relative(0.25),
             coefficients,
+            sampling: ScaleSampling::Paper,
             ..ApproxParams::default()
         };
         let approx = feature_approximation(&mesh, &k, &f, &params).unwrap();
@@ -449,17 +450,18 @@ fn feature_approximation_rejects_bad_parameters() {
     ));
 }
 
-/// Issue #16, `approx` defaults. The default (least squares: the M-orthogonal projection onto
-/// span{K_t eᵢ : i ∈ A}) is a meaningful global component of a noisy smooth field: closer to
-/// the smooth part than the literal feature values (≈ 0 with sparse anchors) at every scale and
-/// anchor density. The normalised feature values are a convex combination of the feature
-/// values (within their range, finite even where the weights underflow). Interpolation on the
-/// anchors is refused when it would blow up (overlapping basis functions). Measured here,
-/// rms(f_glob − smooth)/range: least squares 0.08–0.21, normalised 0.11–0.46 (poor with 2
-/// anchors), literal 0.17–0.21, interpolation up to 5e4.
+/// Issue #16, `approx` coefficients (issue #24 made the anchored rule the default). The
+/// anchored default and the least-squares projection are meaningful global components of a
+/// noisy smooth field: closer to the smooth part than the literal feature values (≈ 0 with
+/// sparse anchors) at every scale and anchor density. The normalised feature values are a
+/// convex combination of the feature values (within their range, finite even where the
+/// weights underflow). Interpolation on the anchors is refused when it would blow up
+/// (overlapping basis functions). Measured here, rms(f_glob − smooth)/range: least squares
+/// 0.08–0.21, normalised 0.11–0.46 (poor with 2 anchors), literal 0.17–0.21, interpolation
+/// up to 5e4.
 #[test]
-fn approx_default_is_a_meaningful_global_component() {
-    assert_eq!(Coefficients::default(), Coefficients::LeastSquares);
+fn approx_coefficients_give_meaningful_global_components() {
+    assert_eq!(Coefficients::default(), Coefficients::Anchored);
     let (mesh, ops) = ops_of(&generate::irregular_sphere(3, 5.6));
     let n = mesh.n_vertices();
     let k = kernel(&ops, Mass::Consistent, Method::fast());
@@ -489,9 +491,9 @@ fn approx_default_is_a_meaningful_global_component() {
         let params = ApproxParams {
             scales: 4,
             persistence: Persistence::Relative(persistence),
+            sampling: ScaleSampling::Paper,
             ..ApproxParams::default()
         };
-        let default = feature_approximation(&mesh, &k, &f, &params).unwrap();
         let literal = feature_approximation(
             &mesh,
             &k,
@@ -502,14 +504,27 @@ fn approx_default_is_a_meaningful_global_component() {
             },
         )
         .unwrap();
-        for (a, b) in default.scales.iter().zip(&literal.scales) {
-            let (da, db) = (distance(&a.global), distance(&b.global));
-            assert!(
-                da <= db + 1e-12 && da < 0.25,
-                "persistence {persistence} t = {}: {da} vs {db}",
-                a.t
-            );
+        for coefficients in [Coefficients::Anchored, Coefficients::LeastSquares] {
+            let fit = feature_approximation(
+                &mesh,
+                &k,
+                &f,
+                &ApproxParams {
+                    coefficients,
+                    ..params.clone()
+                },
+            )
+            .unwrap();
+            for (a, b) in fit.scales.iter().zip(&literal.scales) {
+                let (da, db) = (distance(&a.global), distance(&b.global));
+                assert!(
+                    da <= db + 1e-12 && da < 0.25,
+                    "{coefficients:?} persistence {persistence} t = {}: {da} vs {db}",
+                    a.t
+                );
+            }
         }
+        let default = feature_approximation(&mesh, &k, &f, &params).unwrap();
         if default.anchors.len() > 20 {
             let interpolated = feature_approximation(
                 &mesh,

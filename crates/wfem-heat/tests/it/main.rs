@@ -4,7 +4,9 @@
 mod common;
 
 mod algebra;
+mod approx;
 mod basis;
+mod clouds;
 mod diagonal;
 mod distance;
 mod edge_cases;

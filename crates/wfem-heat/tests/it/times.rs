@@ -95,7 +95,10 @@ fn warnings_say_what_the_kernel_does() {
     // Without positions (operators given directly): negligible times only, the same λ₂.
     let bare = TimeScales::new(ops, None).unwrap();
     assert_eq!(bare.check(0.1).unwrap(), None);
-    assert!(matches!(bare.check(tiny).unwrap(), Some(TimeWarning::Negligible { .. })));
+    assert!(matches!(
+        bare.check(tiny).unwrap(),
+        Some(TimeWarning::Negligible { .. })
+    ));
     assert_eq!(bare.first_nonzero().unwrap(), scales.first_nonzero().unwrap());
     let g = kernel.apply(&e, 1e4 * tiny).unwrap();
     assert!(max_abs_diff(&g, &e) > 100.0 * SETTLED);

@@ -31,6 +31,7 @@ from ._errors import (
     IllConditionedError,
     InternalError,
     InvalidInputError,
+    InvalidTypeError,
     MeshError,
     MeshFileError,
     RetrievalError,
@@ -40,7 +41,17 @@ from ._errors import (
     WfemError,
 )
 from ._choices import choices
-from ._heat import KERNELS, MASSES, METHODS, DiffusionDistance, HeatKernel
+from ._heat import (
+    APPROX_COEFFICIENTS,
+    APPROX_SAMPLINGS,
+    KERNELS,
+    MASSES,
+    METHODS,
+    ApproximationWarning,
+    DiffusionDistance,
+    HeatKernel,
+)
+from ._cloud import DEFAULT_NEIGHBORS, LAPLACIANS, cloud_operators, read_points
 from ._mesh import (
     RepairReport,
     ValidationReport,
@@ -80,6 +91,10 @@ DENSE_MAX_VERTICES: int = _wfem.DENSE_MAX_VERTICES
 __all__ = [
     # meshes and operators
     "read_mesh",
+    "read_points",
+    "cloud_operators",
+    "LAPLACIANS",
+    "DEFAULT_NEIGHBORS",
     "validate",
     "repair",
     "fill_holes",
@@ -96,6 +111,9 @@ __all__ = [
     "MASSES",
     "KERNELS",
     "choices",
+    "APPROX_COEFFICIENTS",
+    "APPROX_SAMPLINGS",
+    "ApproximationWarning",
     # spectrum and signatures
     "Eigenbasis",
     "eigenbasis",
@@ -122,6 +140,7 @@ __all__ = [
     # errors
     "WfemError",
     "InvalidInputError",
+    "InvalidTypeError",
     "MeshError",
     "MeshFileError",
     "RetrievalError",
@@ -134,3 +153,10 @@ __all__ = [
     "DENSE_MAX_VERTICES",
     "__version__",
 ]
+
+# Every error out of the public API is a WfemError (bare OverflowError/TypeError of argument
+# conversions included): see _guard.py.
+from ._guard import guard_namespace as _guard_namespace  # noqa: E402
+
+_guard_namespace(globals(), __all__)
+_guard_namespace(vars(generate), generate.__all__)

@@ -72,6 +72,19 @@ def as_indices(x: Any, name: str) -> list[int]:
     return [int(i) for i in a]
 
 
+def points_of(V: Any, F: Any = None) -> np.ndarray | None:
+    """The points of a point cloud given where a mesh is accepted — ``F`` absent and ``V`` an
+    (n, 3) array or an object with ``.vertices`` but no ``.faces`` — or None for a mesh."""
+    if F is not None or (hasattr(V, "vertices") and hasattr(V, "faces")):
+        return None
+    if hasattr(V, "vertices"):
+        V = V.vertices
+    a = as_float_array(V, "P", (2,))
+    if a.shape[1:] != (3,):
+        raise InvalidInputError(f"P must have shape (n, 3), got {a.shape}", "Shape", name="P")
+    return a
+
+
 def as_mesh(V: Any, F: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """(V float64 (n, 3), F int64 (m, 3)) from arrays or an object with .vertices/.faces."""
     if F is None:

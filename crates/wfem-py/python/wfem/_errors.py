@@ -15,6 +15,7 @@ Hierarchy::
 
     WfemError(Exception)
     ├── InvalidInputError(ValueError)   bad argument: shape, dtype, NaN, parameter, time, vertex
+    │   └── InvalidTypeError(TypeError)  an argument of the wrong type (e.g. k=1.5)
     ├── MeshError(ValueError)           the mesh or mesh file is unusable (face, vertex, line)
     │   └── MeshFileError(OSError)      the file cannot be read (path, errno)
     ├── RetrievalError(ValueError)      descriptor / retrieval data problems
@@ -32,6 +33,7 @@ from typing import Any
 __all__ = [
     "WfemError",
     "InvalidInputError",
+    "InvalidTypeError",
     "MeshError",
     "MeshFileError",
     "RetrievalError",
@@ -67,6 +69,10 @@ def _rebuild(cls: type[WfemError], message: str, kind: str, details: dict[str, A
 
 class InvalidInputError(WfemError, ValueError):
     """A bad argument: wrong shape or dtype, NaN/inf, out-of-range parameter, time or vertex."""
+
+
+class InvalidTypeError(InvalidInputError, TypeError):
+    """An argument of the wrong type (also a ``TypeError``), e.g. ``k=1.5`` or ``k=None``."""
 
 
 class MeshError(WfemError, ValueError):

@@ -10,9 +10,17 @@ import scipy.sparse as sp
 
 from . import _choices, _wfem
 from ._errors import TimeWarning
-from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, to_csc
+from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, points_of, to_csc
 
-__all__ = ["HeatKernel", "DiffusionDistance", "METHODS", "MASSES"]
+__all__ = [
+    "HeatKernel",
+    "DiffusionDistance",
+    "METHODS",
+    "MASSES",
+    "APPROX_COEFFICIENTS",
+    "APPROX_SAMPLINGS",
+    "ApproximationWarning",
+]
 
 #: Names accepted by ``method=`` (the library's registry; aliases are accepted too).
 METHODS = _choices.names("method")
@@ -20,6 +28,15 @@ METHODS = _choices.names("method")
 MASSES = _choices.names("mass")
 #: Older name of :data:`MASSES`.
 KERNELS = MASSES
+#: Names accepted by ``feature_approximation(coefficients=)``, default first (the library's registry).
+APPROX_COEFFICIENTS = _choices.names("coefficients")
+#: Names accepted by ``feature_approximation(sampling=)``, default first (the library's registry).
+APPROX_SAMPLINGS = _choices.names("sampling")
+
+
+class ApproximationWarning(UserWarning):
+    """:meth:`HeatKernel.feature_approximation` stays farther than 3 % of the range from f at
+    every scale; the message names the option to change."""
 
 
 class HeatKernel:
@@ -48,7 +65,11 @@ class HeatKernel:
     * ``"taylor"`` (Eq. (9)) and ``"backward-euler"``: first-order steps, for comparison only.
 
     Args:
-        V, F: vertices (n, 3) and triangles (m, 3), or one object with ``.vertices``/``.faces``.
+        V, F: vertices (n, 3) and triangles (m, 3), or one object with ``.vertices``/``.faces``;
+            or a **point cloud** P (n, 3) without F (operators from the ``n_neighbors``
+            nearest neighbours, :func:`wfem.cloud_operators`).
+        laplacian: ``"cotan"`` (default for meshes) or ``"robust"`` (intrinsic Delaunay L of the
+            tufted cover; for non-manifold or degenerate meshes; names in ``wfem.LAPLACIANS``).
 
     ``kernel=`` and ``lumped=`` are the older spellings of ``mass=`` (DeprecationWarning).
 
@@ -77,10 +98,19 @@ class HeatKernel:
         backend: str | None = None,
         kernel: str | None = None,
         lumped: str | None = None,
+        laplacian: str | None = None,
+        n_neighbors: int | None = None,
     ) -> None:
-        v, f = as_mesh(V, F)
         mass = _choices.mass_of(mass, kernel, lumped)
-        self._k = _wfem.HeatKernel.from_mesh(v, f, mass, method, degree, k, backend)
+        P = points_of(V, F)
+        if P is not None:
+            from ._cloud import cloud_pencil
+
+            L, M = cloud_pencil(P, mass, laplacian=laplacian, n_neighbors=n_neighbors)
+            self._k = _wfem.HeatKernel.from_operators(as_sparse(L, "L"), as_sparse(M, "M"), method, degree, k, backend)
+            return
+        v, f = as_mesh(V, F)
+        self._k = _wfem.HeatKernel.from_mesh(v, f, mass, method, degree, k, backend, laplacian)
 
     @classmethod
     def from_operators(
@@ -323,27 +353,45 @@ class HeatKernel:
         self,
         f: Any,
         *,
-        k: int = 20,
-        scales: int = 10,
-        persistence: float = 0.1,
+        k: int | None = None,
+        scales: int | None = None,
+        persistence: float | None = None,
         absolute: bool = False,
-        interpolate: bool = False,
+        coefficients: str | None = None,
+        sampling: str | None = None,
     ) -> dict[str, Any]:
         """The feature-driven approximation ``f = f_glob + f_loc`` (paper, Sect. 4.2, Fig. 12–13).
 
         The anchors A are the critical points of f with persistence ≥ ``persistence`` (relative
-        to the range of f, or absolute); for ``t_i = (i/10)/λ_k``, i = 1…``scales``,
-        ``f_glob = Σ_{i∈A} c_i K_t e_i`` with ``c_i = f(p_i)`` (the paper) or, with
-        ``interpolate=True``, such that f_glob interpolates f on A.
+        to the range of f, default 0.1; absolute with ``absolute=True``), most persistent
+        first. At ``scales`` times (default 10) sampled by ``sampling`` (one of
+        :data:`APPROX_SAMPLINGS`; default geometric from 1/λ_max, the mesh's resolution, to
+        1/λ_k, k = 20; ``"paper"``: t_i = (i/10)/λ_k) f splits into f_glob and
+        ``f_loc = f − f_glob``. ``coefficients`` is one of :data:`APPROX_COEFFICIENTS`; the
+        default, ``"anchored"``, is ``f_glob = K_t f + Σ_j c_j K_t e_(a_j)`` with f_glob = f at
+        every anchor resolved at t (the persistent features keep their values; within 2 % of
+        f at the finest scale on every mesh of docs/APPROX-RESULTS.md); ``"feature-values"``
+        is the paper's printed ``Σ f(a_j) K_t e_(a_j)`` (≈ 0 between sparse anchors);
+        ``"smooth"`` is ``K_t f`` for a noisy f whose extrema are noise.
 
-        Returns a dict: ``anchors``, ``lambda_k``, ``input_critical_points`` and ``scales``, a
-        list of dicts with ``t``, ``global_``, ``local``, ``linf_error``,
-        ``relative_linf_error``, ``critical_points``, ``significant_critical_points``.
-        Needs a kernel built from (V, F).
+        Returns a dict: ``coefficients`` and ``formula`` (the rule), ``sampling``, ``anchors``
+        and ``anchor_persistence``, ``threshold`` and ``range`` (units of f), ``lambda_k``,
+        ``lambda_max``, ``input_critical_points``, ``persistent_extrema``, ``warning`` (or
+        None) and ``scales``, a list of dicts with ``t``, ``global_``, ``local``, ``anchors``
+        and ``coefficients`` (f_glob's basis functions K_t e_a and their coefficients),
+        ``linf_error``, ``relative_linf_error``, ``anchor_error``, ``critical_points``,
+        ``significant_critical_points``, ``persistent_extrema``. When f_glob stays more than
+        3 % of the range from f at every scale, an :class:`ApproximationWarning` names the
+        option to change. Needs a kernel built from (V, F).
         """
-        return dict(
-            self._k.feature_approximation(as_vector(f, "f"), k, scales, persistence, absolute, interpolate)
+        out = dict(
+            self._k.feature_approximation(
+                as_vector(f, "f"), k, scales, persistence, absolute, coefficients, sampling
+            )
         )
+        if out["warning"] is not None:
+            warnings.warn(out["warning"], ApproximationWarning, stacklevel=2)
+        return out
 
 
 class DiffusionDistance:

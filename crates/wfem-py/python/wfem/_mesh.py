@@ -11,7 +11,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _wfem
-from ._arrays import as_mesh, as_vector, to_csc
+from ._arrays import as_mesh, as_vector, points_of, to_csc
+from ._cloud import DEFAULT_NEIGHBORS
+from ._errors import MeshError
 
 __all__ = [
     "read_mesh",
@@ -70,7 +72,20 @@ def validate(V: Any, F: Any = None) -> ValidationReport:
     duplicate faces, inconsistent orientation, several components, boundaries.
     """
     v, f = as_mesh(V, F)
-    r = json.loads(_wfem.validate_mesh(v, f))
+    try:
+        r = json.loads(_wfem.validate_mesh(v, f))
+    except MeshError as e:
+        # A mesh that cannot even be represented (a NaN coordinate, a face index out of range)
+        # is reported like any other error, not raised: validate() answers "is it usable?".
+        problem = {"kind": e.kind, "severity": "Error", **e.details}
+        return ValidationReport(
+            n_vertices=int(v.shape[0]),
+            n_faces=int(f.shape[0]),
+            usable=False,
+            problems=[problem],
+            counts={e.kind: 1},
+            summary=f"not usable: {e}",
+        )
     return ValidationReport(
         n_vertices=r["n_vertices"],
         n_faces=r["n_faces"],
@@ -163,7 +178,13 @@ def mesh_stats(V: Any, F: Any = None) -> dict[str, Any]:
 
 
 def operators(
-    V: Any, F: Any = None, *, lumped: str | None = None
+    V: Any,
+    F: Any = None,
+    *,
+    lumped: str | None = None,
+    laplacian: str | None = None,
+    mollify_factor: float | None = None,
+    n_neighbors: int | None = None,
 ) -> tuple[sp.csc_matrix, sp.csc_matrix, sp.csc_matrix]:
     """The linear FEM operators ``(L, B, D)`` as ``scipy.sparse.csc_matrix`` (paper, Eq. (3), (7)).
 
@@ -177,9 +198,24 @@ def operators(
       areas, = ``igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)``).
 
     All three share one sparsity pattern (vertex–edge graph plus diagonal).
+
+    ``laplacian="robust"`` (names in ``wfem.LAPLACIANS``) gives instead the intrinsic Delaunay
+    Laplacian of the mesh's tufted cover (Sharp & Crane 2020; L and D equal robust_laplacian's
+    ``mesh_laplacian``), with B and D on the intrinsic triangulation: for non-manifold, badly
+    oriented or degenerate meshes (``mollify_factor``, default 1e-5, thickens flat faces).
+
+    **Point clouds**: ``operators(P)`` with an (n, 3) array and no ``F`` builds L, B, D from
+    local triangulations of the ``n_neighbors`` (default 30) nearest neighbours of every point
+    (see :func:`wfem.cloud_operators`); a cloud always uses the robust construction.
     """
+    from ._cloud import cloud_operators
+
+    P = points_of(V, F)
+    if P is not None:
+        k = DEFAULT_NEIGHBORS if n_neighbors is None else n_neighbors
+        return cloud_operators(P, lumped=lumped, n_neighbors=k, mollify_factor=mollify_factor, laplacian=laplacian)
     v, f = as_mesh(V, F)
-    L, B, D = _wfem.operators(v, f, lumped)
+    L, B, D = _wfem.operators(v, f, lumped, laplacian, mollify_factor)
     return to_csc(L), to_csc(B), to_csc(D)
 
 

@@ -315,12 +315,13 @@ class RetrievalIndex:
     built by ``wfem retrieval build`` opens here.
 
     The default recipe (paper Sect. 5, beyond Shape Google): SI-HKS of the wFEM kernel with
-    times in units of the surface area (exactly scale invariant), z-scored dimensions, 48 words,
-    soft assignment, bags weighted by vertex areas capped at 3 medians, χ² distance, after
-    spikes are put back, noisy shapes denoised and holes closed, in that order (see
-    ``build``). Training the vocabulary on the indexed
-    shapes themselves is optimistic when the same shapes are then used to measure retrieval:
-    train one on other shapes with ``wfem retrieval vocab`` and pass it as ``vocabulary``.
+    times in units of the surface area (exactly scale invariant), z-scored dimensions, 96 words,
+    soft assignment, bags weighted by vertex areas capped at 3 medians and spatially sensitive
+    (the heat flow between words at time area/256), χ² distance, after spikes are put back,
+    noisy shapes denoised, holes closed and thin handles cut, in that order (see ``build``).
+    Training the vocabulary on the indexed shapes themselves is optimistic when the same shapes
+    are then used to measure retrieval (:meth:`evaluate` says so): train one on other shapes
+    with ``wfem retrieval vocab`` and pass it as ``vocabulary`` — the recommended route.
     Adding shapes appends in one transaction (nothing is rebuilt); a query is one descriptor
     computation and a parallel scan of the file.
     """
@@ -340,9 +341,13 @@ class RetrievalIndex:
         despike: float | None = _wfem.DEFAULT_SPIKE_THRESHOLD,
         fill_holes: float | None = _wfem.DEFAULT_MAX_HOLE_PERIMETER,
         denoise: float | None = _wfem.DEFAULT_TARGET_ROUGHNESS,
+        overwrite: bool = False,
+        spatial: float | None = _wfem.DEFAULT_SPATIAL_TIME,
     ) -> "RetrievalIndex":
-        """Indexes mesh files with the default recipe into a new file ``out`` (replaced
-        atomically if it exists).
+        """Indexes mesh files with the default recipe into a new file ``out``.
+
+        An existing ``out`` raises :class:`StoreError` unless ``overwrite=True`` (then it is
+        replaced atomically); ``out`` is never one of the inputs, a directory or a FIFO.
 
         Every shape is cleaned first: a vertex farther than ``despike`` local edge lengths from
         the centroid of its neighbours (an isolated spike) is put back, every hole whose rim
@@ -351,10 +356,18 @@ class RetrievalIndex:
         than ``denoise`` edge lengths is smoothed by the heat kernel until it is not (clean
         shapes are left as they are); ``None`` turns a step off. All three are recorded in the
         index, so queries are cleaned the same way. With ``vocabulary``, its own settings are
-        used instead."""
+        used instead.
+
+        ``spatial``: spatially sensitive bags (Shape Google Sect. 4.2), the bag also holding the
+        heat that flows between words in time ``spatial · area``; ``None`` for plain bags.
+        ``words`` defaults to 96."""
         ps = [os.fspath(p) for p in paths]
         voc = None if vocabulary is None else os.fspath(vocabulary)
-        return cls(_wfem.RetrievalIndex.build(ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise))
+        return cls(
+            _wfem.RetrievalIndex.build(
+                ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise, overwrite, spatial
+            )
+        )
 
     @classmethod
     def open(cls, path: str | os.PathLike[str]) -> "RetrievalIndex":
@@ -384,6 +397,38 @@ class RetrievalIndex:
     def add_meshes(self, paths: Iterable[str | os.PathLike[str]]) -> int:
         """Appends mesh files (named by the path as given) in one transaction; returns how many."""
         return int(self._i.add_paths([os.fspath(p) for p in paths]))
+
+    def evaluate(
+        self,
+        classes: Sequence[str] | dict[str, str] | None = None,
+        *,
+        class_from: str | None = None,
+    ) -> dict[str, Any]:
+        """Leave-one-out evaluation of the indexed shapes, as ``wfem retrieval eval``: every
+        shape ranks all the others from its **stored** signature (nothing is described again)
+        and the standard measures are averaged overall and per class — mAP, nearest neighbour
+        (``nn``), first and second tier, E-measure (first 32 results), normalised DCG — with
+        the most confused class pairs.
+
+        ``classes``: one class per indexed name (in :attr:`names` order) or a mapping name →
+        class; without it, each name's class by ``class_from`` (``"folder"``: the folder holding
+        the file, the default; ``"stem"``: the file name without extension and digits).
+
+        Returns the report as a dict (``overall``, ``per_class``, ``confusions``,
+        ``per_query``, ``vocabulary`` …) with its text under ``"text"``. An index whose
+        vocabulary was trained on the indexed shapes gives optimistic numbers (the report says
+        so): build it with a vocabulary trained on other shapes for an honest evaluation."""
+        if isinstance(classes, dict):
+            missing = [n for n in self.names if n not in classes]
+            if missing:
+                raise InvalidInputError(f"classes: no class for {missing[0]!r}", kind="Labels", name="classes")
+            classes = [str(classes[n]) for n in self.names]
+        elif classes is not None:
+            classes = [str(c) for c in classes]
+        text_json, text = self._i.evaluate(classes, class_from)
+        report: dict[str, Any] = json.loads(text_json)
+        report["text"] = text
+        return report
 
     def query_mesh(self, V: Any, F: Any = None, k: int = 10) -> list[tuple[str, float]]:
         """The k indexed shapes nearest to a mesh: ``[(name, distance)]``, nearest first."""

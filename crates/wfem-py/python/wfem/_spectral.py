@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from . import _choices, _wfem
-from ._arrays import as_float_array, as_mesh, as_sparse, as_vector
+from ._arrays import as_float_array, as_mesh, as_sparse, as_vector, points_of
 
 __all__ = ["Eigenbasis", "eigenbasis", "hks", "sihks", "HKS_CONVENTIONS", "HKS_METHODS"]
 
@@ -144,15 +144,28 @@ def eigenbasis(
     max_restarts: int = 100,
     kernel: str | None = None,
     lumped: str | None = None,
+    laplacian: str | None = None,
+    n_neighbors: int | None = None,
 ) -> Eigenbasis:
     """The k smallest eigenpairs of ``L x = λ M x`` on a mesh (paper, Eq. (4)), M = B for the
     wFEM kernel (D for a lumped ``mass``, I for ``"identity"``); ``k=None`` gives all n (dense,
     n ≤ 5000). Shift-invert thick-restart block Lanczos with one sparse Cholesky of ``L − σM``:
     a basis of at most ``max_dim`` vectors (default max(2k, k + 4b) + b), restarted at most
     ``max_restarts`` times (then ``ConvergenceError`` carrying the converged pairs)."""
-    v, f = as_mesh(V, F)
     mass = _choices.mass_of(mass, kernel, lumped)
-    return Eigenbasis(_wfem.Eigenbasis.from_mesh(v, f, k, mass, tol, block_size, max_dim, seed, shift, max_restarts))
+    P = points_of(V, F)
+    if P is not None:
+        from ._cloud import cloud_pencil
+
+        L, M = cloud_pencil(P, mass, laplacian=laplacian, n_neighbors=n_neighbors)
+        return Eigenbasis.from_operators(
+            L, M, k, tol=tol, block_size=block_size, max_dim=max_dim,
+            seed=seed, shift=shift, max_restarts=max_restarts,
+        )
+    v, f = as_mesh(V, F)
+    return Eigenbasis(
+        _wfem.Eigenbasis.from_mesh(v, f, k, mass, tol, block_size, max_dim, seed, shift, max_restarts, laplacian)
+    )
 
 
 def hks(
@@ -172,9 +185,15 @@ def hks(
     exact: bool = False,
     kernel: str | None = None,
     time_unit: str | None = None,
+    laplacian: str | None = None,
+    n_neighbors: int | None = None,
 ) -> Any:
     """The heat kernel signature h(i, t) at every vertex and time, shape (n, T): the same
     computation as ``wfem hks`` (one library routine).
+
+    ``V, F`` is a mesh, or ``V`` alone a point cloud (n, 3) (operators from its ``n_neighbors``,
+    default 30, nearest neighbours); ``laplacian=`` chooses the Laplacian of a mesh
+    (:data:`wfem.LAPLACIANS`; the robust one for non-manifold or degenerate meshes).
 
     In one of two conventions (``convention=``, :data:`HKS_CONVENTIONS`):
 
@@ -213,13 +232,18 @@ def hks(
         warnings.warn("exact=True is now method='exact'", DeprecationWarning, stacklevel=2)
         method = _wfem.canonical("hks_method", "exact") if method is None else method
     mass = _choices.mass_of(mass, kernel, None)
-    v, f = as_mesh(V, F)
+    P = points_of(V, F)
+    if P is not None:
+        v, f = P, None
+    else:
+        v, f = as_mesh(V, F)
     t = None if times is None else [float(x) for x in as_vector(np.atleast_1d(times), "times")]
     if t is not None and time_unit is not None:
         unit = float(_wfem.mesh_time_unit(v, f, time_unit))
         t = [x * unit for x in t]
     values, used, _, _ = _wfem.mesh_hks(
-        v, f, t, num_times, k, mass, method, convention, scaled, normalization, None if basis is None else basis._b
+        v, f, t, num_times, k, mass, method, convention, scaled, normalization,
+        None if basis is None else basis._b, laplacian=laplacian, n_neighbors=n_neighbors,
     )
     h = np.asarray(values)
     return (h, np.asarray(used)) if return_times else h

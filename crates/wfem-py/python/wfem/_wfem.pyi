@@ -21,6 +21,7 @@ DEFAULT_DEGREE: int
 DEFAULT_SPIKE_THRESHOLD: float
 DEFAULT_MAX_HOLE_PERIMETER: float
 DEFAULT_TARGET_ROUGHNESS: float
+DEFAULT_SPATIAL_TIME: float
 SHIPPED_DEGREES: list[int]
 PAPER_DESCRIPTORS: list[str]
 DEFAULT_NUM_TIMES: int
@@ -28,6 +29,7 @@ DEFAULT_NUM_TIMES: int
 # the registries of the library's choices
 def choices() -> dict[str, Any]: ...
 def canonical(argument: str, text: str) -> str: ...
+DEFAULT_NEIGHBORS: int
 
 # meshes
 def read_mesh(path: _Path, triangulate: bool = False) -> tuple[_Mesh, str]: ...
@@ -43,7 +45,25 @@ def repair_mesh(
 ) -> tuple[_Mesh, str]: ...
 def fill_holes(v: _F64, f: _I64, max_perimeter: float = ...) -> tuple[_Mesh, int]: ...
 def mesh_stats(v: _F64, f: _I64) -> str: ...
-def operators(v: _F64, f: _I64, lumped_mass: str | None = None) -> tuple[_Sparse, _Sparse, _Sparse]: ...
+def operators(
+    v: _F64,
+    f: _I64,
+    lumped_mass: str | None = None,
+    laplacian: str | None = None,
+    mollify_factor: float | None = None,
+) -> tuple[_Sparse, _Sparse, _Sparse]: ...
+
+# point clouds
+def cloud_operators(
+    p: _F64,
+    normals: _F64 | None = None,
+    lumped_mass: str | None = None,
+    n_neighbors: int = ...,
+    mollify_factor: float | None = None,
+    laplacian: str | None = None,
+) -> tuple[_Sparse, _Sparse, _Sparse, str]: ...
+def read_points(path: _Path) -> tuple[_F64, _F64 | None]: ...
+def mass_matrix(mass: str | None = None) -> tuple[str, str]: ...
 def extrema(v: _F64, f: _I64, field: _F64, persistence: float | None = None) -> list[int]: ...
 def icosphere(level: int) -> _Mesh: ...
 def uv_sphere(rings: int, segments: int) -> _Mesh: ...
@@ -64,6 +84,7 @@ class HeatKernel:
         degree: int | None = None,
         k: int | None = None,
         backend: str | None = None,
+        laplacian: str | None = None,
     ) -> HeatKernel: ...
     @staticmethod
     def from_operators(
@@ -126,11 +147,12 @@ class HeatKernel:
     def feature_approximation(
         self,
         f: _F64,
-        k: int = 20,
-        scales: int = 10,
-        persistence: float = 0.1,
+        k: int | None = None,
+        scales: int | None = None,
+        persistence: float | None = None,
         absolute: bool = False,
-        interpolate: bool = False,
+        coefficients: str | None = None,
+        sampling: str | None = None,
     ) -> dict[str, Any]: ...
     def distance(
         self,
@@ -168,6 +190,7 @@ class Eigenbasis:
         seed: int = ...,
         shift: float | None = None,
         max_restarts: int = 100,
+        laplacian: str | None = None,
     ) -> Eigenbasis: ...
     @staticmethod
     def from_operators(
@@ -215,7 +238,7 @@ class Eigenbasis:
 def mesh_time_unit(v: _F64, f: _I64, name: str | None = None) -> float: ...
 def mesh_hks(
     v: _F64,
-    f: _I64,
+    f: _I64 | None,
     times: list[float] | None = None,
     num_times: int | None = None,
     k: int = ...,
@@ -226,6 +249,8 @@ def mesh_hks(
     normalization: str | None = None,
     basis: Eigenbasis | None = None,
     tol: float = ...,
+    laplacian: str | None = None,
+    n_neighbors: int | None = None,
 ) -> tuple[_F64, list[float], list[tuple[str, float]], list[float] | None]: ...
 
 # retrieval
@@ -308,6 +333,8 @@ class RetrievalIndex:
         despike: float | None = ...,
         fill_holes: float | None = ...,
         denoise: float | None = ...,
+        overwrite: bool = ...,
+        spatial: float | None = ...,
     ) -> RetrievalIndex: ...
     @staticmethod
     def open(path: str) -> RetrievalIndex: ...
@@ -317,4 +344,5 @@ class RetrievalIndex:
     def settings(self) -> str: ...
     def add_paths(self, paths: list[str]) -> int: ...
     def query(self, v: _F64, f: _I64, k: int = 10) -> list[tuple[str, float]]: ...
+    def evaluate(self, classes: list[str] | None = None, class_from: str | None = None) -> tuple[str, str]: ...
     def __len__(self) -> int: ...

@@ -21,6 +21,12 @@ failure ``error_type`` (e.g. ``"MeshError"``), ``error_kind`` (the Rust variant,
 each written atomically (temporary file + rename), then ``manifest.json`` listing them; a
 directory without a manifest is an interrupted run. :func:`read` loads a finished output.
 
+**One folder, one run.** ``run.json`` (written first) records the settings. A folder that
+already holds a run is refused unless ``replace=True`` (the new run is written beside it and
+renamed into place only once complete, so the old run stays readable until then) or
+``resume=True`` (the shapes already in its shards are skipped; the settings, the shard size
+and the order of the paths must be those of the first run, or it is refused).
+
 Columns: ``path``, ``ok``, ``error_type``, ``error_kind``, ``error``, ``n_vertices``, ``n_faces``,
 ``area``, then ``descriptor`` (flattened row-major, with ``dim``; :func:`descriptor_arrays`
 reshapes) or ``bag`` (the normalised bag, ``Θᵀa/Σa``).
@@ -190,6 +196,70 @@ def _write_atomic(table: Any, path: str) -> None:
             os.remove(tmp)
 
 
+def _fail(message: str, path: str, kind: str = "BatchOutput") -> Exception:
+    from ._errors import InvalidInputError
+
+    return InvalidInputError(message, kind, path=path)
+
+
+_RUN = "run.json"
+_MANIFEST = "manifest.json"
+
+
+def _shard_name(index: int) -> str:
+    return f"part-{index:05d}.parquet"
+
+
+def _write_json(obj: Any, path: str) -> None:
+    tmp = os.path.join(os.path.dirname(path), f".{os.path.basename(path)}.{os.getpid()}.tmp")
+    with open(tmp, "w") as f:
+        json.dump(obj, f, indent=1)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def _done_rows(out: str, settings: dict[str, Any], names: list[str]) -> tuple[list[dict[str, Any]], list[str]]:
+    """Rows and shards of an earlier run in `out` to resume (checked against this run)."""
+    import pyarrow.parquet as pq
+
+    run_file = os.path.join(out, _RUN)
+    if not os.path.exists(run_file):
+        raise _fail(f"{out} holds no {_RUN}: not a wfem.batch output, cannot resume it", out)
+    with open(run_file) as f:
+        try:
+            before = json.load(f)
+        except ValueError as e:
+            raise _fail(f"{run_file} is not valid JSON ({e}); cannot resume", run_file) from e
+    for key in sorted(set(before) | set(settings)):
+        if before.get(key) != settings.get(key):
+            raise _fail(
+                f"cannot resume {out}: its {key} is {before.get(key)!r}, this run's is {settings.get(key)!r} "
+                "(a resumed run never mixes settings; use replace=True)",
+                out,
+                "ResumeMismatch",
+            )
+    rows: list[dict[str, Any]] = []
+    shards: list[str] = []
+    while os.path.exists(os.path.join(out, _shard_name(len(shards)))):
+        name = _shard_name(len(shards))
+        rows += pq.read_table(os.path.join(out, name)).to_pylist()
+        shards.append(name)
+    done = [r["path"] for r in rows]
+    if done != names[: len(done)]:
+        raise _fail(
+            f"cannot resume {out}: its {len(done)} rows are not the first {len(done)} paths of this run "
+            "(same paths in the same order are needed; use replace=True)",
+            out,
+            "ResumeMismatch",
+        )
+    return rows, shards
+
+
+def _is_run(out: str) -> bool:
+    return os.path.isdir(out) and bool(os.listdir(out))
+
+
 def _run(
     task: Callable[..., dict[str, Any]],
     extra: tuple[Any, ...],
@@ -198,55 +268,106 @@ def _run(
     out_dir: str | os.PathLike[str] | None,
     executor: cf.Executor | None,
     shard_size: int,
+    settings: dict[str, Any],
+    replace: bool,
+    resume: bool,
 ) -> Any:
+    import shutil
+
+    if isinstance(shard_size, bool) or not isinstance(shard_size, int) or shard_size < 1:
+        raise _fail(f"shard_size must be an integer ≥ 1, not {shard_size!r}", "", "InvalidParameter")
+    if replace and resume:
+        raise _fail("replace=True and resume=True exclude each other", "", "InvalidParameter")
+    names: list[str] = [os.fspath(p) for p in paths]
+    out = None if out_dir is None else os.fspath(out_dir)
+    target = out  # the folder written to (a sibling when replacing)
+    rows: list[dict[str, Any]] = []
+    shards: list[str] = []
+    settings = {"kind": kind, "shard_size": shard_size, **settings}
+    if out is not None:
+        if os.path.exists(out) and not os.path.isdir(out):
+            raise _fail(f"{out} exists and is not a folder", out)
+        if _is_run(out):
+            if resume:
+                rows, shards = _done_rows(out, settings, names)
+                manifest = os.path.join(out, _MANIFEST)
+                if os.path.exists(manifest):
+                    os.remove(manifest)
+            elif replace:
+                parent = os.path.dirname(os.path.abspath(out))
+                target = os.path.join(parent, f".{os.path.basename(os.path.abspath(out))}.{os.getpid()}.new")
+                shutil.rmtree(target, ignore_errors=True)
+            else:
+                raise _fail(
+                    f"{out} already holds a run; pass replace=True to replace it (atomically) or "
+                    "resume=True to finish it",
+                    out,
+                    "OutputExists",
+                )
+        assert target is not None
+        os.makedirs(target, exist_ok=True)
+        if not shards:
+            _write_json(settings, os.path.join(target, _RUN))
+    try:
+        return _compute(task, extra, names, kind, out, target, executor, shard_size, rows, shards)
+    except BaseException:
+        if out is not None and target is not None and target != out:
+            shutil.rmtree(target, ignore_errors=True)  # the old run stays as it was
+        raise
+
+
+def _compute(
+    task: Callable[..., dict[str, Any]],
+    extra: tuple[Any, ...],
+    names: list[str],
+    kind: str,
+    out: str | None,
+    target: str | None,
+    executor: cf.Executor | None,
+    shard_size: int,
+    rows: list[dict[str, Any]],
+    shards: list[str],
+) -> Any:
+    import shutil
+
     pa = _require("pyarrow")
 
-    if shard_size < 1:
-        from ._errors import InvalidInputError
-
-        raise InvalidInputError("shard_size must be at least 1", "InvalidParameter", name="shard_size")
-    names: list[str] = [os.fspath(p) for p in paths]
-    own = executor is None
-    ex: cf.Executor = default_executor() if executor is None else executor
-    out = None if out_dir is None else os.fspath(out_dir)
-    if out is not None:
-        os.makedirs(out, exist_ok=True)
-        manifest = os.path.join(out, "manifest.json")
-        if os.path.exists(manifest):
-            os.remove(manifest)
-    shards: list[str] = []
-    rows: list[dict[str, Any]] = []
+    todo = names[len(rows) :]
+    own = executor is None and bool(todo)
+    ex: cf.Executor | None = (default_executor() if own else executor) if todo else None
     try:
-        futures = [ex.submit(task, p, *extra) for p in names]
+        futures = [ex.submit(task, p, *extra) for p in todo] if ex is not None else []
         pending: list[dict[str, Any]] = []
-        for path, fut in zip(names, futures):
+        for path, fut in zip(todo, futures):
             try:
                 row = fut.result()
             except Exception as e:  # noqa: BLE001 - a lost worker is an error row too
                 row = _failure(path, e)
             rows.append(row)
             pending.append(row)
-            if out is not None and len(pending) == shard_size:
-                shards.append(_flush(pending, kind, out, len(shards)))
+            if target is not None and len(pending) == shard_size:
+                shards.append(_flush(pending, kind, target, len(shards)))
                 pending = []
-        if out is not None and (pending or not shards):
-            shards.append(_flush(pending, kind, out, len(shards)))
+        if target is not None and (pending or not shards):
+            shards.append(_flush(pending, kind, target, len(shards)))
     finally:
-        if own:
+        if own and ex is not None:
             ex.shutdown(wait=True, cancel_futures=True)
-    if out is not None:
+    if target is not None:
         meta = {"kind": kind, "rows": len(rows), "failed": sum(not r["ok"] for r in rows), "shards": shards}
-        tmp = os.path.join(out, f".manifest.json.{os.getpid()}.tmp")
-        with open(tmp, "w") as f:
-            json.dump(meta, f, indent=1)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, os.path.join(out, "manifest.json"))
+        _write_json(meta, os.path.join(target, _MANIFEST))
+        if out is not None and target != out:
+            # The complete new run takes the old one's place; the old one is then removed.
+            old = f"{target[:-4]}.old"
+            shutil.rmtree(old, ignore_errors=True)
+            os.rename(out, old)
+            os.rename(target, out)
+            shutil.rmtree(old, ignore_errors=True)
     return _table(rows, kind) if rows else pa.Table.from_pylist([], schema=_schema(kind))
 
 
 def _flush(rows: list[dict[str, Any]], kind: str, out: str, index: int) -> str:
-    name = f"part-{index:05d}.parquet"
+    name = _shard_name(index)
     _write_atomic(_table(rows, kind), os.path.join(out, name))
     return name
 
@@ -261,12 +382,17 @@ def descriptors(
     times: Sequence[float] | None = None,
     sihks: dict[str, Any] | None = None,
     shard_size: int = 64,
+    replace: bool = False,
+    resume: bool = False,
 ) -> Any:
     """The dense descriptor ``kind`` (see :func:`wfem.descriptors`) of every mesh, as a
     ``pyarrow.Table`` (one row per path, input order), also written to ``out_dir`` as Parquet
-    shards when given."""
+    shards when given (``replace``/``resume``: see the module documentation)."""
     options = {"kind": kind, "k": k, "times": None if times is None else list(times), "sihks": sihks}
-    return _run(_descriptor_task, (options,), paths, "descriptor", out_dir, executor, shard_size)
+    return _run(
+        _descriptor_task, (options,), paths, "descriptor", out_dir, executor, shard_size,
+        {"options": options}, replace, resume,
+    )
 
 
 def bags(
@@ -280,28 +406,71 @@ def bags(
     times: Sequence[float] | None = None,
     sihks: dict[str, Any] | None = None,
     shard_size: int = 64,
+    replace: bool = False,
+    resume: bool = False,
 ) -> Any:
     """The normalised bag of features ``Θᵀa/Σa`` of every mesh with ``vocabulary`` (a
     :class:`wfem.Vocabulary`), descriptor ``kind`` and vertex areas ``a = B·1``; see
     :func:`descriptors` for the output."""
     options = {"kind": kind, "k": k, "times": None if times is None else list(times), "sihks": sihks}
     voc = vocabulary.to_dict() if hasattr(vocabulary, "to_dict") else dict(vocabulary)
-    return _run(_bag_task, (options, voc), paths, "bag", out_dir, executor, shard_size)
+    record = {"options": options, "vocabulary": json.loads(json.dumps(voc, default=_plain))}
+    return _run(_bag_task, (options, voc), paths, "bag", out_dir, executor, shard_size, record, replace, resume)
+
+
+def _plain(x: Any) -> Any:
+    # NumPy arrays and scalars in a vocabulary dict, as JSON.
+    return x.tolist() if hasattr(x, "tolist") else str(x)
 
 
 def read(out_dir: str | os.PathLike[str]) -> Any:
-    """The table written by :func:`descriptors` or :func:`bags` into ``out_dir`` (refuses an
-    interrupted run: no ``manifest.json``)."""
+    """The table written by :func:`descriptors` or :func:`bags` into ``out_dir``.
+
+    Raises :class:`wfem.InvalidInputError` (``kind="BatchOutput"``, ``path``) saying exactly
+    what is wrong: no such folder, an interrupted run (no manifest; resume it), a manifest
+    that is not JSON, a listed shard missing or unreadable, a shard not listed (left by
+    another run), or a row count that differs from the manifest's."""
     pa = _require("pyarrow")
     pq = _require("pyarrow.parquet")
 
     out = os.fspath(out_dir)
-    manifest = os.path.join(out, "manifest.json")
+    if not os.path.isdir(out):
+        raise _fail(f"{out} is not a folder" if os.path.exists(out) else f"no such folder: {out}", out)
+    manifest = os.path.join(out, _MANIFEST)
+    present = sorted(f for f in os.listdir(out) if f.startswith("part-") and f.endswith(".parquet"))
     if not os.path.exists(manifest):
-        raise FileNotFoundError(2, "no manifest.json: the run did not finish", manifest)
-    with open(manifest) as f:
-        meta = json.load(f)
-    return pa.concat_tables([pq.read_table(os.path.join(out, s)) for s in meta["shards"]])
+        raise _fail(
+            f"{out} has no {_MANIFEST}: the run did not finish ({len(present)} shards written); "
+            "run it again with resume=True",
+            manifest,
+            "Interrupted",
+        )
+    try:
+        with open(manifest) as f:
+            meta = json.load(f)
+        listed = list(meta["shards"])
+        expected_rows = int(meta["rows"])
+    except (ValueError, KeyError, TypeError) as e:
+        raise _fail(f"{manifest} is not a wfem.batch manifest: {e}", manifest) from e
+    missing = [s for s in listed if s not in present]
+    if missing:
+        raise _fail(f"{out}: the manifest lists {missing[0]}, which is missing", os.path.join(out, missing[0]))
+    extra = [s for s in present if s not in listed]
+    if extra:
+        raise _fail(
+            f"{out}: {extra[0]} is not listed in the manifest (left by another run); the folder mixes runs",
+            os.path.join(out, extra[0]),
+        )
+    tables = []
+    for s in listed:
+        try:
+            tables.append(pq.read_table(os.path.join(out, s)))
+        except (OSError, pa.ArrowException) as e:
+            raise _fail(f"{out}: shard {s} cannot be read: {e}", os.path.join(out, s)) from e
+    table = pa.concat_tables(tables)
+    if table.num_rows != expected_rows:
+        raise _fail(f"{out}: the shards hold {table.num_rows} rows, the manifest says {expected_rows}", manifest)
+    return table
 
 
 def descriptor_arrays(table: Any) -> dict[str, np.ndarray]:
@@ -311,3 +480,8 @@ def descriptor_arrays(table: Any) -> dict[str, np.ndarray]:
         if row["ok"]:
             out[row["path"]] = np.asarray(row["descriptor"], dtype=np.float64).reshape(row["n_vertices"], row["dim"])
     return out
+
+
+from ._guard import guard_namespace as _guard_namespace  # noqa: E402
+
+_guard_namespace(globals(), ["descriptors", "bags", "read", "descriptor_arrays"])

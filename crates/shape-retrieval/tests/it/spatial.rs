@@ -1,0 +1,262 @@
+//! Spatially sensitive bags and global signatures against independent dense references, their
+//! invariances, storage round trips and errors.
+
+use crate::common::{dense_spectrum, small_collection, small_settings};
+use faer::Mat;
+use mesh_fem::generate::{bumpy, icosphere};
+use shape_retrieval::global::{GlobalKind, BIHARMONIC_BINS};
+use shape_retrieval::spatial::{ShapeSpectrum, SpatialBag};
+use shape_retrieval::{
+    DescriptorSettings, GlobalSignature, IndexStore, JsonFile, RetrievalError, RetrievalIndex, ShapeFeatures,
+    VertexWeights,
+};
+use wfem_choice::Choice;
+
+/// A fixed assignment Θ (n × V, rows summing to 1) from a smooth function of the position.
+fn assignment(mesh: &mesh_fem::TriMesh, v: usize) -> Mat<f64> {
+    let p = mesh.positions();
+    Mat::from_fn(p.len(), v, |i, a| {
+        let raw: Vec<f64> = (0..v).map(|b| (1.0 + (b as f64 + 1.0) * p[i][b % 3]).exp()).collect();
+        raw[a] / raw.iter().sum::<f64>()
+    })
+}
+
+#[test]
+fn spatial_histogram_is_the_heat_flow_between_words() {
+    // Reference: F = Θᵀ W (Φ e^{−tΛ} Φᵀ) W Θ with the full dense spectrum of (L, B).
+    let mesh = bumpy(1);
+    let s = dense_spectrum(&mesh);
+    let n = mesh.n_vertices();
+    let theta = assignment(&mesh, 4);
+    let weights: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * (i % 5) as f64).collect();
+    let area: f64 = shape_retrieval::vertex_areas(s.ops.mass.as_ref()).iter().sum();
+    let bag = SpatialBag { time: 0.01 };
+    let t = 0.01 * area;
+    let kernel = Mat::from_fn(n, n, |i, j| {
+        (0..n)
+            .map(|c| s.eigenvectors[(i, c)] * (-s.eigenvalues[c] * t).exp() * s.eigenvectors[(j, c)])
+            .sum::<f64>()
+    });
+    let wt = Mat::from_fn(n, 4, |i, a| weights[i] * theta[(i, a)]);
+    let f = wt.transpose() * &kernel * &wt;
+    let mut want = Vec::new();
+    for a in 0..4 {
+        for b in a..4 {
+            want.push(if a == b { f[(a, b)] } else { 2.0 * f[(a, b)] });
+        }
+    }
+    let total: f64 = want.iter().sum();
+    let spectrum = ShapeSpectrum {
+        values: s.eigenvalues.clone(),
+        vectors: s.eigenvectors.clone(),
+        area,
+    };
+    let got = bag.histogram(theta.as_ref(), &weights, &spectrum).unwrap();
+    assert_eq!(got.len(), SpatialBag::bins(4));
+    for (g, w) in got.iter().zip(&want) {
+        assert!((g - w / total).abs() < 1e-12, "{g} vs {}", w / total);
+    }
+    assert!((got.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    // Errors: mismatched sizes, zero weights, a bad time.
+    let e = bag.histogram(theta.as_ref(), &weights[1..], &spectrum).unwrap_err();
+    assert!(matches!(e, RetrievalError::DimensionMismatch { .. }), "{e}");
+    let e = bag.histogram(theta.as_ref(), &vec![0.0; n], &spectrum).unwrap_err();
+    assert!(matches!(e, RetrievalError::InvalidModel { .. }), "{e}");
+    let e = SpatialBag { time: -1.0 }
+        .histogram(theta.as_ref(), &weights, &spectrum)
+        .unwrap_err();
+    assert!(matches!(e, RetrievalError::InvalidParameter { .. }), "{e}");
+}
+
+fn spatial_settings() -> shape_retrieval::RetrievalSettings {
+    let mut settings = small_settings();
+    settings.bags.spatial = Some(SpatialBag::default());
+    settings
+}
+
+#[test]
+fn spatial_bags_are_half_plain_half_flow_and_scale_invariant() {
+    let shapes = small_collection();
+    let settings = spatial_settings();
+    let index = RetrievalIndex::build(&shapes, &settings, None).unwrap();
+    let v = index.vocabulary().vocabulary().size();
+    for e in index.entries() {
+        let bag = &e.signature.bag;
+        assert_eq!(bag.len(), v + SpatialBag::bins(v));
+        let (plain, flow) = bag.split_at(v);
+        assert!((plain.iter().sum::<f64>() - 0.5).abs() < 1e-12);
+        assert!((flow.iter().sum::<f64>() - 0.5).abs() < 1e-12);
+    }
+    // The plain half is the bag without spatial bags (same vocabulary).
+    let mut plain_settings = settings.clone();
+    plain_settings.bags.spatial = None;
+    let plain = RetrievalIndex::new(index.vocabulary().clone(), plain_settings.bags.clone()).unwrap();
+    let f = plain.features("bumpy", &shapes[0].1).unwrap();
+    let sig = plain.signature(&f).unwrap();
+    for (a, b) in sig.bag.iter().zip(&index.entries()[0].signature.bag) {
+        assert!((0.5 * a - b).abs() < 1e-12);
+    }
+    // Scale invariant: a copy ×50 is at distance ~0 from its original.
+    let copy = index.describe("copy", &shapes[0].1.scaled(50.0).unwrap()).unwrap();
+    let ranked = index.rank(&copy.signature).unwrap();
+    assert_eq!(ranked[0].entry, 0);
+    assert!(ranked[0].distance < 1e-9, "{ranked:?}");
+}
+
+#[test]
+fn spatial_indexes_round_trip_and_plain_files_stay_plain() {
+    let shapes = small_collection();
+    let index = RetrievalIndex::build(&shapes, &spatial_settings(), None).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("index.json");
+    JsonFile::new(&path).save_index(&index).unwrap();
+    let back = JsonFile::new(&path).load_index().unwrap();
+    assert_eq!(back.entries(), index.entries());
+    assert_eq!(back.bags(), index.bags());
+    // An index written without the field holds plain bags and reads as such.
+    let mut plain_settings = small_settings();
+    plain_settings.bags.spatial = None;
+    let plain = RetrievalIndex::build(&shapes, &plain_settings, None).unwrap();
+    JsonFile::new(&path).save_index(&plain).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(!text.contains("spatial"));
+    assert_eq!(JsonFile::new(&path).load_index().unwrap().bags().spatial, None);
+    // A bag of the wrong length for the settings is refused.
+    let mut broken = index.entries().to_vec();
+    broken[0].signature.bag.truncate(5);
+    let e = RetrievalIndex::from_parts(index.vocabulary().clone(), index.bags().clone(), broken).unwrap_err();
+    assert!(matches!(e, RetrievalError::InvalidModel { .. }), "{e}");
+    // Features without their eigenpairs cannot make a spatial bag.
+    let mut f =
+        ShapeFeatures::compute("b", &shapes[0].1, &small_settings().descriptor, &small_settings().bags).unwrap();
+    f.spectrum = None;
+    let e = index.signature(&f).unwrap_err();
+    assert!(matches!(e, RetrievalError::InvalidModel { .. }), "{e}");
+}
+
+#[test]
+fn weyl_shape_dna_matches_the_dense_spectrum() {
+    let mesh = bumpy(2);
+    let settings = DescriptorSettings {
+        eigenpairs: 12,
+        ..Default::default()
+    };
+    let g = GlobalSignature {
+        kind: GlobalKind::WeylShapeDna,
+        eigenvalues: 10,
+        weight: 1.0,
+    };
+    let got = g.compute(&mut settings.shape(&mesh).unwrap()).unwrap();
+    let s = dense_spectrum(&mesh);
+    let area = mesh.area();
+    for (i, x) in got.iter().enumerate() {
+        let want = s.eigenvalues[i + 1] * area / (4.0 * std::f64::consts::PI * (i + 1) as f64);
+        assert!((x - want).abs() < 1e-7 * want, "{i}: {x} vs {want}");
+    }
+    // Its distance is Euclidean; the logarithmic kind (the default of older files) the mean
+    // absolute log gap.
+    let (a, b) = ([1.0, 2.0, 2.0], [1.0, 5.0, 6.0]);
+    assert_eq!(GlobalKind::WeylShapeDna.distance(&a, &b), 5.0);
+    assert_eq!(GlobalKind::LogShapeDna.distance(&a, &b), 7.0 / 3.0);
+    let old: GlobalSignature = serde_json::from_str(r#"{"eigenvalues": 20, "weight": 0.5}"#).unwrap();
+    assert_eq!(old.kind, GlobalKind::LogShapeDna);
+    for name in GlobalKind::names() {
+        assert_eq!(GlobalKind::parse(name).unwrap().name(), name);
+    }
+    assert_eq!(GlobalKind::parse("shape_dna"), Ok(GlobalKind::WeylShapeDna));
+}
+
+#[test]
+fn biharmonic_distribution_is_a_scale_invariant_histogram() {
+    let settings = DescriptorSettings {
+        eigenpairs: 30,
+        ..Default::default()
+    };
+    let g = GlobalSignature {
+        kind: GlobalKind::Biharmonic,
+        eigenvalues: 20,
+        weight: 1.0,
+    };
+    let mesh = bumpy(2);
+    let a = g.compute(&mut settings.shape(&mesh).unwrap()).unwrap();
+    let b = g
+        .compute(&mut settings.shape(&mesh.scaled(30.0).unwrap()).unwrap())
+        .unwrap();
+    assert_eq!(a.len(), BIHARMONIC_BINS);
+    assert!((a.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    assert!(a.iter().all(|&x| x >= 0.0));
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() < 1e-9, "{x} vs {y}");
+    }
+    // A sphere and a stretched sphere have different distributions.
+    let long = mesh_fem::TriMesh::new(
+        icosphere(2)
+            .positions()
+            .iter()
+            .map(|p| [3.0 * p[0], p[1], p[2]])
+            .collect(),
+        icosphere(2).faces().to_vec(),
+    )
+    .unwrap();
+    let s = g.compute(&mut settings.shape(&icosphere(2)).unwrap()).unwrap();
+    let l = g.compute(&mut settings.shape(&long).unwrap()).unwrap();
+    assert!(GlobalKind::Biharmonic.distance(&s, &l) > 0.05);
+    // Too few eigenpairs for the signature.
+    let e = GlobalKind::Biharmonic
+        .compute(&[0.0, 1.0], Mat::<f64>::zeros(3, 2).as_ref(), &[1.0; 3], 1.0, 5)
+        .unwrap_err();
+    assert!(matches!(e, RetrievalError::DimensionMismatch { .. }), "{e}");
+}
+
+#[test]
+fn repair_damped_weights_fade_next_to_added_vertices() {
+    // A punched sphere, filled: the vertices on the patch's rim weigh 0, those 3 hops away or
+    // more their capped area.
+    let intact = icosphere(3);
+    let keep: Vec<bool> = intact.positions().iter().map(|p| p[2] < 0.9).collect();
+    let faces: Vec<[u32; 3]> = intact
+        .faces()
+        .iter()
+        .filter(|f| f.iter().all(|&v| keep[v as usize]))
+        .copied()
+        .collect();
+    let holed = mesh_fem::repair(
+        &mesh_fem::TriMesh::new(intact.positions().to_vec(), faces).unwrap(),
+        &mesh_fem::RepairOptions {
+            drop_unreferenced_vertices: true,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .0;
+    let settings = DescriptorSettings {
+        eigenpairs: 10,
+        ..Default::default()
+    };
+    let shape = settings.shape(&holed).unwrap();
+    assert!(shape.mesh().n_vertices() > shape.described_vertices());
+    let capped = VertexWeights::CappedArea { factor: 3.0 }.compute(&shape).unwrap();
+    let damped = VertexWeights::RepairDamped { factor: 3.0, hops: 3 }
+        .compute(&shape)
+        .unwrap();
+    let rim: Vec<usize> = mesh_fem::holes::boundary_loops(&holed)
+        .into_iter()
+        .flat_map(|l| l.vertices)
+        .map(|v| v as usize)
+        .collect();
+    assert!(!rim.is_empty());
+    for &v in &rim {
+        assert!(
+            damped[v] < 0.3 * capped[v],
+            "rim vertex {v}: {} vs {}",
+            damped[v],
+            capped[v]
+        );
+    }
+    let far = holed.positions().iter().position(|p| p[2] < -0.9).unwrap();
+    assert_eq!(damped[far], capped[far]);
+    let e = VertexWeights::RepairDamped { factor: 3.0, hops: 0 }
+        .validate()
+        .unwrap_err();
+    assert!(matches!(e, RetrievalError::InvalidParameter { .. }), "{e}");
+}

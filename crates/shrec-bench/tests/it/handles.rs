@@ -1,0 +1,71 @@
+//! The handles class: tubes between points close in space and far along the surface, on a real
+//! TOSCA shape (the corpus) — closed manifold output, genus = number of handles, ground truth.
+
+use shrec_bench::handles::{handle_count, HANDLE_MAX_DISTANCE, HANDLE_MIN_GRAPH_DISTANCE};
+use shrec_bench::synth::*;
+
+fn david() -> BaseShape {
+    let dir = mesh_fem::corpus::meshes_dir()
+        .unwrap()
+        .join("tosca-bcicp-5k/TOSCA_Isometric");
+    let (mesh, _) = mesh_fem::io::load(&dir.join("david0.off"), &Default::default()).unwrap();
+    BaseShape::new("david0", mesh).unwrap()
+}
+
+#[test]
+fn handles_raise_the_genus_by_one_each() {
+    let b = david();
+    let p = b.mesh.positions();
+    for s in 1..=5u8 {
+        let t = transform(&b, Class::Handles, s, 2010).unwrap();
+        validate_output(&t, b.mesh.n_vertices(), b.diameter).unwrap();
+        let pairs = t.params["handles"].as_array().unwrap();
+        assert_eq!(pairs.len(), handle_count(s), "strength {s}");
+        let report = mesh_fem::validate(&t.mesh);
+        let stats = mesh_fem::stats(&t.mesh);
+        assert!(report.is_usable(), "strength {s}");
+        assert_eq!(stats.n_boundary_loops, 0, "strength {s}: closed");
+        assert_eq!(
+            (
+                stats.n_components,
+                stats.n_non_manifold_edges,
+                stats.n_non_manifold_vertices
+            ),
+            (1, 0, 0)
+        );
+        assert_eq!(stats.genus, Some(pairs.len() as i64));
+        // χ = V − E + F = 2 − 2g.
+        assert_eq!(stats.euler_characteristic, 2 - 2 * pairs.len() as i64, "strength {s}");
+        // Endpoints close in space, far along the surface.
+        for pr in pairs {
+            let (a, c) = (pr[0].as_u64().unwrap() as usize, pr[1].as_u64().unwrap() as usize);
+            let d: f64 = (0..3).map(|k| (p[a][k] - p[c][k]).powi(2)).sum::<f64>().sqrt();
+            assert!(d <= HANDLE_MAX_DISTANCE * b.diameter);
+            let g = b.graph.distances(&[a as u32], f64::INFINITY).unwrap()[c];
+            assert!(g >= HANDLE_MIN_GRAPH_DISTANCE * b.diameter);
+        }
+        // Old vertices keep their positions; tube vertices have no ground truth.
+        for (i, &g) in t.ground_truth.iter().enumerate() {
+            if g >= 0 {
+                assert_eq!(t.mesh.positions()[i], p[g as usize]);
+            }
+        }
+        let new = t.ground_truth.iter().filter(|&&g| g < 0).count();
+        // Each tube (at most 0.15 D long, rings one mean edge apart) is a small part of the shape.
+        assert!(
+            new > 0 && new < pairs.len() * b.mesh.n_vertices() / 20,
+            "strength {s}: {new} tube vertices"
+        );
+    }
+    // Deterministic, and each strength adds handles to the previous ones.
+    let (a, c) = (
+        transform(&b, Class::Handles, 3, 2010).unwrap(),
+        transform(&b, Class::Handles, 3, 2010).unwrap(),
+    );
+    assert_eq!(a.mesh.positions(), c.mesh.positions());
+    let two = transform(&b, Class::Handles, 2, 2010).unwrap();
+    assert_eq!(
+        two.params["handles"].as_array().unwrap()[..],
+        a.params["handles"].as_array().unwrap()[..2]
+    );
+}

@@ -1,0 +1,153 @@
+//! Indexes that cannot be lost by a mistake (issue #23): `retrieval build` refuses an existing
+//! index without `--force`, any input, a directory or a FIFO; a file that is neither SQLite
+//! nor JSON is named as such (not parsed as JSON); a tampered index is refused by name; an
+//! `add` never mixes bags of another vocabulary into a rebuilt index.
+
+use super::common::{stderr, wfem};
+use retrieval_store::SqliteIndex;
+use std::path::{Path, PathBuf};
+
+fn meshes(dir: &Path) -> Vec<String> {
+    [
+        ("bumpy.off", mesh_fem::generate::bumpy(2)),
+        ("sphere.off", mesh_fem::generate::icosphere(2)),
+        ("torus.off", mesh_fem::generate::torus(1.0, 0.4, 20, 10)),
+    ]
+    .iter()
+    .map(|(name, mesh)| {
+        let p = dir.join(name);
+        mesh_fem::io::write_mesh(&p, mesh).unwrap();
+        p.to_str().unwrap().to_string()
+    })
+    .collect()
+}
+
+fn build(files: &[String], out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["retrieval", "build"];
+    args.extend(files.iter().map(|s| s.as_str()));
+    args.extend(["--out", out.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+    args.extend(extra);
+    wfem(&args)
+}
+
+#[test]
+fn build_never_replaces_an_index_an_input_or_a_special_file_by_mistake() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    let index = dir.path().join("index.sqlite");
+    let o = build(&files, &index, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = std::fs::read(&index).unwrap();
+    // A second build (e.g. a mistyped `add`) is refused and the index kept.
+    let o = build(&files[..1], &index, &[]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("already exists") && stderr(&o).contains("--force"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(std::fs::read(&index).unwrap(), before);
+    let o = build(&files[..1], &index, &["--force"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, store) = SqliteIndex::new(&index).open().unwrap();
+    assert_eq!(store.len().unwrap(), 1);
+    // An input is never the output, even with --force.
+    let mesh = PathBuf::from(&files[1]);
+    let mesh_before = std::fs::read(&mesh).unwrap();
+    let o = build(&files, &mesh, &["--force"]);
+    assert!(!o.status.success());
+    assert_eq!(std::fs::read(&mesh).unwrap(), mesh_before);
+    // A directory or a FIFO is refused and left as it was.
+    let o = build(&files, dir.path(), &["--force"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("directory"), "{}", stderr(&o));
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let fifo = dir.path().join("fifo.sqlite");
+        assert!(std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success());
+        let o = build(&files, &fifo, &["--force"]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("not a regular file"), "{}", stderr(&o));
+        assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+        let o = wfem(&["retrieval", "query", fifo.to_str().unwrap(), files[0].as_str()]);
+        assert!(!o.status.success());
+    }
+}
+
+#[test]
+fn files_that_are_neither_sqlite_nor_json_are_named_not_parsed() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    for (name, bytes) in [
+        ("empty.sqlite", &b""[..]),
+        ("random.sqlite", &b"\x8f\x01garbage bytes, not an index"[..]),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        for action in ["query", "add"] {
+            let o = wfem(&["retrieval", action, path.to_str().unwrap(), files[0].as_str()]);
+            assert!(!o.status.success());
+            let e = stderr(&o);
+            assert!(
+                e.contains("is not a wfem index") && !e.contains("JSON parse") && !e.contains("line 1"),
+                "{e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_tampered_bag_is_refused_by_name_instead_of_ranked_at_distance_zero() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    let index = dir.path().join("index.sqlite");
+    assert!(build(&files, &index, &[]).status.success());
+    // Shape 1's bag gets a negative bin (and keeps its sum): χ² would call it equal to others.
+    {
+        let conn = rusqlite::Connection::open(&index).unwrap();
+        let mut data: Vec<u8> = conn
+            .query_row("SELECT data FROM chunks WHERE chunk = 0", [], |r| r.get(0))
+            .unwrap();
+        let at = |j: usize| (8 + j) * 4;
+        let value = |data: &[u8], j: usize| f32::from_le_bytes(data[at(j)..at(j) + 4].try_into().unwrap());
+        let (a, b) = (value(&data, 0), value(&data, 1));
+        data[at(0)..at(0) + 4].copy_from_slice(&(a - 1.0).to_le_bytes());
+        data[at(1)..at(1) + 4].copy_from_slice(&(b + 1.0).to_le_bytes());
+        conn.execute("UPDATE chunks SET data = ?1 WHERE chunk = 0", [data])
+            .unwrap();
+    }
+    let o = wfem(&["retrieval", "query", index.to_str().unwrap(), files[0].as_str()]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("stored shape 1") && stderr(&o).contains("negative"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn an_add_never_puts_bags_of_another_vocabulary_into_a_rebuilt_index() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    let index = dir.path().join("index.sqlite");
+    assert!(build(&files[..2], &index, &[]).status.success());
+    // `add` describes the new shape with the index as it opened it …
+    let (opened, _) = SqliteIndex::new(&index).open().unwrap();
+    let (torus, _) = mesh_fem::io::load(Path::new(&files[2]), &Default::default()).unwrap();
+    let entry = opened.describe(&files[2], &torus).unwrap();
+    // … meanwhile the index is rebuilt (another vocabulary: trained on other shapes) …
+    assert!(build(&files[1..], &index, &["--force", "--seed", "7"]).status.success());
+    // … so the append is refused and the rebuilt index left as it is.
+    let err = SqliteIndex::new(&index)
+        .append(&opened, &[entry])
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("rebuilt"), "{err}");
+    let (_, store) = SqliteIndex::new(&index).open().unwrap();
+    assert_eq!(store.len().unwrap(), 2);
+}

@@ -1,0 +1,286 @@
+//! `cargo xtask real-eval`: the retrieval defaults (and any variants) on real labelled
+//! collections — SHREC'11 (500-face copy) and TOSCA-76 — beside the Shape-DNA baseline, with
+//! `wfem retrieval eval`'s measures; writes docs/RETRIEVAL-RESULTS.md (its generated part).
+
+use crate::lab::Variant;
+use shape_retrieval::eval::EvalReport;
+use shape_retrieval::RetrievalSettings;
+use shrec_bench::protocol::{self, EigenCache, ShapeFile};
+use shrec_bench::real;
+use shrec_bench::BenchError;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// A labelled collection of the evaluation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Collection {
+    /// SHREC'11 non-rigid, the 500-face copy: 600 shapes, 30 classes.
+    Shrec11,
+    /// TOSCA-76 (`tosca-bcicp-5k/TOSCA_Isometric`): 76 shapes, 8 classes.
+    Tosca76,
+    /// SHREC'11 plus the 20 SHREC'07 four-legged animals as a 31st class.
+    Shrec11Fourleg,
+}
+
+impl Collection {
+    /// Every collection.
+    pub const ALL: [Collection; 3] = [Collection::Shrec11, Collection::Tosca76, Collection::Shrec11Fourleg];
+    /// Every collection's name.
+    pub const NAMES: &'static [&'static str] = &["shrec11", "tosca76", "shrec11-fourleg"];
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Collection::Shrec11 => "shrec11",
+            Collection::Tosca76 => "tosca76",
+            Collection::Shrec11Fourleg => "shrec11-fourleg",
+        }
+    }
+
+    /// The collection of that name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| c.name() == name)
+    }
+
+    /// A title for the report.
+    pub fn title(self) -> &'static str {
+        match self {
+            Collection::Shrec11 => "SHREC'11 non-rigid, 500-face copy (600 shapes, 30 classes)",
+            Collection::Tosca76 => "TOSCA-76 (76 shapes, 8 classes)",
+            Collection::Shrec11Fourleg => "SHREC'11 + 20 SHREC'07 four-legged animals as a 31st class",
+        }
+    }
+
+    fn files(self, meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
+        match self {
+            Collection::Shrec11 => real::shrec11_files(meshes_dir),
+            Collection::Tosca76 => protocol::tosca_files(meshes_dir),
+            Collection::Shrec11Fourleg => {
+                let mut f = real::shrec11_files(meshes_dir)?;
+                f.extend(real::fourleg_files(meshes_dir)?);
+                Ok(f)
+            }
+        }
+    }
+
+    /// The shapes an honest vocabulary for this collection is trained on (none of them in it).
+    fn outside(self, meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
+        let all = protocol::outside_files(meshes_dir)?;
+        Ok(match self {
+            // The four-legged animals are in the collection itself.
+            Collection::Shrec11Fourleg => all
+                .into_iter()
+                .filter(|f| !f.name.starts_with("shrec07-fourleg"))
+                .collect(),
+            _ => all,
+        })
+    }
+}
+
+/// One row of the report: a method with one vocabulary on one collection.
+pub struct Row {
+    /// The method (variant name or "Shape-DNA baseline").
+    pub method: String,
+    /// Where its vocabulary was trained.
+    pub vocabulary: String,
+    /// Its evaluation.
+    pub report: EvalReport,
+}
+
+/// The evaluation of one collection.
+pub struct CollectionResult {
+    /// Which.
+    pub collection: Collection,
+    /// The baseline first, then each variant with the vocabulary on the indexed shapes and
+    /// outside.
+    pub rows: Vec<Row>,
+}
+
+/// Options of [`run`].
+pub struct RealEvalOptions<'a> {
+    /// Mesh corpus folder.
+    pub meshes_dir: &'a Path,
+    /// Eigenbasis cache.
+    pub cache: &'a EigenCache,
+    /// The variants (the first is reported in detail; usually the defaults).
+    pub variants: &'a [Variant],
+    /// The collections.
+    pub collections: &'a [Collection],
+    /// Also evaluate with a vocabulary trained outside the collection.
+    pub outside: bool,
+}
+
+fn line(r: &Row) -> String {
+    let m = &r.report.overall;
+    let worst: Vec<String> = r
+        .report
+        .worst_classes()
+        .iter()
+        .take(3)
+        .map(|c| format!("{} {:.2}", c.class, c.measures.map))
+        .collect();
+    format!(
+        "mAP {:.4} NN {:.4} FT {:.4} ST {:.4} E {:.4} DCG {:.4} | worst {}",
+        m.map,
+        m.nn,
+        m.first_tier,
+        m.second_tier,
+        m.e_measure,
+        m.dcg,
+        worst.join(", ")
+    )
+}
+
+/// Runs every variant on every collection, printing one line per row as it goes.
+///
+/// # Errors
+/// The first failure.
+pub fn run(opts: &RealEvalOptions<'_>) -> Result<Vec<CollectionResult>, BenchError> {
+    let mut out = Vec::new();
+    for &collection in opts.collections {
+        let files = collection.files(opts.meshes_dir)?;
+        let mut rows = Vec::new();
+        let baseline = real::shape_dna_baseline(&files, opts.cache)?;
+        rows.push(Row {
+            method: "Shape-DNA baseline".into(),
+            vocabulary: "–".into(),
+            report: baseline,
+        });
+        println!("[{}] {}: {}", collection.name(), rows[0].method, line(&rows[0]));
+        for v in opts.variants {
+            let t0 = std::time::Instant::now();
+            let settings: &RetrievalSettings = &v.settings;
+            let described = real::describe(files.clone(), settings, opts.cache)?;
+            let mut vocabularies: Vec<(String, Option<shape_retrieval::VocabularyModel>)> =
+                vec![("indexed shapes".into(), None)];
+            if opts.outside {
+                let outside = real::describe(collection.outside(opts.meshes_dir)?, settings, opts.cache)?;
+                let vocabulary = protocol::train(settings, &outside.features)?;
+                vocabularies.push((format!("{} outside shapes", outside.files.len()), Some(vocabulary)));
+            }
+            for (label, vocabulary) in vocabularies {
+                let note = if vocabulary.is_some() {
+                    format!("trained on {label}")
+                } else {
+                    "trained on the indexed shapes (optimistic)".to_string()
+                };
+                let report = real::evaluate(&described, settings, vocabulary.as_ref(), &note)?;
+                let row = Row {
+                    method: v.name.clone(),
+                    vocabulary: label,
+                    report,
+                };
+                println!(
+                    "[{}] {} ({}): {} ({:.0} s)",
+                    collection.name(),
+                    row.method,
+                    row.vocabulary,
+                    line(&row),
+                    t0.elapsed().as_secs_f64()
+                );
+                rows.push(row);
+            }
+        }
+        out.push(CollectionResult { collection, rows });
+    }
+    Ok(out)
+}
+
+/// The generated markdown: per collection, one table of every row, the per-class table of the
+/// baseline and the first variant, and the first variant's most confused pairs.
+pub fn markdown(results: &[CollectionResult]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Generated by `cargo xtask real-eval` (`xtask/src/real_eval.rs`, measures: \
+         `shape_retrieval::eval`). Every shape queries all the others from its stored signature \
+         (leave-one-out, self excluded); relevant = same class. Shape-DNA baseline: the first 40 \
+         non-zero eigenvalues of (L, Voronoi mass) × area / (4πi), L2 (`shrec_bench::real`).\n"
+    );
+    for r in results {
+        let _ = writeln!(s, "## {}\n", r.collection.title());
+        let _ = writeln!(
+            s,
+            "| method | vocabulary | mAP | NN | FT | ST | E | DCG | worst classes (mAP) |\n|---|---|---|---|---|---|---|---|---|"
+        );
+        for row in &r.rows {
+            let m = &row.report.overall;
+            let worst: Vec<String> = row
+                .report
+                .worst_classes()
+                .iter()
+                .take(3)
+                .map(|c| format!("{} {:.2}", c.class, c.measures.map))
+                .collect();
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {} |",
+                row.method,
+                row.vocabulary,
+                m.map,
+                m.nn,
+                m.first_tier,
+                m.second_tier,
+                m.e_measure,
+                m.dcg,
+                worst.join(", ")
+            );
+        }
+        if let (Some(base), Some(first)) = (r.rows.first(), r.rows.get(1)) {
+            let _ = writeln!(
+                s,
+                "\nPer class (mAP / NN / FT): {} ({}) against the baseline.\n",
+                first.method, first.vocabulary
+            );
+            let _ = writeln!(s, "| class | {} | baseline |\n|---|---|---|", first.method);
+            for c in &first.report.per_class {
+                let b = base.report.per_class.iter().find(|x| x.class == c.class);
+                let f =
+                    |m: &shape_retrieval::eval::Measures| format!("{:.3} / {:.2} / {:.3}", m.map, m.nn, m.first_tier);
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} |",
+                    c.class,
+                    f(&c.measures),
+                    b.map_or("–".into(), |b| f(&b.measures))
+                );
+            }
+            if !first.report.confusions.is_empty() {
+                let pairs: Vec<String> = first
+                    .report
+                    .confusions
+                    .iter()
+                    .map(|c| format!("{} → {} {:.3}", c.query, c.retrieved, c.share))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "\nMost confused ({}; share of the query class's first-tier places): {}.\n",
+                    first.method,
+                    pairs.join(", ")
+                );
+            }
+        }
+    }
+    s
+}
+
+/// Marker line after which docs/RETRIEVAL-RESULTS.md is generated.
+pub const GENERATED_MARKER: &str = "<!-- generated by cargo xtask real-eval: everything below is rewritten -->";
+
+/// Replaces the generated part of `path` (after [`GENERATED_MARKER`]; the whole file gets a
+/// marker if it has none) with `generated`.
+///
+/// # Errors
+/// Reading or writing the file.
+pub fn write_generated(path: &Path, generated: &str) -> Result<(), Box<dyn std::error::Error>> {
+    let head = match std::fs::read_to_string(path) {
+        Ok(text) => match text.find(GENERATED_MARKER) {
+            Some(i) => text[..i].to_string(),
+            None => format!("{text}\n"),
+        },
+        Err(_) => "# Retrieval on real collections\n\n".to_string(),
+    };
+    let text = format!("{head}{GENERATED_MARKER}\n\n{generated}");
+    mesh_fem::io::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+    Ok(())
+}
