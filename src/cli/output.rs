@@ -435,16 +435,19 @@ pub fn write_fields(
                 (Some(_), Some(v)) => format!("facing vertex {v} (red dot)"),
                 _ => "oblique".to_string(),
             };
+            // The up direction is named when it was guessed (an explicit --up is the user's own).
+            let up = if how.render.up == Up::Auto {
+                format!(
+                    "up is {} (--up auto, from the extents of the mesh; --up x|y|z|-x|-y|-z overrides); ",
+                    wfem_render::direction_label(frame.up)
+                )
+            } else {
+                String::new()
+            };
             progress::note(&format!(
-                "figures: up is {}; views from {} (the broadest side), {}, above, and {last}{}",
-                wfem_render::direction_label(frame.up),
+                "figures: {up}views from {} (the broadest side), {}, above, and {last}",
                 wfem_render::direction_label(frame.front),
                 wfem_render::direction_label(frame.right),
-                if how.render.up == Up::Auto {
-                    " (--up auto, from the extents of the mesh; --up x|y|z|-x|-y|-z overrides)"
-                } else {
-                    ""
-                }
             ));
             let bar = progress::bar(columns.len(), "rendering figures");
             for (column, target) in columns.iter().zip(&targets) {
