@@ -239,6 +239,14 @@ def hks(
         v, f = as_mesh(V, F)
     t = None if times is None else [float(x) for x in as_vector(np.atleast_1d(times), "times")]
     if t is not None and time_unit is not None:
+        if f is None:
+            from ._errors import InvalidInputError
+
+            raise InvalidInputError(
+                "time_unit= needs a mesh (V, F); give a point cloud's times in absolute units",
+                "InvalidParameter",
+                name="time_unit",
+            )
         unit = float(_wfem.mesh_time_unit(v, f, time_unit))
         t = [x * unit for x in t]
     values, used, _, _ = _wfem.mesh_hks(
