@@ -8,6 +8,7 @@ import warnings
 from typing import Any
 
 from . import _wfem
+from ._errors import warn_user
 
 _TABLES: dict[str, Any] = _wfem.choices()
 
@@ -42,11 +43,11 @@ def mass_of(mass: str | None, kernel: str | None, lumped: str | None) -> str | N
     """``mass=`` with the older spellings folded in: ``kernel=`` (the same names) and ``lumped=``
     (the lumped mass of ``kernel="lumped"``), each with a :class:`DeprecationWarning`."""
     if kernel is not None:
-        warnings.warn("kernel= is now mass= (same names)", DeprecationWarning, stacklevel=3)
+        warn_user("kernel= is now mass= (same names)", DeprecationWarning)
         if mass is None:
             mass = kernel
     if lumped is not None:
-        warnings.warn("lumped= is now mass= (e.g. mass='voronoi')", DeprecationWarning, stacklevel=3)
+        warn_user("lumped= is now mass= (e.g. mass='voronoi')", DeprecationWarning)
         lumped_masses = set(_TABLES["lumped_masses"])
         if canonical("mass", lumped) not in lumped_masses:
             from ._errors import InvalidInputError

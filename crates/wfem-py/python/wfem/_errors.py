@@ -113,3 +113,23 @@ class TimeWarning(UserWarning):
     a constant result). The message names the sensible range of times for the mesh, in the
     ``time_unit`` the times were given in. Silence it with
     ``warnings.simplefilter("ignore", wfem.TimeWarning)``."""
+
+
+def warn_user(message: str, category: type[Warning]) -> None:
+    """``warnings.warn`` attributed to the caller's own code: the first frame outside the wfem
+    package (however many wfem frames — wrappers, helpers — lie between), so the warning shows
+    the user's line, and a DeprecationWarning is shown by Python's default filters."""
+    import os
+    import sys
+    import warnings
+
+    from types import FrameType
+
+    package = os.path.dirname(os.path.abspath(__file__))
+    # stacklevel 1 is this function, 2 its caller, …
+    level = 2
+    frame: FrameType | None = sys._getframe(1)
+    while frame is not None and os.path.dirname(os.path.abspath(frame.f_code.co_filename)) == package:
+        frame = frame.f_back
+        level += 1
+    warnings.warn(message, category, stacklevel=level)

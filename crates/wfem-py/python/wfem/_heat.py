@@ -9,7 +9,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _choices, _wfem
-from ._errors import TimeWarning
+from ._errors import TimeWarning, warn_user
 from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, points_of, to_csc
 
 __all__ = [
@@ -189,7 +189,7 @@ class HeatKernel:
         name = _choices.canonical("time_unit", time_unit) if time_unit is not None else _choices.default("time_unit")
         kind = None if distance is None else (distance or _choices.default("distance"))
         for text in self._k.time_warnings(absolute, unit, name, kind):
-            warnings.warn(text, TimeWarning, stacklevel=3)
+            warn_user(text, TimeWarning)
         return absolute
 
     def apply(self, f: Any, t: Any, *, time_unit: str | None = None) -> np.ndarray:
@@ -390,7 +390,7 @@ class HeatKernel:
             )
         )
         if out["warning"] is not None:
-            warnings.warn(out["warning"], ApproximationWarning, stacklevel=2)
+            warn_user(out["warning"], ApproximationWarning)
         return out
 
 

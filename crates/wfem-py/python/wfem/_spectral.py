@@ -8,6 +8,7 @@ import numpy as np
 
 from . import _choices, _wfem
 from ._arrays import as_float_array, as_mesh, as_sparse, as_vector, points_of
+from ._errors import warn_user
 
 __all__ = ["Eigenbasis", "eigenbasis", "hks", "sihks", "HKS_CONVENTIONS", "HKS_METHODS"]
 
@@ -229,7 +230,7 @@ def hks(
     import warnings
 
     if exact:
-        warnings.warn("exact=True is now method='exact'", DeprecationWarning, stacklevel=2)
+        warn_user("exact=True is now method='exact'", DeprecationWarning)
         method = _wfem.canonical("hks_method", "exact") if method is None else method
     mass = _choices.mass_of(mass, kernel, None)
     P = points_of(V, F)
