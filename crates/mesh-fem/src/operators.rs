@@ -420,32 +420,7 @@ fn merge_columns(
     let n = first.len() - 1;
     let voronoi = !corner_mass.is_empty();
     // 3a. Count the distinct rows of each column, then lay out the column pointers.
-    let chunks: Vec<(usize, usize)> = (0..n)
-        .step_by(COLUMNS_PER_CHUNK)
-        .map(|c| (c, (c + COLUMNS_PER_CHUNK).min(n)))
-        .collect();
-    let mut col_ptr = vec![0usize; n + 1];
-    col_ptr[1..]
-        .par_chunks_mut(COLUMNS_PER_CHUNK)
-        .zip(&chunks)
-        .for_each(|(out, &(col_start, _))| {
-            let mut rows: Vec<u32> = Vec::new();
-            for (jj, count) in out.iter_mut().enumerate() {
-                let j = col_start + jj;
-                rows.clear();
-                for &f in &around[first[j]..first[j + 1]] {
-                    for &v in &faces[f as usize] {
-                        if v as usize != j && !rows.contains(&v) {
-                            rows.push(v);
-                        }
-                    }
-                }
-                *count = 1 + rows.len();
-            }
-        });
-    for j in 0..n {
-        col_ptr[j + 1] += col_ptr[j];
-    }
+    let (chunks, col_ptr) = column_layout(around, first, faces);
     let nnz = col_ptr[n];
 
     // 3b. Write the merged entries of L, B, D and the three copies of the row indices into
@@ -529,6 +504,45 @@ fn merge_columns(
         b_val,
         lumped_diagonal,
     }
+}
+
+/// The column chunks (`COLUMNS_PER_CHUNK` columns each) and the column pointers of the
+/// vertex–edge pattern plus diagonal: column j holds j and every other corner of the triangles
+/// `around[first[j]..first[j + 1]]` (each once). Shared by the cotangent and the intrinsic
+/// assembly.
+pub(crate) fn column_layout(
+    around: &[u32],
+    first: &[usize],
+    triangles: &[[u32; 3]],
+) -> (Vec<(usize, usize)>, Vec<usize>) {
+    let n = first.len() - 1;
+    let chunks: Vec<(usize, usize)> = (0..n)
+        .step_by(COLUMNS_PER_CHUNK)
+        .map(|c| (c, (c + COLUMNS_PER_CHUNK).min(n)))
+        .collect();
+    let mut col_ptr = vec![0usize; n + 1];
+    col_ptr[1..]
+        .par_chunks_mut(COLUMNS_PER_CHUNK)
+        .zip(&chunks)
+        .for_each(|(out, &(col_start, _))| {
+            let mut rows: Vec<u32> = Vec::new();
+            for (jj, count) in out.iter_mut().enumerate() {
+                let j = col_start + jj;
+                rows.clear();
+                for &f in &around[first[j]..first[j + 1]] {
+                    for &v in &triangles[f as usize] {
+                        if v as usize != j && !rows.contains(&v) {
+                            rows.push(v);
+                        }
+                    }
+                }
+                *count = 1 + rows.len();
+            }
+        });
+    for j in 0..n {
+        col_ptr[j + 1] += col_ptr[j];
+    }
+    (chunks, col_ptr)
 }
 
 /// Splits `v` into consecutive pieces ending at the increasing offsets `bounds` (the last

@@ -836,8 +836,16 @@ fn added_hops(mesh: &TriMesh, own: usize, cap: u32) -> Vec<u32> {
         }
     }
     let mut hops = vec![cap; n];
-    let mut frontier: Vec<u32> = (own as u32..n as u32).collect();
+    let frontier: Vec<u32> = (own as u32..n as u32).collect();
     frontier.iter().for_each(|&v| hops[v as usize] = 0);
+    sweep_hops(&neighbors, &mut hops, frontier, cap);
+    hops.truncate(own);
+    hops
+}
+
+/// Breadth-first sweep from `frontier` (its vertices at 0 hops), one ring per round:
+/// `hops[w]` becomes the edge hops from the frontier, where below `cap`.
+fn sweep_hops(neighbors: &[Vec<u32>], hops: &mut [u32], mut frontier: Vec<u32>, cap: u32) {
     let mut depth = 0;
     while !frontier.is_empty() && depth + 1 < cap {
         depth += 1;
@@ -852,8 +860,6 @@ fn added_hops(mesh: &TriMesh, own: usize, cap: u32) -> Vec<u32> {
         }
         frontier = next;
     }
-    hops.truncate(own);
-    hops
 }
 
 /// Edge hops from every vertex to the nearest boundary vertex, capped at `cap` (closed meshes:
@@ -891,20 +897,7 @@ fn boundary_hops(mesh: &TriMesh, cap: u32) -> Vec<u32> {
         i = j;
     }
     // Breadth-first sweep from the boundary, one ring per round.
-    let mut depth = 0;
-    while !frontier.is_empty() && depth + 1 < cap {
-        depth += 1;
-        let mut next = Vec::new();
-        for v in frontier {
-            for &w in &neighbors[v as usize] {
-                if hops[w as usize] > depth {
-                    hops[w as usize] = depth;
-                    next.push(w);
-                }
-            }
-        }
-        frontier = next;
-    }
+    sweep_hops(&neighbors, &mut hops, frontier, cap);
     hops
 }
 

@@ -21,7 +21,9 @@
 
 use super::{cot_opposite, triangle_area, IntrinsicTriangulation};
 use crate::mesh::mul_pow2;
-use crate::operators::{faces_around_vertices, split_at_bounds, FemOperators, Lumping, COLUMNS_PER_CHUNK};
+use crate::operators::{
+    column_layout, faces_around_vertices, split_at_bounds, FemOperators, Lumping, COLUMNS_PER_CHUNK,
+};
 use crate::MeshError;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use rayon::prelude::*;
@@ -107,34 +109,8 @@ pub(crate) fn assemble(tri: &IntrinsicTriangulation, weight: f64, lumped: Lumpin
             corner_mass: [0.0; 3],
         })
     };
-    let chunks: Vec<(usize, usize)> = (0..n)
-        .step_by(COLUMNS_PER_CHUNK)
-        .map(|c| (c, (c + COLUMNS_PER_CHUNK).min(n)))
-        .collect();
-
     // 1. Count the distinct rows of each column.
-    let mut col_ptr = vec![0usize; n + 1];
-    col_ptr[1..]
-        .par_chunks_mut(COLUMNS_PER_CHUNK)
-        .zip(&chunks)
-        .for_each(|(out, &(col_start, _))| {
-            let mut rows: Vec<u32> = Vec::new();
-            for (jj, count) in out.iter_mut().enumerate() {
-                let j = (col_start + jj) as u32;
-                rows.clear();
-                for &f in &around[first[j as usize]..first[j as usize + 1]] {
-                    for &v in &triangles[f as usize] {
-                        if v != j && !rows.contains(&v) {
-                            rows.push(v);
-                        }
-                    }
-                }
-                *count = 1 + rows.len();
-            }
-        });
-    for j in 0..n {
-        col_ptr[j + 1] += col_ptr[j];
-    }
+    let (chunks, col_ptr) = column_layout(&around, &first, triangles);
     let nnz = col_ptr[n];
 
     // 2. Write the merged entries.
