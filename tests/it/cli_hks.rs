@@ -416,8 +416,8 @@ fn retrieval_cleaning_is_selectable_and_checked() {
 #[test]
 fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     // `vocab` and `build` with no option write the documented defaults (issue #13): SI-HKS of the
-    // wFEM kernel, area time unit, τ ∈ [−12, 1] step 1/8, α = 2, K = 5, k = 100, isolated
-    // spikes put back (threshold 3), rough and incoherent shapes denoised to roughness 0.1,
+    // wFEM kernel, area time unit, τ ∈ [−12, 1] step 1/8, α = 2, K = 5, k = 100, the cotangent
+    // Laplacian, isolated spikes put back (threshold 3), rough and incoherent shapes denoised to roughness 0.1,
     // holes up to 3√A closed, handles up to 0.35√A cut, z-scored, 96 words, soft assignment,
     // areas capped at 3 medians, spatially sensitive bags at t = A/256, χ², no fusion; `build
     // --vocab` reuses the vocabulary as it was written.
@@ -447,6 +447,7 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
         v["descriptor"],
         serde_json::json!({
             "eigenpairs": 100,
+            "laplacian": "cotan",
             "descriptor": {"kind": "si-hks", "alpha": 2.0, "tau_min": -12.0, "tau_max": 1.0,
                            "tau_step": 0.125, "frequencies": 5},
             "despiking": {"threshold": 3.0},

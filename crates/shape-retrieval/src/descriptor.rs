@@ -37,7 +37,9 @@ use crate::hks::{heat_kernel_signature, HksParams, Spectrum, TimeSampling};
 use crate::sihks::SihksParams;
 use crate::RetrievalError;
 use faer::Mat;
-use mesh_fem::{assemble, AssemblyParams, FemOperators, Lumping, TriMesh};
+use mesh_fem::{
+    assemble, assemble_cloud, AssemblyParams, CloudParams, FemOperators, Laplacian, Lumping, PointCloud, TriMesh,
+};
 use wfem_heat::{EigenParams, Eigenbasis, Operators};
 
 /// Default number k of eigenpairs (see the module docs).
@@ -169,22 +171,57 @@ pub struct ShapeDescriptors {
 }
 
 impl ShapeDescriptors {
-    /// Assembles L, B and the Voronoi lumped mass D of `mesh`.
+    /// Assembles L, B and the Voronoi lumped mass D of `mesh` with the cotangent Laplacian.
     ///
     /// # Errors
     /// [`RetrievalError::Mesh`] if assembly fails, [`RetrievalError::InvalidParameter`] for
     /// k = 0 or bad feature parameters.
     pub fn new(mesh: &TriMesh, params: &DescriptorParams) -> Result<Self, RetrievalError> {
+        Self::with_laplacian(mesh, Laplacian::default(), params)
+    }
+
+    /// As [`Self::new`] with the given Laplacian ([`mesh_fem::Laplacian`]: the cotangent L or
+    /// the robust one of the mesh's tufted cover; L symmetric positive semidefinite either way).
+    ///
+    /// # Errors
+    /// As [`Self::new`].
+    pub fn with_laplacian(
+        mesh: &TriMesh,
+        laplacian: Laplacian,
+        params: &DescriptorParams,
+    ) -> Result<Self, RetrievalError> {
         // Sizes first (a huge T or k must not cost an assembly, let alone an allocation).
         params.times.check_size(mesh.n_vertices())?;
         let operators = assemble(
             mesh,
             &AssemblyParams {
                 lumping: Lumping::Voronoi,
-                ..Default::default()
+                laplacian,
             },
         )?;
         Self::from_operators(mesh, operators, params)
+    }
+
+    /// The operators of a point cloud ([`mesh_fem::assemble_cloud`] with its default
+    /// neighbourhood size: the robust Laplacian from local triangulations of the 30 nearest
+    /// neighbours, B and the Voronoi lumped D on its intrinsic triangulation); the shape's mesh
+    /// is the cloud's neighbourhood mesh (the merged local triangles on the points), which gives
+    /// the adjacency that feature points and vertex weights need.
+    ///
+    /// # Errors
+    /// [`RetrievalError::Mesh`] if assembly fails (duplicate points, degenerate
+    /// neighbourhoods), and those of [`Self::from_operators`].
+    pub fn from_cloud(cloud: &PointCloud, params: &DescriptorParams) -> Result<Self, RetrievalError> {
+        params.times.check_size(cloud.n_points())?;
+        let ops = assemble_cloud(
+            cloud,
+            &CloudParams::default(),
+            &AssemblyParams {
+                lumping: Lumping::Voronoi,
+                ..Default::default()
+            },
+        )?;
+        Self::from_operators(&ops.neighbourhood, ops.operators, params)
     }
 
     /// Uses given operators (their `lumped_mass` is the D of DHK1, whatever its kind).

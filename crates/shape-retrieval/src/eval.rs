@@ -32,7 +32,6 @@ use crate::model::{RetrievalIndex, RetrievalSettings, VocabularyModel};
 use crate::retrieval::average_precision;
 use crate::RetrievalError;
 use faer::MatRef;
-use mesh_fem::TriMesh;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -407,21 +406,22 @@ pub struct CollectionEvaluation {
     pub report: EvalReport,
 }
 
-/// Builds an index of labelled meshes ([`RetrievalIndex::build`]: trained on them unless a
+/// Builds an index of labelled shapes — meshes, point clouds or both ([`crate::AsShape`]) —
+/// ([`RetrievalIndex::build`]: trained on them unless a
 /// vocabulary is given) and evaluates it ([`evaluate_index`]). The one call behind
 /// `wfem retrieval eval`.
 ///
 /// # Errors
-/// [`RetrievalError::DimensionMismatch`] if classes and meshes differ in number, and those of
+/// [`RetrievalError::DimensionMismatch`] if classes and shapes differ in number, and those of
 /// [`RetrievalIndex::build`] and [`evaluate_index`].
 pub fn evaluate_collection(
-    meshes: &[(String, TriMesh)],
+    shapes: &[(String, impl crate::AsShape)],
     classes: &[String],
     settings: &RetrievalSettings,
     vocabulary: Option<VocabularyModel>,
 ) -> Result<CollectionEvaluation, RetrievalError> {
-    check::same("classes vs meshes", meshes.len(), classes.len())?;
-    let index = RetrievalIndex::build(meshes, settings, vocabulary)?;
+    check::same("classes vs shapes", shapes.len(), classes.len())?;
+    let index = RetrievalIndex::build(shapes, settings, vocabulary)?;
     let report = evaluate_index(&index, classes, &vocabulary_source(&index))?;
     Ok(CollectionEvaluation { index, report })
 }

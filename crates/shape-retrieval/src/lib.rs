@@ -66,9 +66,9 @@ pub use hks::{
 pub use kmeans::{kmeans, KmeansParams, KmeansReport};
 pub use mesh_hks::{mesh_hks, operators_hks, HksStep, MeshHks, MeshHksParams};
 pub use model::{
-    BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexEntry,
-    Ranked, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeSignature, Smoothing, TopologyRepair, TrainingInfo,
-    TrainingParams, VertexWeights, VocabularyModel,
+    AsShape, BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, HoleFilling,
+    IndexEntry, Ranked, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeRef, ShapeSignature, Smoothing,
+    TopologyRepair, TrainingInfo, TrainingParams, VertexWeights, VocabularyModel,
 };
 pub use model::{DEFAULT_AREA_CAP, DEFAULT_MAX_COHERENCE, DEFAULT_TARGET_ROUGHNESS, DEFAULT_WORDS};
 pub use output::check_index_output;

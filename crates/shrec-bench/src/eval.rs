@@ -171,6 +171,7 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
         with_k(RetrievalSettings {
             descriptor: DescriptorSettings {
                 eigenpairs: k,
+                laplacian: Default::default(),
                 descriptor,
                 smoothing: None,
                 despiking: None,

@@ -5,7 +5,7 @@
 use crate::check;
 use crate::RetrievalError;
 use faer::Mat;
-use mesh_fem::TriMesh;
+use mesh_fem::{AssemblyParams, FemOperators, Laplacian, TriMesh};
 use serde::{Deserialize, Serialize};
 
 /// Heat-kernel smoothing of the embedding before anything is computed (beyond the paper): the
@@ -23,49 +23,78 @@ pub struct Smoothing {
 }
 
 impl Smoothing {
-    /// The mesh with positions `K_t x`, `t = c·A`, and the same faces.
+    /// The mesh with positions `K_t x`, `t = c·A`, and the same faces (cotangent Laplacian).
     ///
     /// # Errors
     /// [`RetrievalError::InvalidParameter`] for c ≤ 0, [`RetrievalError::Mesh`] /
     /// [`RetrievalError::Heat`] from assembly and the kernel, and [`RetrievalError::Mesh`] if the
     /// smoothed positions do not form a valid mesh.
     pub fn apply(&self, mesh: &TriMesh) -> Result<TriMesh, RetrievalError> {
+        self.apply_with(mesh, Laplacian::default())
+    }
+
+    /// [`Self::apply`] with the kernel of the given Laplacian.
+    pub(crate) fn apply_with(&self, mesh: &TriMesh, laplacian: Laplacian) -> Result<TriMesh, RetrievalError> {
         check::positive("smoothing time", self.time)?;
-        EmbeddingFlow::new(mesh)?.at(self.time)
+        EmbeddingFlow::new(mesh, laplacian)?.mesh_at(mesh, self.time)
+    }
+
+    /// The positions `K_t x`, `t = c·A`, of a shape whose operators are given (a point cloud's).
+    pub(crate) fn positions(
+        &self,
+        operators: &FemOperators,
+        positions: &[[f64; 3]],
+    ) -> Result<Vec<[f64; 3]>, RetrievalError> {
+        check::positive("smoothing time", self.time)?;
+        EmbeddingFlow::from_operators(operators, positions)?.positions_at(self.time)
     }
 }
 
-/// The heat flow of a mesh's embedding: `K_t x` for the three coordinate functions, `t = c·A`,
+/// The heat flow of a shape's embedding: `K_t x` for the three coordinate functions, `t = c·A`,
 /// by the fast exact path of the wFEM kernel (one factorization per time). Shared by
 /// [`Smoothing`] and [`Denoising`].
-struct EmbeddingFlow<'m> {
-    mesh: &'m TriMesh,
+struct EmbeddingFlow {
     kernel: wfem_heat::HeatKernel,
     area: f64,
     x: Mat<f64>,
 }
 
-impl<'m> EmbeddingFlow<'m> {
-    fn new(mesh: &'m TriMesh) -> Result<Self, RetrievalError> {
-        let ops = mesh_fem::assemble(mesh, &mesh_fem::AssemblyParams::default())?;
+impl EmbeddingFlow {
+    /// The flow of a mesh with its operators of `laplacian`.
+    fn new(mesh: &TriMesh, laplacian: Laplacian) -> Result<Self, RetrievalError> {
+        let ops = mesh_fem::assemble(
+            mesh,
+            &AssemblyParams {
+                laplacian,
+                ..Default::default()
+            },
+        )?;
+        Self::from_operators(&ops, mesh.positions())
+    }
+
+    fn from_operators(ops: &FemOperators, positions: &[[f64; 3]]) -> Result<Self, RetrievalError> {
+        check::same("positions vs operators", ops.n(), positions.len())?;
         let area: f64 = crate::bof::vertex_areas(ops.mass.as_ref()).iter().sum();
         let kernel = wfem_heat::HeatKernel::new(
-            &ops,
+            ops,
             wfem_heat::HeatParams {
                 mass: wfem_heat::Mass::Consistent,
                 method: wfem_heat::Method::Fast(Default::default()),
             },
         )?;
-        let p = mesh.positions();
-        let x = Mat::from_fn(p.len(), 3, |i, j| p[i][j]);
-        Ok(Self { mesh, kernel, area, x })
+        let x = Mat::from_fn(positions.len(), 3, |i, j| positions[i][j]);
+        Ok(Self { kernel, area, x })
     }
 
-    /// The mesh with positions `K_t x`, `t = c·A`, and the same faces.
-    fn at(&self, c: f64) -> Result<TriMesh, RetrievalError> {
+    /// The positions `K_t x`, `t = c·A`.
+    fn positions_at(&self, c: f64) -> Result<Vec<[f64; 3]>, RetrievalError> {
         let y = self.kernel.apply_many(self.x.as_ref(), c * self.area)?;
-        let positions = (0..y.nrows()).map(|i| [y[(i, 0)], y[(i, 1)], y[(i, 2)]]).collect();
-        Ok(TriMesh::new(positions, self.mesh.faces().to_vec())?)
+        Ok((0..y.nrows()).map(|i| [y[(i, 0)], y[(i, 1)], y[(i, 2)]]).collect())
+    }
+
+    /// `mesh` with positions `K_t x`, `t = c·A`, and the same faces.
+    fn mesh_at(&self, mesh: &TriMesh, c: f64) -> Result<TriMesh, RetrievalError> {
+        Ok(TriMesh::new(self.positions_at(c)?, mesh.faces().to_vec())?)
     }
 }
 
@@ -143,21 +172,26 @@ impl Denoising {
         noise.roughness > self.roughness && self.max_coherence.is_none_or(|c| noise.coherence < c)
     }
 
-    /// The mesh, smoothed as much as needed (or unchanged).
+    /// The mesh, smoothed as much as needed (or unchanged), with the cotangent Laplacian.
     ///
     /// # Errors
     /// [`RetrievalError::InvalidParameter`] for a target ≤ 0 or a gate outside (−1, 1],
     /// [`RetrievalError::Mesh`] / [`RetrievalError::Heat`] from assembly and the kernel, and
     /// [`RetrievalError::Mesh`] if the smoothed positions do not form a valid mesh.
     pub fn apply(&self, mesh: &TriMesh) -> Result<TriMesh, RetrievalError> {
+        self.apply_with(mesh, Laplacian::default())
+    }
+
+    /// [`Self::apply`] with the kernel of the given Laplacian.
+    pub(crate) fn apply_with(&self, mesh: &TriMesh, laplacian: Laplacian) -> Result<TriMesh, RetrievalError> {
         self.validate()?;
         if !self.applies_to(mesh) {
             return Ok(mesh.clone());
         }
-        let flow = EmbeddingFlow::new(mesh)?;
+        let flow = EmbeddingFlow::new(mesh, laplacian)?;
         let mut c = DENOISING_FIRST_TIME;
         loop {
-            let smoothed = flow.at(c)?;
+            let smoothed = flow.mesh_at(mesh, c)?;
             if c >= DENOISING_LAST_TIME || mesh_fem::filter::roughness(&smoothed) <= self.roughness {
                 return Ok(smoothed);
             }

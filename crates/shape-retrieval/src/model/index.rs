@@ -1,10 +1,9 @@
 //! [`RetrievalIndex`]: the vocabulary, the bag settings and one [`IndexEntry`] per shape;
 //! queries rank the entries by the fused distance.
 
-use super::{BagSettings, RetrievalSettings, ShapeFeatures, VocabularyModel};
+use super::{AsShape, BagSettings, RetrievalSettings, ShapeFeatures, VocabularyModel};
 use crate::check;
 use crate::RetrievalError;
-use mesh_fem::TriMesh;
 
 /// The retrieval signature of one shape: its normalised bag and its global signature.
 #[derive(Clone, Debug, PartialEq)]
@@ -133,12 +132,14 @@ impl RetrievalIndex {
         &self.entries
     }
 
-    /// Computes the features of a mesh with the index's settings (one eigensolve).
+    /// Computes the features of a shape (a mesh or a point cloud) with the index's settings
+    /// (one eigensolve): a query is always described as the indexed shapes were, with the
+    /// recorded Laplacian and cleaning.
     ///
     /// # Errors
     /// Those of [`ShapeFeatures::compute`].
-    pub fn features(&self, name: &str, mesh: &TriMesh) -> Result<ShapeFeatures, RetrievalError> {
-        ShapeFeatures::compute(name, mesh, self.vocabulary.descriptor(), &self.bags)
+    pub fn features(&self, name: &str, shape: &impl AsShape) -> Result<ShapeFeatures, RetrievalError> {
+        ShapeFeatures::compute(name, shape, self.vocabulary.descriptor(), &self.bags)
     }
 
     /// The signature of a described shape.
@@ -157,13 +158,14 @@ impl RetrievalIndex {
         })
     }
 
-    /// The entry of a mesh with the index's settings: [`Self::features`] (one eigensolve) and
-    /// [`Self::signature`] — what an append stores and a query compares.
+    /// The entry of a shape (a mesh or a point cloud) with the index's settings:
+    /// [`Self::features`] (one eigensolve) and [`Self::signature`] — what an append stores and a
+    /// query compares.
     ///
     /// # Errors
     /// Those of [`Self::features`] and [`Self::signature`].
-    pub fn describe(&self, name: &str, mesh: &TriMesh) -> Result<IndexEntry, RetrievalError> {
-        let features = self.features(name, mesh)?;
+    pub fn describe(&self, name: &str, shape: &impl AsShape) -> Result<IndexEntry, RetrievalError> {
+        let features = self.features(name, shape)?;
         Ok(IndexEntry {
             name: name.to_string(),
             signature: self.signature(&features)?,
@@ -238,14 +240,17 @@ impl RetrievalIndex {
         Ok(ranked)
     }
 
-    /// Builds an index in one go: describes `meshes` (in parallel), trains the vocabulary on them
-    /// unless one is given (training on the indexed shapes themselves is optimistic; see the
-    /// module docs), and inserts every mesh.
+    /// Builds an index in one go: describes `shapes` — meshes, point clouds or a mix
+    /// ([`AsShape`]) — in parallel, trains the vocabulary on them unless one is given (training
+    /// on the indexed shapes themselves is optimistic; see the module docs), and inserts every
+    /// shape. A given vocabulary brings its own descriptor settings (Laplacian and cleaning
+    /// included), which then replace `settings.descriptor`: its words only mean something for
+    /// descriptors computed as its own were.
     ///
     /// # Errors
     /// Those of [`ShapeFeatures::compute_many`], [`VocabularyModel::train`], [`Self::insert`].
-    pub fn build(
-        meshes: &[(String, TriMesh)],
+    pub fn build<S: AsShape>(
+        shapes: &[(String, S)],
         settings: &RetrievalSettings,
         vocabulary: Option<VocabularyModel>,
     ) -> Result<Self, RetrievalError> {
@@ -257,7 +262,7 @@ impl RetrievalIndex {
         // such and not as the failure of the first mesh.
         descriptor.validate()?;
         settings.bags.validate(descriptor.eigenpairs)?;
-        let features = ShapeFeatures::compute_many(meshes, &descriptor, &settings.bags)?;
+        let features = ShapeFeatures::compute_many(shapes, &descriptor, &settings.bags)?;
         let vocabulary = match vocabulary {
             Some(v) => v,
             None => VocabularyModel::train(&descriptor, &settings.training, &features)?,

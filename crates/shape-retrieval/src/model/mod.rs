@@ -27,7 +27,8 @@
 //! to exactly the shapes that are then retrieved); train on disjoint shapes
 //! ([`VocabularyModel::train`] on another set) to measure generalisation.
 //!
-//! One file per part, every type re-exported here: `spec` ([`DescriptorSpec`]), `cleaning`
+//! One file per part, every type re-exported here: `shape` (what is described: a mesh or a
+//! point cloud, [`ShapeRef`], [`AsShape`]), `spec` ([`DescriptorSpec`]), `cleaning`
 //! (the steps before a shape is described: [`Despiking`], [`Denoising`], [`HoleFilling`],
 //! [`TopologyRepair`], [`Smoothing`]), `weights` ([`VertexWeights`]), `global_signature`
 //! ([`GlobalSignature`]), `settings` ([`DescriptorSettings`] — which also prepares a shape —,
@@ -38,6 +39,7 @@ mod cleaning;
 mod global_signature;
 mod index;
 mod settings;
+mod shape;
 mod spec;
 mod vocabulary;
 mod weights;
@@ -48,6 +50,7 @@ pub use cleaning::{
 pub use global_signature::GlobalSignature;
 pub use index::{IndexEntry, Ranked, RetrievalIndex, ShapeSignature};
 pub use settings::{BagSettings, DescriptorSettings, RetrievalSettings, TrainingParams, DEFAULT_WORDS};
+pub use shape::{AsShape, ShapeRef};
 pub use spec::DescriptorSpec;
 pub use vocabulary::{ShapeFeatures, TrainingInfo, VocabularyModel};
 pub use weights::{VertexWeights, DEFAULT_AREA_CAP};

@@ -2,8 +2,8 @@
 //! [`BagSettings`], [`TrainingParams`] and all of them together, [`RetrievalSettings`].
 
 use super::{
-    Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, Smoothing, TopologyRepair, VertexWeights,
-    DEFAULT_AREA_CAP,
+    AsShape, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, ShapeRef, Smoothing, TopologyRepair,
+    VertexWeights, DEFAULT_AREA_CAP,
 };
 use crate::bof::Assignment;
 use crate::check;
@@ -11,16 +11,34 @@ use crate::descriptor::{DescriptorParams, ShapeDescriptors};
 use crate::distance::BagDistance;
 use crate::spatial::SpatialBag;
 use crate::RetrievalError;
-use mesh_fem::TriMesh;
+use mesh_fem::{Laplacian, PointCloud, TriMesh};
 use serde::{Deserialize, Serialize};
 
-/// How a shape's vertices are described: the eigenpairs and the dense descriptor. A vocabulary
-/// is only meaningful for descriptors computed with the same settings, so they are stored with it.
+/// How a shape's vertices are described: the Laplacian, the cleaning, the eigenpairs and the
+/// dense descriptor. A vocabulary is only meaningful for descriptors computed with the same
+/// settings, so they are stored with it.
+///
+/// **Point clouds** ([`Self::shape`] of a [`mesh_fem::PointCloud`]) always get the robust
+/// Laplacian of their neighbourhoods ([`ShapeDescriptors::from_cloud`]), whatever
+/// [`Self::laplacian`] says, and of the cleaning steps only those that need no faces apply:
+/// despiking (on the neighbourhood mesh's adjacency; the operators are then rebuilt from the
+/// moved points) and a fixed smoothing (`K_t x` with the cloud's own operators, rebuilt
+/// likewise). Denoising, hole filling and topology repair are mesh repairs — roughness and
+/// coherence are measured across faces, holes are rims of faces, pinches and handles are
+/// properties of a triangulation — and are skipped for clouds, which have none of these
+/// (the settings stay what they are, so a collection may mix meshes and clouds).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct DescriptorSettings {
     /// Number k of eigenpairs (default 100).
     pub eigenpairs: usize,
+    /// The Laplacian of meshes ([`mesh_fem::Laplacian`], recorded by its name): the cotangent L
+    /// (the default, paper Eq. (3)) or the robust intrinsic Delaunay L of the tufted cover, for
+    /// non-manifold or badly triangulated collections; either way L is symmetric positive
+    /// semidefinite. A missing field reads as the cotangent L (what files written before the
+    /// choice existed were computed with). Point clouds always use the robust construction.
+    #[serde(with = "wfem_choice::serde_name")]
+    pub laplacian: Laplacian,
     /// The descriptor (default SI-HKS, area time unit).
     pub descriptor: DescriptorSpec,
     /// Optional smoothing of the embedding by a fixed time, after despiking, denoising and
@@ -53,6 +71,7 @@ impl Default for DescriptorSettings {
     fn default() -> Self {
         Self {
             eigenpairs: crate::DEFAULT_EIGENPAIRS,
+            laplacian: Laplacian::default(),
             descriptor: DescriptorSpec::default(),
             smoothing: None,
             despiking: Some(Despiking::default()),
@@ -95,12 +114,31 @@ impl DescriptorSettings {
         self.descriptor.validate()
     }
 
-    /// Assembles the operators of a mesh for these settings (no eigensolve yet).
+    /// Cleans a shape and assembles its operators for these settings (no eigensolve yet): a
+    /// mesh with [`Self::laplacian`] after the cleaning steps, a point cloud as the type docs
+    /// say.
     ///
     /// # Errors
-    /// [`RetrievalError::Mesh`] if assembly fails, and those of [`Self::validate`].
-    pub fn shape(&self, mesh: &TriMesh) -> Result<ShapeDescriptors, RetrievalError> {
+    /// [`RetrievalError::Mesh`] if a cleaning step or assembly fails, and those of
+    /// [`Self::validate`].
+    pub fn shape(&self, shape: &impl AsShape) -> Result<ShapeDescriptors, RetrievalError> {
         self.validate()?;
+        match shape.as_shape() {
+            ShapeRef::Mesh(mesh) => self.mesh_shape(mesh),
+            ShapeRef::Cloud(cloud) => self.cloud_shape(cloud),
+        }
+    }
+
+    /// The descriptor options of these settings.
+    fn params(&self) -> DescriptorParams {
+        DescriptorParams {
+            eigenpairs: self.eigenpairs,
+            ..Default::default()
+        }
+    }
+
+    /// [`Self::shape`] of a mesh.
+    fn mesh_shape(&self, mesh: &TriMesh) -> Result<ShapeDescriptors, RetrievalError> {
         // The cleaning steps, in order; each one that is on replaces the mesh. Every step that
         // adds vertices appends them, so the shape's own vertices stay the first `described`.
         let mut mesh = std::borrow::Cow::Borrowed(mesh);
@@ -117,7 +155,7 @@ impl DescriptorSettings {
         // Denoising measures the roughness of the shape itself, so it comes before the
         // patches (smooth by construction) could dilute it.
         if let Some(d) = &self.denoising {
-            mesh = std::borrow::Cow::Owned(d.apply(&mesh)?);
+            mesh = std::borrow::Cow::Owned(d.apply_with(&mesh, self.laplacian)?);
         }
         if let Some(h) = &self.hole_filling {
             mesh = std::borrow::Cow::Owned(mesh_fem::holes::fill_holes(&mesh, h.max_perimeter)?.mesh);
@@ -132,16 +170,30 @@ impl DescriptorSettings {
             }
         }
         if let Some(s) = &self.smoothing {
-            mesh = std::borrow::Cow::Owned(s.apply(&mesh)?);
+            mesh = std::borrow::Cow::Owned(s.apply_with(&mesh, self.laplacian)?);
         }
-        ShapeDescriptors::new(
-            &mesh,
-            &DescriptorParams {
-                eigenpairs: self.eigenpairs,
-                ..Default::default()
-            },
-        )?
-        .described_only(described)
+        ShapeDescriptors::with_laplacian(&mesh, self.laplacian, &self.params())?.described_only(described)
+    }
+
+    /// [`Self::shape`] of a point cloud: despiking and smoothing only (type docs), each
+    /// followed by a new assembly when it moved a point.
+    fn cloud_shape(&self, cloud: &PointCloud) -> Result<ShapeDescriptors, RetrievalError> {
+        let params = self.params();
+        let mut shape = ShapeDescriptors::from_cloud(cloud, &params)?;
+        if let Some(d) = &self.despiking {
+            let despiked = mesh_fem::filter::despike(shape.mesh(), d.threshold)?;
+            if !despiked.moved.is_empty() {
+                // The given normals stay (a spike's own normal was as wrong as its position).
+                let moved = PointCloud::new(despiked.mesh.positions().to_vec(), cloud.normals().map(<[_]>::to_vec))?;
+                shape = ShapeDescriptors::from_cloud(&moved, &params)?;
+            }
+        }
+        if let Some(s) = &self.smoothing {
+            let positions = s.positions(shape.operators(), shape.mesh().positions())?;
+            // Smoothed points have new tangent planes: their normals are estimated again.
+            shape = ShapeDescriptors::from_cloud(&PointCloud::new(positions, None)?, &params)?;
+        }
+        Ok(shape)
     }
 }
 

@@ -1,7 +1,7 @@
 //! [`ShapeFeatures`] (what a shape contributes: descriptors, weights, global signature,
 //! eigenpairs) and [`VocabularyModel`] (z-score statistics and words trained on them).
 
-use super::{BagSettings, DescriptorSettings, TrainingParams};
+use super::{AsShape, BagSettings, DescriptorSettings, TrainingParams};
 use crate::bof::{Assignment, Vocabulary, VocabularyParams};
 use crate::check;
 use crate::descriptor::ShapeDescriptors;
@@ -9,7 +9,6 @@ use crate::spatial::ShapeSpectrum;
 use crate::standardize::Standardizer;
 use crate::RetrievalError;
 use faer::{Mat, MatRef};
-use mesh_fem::TriMesh;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -32,19 +31,20 @@ pub struct ShapeFeatures {
 }
 
 impl ShapeFeatures {
-    /// Describes one mesh: operators, one eigensolve, the dense descriptor, the weights and the
-    /// global signature.
+    /// Describes one shape, a mesh or a point cloud ([`AsShape`]): cleaning and operators
+    /// ([`DescriptorSettings::shape`]), one eigensolve, the dense descriptor, the weights and
+    /// the global signature.
     ///
     /// # Errors
     /// [`RetrievalError::Mesh`] from assembly, and those of [`DescriptorSpec::compute`](super::DescriptorSpec::compute),
     /// [`VertexWeights::compute`](super::VertexWeights::compute), [`GlobalSignature::compute`](super::GlobalSignature::compute).
     pub fn compute(
         name: &str,
-        mesh: &TriMesh,
+        shape: &impl AsShape,
         descriptor: &DescriptorSettings,
         bags: &BagSettings,
     ) -> Result<Self, RetrievalError> {
-        let mut shape = descriptor.shape(mesh)?;
+        let mut shape = descriptor.shape(shape)?;
         Self::from_shape(name, &mut shape, descriptor, bags)
     }
 
@@ -127,19 +127,19 @@ impl ShapeFeatures {
         })
     }
 
-    /// [`Self::compute`] for many meshes in parallel (one eigensolve per mesh), in input order.
+    /// [`Self::compute`] for many shapes in parallel (one eigensolve per shape), in input order.
     ///
     /// # Errors
-    /// The first failure, as [`RetrievalError::Shape`] naming the mesh.
-    pub fn compute_many(
-        meshes: &[(String, TriMesh)],
+    /// The first failure, as [`RetrievalError::Shape`] naming the shape.
+    pub fn compute_many<S: AsShape>(
+        shapes: &[(String, S)],
         descriptor: &DescriptorSettings,
         bags: &BagSettings,
     ) -> Result<Vec<Self>, RetrievalError> {
-        meshes
+        shapes
             .par_iter()
-            .map(|(name, mesh)| {
-                Self::compute(name, mesh, descriptor, bags).map_err(|e| RetrievalError::Shape {
+            .map(|(name, shape)| {
+                Self::compute(name, shape, descriptor, bags).map_err(|e| RetrievalError::Shape {
                     name: name.clone(),
                     source: Box::new(e),
                 })
