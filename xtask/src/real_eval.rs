@@ -5,7 +5,7 @@
 use crate::lab::Variant;
 use shape_retrieval::eval::EvalReport;
 use shape_retrieval::RetrievalSettings;
-use shrec_bench::protocol::{self, EigenCache, ShapeFile};
+use shrec_bench::protocol::{self, CloudSampling, EigenCache, ShapeFile};
 use shrec_bench::real;
 use shrec_bench::BenchError;
 use std::fmt::Write as _;
@@ -20,13 +20,34 @@ pub enum Collection {
     Tosca76,
     /// SHREC'11 plus the 20 SHREC'07 four-legged animals as a 31st class.
     Shrec11Fourleg,
+    /// TOSCA-76 as point clouds (issue #27): each mesh sampled into 5,000 points uniformly on
+    /// its surface (no faces; seeded), described with the robust Laplacian of the cloud.
+    Tosca76Clouds,
+    /// TOSCA-76's 76 meshes and the same shapes as clouds in one collection (152 shapes, 8
+    /// classes): a cloud should find its own mesh first.
+    Tosca76Mixed,
 }
+
+/// The seed of the TOSCA clouds (mixed with each file's name).
+pub const CLOUD_SEED: u64 = 27;
 
 impl Collection {
     /// Every collection.
-    pub const ALL: [Collection; 3] = [Collection::Shrec11, Collection::Tosca76, Collection::Shrec11Fourleg];
+    pub const ALL: [Collection; 5] = [
+        Collection::Shrec11,
+        Collection::Tosca76,
+        Collection::Shrec11Fourleg,
+        Collection::Tosca76Clouds,
+        Collection::Tosca76Mixed,
+    ];
     /// Every collection's name.
-    pub const NAMES: &'static [&'static str] = &["shrec11", "tosca76", "shrec11-fourleg"];
+    pub const NAMES: &'static [&'static str] = &[
+        "shrec11",
+        "tosca76",
+        "shrec11-fourleg",
+        "tosca76-clouds",
+        "tosca76-mixed",
+    ];
 
     /// Its name.
     pub fn name(self) -> &'static str {
@@ -34,6 +55,16 @@ impl Collection {
             Collection::Shrec11 => "shrec11",
             Collection::Tosca76 => "tosca76",
             Collection::Shrec11Fourleg => "shrec11-fourleg",
+            Collection::Tosca76Clouds => "tosca76-clouds",
+            Collection::Tosca76Mixed => "tosca76-mixed",
+        }
+    }
+
+    /// How its clouds are sampled.
+    fn sampling() -> CloudSampling {
+        CloudSampling {
+            points: protocol::DEFAULT_CLOUD_POINTS,
+            seed: CLOUD_SEED,
         }
     }
 
@@ -48,6 +79,8 @@ impl Collection {
             Collection::Shrec11 => "SHREC'11 non-rigid, 500-face copy (600 shapes, 30 classes)",
             Collection::Tosca76 => "TOSCA-76 (76 shapes, 8 classes)",
             Collection::Shrec11Fourleg => "SHREC'11 + 20 SHREC'07 four-legged animals as a 31st class",
+            Collection::Tosca76Clouds => "TOSCA-76 as point clouds of 5,000 points (76 clouds, 8 classes)",
+            Collection::Tosca76Mixed => "TOSCA-76 meshes and clouds together (152 shapes, 8 classes)",
         }
     }
 
@@ -60,7 +93,17 @@ impl Collection {
                 f.extend(real::fourleg_files(meshes_dir)?);
                 Ok(f)
             }
+            Collection::Tosca76Clouds => Ok(Self::clouds(protocol::tosca_files(meshes_dir)?)),
+            Collection::Tosca76Mixed => {
+                let mut f = protocol::tosca_files(meshes_dir)?;
+                f.extend(Self::clouds(f.clone()));
+                Ok(f)
+            }
         }
+    }
+
+    fn clouds(files: Vec<ShapeFile>) -> Vec<ShapeFile> {
+        files.iter().map(|f| f.as_cloud(Self::sampling())).collect()
     }
 
     /// The shapes an honest vocabulary for this collection is trained on (none of them in it).
@@ -72,6 +115,13 @@ impl Collection {
                 .into_iter()
                 .filter(|f| !f.name.starts_with("shrec07-fourleg"))
                 .collect(),
+            // Clouds are trained on clouds, a mixed collection on both.
+            Collection::Tosca76Clouds => Self::clouds(all),
+            Collection::Tosca76Mixed => {
+                let mut f = all.clone();
+                f.extend(Self::clouds(all));
+                f
+            }
             _ => all,
         })
     }
@@ -110,6 +160,27 @@ pub struct RealEvalOptions<'a> {
     pub outside: bool,
 }
 
+/// In a collection holding meshes and the clouds sampled from them (`NAME` and `NAME-cloud`):
+/// how many cloud queries have their own mesh as first result, of how many clouds whose mesh
+/// is indexed (`None` without such clouds).
+pub fn own_mesh_first(report: &EvalReport) -> Option<(usize, usize)> {
+    let names: std::collections::HashSet<&str> = report.per_query.iter().map(|q| q.name.as_str()).collect();
+    let clouds: Vec<(&str, Option<&str>)> = report
+        .per_query
+        .iter()
+        .filter_map(|q| {
+            let mesh = q.name.strip_suffix("-cloud")?;
+            names.contains(mesh).then_some((mesh, q.nearest.as_deref()))
+        })
+        .collect();
+    (!clouds.is_empty()).then(|| {
+        (
+            clouds.iter().filter(|(mesh, nearest)| Some(*mesh) == *nearest).count(),
+            clouds.len(),
+        )
+    })
+}
+
 fn line(r: &Row) -> String {
     let m = &r.report.overall;
     let worst: Vec<String> = r
@@ -119,8 +190,11 @@ fn line(r: &Row) -> String {
         .take(3)
         .map(|c| format!("{} {:.2}", c.class, c.measures.map))
         .collect();
+    let own = own_mesh_first(&r.report).map_or(String::new(), |(hits, of)| {
+        format!(" | cloud queries with their own mesh first {hits}/{of}")
+    });
     format!(
-        "mAP {:.4} NN {:.4} FT {:.4} ST {:.4} E {:.4} DCG {:.4} | worst {}",
+        "mAP {:.4} NN {:.4} FT {:.4} ST {:.4} E {:.4} DCG {:.4} | worst {}{own}",
         m.map,
         m.nn,
         m.first_tier,
@@ -224,6 +298,21 @@ pub fn markdown(results: &[CollectionResult]) -> String {
                 m.e_measure,
                 m.dcg,
                 worst.join(", ")
+            );
+        }
+        let own: Vec<String> = r
+            .rows
+            .iter()
+            .filter_map(|row| {
+                own_mesh_first(&row.report)
+                    .map(|(hits, of)| format!("{} ({}) {hits}/{of}", row.method, row.vocabulary))
+            })
+            .collect();
+        if !own.is_empty() {
+            let _ = writeln!(
+                s,
+                "\nCloud queries whose first result is their own mesh: {}.",
+                own.join("; ")
             );
         }
         if let (Some(base), Some(first)) = (r.rows.first(), r.rows.get(1)) {

@@ -27,6 +27,7 @@ use shape_retrieval::{
 };
 use std::io::Read;
 use std::path::{Path, PathBuf};
+use wfem_heat::rng::SplitMix64;
 use wfem_heat::Eigenbasis;
 
 /// The paper's Table 5 (mAP in %, strength ≤ 1 … ≤ 5): method, description, values.
@@ -84,6 +85,50 @@ pub struct ShapeFile {
     pub transform: Option<Class>,
     /// Its strength (0 for a clean shape).
     pub strength: u8,
+    /// Described as a point cloud sampled from the file's mesh instead of the mesh itself
+    /// (`None`: the mesh).
+    pub cloud: Option<CloudSampling>,
+}
+
+/// How a mesh file becomes a point cloud: `points` points uniformly distributed on its surface
+/// ([`mesh_fem::cloud::sample_surface`]), drawn by the workspace's generator seeded with
+/// `seed` and the file's name (so every shape has its own stream, whatever the order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CloudSampling {
+    /// Number of points.
+    pub points: usize,
+    /// Seed (mixed with the name).
+    pub seed: u64,
+}
+
+/// The points of the issue #27 evaluation: TOSCA-76 as clouds of 5,000 points.
+pub const DEFAULT_CLOUD_POINTS: usize = 5000;
+
+impl ShapeFile {
+    /// The same file described as a point cloud of `sampling` (named `NAME-cloud`, same family).
+    pub fn as_cloud(&self, sampling: CloudSampling) -> ShapeFile {
+        ShapeFile {
+            name: format!("{}-cloud", self.name),
+            cloud: Some(sampling),
+            ..self.clone()
+        }
+    }
+
+    /// What is described: the mesh of the file, or the point cloud sampled from it.
+    ///
+    /// # Errors
+    /// [`BenchError::Mesh`] for an unreadable file or a mesh that cannot be sampled.
+    pub fn load(&self) -> Result<mesh_fem::io::Shape, BenchError> {
+        let (mesh, report): (TriMesh, _) = mesh_fem::io::load(&self.path, &Default::default())?;
+        let Some(sampling) = self.cloud else {
+            return Ok(mesh_fem::io::Shape::Mesh(mesh, report));
+        };
+        let mut h = crate::Fnv1a::new();
+        h.eat(self.name.bytes());
+        let mut rng = SplitMix64::new(sampling.seed ^ h.0);
+        let cloud = mesh_fem::cloud::sample_surface(&mesh, sampling.points, &mut || rng.next_f64())?;
+        Ok(mesh_fem::io::Shape::Cloud(cloud))
+    }
 }
 
 /// A loaded shape: its labels and its operators with the wFEM eigenbasis computed (or cached).
@@ -119,6 +164,7 @@ pub fn tosca_files(meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
             name,
             transform: None,
             strength: 0,
+            cloud: None,
         })
         .collect::<Vec<_>>();
     out.sort_by(|a, b| a.name.cmp(&b.name));
@@ -158,6 +204,7 @@ pub fn outside_files(meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
             family: "outside".into(),
             transform: None,
             strength: 0,
+            cloud: None,
         })
         .collect())
 }
@@ -206,6 +253,7 @@ pub fn shrec_files(data_dir: &Path, manifest: &Manifest) -> Vec<ShapeFile> {
             family: family(&b.shape),
             transform: None,
             strength: 0,
+            cloud: None,
         })
         .collect();
     out.extend(
@@ -219,6 +267,7 @@ pub fn shrec_files(data_dir: &Path, manifest: &Manifest) -> Vec<ShapeFile> {
                 family: family(&o.shape),
                 transform: Some(o.class),
                 strength: o.strength,
+                cloud: None,
             }),
     );
     out
@@ -252,10 +301,25 @@ impl EigenCache {
     /// The cache file of a prepared shape: keyed by the mesh the eigenbasis is computed on
     /// (positions and faces after every preprocessing step, bit for bit), k and the mass, so a
     /// change of the preprocessing or of its code can never return a stale basis.
-    fn entry(&self, shape: &ShapeDescriptors, settings: &DescriptorSettings, lumped: bool) -> Option<PathBuf> {
+    ///
+    /// The operators are those of the mesh's Laplacian or, for a point cloud (`cloud`), of the
+    /// cloud whose neighbourhood mesh `shape.mesh()` is; both are in the key (the cotangent
+    /// mesh keeps the key it had before the choice existed).
+    fn entry(
+        &self,
+        shape: &ShapeDescriptors,
+        settings: &DescriptorSettings,
+        lumped: bool,
+        cloud: bool,
+    ) -> Option<PathBuf> {
         let dir = self.dir.as_ref()?;
         let mut h = crate::Fnv1a::new();
         h.eat(format!("v2|{}|{lumped}|", settings.eigenpairs).bytes());
+        if cloud {
+            h.eat(b"cloud|".iter().copied());
+        } else if settings.laplacian != mesh_fem::Laplacian::Cotan {
+            h.eat(format!("{:?}|", settings.laplacian).bytes());
+        }
         for p in shape.mesh().positions() {
             for c in p {
                 h.eat(c.to_bits().to_le_bytes());
@@ -312,7 +376,22 @@ impl EigenCache {
         lumped: bool,
         settings: &DescriptorSettings,
     ) -> Result<(), BenchError> {
-        let entry = self.entry(shape, settings, lumped);
+        self.fill_as(file, shape, lumped, settings, false)
+    }
+
+    /// [`Self::fill`] for a shape that is a point cloud (`cloud`) or a mesh.
+    ///
+    /// # Errors
+    /// The eigensolver's.
+    pub fn fill_as(
+        &self,
+        file: &Path,
+        shape: &mut ShapeDescriptors,
+        lumped: bool,
+        settings: &DescriptorSettings,
+        cloud: bool,
+    ) -> Result<(), BenchError> {
+        let entry = self.entry(shape, settings, lumped, cloud);
         if let Some(basis) = entry.as_deref().and_then(Self::read) {
             if shape.set_eigenbasis(lumped, basis).is_ok() {
                 return Ok(());
@@ -343,11 +422,11 @@ pub fn load_shapes(
     files
         .into_par_iter()
         .map(|file| {
-            let (mesh, _): (TriMesh, _) = mesh_fem::io::load(&file.path, &Default::default())?;
+            let input = file.load()?;
             let mut shape = settings
-                .shape(&mesh)
+                .shape(&input)
                 .map_err(BenchError::retrieval(file.name.clone()))?;
-            cache.fill(&file.path, &mut shape, false, settings)?;
+            cache.fill_as(&file.path, &mut shape, false, settings, file.cloud.is_some())?;
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             if d % 50 == 0 || d == total {
                 eprintln!("shrec-bench: eigenbases of {d}/{total} shapes");
@@ -376,7 +455,13 @@ pub fn features(
         .par_iter_mut()
         .map(|s| {
             if lumped {
-                cache.fill(&s.file.path, &mut s.shape, true, &settings.descriptor)?;
+                cache.fill_as(
+                    &s.file.path,
+                    &mut s.shape,
+                    true,
+                    &settings.descriptor,
+                    s.file.cloud.is_some(),
+                )?;
             }
             let name = s.file.name.clone();
             let wrap = |source| BenchError::Retrieval {

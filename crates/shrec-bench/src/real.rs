@@ -7,12 +7,13 @@
 //! semidefinite), D the lumped Voronoi mass (paper, Eq. (7)) — of the mesh as it is (no
 //! cleaning), times the surface area A and divided by their Weyl growth,
 //! `g_i = λ_i A / (4π i)`, i = 1 … m, compared with the Euclidean distance. It needs no
-//! vocabulary: the 30-line method every descriptor here has to beat.
+//! vocabulary: the 30-line method every descriptor here has to beat. A point cloud
+//! ([`ShapeFile::cloud`]) gets the same with its robust L and the Voronoi lumped mass of its
+//! intrinsic triangulation.
 
 use crate::protocol::{self, EigenCache, ShapeFile};
 use crate::BenchError;
 use faer::Mat;
-use mesh_fem::TriMesh;
 use rayon::prelude::*;
 use shape_retrieval::eval::{evaluate_distances, evaluate_index, EvalReport};
 use shape_retrieval::{DescriptorParams, DescriptorSettings, RetrievalSettings, ShapeDescriptors, ShapeFeatures};
@@ -42,6 +43,7 @@ pub fn shrec11_files(meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
             family: class,
             transform: None,
             strength: 0,
+            cloud: None,
         })
         .collect())
 }
@@ -67,6 +69,7 @@ pub fn fourleg_files(meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
             family: "fourleg".into(),
             transform: None,
             strength: 0,
+            cloud: None,
         })
         .collect();
     out.sort_by(|a, b| a.name.cmp(&b.name));
@@ -136,17 +139,17 @@ pub fn shape_dna_baseline(files: &[ShapeFile], cache: &EigenCache) -> Result<Eva
     let signatures: Vec<Vec<f64>> = files
         .par_iter()
         .map(|file| {
-            let (mesh, _): (TriMesh, _) = mesh_fem::io::load(&file.path, &Default::default())?;
             let wrap = BenchError::retrieval(file.name.clone());
-            let mut shape = ShapeDescriptors::new(
-                &mesh,
-                &DescriptorParams {
-                    eigenpairs: settings.eigenpairs,
-                    ..Default::default()
-                },
-            )
+            let params = DescriptorParams {
+                eigenpairs: settings.eigenpairs,
+                ..Default::default()
+            };
+            let mut shape = match file.load()? {
+                mesh_fem::io::Shape::Mesh(mesh, _) => ShapeDescriptors::new(&mesh, &params),
+                mesh_fem::io::Shape::Cloud(cloud) => ShapeDescriptors::from_cloud(&cloud, &params),
+            }
             .map_err(wrap)?;
-            cache.fill(&file.path, &mut shape, true, &settings)?;
+            cache.fill_as(&file.path, &mut shape, true, &settings, file.cloud.is_some())?;
             let area = shape.area();
             let basis = shape
                 .eigenbasis(true)
