@@ -21,8 +21,9 @@ pub struct MeshArgs {
     /// Laplacian of a mesh: cotan (the default, paper Eq. (3)) or robust (intrinsic Delaunay
     /// L of the tufted cover: for non-manifold, badly oriented or degenerate meshes; its
     /// lumped heat is never negative). Point clouds always use the robust construction.
-    #[arg(long, value_parser = super::choice::choice::<Laplacian>(), default_value = Laplacian::default_name())]
-    pub laplacian: Laplacian,
+    /// `retrieval query` describes the query with the index's Laplacian and refuses another.
+    #[arg(long, value_parser = super::choice::choice::<Laplacian>())]
+    pub laplacian: Option<Laplacian>,
     /// Fan-triangulate polygons with more than three corners instead of refusing them.
     #[arg(long)]
     pub triangulate: bool,
@@ -40,15 +41,7 @@ pub struct MeshArgs {
 impl MeshArgs {
     /// The Laplacian of `--laplacian` (the library default when absent).
     pub fn laplacian(&self) -> Laplacian {
-        self.laplacian
-    }
-
-    /// The mesh argument for a file, with no triangulation and no repair.
-    pub fn new(mesh: PathBuf) -> Self {
-        Self {
-            mesh,
-            ..Self::default()
-        }
+        self.laplacian.unwrap_or_default()
     }
 
     /// The repairs asked for, as library options.
@@ -218,13 +211,35 @@ impl Input {
         }
     }
 
-    /// Metadata of the input for the `.npy` sidecar.
+    /// What retrieval describes: the point cloud, or the (repaired) mesh.
+    pub fn as_shape(&self) -> shape_retrieval::ShapeRef<'_> {
+        match &self.cloud {
+            Some(cloud) => cloud.into(),
+            None => (&self.mesh).into(),
+        }
+    }
+
+    /// The Laplacian the operators are assembled with: `--laplacian` for a mesh, the robust
+    /// construction for a point cloud.
+    pub fn laplacian_used(&self) -> Laplacian {
+        match self.cloud {
+            Some(_) => Laplacian::Robust(mesh_fem::RobustParams::default()),
+            None => self.laplacian,
+        }
+    }
+
+    /// Metadata of the input for the `.npy` sidecar (with the Laplacian used, and whether the
+    /// input is a point cloud, whose `n_faces` are those of its neighbourhood mesh).
     pub fn meta(&self, path: &Path) -> serde_json::Value {
         let mut v = serde_json::json!({
             "mesh": path.display().to_string(),
             "n_vertices": self.mesh.n_vertices(),
             "n_faces": self.mesh.n_faces(),
+            "laplacian": self.laplacian_used().name(),
         });
+        if let (Some(_), Some(obj)) = (&self.cloud, v.as_object_mut()) {
+            obj.insert("point_cloud".into(), serde_json::Value::Bool(true));
+        }
         if let (Some(r), Some(obj)) = (&self.repair, v.as_object_mut()) {
             obj.insert(
                 "repair".into(),
@@ -391,15 +406,27 @@ pub fn read_usable(args: &MeshArgs) -> Result<Input, CliError> {
     Ok(input)
 }
 
-/// [`load_usable`] without the mesh's warnings (the shapes of a collection: one line per
-/// open scan would bury the report).
+/// A shape of a collection (`wfem retrieval`): a mesh, validated without its warnings (one
+/// line per open scan would bury the report), or a point cloud as read (its operators are
+/// built when it is described). With the robust Laplacian a mesh's problems are not fatal
+/// (it takes degenerate and non-manifold faces), as in [`read_usable`].
 ///
 /// # Errors
-/// Those of [`read_input`]; the first fatal problem of [`mesh_fem::validate`].
-pub fn load_usable_quietly(args: &MeshArgs) -> Result<TriMesh, CliError> {
-    let input = read_input(args)?;
-    mesh_fem::validate(&input.mesh).into_result()?;
-    Ok(input.mesh)
+/// Reading errors; the first fatal problem of [`mesh_fem::validate`] (cotangent Laplacian).
+pub fn load_shape_quietly(path: &Path, laplacian: Laplacian) -> Result<Shape, CliError> {
+    if path.is_dir() {
+        return Err(CliError::Usage(format!(
+            "{} is a directory, not a mesh or point-cloud file",
+            path.display()
+        )));
+    }
+    let shape = load_shape(path, &LoadOptions::default())?;
+    if let Shape::Mesh(mesh, _) = &shape {
+        if !matches!(laplacian, Laplacian::Robust(_)) {
+            mesh_fem::validate(mesh).into_result()?;
+        }
+    }
+    Ok(shape)
 }
 
 /// The warnings of `wfem info` about a usable mesh, once per kind and one line each, with the
@@ -421,14 +448,6 @@ fn say_warnings(name: &str, report: &mesh_fem::ValidationReport) {
             progress::warn(&format!("{name}: {text}"));
         }
     }
-}
-
-/// Loads and validates a mesh; a mesh with a fatal problem is refused with the error naming it.
-///
-/// # Errors
-/// Those of [`read_usable`].
-pub fn load_usable(args: &MeshArgs) -> Result<TriMesh, CliError> {
-    Ok(read_usable(args)?.mesh)
 }
 
 /// Library names in messages of mesh-fem and the command-line flags that do the same.

@@ -27,7 +27,7 @@ pub mod retrieval;
 pub use approx::{approx, ApproxArgs};
 pub use demo::{demo, DemoArgs};
 pub use heat::{heat, HeatArgs};
-pub use input::{load_usable, read_input, read_usable, MeshArgs};
+pub use input::{read_input, read_usable, MeshArgs};
 pub use output::{Output, OutputFormat};
 
 use clap::Args;

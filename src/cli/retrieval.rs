@@ -10,6 +10,14 @@
 //! * `query` ranks the indexed meshes by distance to a query mesh: one descriptor computation
 //!   and one scan of the index.
 //!
+//! Every file may be a mesh or a point cloud (`.ply` without faces, `.xyz`, `.pts`, `.csv`,
+//! `.npy`), and one collection may mix them: a cloud is described with the robust Laplacian of
+//! its 30-nearest-neighbour triangulations, and of the cleaning below only the spikes are put
+//! back (the other steps repair triangulations). `--laplacian` (cotan by default) is the
+//! Laplacian of the meshes; it is recorded in the vocabulary and the index, and `add` and
+//! `query` describe their shapes with the recorded one (`query --laplacian` naming another is
+//! refused).
+//!
 //! The defaults are [`shape_retrieval::RetrievalSettings::default`]: pinched vertices split,
 //! isolated spikes put back, rough and incoherent (noisy, not merely coarse) shapes smoothed by
 //! the heat kernel down to a roughness of 0.1 edge lengths, holes with rims up to 3√A closed by
@@ -23,8 +31,10 @@
 //! the vocabulary and index files (JSON, see [`shape_retrieval::store`]).
 
 use super::choice::choice;
-use super::{check_output, load_usable, CliError, MeshArgs};
+use super::{check_output, CliError, MeshArgs};
 use clap::{Args, Subcommand};
+use mesh_fem::io::Shape;
+use mesh_fem::Laplacian;
 use retrieval_store::SqliteIndex;
 use shape_retrieval::eval::ClassRule;
 use shape_retrieval::global::GlobalKind;
@@ -52,7 +62,7 @@ pub struct RetrievalArgs {
 pub enum RetrievalAction {
     /// Train a vocabulary on meshes and save it (reuse it with `build --vocab`).
     Vocab {
-        /// Training meshes.
+        /// Training meshes or point clouds.
         #[arg(required = true, num_args = 1..)]
         files: Vec<PathBuf>,
         /// Vocabulary file (JSON).
@@ -74,7 +84,7 @@ pub enum RetrievalAction {
     /// retrieval on those same shapes is then optimistic. Train one on other shapes with
     /// `wfem retrieval vocab` for an honest measurement.
     Build {
-        /// Mesh files to index.
+        /// Mesh or point-cloud files to index.
         #[arg(required = true, num_args = 1..)]
         files: Vec<PathBuf>,
         /// Index file: an embedded SQLite file (any extension, e.g. `index.sqlite`; queries scan
@@ -84,7 +94,7 @@ pub enum RetrievalAction {
         /// Reuse a vocabulary from `wfem retrieval vocab` (its descriptor settings are used).
         /// Without it, the vocabulary is trained on the indexed meshes themselves, which is
         /// optimistic when those same meshes are then used to measure retrieval.
-        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
+        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore", "laplacian"])]
         vocab: Option<PathBuf>,
         /// Replace `--out` if it exists (without it an existing index is never overwritten).
         #[arg(long)]
@@ -122,7 +132,7 @@ pub enum RetrievalAction {
         #[arg(long, conflicts_with = "labels", value_parser = choice::<ClassRule>())]
         class_from: Option<ClassRule>,
         /// Reuse a vocabulary from `wfem retrieval vocab` (recommended: trained on other shapes).
-        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
+        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore", "laplacian"])]
         vocab: Option<PathBuf>,
         /// Also write the report (with every query) as JSON.
         #[arg(long)]
@@ -144,14 +154,14 @@ pub enum RetrievalAction {
     Add {
         /// Index file written by `wfem retrieval build` (SQLite).
         index: PathBuf,
-        /// Mesh files to add (names must be new to the index).
+        /// Mesh or point-cloud files to add (names must be new to the index).
         #[arg(required = true, num_args = 1..)]
         files: Vec<PathBuf>,
         #[command(flatten)]
         #[allow(missing_docs)]
         strict: StrictArg,
     },
-    /// Rank the indexed meshes by distance to a query mesh.
+    /// Rank the indexed shapes by distance to a query mesh or point cloud.
     Query {
         /// Index file written by `wfem retrieval build` (SQLite or JSON).
         index: PathBuf,
@@ -233,7 +243,7 @@ impl Refused {
 /// Describes every mesh (in parallel, a bar per shape); a shape that cannot be described is
 /// refused (or, strict, the error).
 fn describe_all(
-    meshes: &[(String, mesh_fem::TriMesh)],
+    meshes: &[(String, Shape)],
     descriptor: &shape_retrieval::DescriptorSettings,
     bags: &shape_retrieval::BagSettings,
     refused: &mut Refused,
@@ -271,6 +281,11 @@ pub struct DescriptorArgs {
     /// Dense descriptor.
     #[arg(long, value_parser = choice::<Descriptor>(), default_value = Descriptor::default_name())]
     pub descriptor: Descriptor,
+    /// Laplacian of the meshes, recorded in the vocabulary and the index (queries and added
+    /// shapes are described with it): cotan (paper Eq. (3)) or robust (for non-manifold or
+    /// badly triangulated collections). Point clouds always use the robust construction.
+    #[arg(long, value_parser = choice::<Laplacian>(), default_value = Laplacian::default_name())]
+    pub laplacian: Laplacian,
     /// Eigenpairs k per shape.
     #[arg(long, default_value_t = shape_retrieval::DEFAULT_EIGENPAIRS)]
     pub eigs: usize,
@@ -368,6 +383,7 @@ fn missing_times(descriptor: Descriptor) -> CliError {
 impl DescriptorArgs {
     fn apply(&self, settings: &mut RetrievalSettings) -> Result<(), CliError> {
         settings.descriptor.eigenpairs = self.eigs;
+        settings.descriptor.laplacian = self.laplacian;
         settings.descriptor.smoothing = self.smoothing.map(|time| Smoothing { time });
         if let Some(v) = number_or_off("--despike", &self.despike)? {
             settings.descriptor.despiking = v.map(|threshold| Despiking { threshold });
@@ -455,13 +471,15 @@ impl BagArgs {
     }
 }
 
-/// Loads and validates every file (in order, with a progress bar), refusing an output path
-/// among them.
+/// Loads every file (in order, with a progress bar), refusing an output path among them:
+/// meshes validated for `laplacian`, point clouds as read
+/// ([`super::input::load_shape_quietly`]).
 fn load_all(
     files: &[PathBuf],
     outputs: &[&std::path::Path],
+    laplacian: Laplacian,
     refused: &mut Refused,
-) -> Result<Vec<(String, mesh_fem::TriMesh)>, CliError> {
+) -> Result<Vec<(String, Shape)>, CliError> {
     for f in files {
         for out in outputs {
             check_output(f, out)?;
@@ -471,10 +489,10 @@ fn load_all(
     let mut meshes = Vec::with_capacity(files.len());
     for f in files {
         let name = f.display().to_string();
-        let mesh = super::input::load_usable_quietly(&MeshArgs::new(f.clone()));
+        let shape = super::input::load_shape_quietly(f, laplacian);
         bar.inc(&name);
-        if let Some(mesh) = refused.keep(&name, mesh)? {
-            meshes.push((name, mesh));
+        if let Some(shape) = refused.keep(&name, shape)? {
+            meshes.push((name, shape));
         }
     }
     bar.done();
@@ -497,7 +515,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             descriptor.apply(&mut settings)?;
             training.apply(&mut settings);
             let mut refused = Refused::new(*strict);
-            let meshes = load_all(files, &[path], &mut refused)?;
+            let meshes = load_all(files, &[path], settings.descriptor.laplacian, &mut refused)?;
             let features = describe_all(&meshes, &settings.descriptor, &settings.bags, &mut refused)?;
             let vocabulary = VocabularyModel::train(&settings.descriptor, &settings.training, &features)?;
             JsonFile::new(path).save_vocabulary(&vocabulary)?;
@@ -531,9 +549,9 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 None => "a vocabulary trained on these shapes (optimistic if they are also the test set)".into(),
             };
             let mut refused = Refused::new(*strict);
-            let meshes = load_all(files, &[path], &mut refused)?;
-            // RetrievalIndex::build, shape by shape: a bar per shape, refused shapes left out.
             let descriptor = vocabulary.as_ref().map_or(&settings.descriptor, |v| v.descriptor());
+            let meshes = load_all(files, &[path], descriptor.laplacian, &mut refused)?;
+            // RetrievalIndex::build, shape by shape: a bar per shape, refused shapes left out.
             let features = describe_all(&meshes, descriptor, &settings.bags, &mut refused)?;
             let vocabulary = match vocabulary {
                 Some(v) => v,
@@ -548,8 +566,9 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             index_file(path).save_index(&index)?;
             writeln!(
                 out,
-                "indexed {} ({} of {} words, {} distance) with {from} into {}",
+                "indexed {}{} ({} of {} words, {} distance) with {from} into {}",
                 super::input::count_of(index.entries().len(), "file", "files"),
+                clouds_among(&meshes, &features),
                 index.vocabulary().descriptor().descriptor.kind().label(),
                 index.vocabulary().vocabulary().size(),
                 index.bags().distance.name(),
@@ -574,7 +593,15 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &outputs)?;
             let paths: Vec<PathBuf> = labelled.iter().map(|(f, _)| f.clone()).collect();
             // Every labelled shape is needed: one that cannot be read is an error.
-            let meshes = load_all(&paths, &outputs, &mut Refused::new(StrictArg { strict: true }))?;
+            let laplacian = vocabulary
+                .as_ref()
+                .map_or(settings.descriptor.laplacian, |v| v.descriptor().laplacian);
+            let meshes = load_all(
+                &paths,
+                &outputs,
+                laplacian,
+                &mut Refused::new(StrictArg { strict: true }),
+            )?;
             let classes: Vec<String> = labelled.into_iter().map(|(_, c)| c).collect();
             let run = shape_retrieval::eval::evaluate_collection(&meshes, &classes, &settings, vocabulary)?;
             if let Some(p) = json {
@@ -608,11 +635,16 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             let (settings, _) = store.open()?;
             stored_sizes(&settings)?;
             let mut refused = Refused::new(*strict);
-            let meshes = load_all(files, &[path], &mut refused)?;
+            let meshes = load_all(
+                files,
+                &[path],
+                settings.vocabulary().descriptor().laplacian,
+                &mut refused,
+            )?;
             let bar = super::progress::bar(meshes.len(), "describing shapes");
             let mut entries = Vec::with_capacity(meshes.len());
-            for (name, mesh) in &meshes {
-                let entry = settings.describe(name, mesh).map_err(CliError::from);
+            for (name, shape) in &meshes {
+                let entry = settings.describe(name, shape).map_err(CliError::from);
                 bar.inc(name);
                 entries.extend(refused.keep(name, entry)?);
             }
@@ -636,9 +668,9 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 let store = SqliteIndex::new(path);
                 let (settings, rows) = store.open()?;
                 stored_sizes(&settings)?;
-                let mesh = load_usable(input)?;
+                let query = read_query(input, &settings)?;
                 let query = super::progress::run("describing the query", || {
-                    settings.describe(&input.mesh.display().to_string(), &mesh)
+                    settings.describe(&input.mesh.display().to_string(), &query.as_shape())
                 })?;
                 store
                     .search(&settings, &rows, &query.signature, *top)?
@@ -648,9 +680,9 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             } else {
                 let index = JsonFile::new(path).load_index()?;
                 stored_sizes(&index)?;
-                let mesh = load_usable(input)?;
+                let query = read_query(input, &index)?;
                 let query = super::progress::run("describing the query", || {
-                    index.describe(&input.mesh.display().to_string(), &mesh)
+                    index.describe(&input.mesh.display().to_string(), &query.as_shape())
                 })?;
                 index
                     .rank(&query.signature)?
@@ -665,6 +697,46 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// The query of `wfem retrieval query`, read as the index needs it: with the index's
+/// Laplacian (a different `--laplacian` is refused: the query's bag would not be comparable
+/// with the stored ones), repaired and validated as every subcommand's input; a point cloud
+/// is kept as a cloud.
+fn read_query(input: &MeshArgs, index: &RetrievalIndex) -> Result<super::input::Input, CliError> {
+    let recorded = index.vocabulary().descriptor().laplacian;
+    if let Some(asked) = input.laplacian.filter(|l| *l != recorded) {
+        return Err(CliError::Usage(format!(
+            "--laplacian {}: the index was built with the {} Laplacian, and a query is described as the indexed \
+             shapes were (omit --laplacian, or build an index with --laplacian {})",
+            asked.name(),
+            recorded.name(),
+            asked.name()
+        )));
+    }
+    super::input::read_usable(&MeshArgs {
+        laplacian: Some(recorded),
+        ..input.clone()
+    })
+}
+
+/// `, N of them point clouds` when the indexed shapes include clouds (for `build`'s line).
+fn clouds_among(shapes: &[(String, Shape)], features: &[ShapeFeatures]) -> String {
+    let clouds = features
+        .iter()
+        .filter(|f| {
+            shapes
+                .iter()
+                .any(|(name, s)| *name == f.name && matches!(s, Shape::Cloud(_)))
+        })
+        .count();
+    match clouds {
+        0 => String::new(),
+        1 if features.len() == 1 => ", a point cloud".to_string(),
+        1 => ", 1 of them a point cloud".to_string(),
+        n if n == features.len() => ", all point clouds".to_string(),
+        n => format!(", {n} of them point clouds"),
+    }
 }
 
 /// The settings of `build`/`eval` and the vocabulary to use: the one of `--vocab` (its
