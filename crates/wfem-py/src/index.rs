@@ -3,16 +3,17 @@
 //! A file built here is queried by `wfem retrieval query` and vice versa.
 
 use crate::convert::mesh_in;
-use crate::errors::Error;
+use crate::errors::{invalid_param, Error};
 use crate::run::run;
-use mesh_fem::io::{load, LoadOptions};
-use mesh_fem::TriMesh;
+use mesh_fem::io::{load_shape, LoadOptions, Shape};
+use mesh_fem::Laplacian;
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use retrieval_store::SqliteIndex;
 use shape_retrieval::eval::{evaluate_index, vocabulary_source, ClassRule};
 use shape_retrieval::{IndexStore, JsonFile, RetrievalIndex, RetrievalSettings, VocabularyStore};
 use std::path::PathBuf;
+use wfem_choice::Choice;
 
 /// Rust side of `wfem.RetrievalIndex`.
 #[pyclass(name = "RetrievalIndex", module = "wfem._wfem", frozen)]
@@ -20,11 +21,33 @@ pub struct PyRetrievalIndex {
     path: PathBuf,
 }
 
-fn read_all(paths: &[PathBuf]) -> Result<Vec<(String, TriMesh)>, Error> {
+/// Meshes and point clouds, whichever each file holds (`mesh_fem::io::load_shape`).
+fn read_all(paths: &[PathBuf]) -> Result<Vec<(String, Shape)>, Error> {
     paths
         .iter()
-        .map(|p| Ok((p.display().to_string(), load(p, &LoadOptions::default())?.0)))
+        .map(|p| Ok((p.display().to_string(), load_shape(p, &LoadOptions::default())?)))
         .collect()
+}
+
+/// The Laplacian of `laplacian=`, which must be `recorded` (an index's or a vocabulary's):
+/// shapes described with another one would not be comparable with the stored ones.
+fn same_laplacian(py: Python<'_>, laplacian: Option<&str>, recorded: Laplacian, whose: &str) -> PyResult<()> {
+    if laplacian.is_none() {
+        return Ok(());
+    }
+    let asked: Laplacian = crate::choices::parse(py, "laplacian", laplacian)?;
+    if asked == recorded {
+        return Ok(());
+    }
+    Err(invalid_param(
+        py,
+        "laplacian",
+        format!(
+            "{:?}: {whose} was built with the {:?} Laplacian, and shapes are described as its own were (omit laplacian=)",
+            asked.name(),
+            recorded.name()
+        ),
+    ))
 }
 
 fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
@@ -33,19 +56,21 @@ fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
 
 #[pymethods]
 impl PyRetrievalIndex {
-    /// Indexes mesh files with the default recipe (spikes put back, rough and incoherent shapes
+    /// Indexes mesh and point-cloud files with the default recipe (spikes put back, rough and incoherent shapes
     /// denoised, holes closed, thin handles cut, SI-HKS in area units, z-scored, 96 words, soft
     /// assignment, capped area weights, spatially sensitive bags, χ²) into a new SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
     /// of training on these shapes (its descriptor settings, cleaning included, are used);
     /// `despike` / `fill_holes` / `denoise`: the spike threshold, the largest hole perimeter
     /// (in √area) and the target roughness, `None` for off; `overwrite`: replace an existing
-    /// `out` (never an input).
+    /// `out` (never an input); `laplacian`: the Laplacian of the meshes (a name of
+    /// `mesh_fem::Laplacian`, default cotan; point clouds always use the robust one), which
+    /// must be the vocabulary's when one is given.
     #[staticmethod]
     #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0,
         despike=Some(mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD),
         fill_holes=Some(mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER),
         denoise=Some(shape_retrieval::DEFAULT_TARGET_ROUGHNESS), overwrite=false,
-        spatial=Some(shape_retrieval::spatial::DEFAULT_SPATIAL_TIME)))]
+        spatial=Some(shape_retrieval::spatial::DEFAULT_SPATIAL_TIME), laplacian=None))]
     #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
@@ -59,11 +84,20 @@ impl PyRetrievalIndex {
         denoise: Option<f64>,
         overwrite: bool,
         spatial: Option<f64>,
+        laplacian: Option<&str>,
     ) -> PyResult<Self> {
         let path = out.clone();
+        let chosen: Laplacian = crate::choices::parse(py, "laplacian", laplacian)?;
+        let (inputs, target) = (paths.clone(), out.clone());
+        let vocabulary = run(py, move |_| {
+            let inputs: Vec<&std::path::Path> = inputs.iter().chain(&vocabulary).map(PathBuf::as_path).collect();
+            shape_retrieval::check_index_output(&target, &inputs, overwrite)?;
+            Ok(vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?)
+        })?;
+        if let Some(v) = &vocabulary {
+            same_laplacian(py, laplacian, v.descriptor().laplacian, "the vocabulary")?;
+        }
         run(py, move |_| {
-            let inputs: Vec<&std::path::Path> = paths.iter().chain(&vocabulary).map(PathBuf::as_path).collect();
-            shape_retrieval::check_index_output(&out, &inputs, overwrite)?;
             let mut settings = RetrievalSettings::default();
             if let Some(w) = words {
                 settings.training.words = w;
@@ -77,7 +111,7 @@ impl PyRetrievalIndex {
                 ..Default::default()
             });
             settings.bags.spatial = spatial.map(|time| shape_retrieval::spatial::SpatialBag { time });
-            let vocabulary = vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?;
+            settings.descriptor.laplacian = chosen;
             match &vocabulary {
                 Some(v) => shape_retrieval::limits::check_sizes(v.descriptor().eigenpairs, v.vocabulary().size())?,
                 None => shape_retrieval::limits::check_sizes(settings.descriptor.eigenpairs, settings.training.words)?,
@@ -119,7 +153,8 @@ impl PyRetrievalIndex {
         run(py, move |_| Ok(shape_retrieval::index_settings(&open(&path)?)?))
     }
 
-    /// Appends mesh files (bags from the stored vocabulary; one transaction; nothing rebuilt).
+    /// Appends mesh or point-cloud files (bags from the stored vocabulary, described with the
+    /// index's Laplacian; one transaction; nothing rebuilt).
     fn add_paths(&self, py: Python<'_>, paths: Vec<PathBuf>) -> PyResult<usize> {
         let path = self.path.clone();
         run(py, move |_| {
@@ -134,21 +169,37 @@ impl PyRetrievalIndex {
         })
     }
 
-    /// The k nearest indexed shapes to a mesh: [(name, distance)], nearest first.
-    #[pyo3(signature = (v, f, k=10))]
+    /// The k nearest indexed shapes to a mesh (`v`, `f`) or a point cloud (`v` alone):
+    /// [(name, distance)], nearest first. The query is described with the index's Laplacian;
+    /// `laplacian`, if given, must name it.
+    #[pyo3(signature = (v, f=None, k=10, laplacian=None))]
     fn query<'py>(
         &self,
         py: Python<'py>,
         v: PyReadonlyArray2<'py, f64>,
-        f: PyReadonlyArray2<'py, i64>,
+        f: Option<PyReadonlyArray2<'py, i64>>,
         k: usize,
+        laplacian: Option<&str>,
     ) -> PyResult<Vec<(String, f64)>> {
-        let mesh = mesh_in(py, &v, &f)?;
+        // A mesh, or (no F) a point cloud.
+        let shape = match &f {
+            Some(f) => Ok(mesh_in(py, &v, f)?),
+            None => Err(crate::cloud::cloud_in(py, &v, None)?.0),
+        };
         let path = self.path.clone();
+        if laplacian.is_some() {
+            let p = path.clone();
+            let recorded = run(py, move |_| Ok(open(&p)?.vocabulary().descriptor().laplacian))?;
+            same_laplacian(py, laplacian, recorded, "the index")?;
+        }
         run(py, move |_| {
             let index = SqliteIndex::new(&path);
             let (settings, store) = index.open()?;
-            let query = settings.describe("query", &mesh)?;
+            let shape: shape_retrieval::ShapeRef<'_> = match &shape {
+                Ok(mesh) => mesh.into(),
+                Err(cloud) => cloud.into(),
+            };
+            let query = settings.describe("query", &shape)?;
             Ok(index
                 .search(&settings, &store, &query.signature, k)?
                 .into_iter()

@@ -126,3 +126,58 @@ def test_read_points_and_cloud_errors(tmp_path):
         wfem.HeatKernel(dup)
     with pytest.raises(wfem.InvalidInputError):
         wfem.operators(P, laplacian="cotan")
+
+
+def surface_points(V: np.ndarray, F: np.ndarray, n: int, seed: int) -> np.ndarray:
+    """n points uniform on a mesh's surface (faces by area, uniform barycentric coordinates)."""
+    rng = np.random.default_rng(seed)
+    tri = np.asarray(V, float)[np.asarray(F)]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    f = rng.choice(len(tri), size=n, p=area / area.sum())
+    u, v = rng.random(n), rng.random(n)
+    flip = u + v > 1
+    u[flip], v[flip] = 1 - u[flip], 1 - v[flip]
+    return tri[f, 0] * (1 - u - v)[:, None] + tri[f, 1] * u[:, None] + tri[f, 2] * v[:, None]
+
+
+def test_retrieval_index_mixes_meshes_and_point_clouds(tmp_path):
+    from conftest import write_off
+
+    sphere = wfem.generate.icosphere(3)
+    shapes = {
+        "sphere": sphere,
+        "ellipsoid": (sphere[0] * np.array([2.2, 1.0, 0.6]), sphere[1]),
+        "torus": wfem.generate.torus(1.0, 0.4, 48, 24),
+    }
+    paths = []
+    for i, (name, (V, F)) in enumerate(shapes.items()):
+        write_off(tmp_path / f"{name}.off", V, F)
+        paths.append(tmp_path / f"{name}.off")
+        cloud = surface_points(V, F, 1500, seed=i)
+        if i % 2:
+            np.savetxt(tmp_path / f"{name}-cloud.xyz", cloud)
+            paths.append(tmp_path / f"{name}-cloud.xyz")
+        else:
+            np.save(tmp_path / f"{name}-cloud.npy", cloud)
+            paths.append(tmp_path / f"{name}-cloud.npy")
+    index = wfem.RetrievalIndex.build(paths, tmp_path / "idx.sqlite", words=6)
+    assert len(index) == 6
+    assert index.settings["vocabulary"]["descriptor"]["laplacian"] == "cotan"
+    # A new cloud of the torus (an (n, 3) array alone is a point cloud) finds a torus first.
+    V, F = shapes["torus"]
+    query = surface_points(V, F, 1500, seed=99)
+    hits = index.query_mesh(query, k=3)
+    assert "torus" in hits[0][0], hits
+    assert index.query_mesh(query, k=3, laplacian="cotan") == hits
+    # The query is described with the index's Laplacian: another one is refused, by name.
+    with pytest.raises(wfem.InvalidInputError, match="laplacian"):
+        index.query_mesh(V, F, k=1, laplacian="robust")
+    # Clouds are appended like meshes.
+    csv = tmp_path / "more.csv"
+    np.savetxt(csv, surface_points(V, F, 1200, seed=5), delimiter=",", header="x,y,z", comments="")
+    assert index.add_meshes([csv]) == 1
+    # A robust index records its Laplacian; names come from the library's registry.
+    robust = wfem.RetrievalIndex.build(paths, tmp_path / "robust.sqlite", words=6, laplacian="robust")
+    assert robust.settings["vocabulary"]["descriptor"]["laplacian"] == "robust"
+    with pytest.raises(wfem.InvalidInputError, match="laplacian"):
+        wfem.RetrievalIndex.build(paths, tmp_path / "bad.sqlite", words=6, laplacian="intrinsic")

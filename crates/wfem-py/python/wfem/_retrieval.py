@@ -11,7 +11,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from . import _choices, _wfem
-from ._arrays import as_float_array, as_indices, as_mesh, as_vector
+from ._arrays import as_float_array, as_indices, as_mesh, as_vector, points_of
 from ._errors import InvalidInputError
 from ._heat import HeatKernel
 
@@ -343,8 +343,16 @@ class RetrievalIndex:
         denoise: float | None = _wfem.DEFAULT_TARGET_ROUGHNESS,
         overwrite: bool = False,
         spatial: float | None = _wfem.DEFAULT_SPATIAL_TIME,
+        laplacian: str | None = None,
     ) -> "RetrievalIndex":
-        """Indexes mesh files with the default recipe into a new file ``out``.
+        """Indexes mesh and point-cloud files with the default recipe into a new file ``out``.
+
+        A file holds a mesh (``.obj``, ``.off``, ``.stl``, a ``.ply`` with faces) or a point
+        cloud (a ``.ply`` without faces, ``.xyz``, ``.pts``, ``.csv``, ``.npy``); one index may
+        mix them. A cloud is described with the robust Laplacian of its 30-nearest-neighbour
+        triangulations; ``laplacian`` (a name of :data:`wfem.LAPLACIANS`, default the cotangent
+        L) is the Laplacian of the meshes, recorded in the index (queries and added shapes are
+        described with it; with ``vocabulary`` it must be the vocabulary's).
 
         An existing ``out`` raises :class:`StoreError` unless ``overwrite=True`` (then it is
         replaced atomically); ``out`` is never one of the inputs, a directory or a FIFO.
@@ -356,7 +364,8 @@ class RetrievalIndex:
         than ``denoise`` edge lengths is smoothed by the heat kernel until it is not (clean
         shapes are left as they are); ``None`` turns a step off. All three are recorded in the
         index, so queries are cleaned the same way. With ``vocabulary``, its own settings are
-        used instead.
+        used instead. Point clouds are despiked only: denoising, hole filling and the repair of
+        pinches and handles are repairs of a triangulation, which a cloud does not have.
 
         ``spatial``: spatially sensitive bags (Shape Google Sect. 4.2), the bag also holding the
         heat that flows between words in time ``spatial · area``; ``None`` for plain bags.
@@ -365,7 +374,7 @@ class RetrievalIndex:
         voc = None if vocabulary is None else os.fspath(vocabulary)
         return cls(
             _wfem.RetrievalIndex.build(
-                ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise, overwrite, spatial
+                ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise, overwrite, spatial, laplacian
             )
         )
 
@@ -395,7 +404,8 @@ class RetrievalIndex:
         return dict(json.loads(self._i.settings()))
 
     def add_meshes(self, paths: Iterable[str | os.PathLike[str]]) -> int:
-        """Appends mesh files (named by the path as given) in one transaction; returns how many."""
+        """Appends mesh or point-cloud files (named by the path as given) in one transaction;
+        returns how many."""
         return int(self._i.add_paths([os.fspath(p) for p in paths]))
 
     def evaluate(
@@ -430,7 +440,17 @@ class RetrievalIndex:
         report["text"] = text
         return report
 
-    def query_mesh(self, V: Any, F: Any = None, k: int = 10) -> list[tuple[str, float]]:
-        """The k indexed shapes nearest to a mesh: ``[(name, distance)]``, nearest first."""
+    def query_mesh(
+        self, V: Any, F: Any = None, k: int = 10, *, laplacian: str | None = None
+    ) -> list[tuple[str, float]]:
+        """The k indexed shapes nearest to a mesh ``V, F`` or a point cloud ``V`` (n, 3) alone:
+        ``[(name, distance)]``, nearest first.
+
+        The query is described as the indexed shapes were, with the index's Laplacian
+        (``settings["descriptor"]["laplacian"]``); ``laplacian``, if given, must name it
+        (another one raises :class:`InvalidInputError`: its bag would not be comparable)."""
+        P = points_of(V, F)
+        if P is not None:
+            return [(str(n), float(d)) for n, d in self._i.query(P, None, k, laplacian)]
         v, f = as_mesh(V, F)
-        return [(str(n), float(d)) for n, d in self._i.query(v, f, k)]
+        return [(str(n), float(d)) for n, d in self._i.query(v, f, k, laplacian)]
