@@ -304,8 +304,7 @@ pub fn markdown(results: &[CollectionResult]) -> String {
             .rows
             .iter()
             .filter_map(|row| {
-                own_mesh_first(&row.report)
-                    .map(|(hits, of)| format!("{} ({}) {hits}/{of}", row.method, row.vocabulary))
+                own_mesh_first(&row.report).map(|(hits, of)| format!("{} ({}) {hits}/{of}", row.method, row.vocabulary))
             })
             .collect();
         if !own.is_empty() {
