@@ -32,8 +32,7 @@ use shape_retrieval::spatial::SpatialBag;
 use shape_retrieval::Descriptor;
 use shape_retrieval::{
     BagDistance, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexStore, JsonFile,
-    RetrievalError, RetrievalIndex, RetrievalSettings, ShapeFeatures, Smoothing, VertexWeights, VocabularyModel,
-    VocabularyStore,
+    RetrievalIndex, RetrievalSettings, ShapeFeatures, Smoothing, VertexWeights, VocabularyModel, VocabularyStore,
 };
 use std::io::Write;
 use std::path::PathBuf;
@@ -201,6 +200,21 @@ impl Refused {
         }
     }
 
+    /// The library's tolerance for this flag.
+    fn tolerance(&self) -> shape_retrieval::collection::Tolerance {
+        if self.strict {
+            shape_retrieval::collection::Tolerance::Strict
+        } else {
+            shape_retrieval::collection::Tolerance::Skip
+        }
+    }
+
+    /// Records the shapes the library left out.
+    fn extend(&mut self, left_out: Vec<shape_retrieval::collection::Refusal>) {
+        self.files
+            .extend(left_out.into_iter().map(|r| (r.name, r.reason.to_string())));
+    }
+
     /// Nothing usable left: the error names every refused file.
     fn check_some(&self, left: usize, total: usize) -> Result<(), CliError> {
         if left > 0 {
@@ -230,39 +244,22 @@ impl Refused {
     }
 }
 
-/// Describes every mesh (in parallel, a bar per shape); a shape that cannot be described is
-/// refused (or, strict, the error).
+/// Describes every mesh (in parallel, a bar per shape; `shape_retrieval::collection`); a shape
+/// that cannot be described is refused (or, strict, the error).
 fn describe_all(
     meshes: &[(String, mesh_fem::TriMesh)],
     descriptor: &shape_retrieval::DescriptorSettings,
     bags: &shape_retrieval::BagSettings,
     refused: &mut Refused,
 ) -> Result<Vec<ShapeFeatures>, CliError> {
-    use rayon::prelude::*;
-    descriptor.validate()?;
-    bags.validate(descriptor.eigenpairs)?;
+    use shape_retrieval::collection::describe_collection;
     let bar = super::progress::bar(meshes.len(), "describing shapes");
-    let results: Vec<Result<ShapeFeatures, RetrievalError>> = meshes
-        .par_iter()
-        .map(|(name, mesh)| {
-            let features = ShapeFeatures::compute(name, mesh, descriptor, bags);
-            bar.inc(name);
-            features
-        })
-        .collect();
+    let described = describe_collection(meshes, descriptor, bags, refused.tolerance(), &|name| bar.inc(name));
     bar.done();
-    let mut kept = Vec::with_capacity(meshes.len());
-    for ((name, _), result) in meshes.iter().zip(results) {
-        let result = result.map_err(|e| {
-            CliError::from(RetrievalError::Shape {
-                name: name.clone(),
-                source: Box::new(e),
-            })
-        });
-        kept.extend(refused.keep(name, result)?);
-    }
-    refused.check_some(kept.len(), meshes.len())?;
-    Ok(kept)
+    let described = described?;
+    refused.extend(described.refused);
+    refused.check_some(described.features.len(), meshes.len())?;
+    Ok(described.features)
 }
 
 /// Descriptor options (recorded in the vocabulary).
@@ -610,13 +607,13 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             let mut refused = Refused::new(*strict);
             let meshes = load_all(files, &[path], &mut refused)?;
             let bar = super::progress::bar(meshes.len(), "describing shapes");
-            let mut entries = Vec::with_capacity(meshes.len());
-            for (name, mesh) in &meshes {
-                let entry = settings.describe(name, mesh).map_err(CliError::from);
-                bar.inc(name);
-                entries.extend(refused.keep(name, entry)?);
-            }
+            let described =
+                shape_retrieval::collection::describe_entries(&settings, &meshes, refused.tolerance(), &|name| {
+                    bar.inc(name)
+                });
             bar.done();
+            let (entries, left_out) = described?;
+            refused.extend(left_out);
             refused.check_some(entries.len(), files.len())?;
             store.append(&settings, &entries)?;
             writeln!(

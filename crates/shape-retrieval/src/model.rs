@@ -39,7 +39,6 @@ use crate::standardize::Standardizer;
 use crate::RetrievalError;
 use faer::{Mat, MatRef};
 use mesh_fem::TriMesh;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use wfem_heat::KernelDiagonal;
 
@@ -1196,15 +1195,8 @@ impl ShapeFeatures {
         descriptor: &DescriptorSettings,
         bags: &BagSettings,
     ) -> Result<Vec<Self>, RetrievalError> {
-        meshes
-            .par_iter()
-            .map(|(name, mesh)| {
-                Self::compute(name, mesh, descriptor, bags).map_err(|e| RetrievalError::Shape {
-                    name: name.clone(),
-                    source: Box::new(e),
-                })
-            })
-            .collect()
+        crate::collection::describe_collection(meshes, descriptor, bags, crate::collection::Tolerance::Strict, &|_| ())
+            .map(|d| d.features)
     }
 }
 
@@ -1683,23 +1675,13 @@ impl RetrievalIndex {
         settings: &RetrievalSettings,
         vocabulary: Option<VocabularyModel>,
     ) -> Result<Self, RetrievalError> {
-        let descriptor = vocabulary
-            .as_ref()
-            .map_or(&settings.descriptor, |v| &v.descriptor)
-            .clone();
-        // The parameters are checked before any mesh is read, so a bad one is reported as
-        // such and not as the failure of the first mesh.
-        descriptor.validate()?;
-        settings.bags.validate(descriptor.eigenpairs)?;
-        let features = ShapeFeatures::compute_many(meshes, &descriptor, &settings.bags)?;
-        let vocabulary = match vocabulary {
-            Some(v) => v,
-            None => VocabularyModel::train(&descriptor, &settings.training, &features)?,
-        };
-        let mut index = Self::new(vocabulary, settings.bags.clone())?;
-        for f in &features {
-            index.insert(f)?;
-        }
-        Ok(index)
+        crate::collection::build_index(
+            meshes,
+            settings,
+            vocabulary,
+            crate::collection::Tolerance::Strict,
+            &|_| (),
+        )
+        .map(|(index, _)| index)
     }
 }

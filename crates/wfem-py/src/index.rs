@@ -4,14 +4,15 @@
 
 use crate::convert::mesh_in;
 use crate::errors::Error;
-use crate::run::run;
+use crate::run::{run, run_reporting, Progress};
 use mesh_fem::io::{load, LoadOptions};
 use mesh_fem::TriMesh;
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use retrieval_store::SqliteIndex;
+use shape_retrieval::collection::{build_index, describe_entries, Refusal, Tolerance};
 use shape_retrieval::eval::{evaluate_index, vocabulary_source, ClassRule};
-use shape_retrieval::{IndexStore, JsonFile, RetrievalIndex, RetrievalSettings, VocabularyStore};
+use shape_retrieval::{IndexStore, JsonFile, RetrievalError, RetrievalIndex, RetrievalSettings, VocabularyStore};
 use std::path::PathBuf;
 
 /// Rust side of `wfem.RetrievalIndex`.
@@ -20,11 +21,60 @@ pub struct PyRetrievalIndex {
     path: PathBuf,
 }
 
-fn read_all(paths: &[PathBuf]) -> Result<Vec<(String, TriMesh)>, Error> {
-    paths
-        .iter()
-        .map(|p| Ok((p.display().to_string(), load(p, &LoadOptions::default())?.0)))
-        .collect()
+/// Files of a collection left out, with why (`(file, reason)`, in input order).
+type Refused = Vec<(String, String)>;
+
+/// Reads every file; one that cannot be read is refused (or, strict, the error).
+fn read_all(
+    paths: &[PathBuf],
+    tolerance: Tolerance,
+    progress: &Progress,
+) -> Result<(Vec<(String, TriMesh)>, Refused), Error> {
+    let mut meshes = Vec::with_capacity(paths.len());
+    let mut refused = Refused::new();
+    for p in paths {
+        let name = p.display().to_string();
+        match load(p, &LoadOptions::default()) {
+            Ok((mesh, _)) => meshes.push((name, mesh)),
+            Err(e) if tolerance == Tolerance::Skip => {
+                // A refused file is a finished step too: the bar counts every file.
+                progress.step(&name);
+                refused.push((name, e.to_string()));
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
+    Ok((meshes, refused))
+}
+
+fn tolerance(strict: bool) -> Tolerance {
+    if strict {
+        Tolerance::Strict
+    } else {
+        Tolerance::Skip
+    }
+}
+
+/// Adds the library's refusals to the files that could not be read, in the order of `paths`;
+/// no usable shape left is the error naming every file.
+fn merge_refused(
+    paths: &[PathBuf],
+    mut refused: Refused,
+    left_out: Vec<Refusal>,
+    kept: usize,
+) -> Result<Refused, Error> {
+    refused.extend(left_out.into_iter().map(|r| (r.name, r.reason.to_string())));
+    let order: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    refused.sort_by_key(|(name, _)| order.iter().position(|o| o == name));
+    if kept == 0 && !refused.is_empty() {
+        let reasons: Vec<String> = refused.iter().map(|(f, why)| format!("{f}: {why}")).collect();
+        return Err(RetrievalError::NothingUsable {
+            shapes: refused.len(),
+            reasons: reasons.join("; "),
+        }
+        .into());
+    }
+    Ok(refused)
 }
 
 fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
@@ -45,7 +95,7 @@ impl PyRetrievalIndex {
         despike=Some(mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD),
         fill_holes=Some(mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER),
         denoise=Some(shape_retrieval::DEFAULT_TARGET_ROUGHNESS), overwrite=false,
-        spatial=Some(shape_retrieval::spatial::DEFAULT_SPATIAL_TIME)))]
+        spatial=Some(shape_retrieval::spatial::DEFAULT_SPATIAL_TIME), strict=false, progress=None))]
     #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
@@ -59,9 +109,11 @@ impl PyRetrievalIndex {
         denoise: Option<f64>,
         overwrite: bool,
         spatial: Option<f64>,
-    ) -> PyResult<Self> {
+        strict: bool,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<(Self, Refused)> {
         let path = out.clone();
-        run(py, move |_| {
+        let refused = run_reporting(py, progress, move |cancel, progress| {
             let inputs: Vec<&std::path::Path> = paths.iter().chain(&vocabulary).map(PathBuf::as_path).collect();
             shape_retrieval::check_index_output(&out, &inputs, overwrite)?;
             let mut settings = RetrievalSettings::default();
@@ -82,12 +134,34 @@ impl PyRetrievalIndex {
                 Some(v) => shape_retrieval::limits::check_sizes(v.descriptor().eigenpairs, v.vocabulary().size())?,
                 None => shape_retrieval::limits::check_sizes(settings.descriptor.eigenpairs, settings.training.words)?,
             }
-            let meshes = read_all(&paths)?;
-            let index = RetrievalIndex::build(&meshes, &settings, vocabulary)?;
+            let (meshes, refused) = read_all(&paths, tolerance(strict), progress)?;
+            if meshes.is_empty() {
+                merge_refused(&paths, refused, Vec::new(), 0)?;
+                return Err(RetrievalError::Empty { what: "paths" }.into());
+            }
+            let built = build_index(&meshes, &settings, vocabulary, tolerance(strict), &|name| {
+                progress.step(name)
+            });
+            let (index, left_out) = match built {
+                // Every read file refused too: name the unreadable ones as well.
+                Err(RetrievalError::NothingUsable { shapes, reasons }) if !refused.is_empty() => {
+                    let mut all: Vec<String> = refused.iter().map(|(f, why)| format!("{f}: {why}")).collect();
+                    all.push(reasons);
+                    return Err(RetrievalError::NothingUsable {
+                        shapes: shapes + refused.len(),
+                        reasons: all.join("; "),
+                    }
+                    .into());
+                }
+                other => other?,
+            };
+            let refused = merge_refused(&paths, refused, left_out, index.entries().len())?;
+            // An interrupted call (Ctrl-C, a raising progress callback) writes nothing.
+            cancel.check()?;
             SqliteIndex::new(&out).save_index(&index)?;
-            Ok(())
+            Ok(refused)
         })?;
-        Ok(Self { path })
+        Ok((Self { path }, refused))
     }
 
     /// Opens an index file (written by `build` here or by `wfem retrieval build`).
@@ -119,18 +193,27 @@ impl PyRetrievalIndex {
         run(py, move |_| Ok(shape_retrieval::index_settings(&open(&path)?)?))
     }
 
-    /// Appends mesh files (bags from the stored vocabulary; one transaction; nothing rebuilt).
-    fn add_paths(&self, py: Python<'_>, paths: Vec<PathBuf>) -> PyResult<usize> {
+    /// Appends mesh files (bags from the stored vocabulary; one transaction; nothing rebuilt);
+    /// returns how many were added and the refused files (`strict`: the first failure instead).
+    #[pyo3(signature = (paths, strict=false, progress=None))]
+    fn add_paths(
+        &self,
+        py: Python<'_>,
+        paths: Vec<PathBuf>,
+        strict: bool,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<(usize, Refused)> {
         let path = self.path.clone();
-        run(py, move |_| {
+        run_reporting(py, progress, move |cancel, progress| {
             let index = SqliteIndex::new(&path);
             let settings = index.open()?.0;
-            let entries = read_all(&paths)?
-                .iter()
-                .map(|(name, mesh)| settings.describe(name, mesh))
-                .collect::<Result<Vec<_>, _>>()?;
+            let (meshes, refused) = read_all(&paths, tolerance(strict), progress)?;
+            let (entries, left_out) =
+                describe_entries(&settings, &meshes, tolerance(strict), &|name| progress.step(name))?;
+            let refused = merge_refused(&paths, refused, left_out, entries.len())?;
+            cancel.check()?;
             index.append(&settings, &entries)?;
-            Ok(entries.len())
+            Ok((entries.len(), refused))
         })
     }
 

@@ -4,6 +4,7 @@
 mod common;
 
 mod bof;
+mod collection;
 mod descriptor;
 mod distance;
 mod eval;
