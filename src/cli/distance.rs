@@ -100,9 +100,9 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
         meta.insert(
             "diagonal".into(),
             match info.hops {
-                Some(hops) => json!({ "name": info.method.name(), "columns": info.columns, "hops": hops, "relative_tail": info.relative_tail }),
+                Some(hops) => json!({ "name": info.method.name(), "probe_columns": info.columns, "hops": hops, "relative_tail": info.relative_tail }),
                 None if info.columns == 0 => json!({ "name": info.method.name() }),
-                None => json!({ "name": info.method.name(), "columns": info.columns }),
+                None => json!({ "name": info.method.name(), "probe_columns": info.columns }),
             },
         );
     }
