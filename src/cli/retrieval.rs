@@ -80,11 +80,9 @@ pub enum RetrievalAction {
         /// it in parallel and `add` appends to it), or one JSON document (`.json`).
         #[arg(long)]
         out: PathBuf,
-        /// Reuse a vocabulary from `wfem retrieval vocab` (its descriptor settings are used).
-        /// Without it, the vocabulary is trained on the indexed meshes themselves, which is
-        /// optimistic when those same meshes are then used to measure retrieval.
-        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
-        vocab: Option<PathBuf>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        vocab: VocabArg,
         /// Replace `--out` if it exists (without it an existing index is never overwritten).
         #[arg(long)]
         force: bool,
@@ -120,9 +118,9 @@ pub enum RetrievalAction {
         /// its name without extension and digits (`stem`: cat10.off → cat).
         #[arg(long, conflicts_with = "labels", value_parser = choice::<ClassRule>())]
         class_from: Option<ClassRule>,
-        /// Reuse a vocabulary from `wfem retrieval vocab` (recommended: trained on other shapes).
-        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
-        vocab: Option<PathBuf>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        vocab: VocabArg,
         /// Also write the report (with every query) as JSON.
         #[arg(long)]
         json: Option<PathBuf>,
@@ -161,6 +159,17 @@ pub enum RetrievalAction {
         #[arg(long, default_value_t = 5)]
         top: usize,
     },
+}
+
+/// `--vocab` of `build` and `eval`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct VocabArg {
+    /// Reuse a vocabulary from `wfem retrieval vocab` (its descriptor settings are used;
+    /// recommended: trained on other shapes). Without it, the vocabulary is trained on the given
+    /// meshes themselves, which is optimistic when those same meshes are then used to measure
+    /// retrieval.
+    #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore"])]
+    pub vocab: Option<PathBuf>,
 }
 
 /// `--strict`: all-or-nothing over a collection.
@@ -519,6 +528,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             bags,
             strict,
         } => {
+            let vocab = &vocab.vocab;
             let inputs: Vec<&std::path::Path> = files.iter().chain(vocab).map(PathBuf::as_path).collect();
             shape_retrieval::check_index_output(path, &inputs, *force)?;
             let (settings, vocabulary) =
@@ -565,6 +575,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             training,
             bags,
         } => {
+            let vocab = &vocab.vocab;
             let outputs: Vec<&std::path::Path> = json.iter().chain(index).map(PathBuf::as_path).collect();
             let labelled = labelled_files(files, labels.as_deref(), class_from.unwrap_or_default())?;
             let (settings, vocabulary) =
