@@ -109,6 +109,7 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
     meta.insert("method".into(), super::heat::method_meta(&method));
     let how = Writing {
         render: args.render,
+        splats: input.splats.as_ref(),
         highlight: &[i],
         meta,
     };
