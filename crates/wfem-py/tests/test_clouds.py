@@ -126,3 +126,19 @@ def test_read_points_and_cloud_errors(tmp_path):
         wfem.HeatKernel(dup)
     with pytest.raises(wfem.InvalidInputError):
         wfem.operators(P, laplacian="cotan")
+
+
+def test_hks_of_a_cloud_reads_times_in_area_units():
+    """``time_unit="area"`` on a cloud: t = τ·A with A measured on the cloud (as the CLI does),
+    so the HKS is exactly scale covariant — a cloud scaled by s has K_t(x, x) divided by s²
+    (the kernel value of a surface of area s²A) at the same τ; absolute times are not."""
+    P = sphere_points(1500, seed=3)
+    tau = [1e-3, 1e-2]
+    h1 = wfem.hks(P, times=tau, time_unit="area", method="exact")
+    h2 = wfem.hks(2.0 * P, times=tau, time_unit="area", method="exact")
+    assert np.allclose(h2, h1 / 4.0, rtol=1e-8, atol=0.0)
+    # Absolute times on the scaled cloud are another point of the curve.
+    h3 = wfem.hks(2.0 * P, times=tau, method="exact")
+    assert not np.allclose(h3, h1 / 4.0, rtol=1e-3)
+    with pytest.raises(wfem.InvalidInputError, match="time_unit"):
+        wfem.hks(P, times=tau, time_unit="fortnight")

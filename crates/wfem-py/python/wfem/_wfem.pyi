@@ -251,6 +251,7 @@ def mesh_hks(
     tol: float = ...,
     laplacian: str | None = None,
     n_neighbors: int | None = None,
+    cloud_time_unit: str | None = None,
 ) -> tuple[_F64, list[float], list[tuple[str, float]], list[float] | None]: ...
 
 # retrieval
