@@ -61,7 +61,7 @@ pub enum Descriptor {
     Dhk1,
     /// HKS of the wFEM kernel, spectrum of (L, B) (Eq. (6)).
     Dhk2,
-    /// Scale-invariant wFEM HKS: eigenvalues divided by λ_max ([`SpectrumNormalization::MaxEigenvalue`]).
+    /// Scale-invariant wFEM HKS: eigenvalues divided by λ_max ([`SpectrumNormalization::MaxEigenvalue`](crate::SpectrumNormalization::MaxEigenvalue)).
     Dhk3,
 }
 

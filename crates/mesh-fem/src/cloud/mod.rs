@@ -41,6 +41,9 @@
 
 mod knn;
 pub(crate) mod local;
+mod sample;
+
+pub use sample::sample_surface;
 
 use crate::intrinsic::{tufted, DELAUNAY_TOLERANCE};
 use crate::laplacian::DEFAULT_MOLLIFY_FACTOR;

@@ -1,0 +1,255 @@
+//! [`RetrievalIndex`]: the vocabulary, the bag settings and one [`IndexEntry`] per shape;
+//! queries rank the entries by the fused distance.
+
+use super::{BagSettings, RetrievalSettings, ShapeFeatures, VocabularyModel};
+use crate::check;
+use crate::RetrievalError;
+use mesh_fem::TriMesh;
+
+/// The retrieval signature of one shape: its normalised bag and its global signature.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeSignature {
+    /// The bag (length V, non-negative, sums to 1).
+    pub bag: Vec<f64>,
+    /// The global signature (length m; empty without fusion).
+    pub global: Vec<f64>,
+}
+
+/// One indexed shape.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IndexEntry {
+    /// Its name (the file as given to `build`).
+    pub name: String,
+    /// Its signature.
+    pub signature: ShapeSignature,
+}
+
+/// One result of a query: the entry and its distance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ranked {
+    /// Position of the entry in the index.
+    pub entry: usize,
+    /// Its distance to the query (≥ 0).
+    pub distance: f64,
+}
+
+/// A retrieval index: vocabulary, bag settings, and the signature of every indexed shape.
+#[derive(Clone, Debug)]
+pub struct RetrievalIndex {
+    vocabulary: VocabularyModel,
+    bags: BagSettings,
+    entries: Vec<IndexEntry>,
+}
+
+impl RetrievalIndex {
+    /// An empty index.
+    ///
+    /// # Errors
+    /// Those of [`BagSettings::validate`].
+    pub fn new(vocabulary: VocabularyModel, bags: BagSettings) -> Result<Self, RetrievalError> {
+        bags.validate(vocabulary.descriptor().eigenpairs)?;
+        Ok(Self {
+            vocabulary,
+            bags,
+            entries: Vec::new(),
+        })
+    }
+
+    /// Reassembles an index from stored parts, validating every entry: bag length V, bag values
+    /// finite, in [0, 1] and summing to 1 (±1e−6), global signatures finite of length m.
+    ///
+    /// # Errors
+    /// [`RetrievalError::InvalidModel`] naming the entry and the value.
+    pub fn from_parts(
+        vocabulary: VocabularyModel,
+        bags: BagSettings,
+        entries: Vec<IndexEntry>,
+    ) -> Result<Self, RetrievalError> {
+        let mut index = Self::new(vocabulary, bags).map_err(|e| RetrievalError::InvalidModel {
+            what: "index",
+            reason: e.to_string(),
+        })?;
+        for e in entries {
+            index.push_checked(e)?;
+        }
+        Ok(index)
+    }
+
+    fn push_checked(&mut self, entry: IndexEntry) -> Result<(), RetrievalError> {
+        let invalid = |reason: String| RetrievalError::InvalidModel { what: "index", reason };
+        let (i, name) = (self.entries.len(), &entry.name);
+        let v = self.bags.bag_len(self.vocabulary.vocabulary().size());
+        let bag = &entry.signature.bag;
+        if bag.len() != v {
+            return Err(invalid(format!(
+                "entry {i} ({name}): bag has {} bins, the settings {v}",
+                bag.len()
+            )));
+        }
+        if let Some((j, x)) = bag
+            .iter()
+            .enumerate()
+            .find(|(_, x)| !(x.is_finite() && (0.0..=1.0).contains(*x)))
+        {
+            return Err(invalid(format!(
+                "entry {i} ({name}): bag value {x:e} at word {j} is not in [0, 1]"
+            )));
+        }
+        let sum: f64 = bag.iter().sum();
+        if (sum - 1.0).abs() > 1e-6 {
+            return Err(invalid(format!("entry {i} ({name}): bag sums to {sum}, not 1")));
+        }
+        let m = self.bags.global.map_or(0, |g| g.len());
+        let global = &entry.signature.global;
+        if global.len() != m {
+            return Err(invalid(format!(
+                "entry {i} ({name}): global signature has {} values, the settings {m}",
+                global.len()
+            )));
+        }
+        // Every global signature of a real shape is within a few hundred of 0 (ln(λA), λA/4πi,
+        // histogram bins); this also keeps every sum finite.
+        if let Some((j, x)) = global.iter().enumerate().find(|(_, x)| x.is_nan() || x.abs() >= 1e3) {
+            return Err(invalid(format!(
+                "entry {i} ({name}): global value {x:e} at {j} is not finite or not below 1e3"
+            )));
+        }
+        self.entries.push(entry);
+        Ok(())
+    }
+
+    /// The vocabulary model.
+    pub fn vocabulary(&self) -> &VocabularyModel {
+        &self.vocabulary
+    }
+
+    /// The bag settings.
+    pub fn bags(&self) -> &BagSettings {
+        &self.bags
+    }
+
+    /// The indexed shapes.
+    pub fn entries(&self) -> &[IndexEntry] {
+        &self.entries
+    }
+
+    /// Computes the features of a mesh with the index's settings (one eigensolve).
+    ///
+    /// # Errors
+    /// Those of [`ShapeFeatures::compute`].
+    pub fn features(&self, name: &str, mesh: &TriMesh) -> Result<ShapeFeatures, RetrievalError> {
+        ShapeFeatures::compute(name, mesh, self.vocabulary.descriptor(), &self.bags)
+    }
+
+    /// The signature of a described shape.
+    ///
+    /// # Errors
+    /// Those of [`VocabularyModel::bag`]; [`RetrievalError::DimensionMismatch`] if the global
+    /// signature does not match the settings.
+    pub fn signature(&self, features: &ShapeFeatures) -> Result<ShapeSignature, RetrievalError> {
+        let bag = self.vocabulary.shape_bag(features, &self.bags)?;
+        let m = self.bags.global.map_or(0, |g| g.len());
+        check::same("global signature length", m, features.global.len())?;
+        check::finite_slice("global signature", &features.global)?;
+        Ok(ShapeSignature {
+            bag,
+            global: features.global.clone(),
+        })
+    }
+
+    /// The entry of a mesh with the index's settings: [`Self::features`] (one eigensolve) and
+    /// [`Self::signature`] — what an append stores and a query compares.
+    ///
+    /// # Errors
+    /// Those of [`Self::features`] and [`Self::signature`].
+    pub fn describe(&self, name: &str, mesh: &TriMesh) -> Result<IndexEntry, RetrievalError> {
+        let features = self.features(name, mesh)?;
+        Ok(IndexEntry {
+            name: name.to_string(),
+            signature: self.signature(&features)?,
+        })
+    }
+
+    /// Adds a described shape.
+    ///
+    /// # Errors
+    /// Those of [`Self::signature`].
+    pub fn insert(&mut self, features: &ShapeFeatures) -> Result<(), RetrievalError> {
+        let signature = self.signature(features)?;
+        self.push_checked(IndexEntry {
+            name: features.name.clone(),
+            signature,
+        })
+    }
+
+    /// The fused distance between two signatures (see the module docs).
+    ///
+    /// # Errors
+    /// [`RetrievalError::DimensionMismatch`], [`RetrievalError::NonFinite`],
+    /// [`RetrievalError::NegativeBin`].
+    pub fn distance(&self, a: &ShapeSignature, b: &ShapeSignature) -> Result<f64, RetrievalError> {
+        let bag = self.bags.distance.between(&a.bag, &b.bag)?;
+        check::same("global signature lengths", a.global.len(), b.global.len())?;
+        check::finite_slice("global signature", &a.global)?;
+        check::finite_slice("global signature", &b.global)?;
+        Ok(self.fused(bag, &a.global, &b.global))
+    }
+
+    fn fused(&self, bag: f64, a: &[f64], b: &[f64]) -> f64 {
+        match &self.bags.global {
+            Some(g) if g.weight > 0.0 => bag + g.weight * g.distance(a, b),
+            _ => bag,
+        }
+    }
+
+    /// The distance of a validated query ([`Self::distance`] checked it against one entry) to
+    /// a stored signature given as its bag followed by its global signature (`row`, V + m
+    /// values), without checks: the inner loop of a scan over an external store.
+    pub fn row_distance(&self, query: &ShapeSignature, row: &[f64]) -> f64 {
+        let v = query.bag.len().min(row.len());
+        let (bag, global) = row.split_at(v);
+        self.fused(self.bags.distance.unchecked(&query.bag, bag), &query.global, global)
+    }
+
+    /// Every entry by increasing distance to the query signature (ties → lower entry index):
+    /// one O(N·V) scan.
+    ///
+    /// # Errors
+    /// Those of [`Self::distance`] (for the query only: entries were validated on insertion).
+    pub fn rank(&self, query: &ShapeSignature) -> Result<Vec<Ranked>, RetrievalError> {
+        if let Some(first) = self.entries.first() {
+            // Validates the query once; the scan below then uses the unchecked formulas.
+            self.distance(query, &first.signature)?;
+        }
+        let mut ranked: Vec<Ranked> = self
+            .entries
+            .iter()
+            .enumerate()
+            .map(|(entry, e)| Ranked {
+                entry,
+                distance: self.fused(
+                    self.bags.distance.unchecked(&query.bag, &e.signature.bag),
+                    &query.global,
+                    &e.signature.global,
+                ),
+            })
+            .collect();
+        ranked.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.entry.cmp(&b.entry)));
+        Ok(ranked)
+    }
+
+    /// Builds an index in one go: describes `meshes` (in parallel), trains the vocabulary on them
+    /// unless one is given (training on the indexed shapes themselves is optimistic; see the
+    /// module docs), and inserts every mesh.
+    ///
+    /// # Errors
+    /// Those of [`ShapeFeatures::compute_many`], [`VocabularyModel::train`], [`Self::insert`].
+    pub fn build(
+        meshes: &[(String, TriMesh)],
+        settings: &RetrievalSettings,
+        vocabulary: Option<VocabularyModel>,
+    ) -> Result<Self, RetrievalError> {
+        crate::collection::build_index(meshes, settings, vocabulary, crate::collection::Tolerance::Strict, &|_| ())
+            .map(|(index, _)| index)
+    }
+}

@@ -1,0 +1,249 @@
+//! The recorded settings: [`DescriptorSettings`] (cleaning, eigenpairs, descriptor),
+//! [`BagSettings`], [`TrainingParams`] and all of them together, [`RetrievalSettings`].
+
+use super::{
+    Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, Smoothing, TopologyRepair, VertexWeights,
+    DEFAULT_AREA_CAP,
+};
+use crate::bof::Assignment;
+use crate::check;
+use crate::descriptor::{DescriptorParams, ShapeDescriptors};
+use crate::distance::BagDistance;
+use crate::spatial::SpatialBag;
+use crate::RetrievalError;
+use mesh_fem::TriMesh;
+use serde::{Deserialize, Serialize};
+
+/// How a shape's vertices are described: the eigenpairs and the dense descriptor. A vocabulary
+/// is only meaningful for descriptors computed with the same settings, so they are stored with it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DescriptorSettings {
+    /// Number k of eigenpairs (default 100).
+    pub eigenpairs: usize,
+    /// The descriptor (default SI-HKS, area time unit).
+    pub descriptor: DescriptorSpec,
+    /// Optional smoothing of the embedding by a fixed time, after despiking, denoising and
+    /// hole filling (default: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub smoothing: Option<Smoothing>,
+    /// Removal of isolated spikes first (default: on, threshold 3; `null` turns it off). As
+    /// every field, a missing one takes the default, so a vocabulary or index written before
+    /// this option existed is queried with it; on shapes without spikes it changes nothing.
+    pub despiking: Option<Despiking>,
+    /// Denoising as much as needed, after the spikes and before hole filling and any fixed
+    /// smoothing (default: on, target roughness 0.1; `null` turns it off). A missing field
+    /// takes the default, as for `despiking`; smooth shapes are left unchanged.
+    pub denoising: Option<Denoising>,
+    /// Hole filling after denoising and before any fixed smoothing (default: on, rims up to
+    /// 3 √A; `null` turns it off). Unlike the other steps, **a missing field reads as off**:
+    /// a vocabulary or index written before hole filling existed holds bags of unfilled
+    /// shapes, and its queries must be described alike. Closed shapes are left unchanged.
+    #[serde(default)]
+    pub hole_filling: Option<HoleFilling>,
+    /// Repair of topological noise: pinches split first, thin handles removed after hole
+    /// filling (default: on, handle cycles up to 0.35 √A; `null` turns it off). **A missing
+    /// field reads as off**, as for `hole_filling`. Manifold shapes of genus 0 are left
+    /// unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub topology_repair: Option<TopologyRepair>,
+}
+
+impl Default for DescriptorSettings {
+    fn default() -> Self {
+        Self {
+            eigenpairs: crate::DEFAULT_EIGENPAIRS,
+            descriptor: DescriptorSpec::default(),
+            smoothing: None,
+            despiking: Some(Despiking::default()),
+            denoising: Some(Denoising::default()),
+            hole_filling: Some(HoleFilling::default()),
+            topology_repair: Some(TopologyRepair::default()),
+        }
+    }
+}
+
+impl DescriptorSettings {
+    /// Checks the parameters.
+    ///
+    /// # Errors
+    /// [`RetrievalError::InvalidParameter`] for k < 2 (a descriptor needs a nonzero eigenvalue)
+    /// and those of [`DescriptorSpec::validate`].
+    pub fn validate(&self) -> Result<(), RetrievalError> {
+        if self.eigenpairs < 2 {
+            return Err(RetrievalError::InvalidParameter {
+                name: "eigenpairs",
+                value: self.eigenpairs as f64,
+                reason: "must be at least 2",
+            });
+        }
+        if let Some(s) = &self.smoothing {
+            check::positive("smoothing time", s.time)?;
+        }
+        if let Some(d) = &self.despiking {
+            check::positive("spike threshold", d.threshold)?;
+        }
+        if let Some(d) = &self.denoising {
+            d.validate()?;
+        }
+        if let Some(h) = &self.hole_filling {
+            check::positive("largest hole perimeter", h.max_perimeter)?;
+        }
+        if let Some(t) = &self.topology_repair {
+            check::positive("longest handle cycle", t.max_handle)?;
+        }
+        self.descriptor.validate()
+    }
+
+    /// Assembles the operators of a mesh for these settings (no eigensolve yet).
+    ///
+    /// # Errors
+    /// [`RetrievalError::Mesh`] if assembly fails, and those of [`Self::validate`].
+    pub fn shape(&self, mesh: &TriMesh) -> Result<ShapeDescriptors, RetrievalError> {
+        self.validate()?;
+        // The cleaning steps, in order; each one that is on replaces the mesh. Every step that
+        // adds vertices appends them, so the shape's own vertices stay the first `described`.
+        let mut mesh = std::borrow::Cow::Borrowed(mesh);
+        let mut described = mesh.n_vertices();
+        if self.topology_repair.is_some() {
+            let unwelded = mesh_fem::handles::unweld(&mesh);
+            if !unwelded.copies.is_empty() {
+                mesh = std::borrow::Cow::Owned(unwelded.mesh);
+            }
+        }
+        if let Some(d) = &self.despiking {
+            mesh = std::borrow::Cow::Owned(mesh_fem::filter::despike(&mesh, d.threshold)?.mesh);
+        }
+        // Denoising measures the roughness of the shape itself, so it comes before the
+        // patches (smooth by construction) could dilute it.
+        if let Some(d) = &self.denoising {
+            mesh = std::borrow::Cow::Owned(d.apply(&mesh)?);
+        }
+        if let Some(h) = &self.hole_filling {
+            mesh = std::borrow::Cow::Owned(mesh_fem::holes::fill_holes(&mesh, h.max_perimeter)?.mesh);
+        }
+        // Handles are found on closed shapes, so after the holes are filled.
+        if let Some(t) = &self.topology_repair {
+            let cut = mesh_fem::handles::cut_handles(&mesh, t.max_handle)?;
+            if !cut.cut.is_empty() {
+                // The tubes' vertices are gone: the shape's own vertices are the kept ones.
+                described -= cut.removed.iter().filter(|&&v| (v as usize) < described).count();
+                mesh = std::borrow::Cow::Owned(cut.mesh);
+            }
+        }
+        if let Some(s) = &self.smoothing {
+            mesh = std::borrow::Cow::Owned(s.apply(&mesh)?);
+        }
+        ShapeDescriptors::new(
+            &mesh,
+            &DescriptorParams {
+                eigenpairs: self.eigenpairs,
+                ..Default::default()
+            },
+        )?
+        .described_only(described)
+    }
+}
+
+/// How bags are made and compared (everything after the vocabulary).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct BagSettings {
+    /// Vertex weights of the bag (default `CappedArea { factor: 3 }`).
+    pub weights: VertexWeights,
+    /// How descriptors are spread over the words (default normalised, Shape Google).
+    pub assignment: Assignment,
+    /// Distance between bags (default χ²).
+    pub distance: BagDistance,
+    /// Optional fusion with the Shape-DNA (default: none).
+    pub global: Option<GlobalSignature>,
+    /// Spatially sensitive bags ([`crate::spatial`]): the bag becomes `[½ f, ½ F]`, the plain
+    /// bag and the heat flow between words. A missing field reads as off (older files hold
+    /// plain bags).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spatial: Option<SpatialBag>,
+}
+
+impl Default for BagSettings {
+    fn default() -> Self {
+        Self {
+            weights: VertexWeights::CappedArea {
+                factor: DEFAULT_AREA_CAP,
+            },
+            assignment: Assignment::Normalized,
+            distance: BagDistance::default(),
+            global: None,
+            spatial: Some(SpatialBag::default()),
+        }
+    }
+}
+
+impl BagSettings {
+    /// Checks the parameters against the number of eigenpairs k.
+    ///
+    /// # Errors
+    /// Those of [`VertexWeights::validate`] and [`GlobalSignature::validate`].
+    pub fn validate(&self, eigenpairs: usize) -> Result<(), RetrievalError> {
+        self.weights.validate()?;
+        if let Some(g) = &self.global {
+            g.validate(eigenpairs)?;
+        }
+        if let Some(s) = &self.spatial {
+            s.validate()?;
+        }
+        Ok(())
+    }
+
+    /// The length of a bag for V words: V, plus V(V+1)/2 with spatial bags.
+    pub fn bag_len(&self, words: usize) -> usize {
+        words + self.spatial.map_or(0, |_| SpatialBag::bins(words))
+    }
+}
+
+/// Every user-selectable setting of `build`: the descriptor, the vocabulary training and the bags.
+/// Deserialises from partial JSON (missing fields take their defaults).
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RetrievalSettings {
+    /// Eigenpairs and dense descriptor.
+    pub descriptor: DescriptorSettings,
+    /// Vocabulary training.
+    pub training: TrainingParams,
+    /// Bags and distances.
+    pub bags: BagSettings,
+}
+
+/// Options of [`VocabularyModel::train`](super::VocabularyModel::train).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrainingParams {
+    /// Number of words V (default [`DEFAULT_WORDS`]).
+    pub words: usize,
+    /// Seed of k-means++ and of the training subsample (default 0).
+    pub seed: u64,
+    /// Lloyd iterations (default 300).
+    pub max_iter: usize,
+    /// Train k-means on at most this many pooled descriptors (seeded subsample; default 50 000).
+    pub max_training_points: usize,
+    /// z-score the descriptor dimensions before quantisation (default `true`).
+    pub standardize: bool,
+}
+
+/// Default vocabulary size: 96 words, twice Shape Google's 48. With spatially sensitive bags
+/// (on by default) the finer vocabulary wins on the dev sets (docs/RETRIEVAL-RESULTS.md):
+/// SHREC'11 mAP 0.986 against 0.983 with 48 words (mean of 3 seeds), the SHREC'10 protocol
+/// with the handles class 99.1/96.1/93.3/90.8/85.9 against 99.2/95.1/91.9/89.0/83.7 (null-shape
+/// vocabulary), TOSCA-76 0.996–0.997 both.
+pub const DEFAULT_WORDS: usize = 96;
+
+impl Default for TrainingParams {
+    fn default() -> Self {
+        Self {
+            words: DEFAULT_WORDS,
+            seed: 0,
+            max_iter: 300,
+            max_training_points: 50_000,
+            standardize: true,
+        }
+    }
+}

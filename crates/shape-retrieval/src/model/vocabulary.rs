@@ -1,0 +1,373 @@
+//! [`ShapeFeatures`] (what a shape contributes: descriptors, weights, global signature,
+//! eigenpairs) and [`VocabularyModel`] (z-score statistics and words trained on them).
+
+use super::{BagSettings, DescriptorSettings, TrainingParams};
+use crate::bof::{Assignment, Vocabulary, VocabularyParams};
+use crate::check;
+use crate::descriptor::ShapeDescriptors;
+use crate::spatial::ShapeSpectrum;
+use crate::standardize::Standardizer;
+use crate::RetrievalError;
+use faer::{Mat, MatRef};
+use mesh_fem::TriMesh;
+use serde::{Deserialize, Serialize};
+
+/// The dense descriptors of one shape with what its bag needs: the vertex weights and the
+/// global signature. Computed once per shape ([`ShapeFeatures::compute`]) and reused for
+/// training, indexing and querying.
+#[derive(Clone, Debug)]
+pub struct ShapeFeatures {
+    /// A name for reports (e.g. the file).
+    pub name: String,
+    /// m × d dense descriptors (not z-scored), one row per own vertex of the shape (m = n
+    /// unless holes were filled).
+    pub descriptors: Mat<f64>,
+    /// m vertex weights.
+    pub weights: Vec<f64>,
+    /// The global signature (empty without fusion).
+    pub global: Vec<f64>,
+    /// The eigenpairs of the described vertices, for spatial bags (`None` without them).
+    pub spectrum: Option<ShapeSpectrum>,
+}
+
+impl ShapeFeatures {
+    /// Describes one mesh: operators, one eigensolve, the dense descriptor, the weights and the
+    /// global signature.
+    ///
+    /// # Errors
+    /// [`RetrievalError::Mesh`] from assembly, and those of [`DescriptorSpec::compute`](super::DescriptorSpec::compute),
+    /// [`VertexWeights::compute`](super::VertexWeights::compute), [`GlobalSignature::compute`](super::GlobalSignature::compute).
+    pub fn compute(
+        name: &str,
+        mesh: &TriMesh,
+        descriptor: &DescriptorSettings,
+        bags: &BagSettings,
+    ) -> Result<Self, RetrievalError> {
+        let mut shape = descriptor.shape(mesh)?;
+        Self::from_shape(name, &mut shape, descriptor, bags)
+    }
+
+    /// As [`Self::compute`] on prepared operators (and possibly cached eigenbases).
+    ///
+    /// # Errors
+    /// Those of [`Self::compute`].
+    pub fn from_shape(
+        name: &str,
+        shape: &mut ShapeDescriptors,
+        descriptor: &DescriptorSettings,
+        bags: &BagSettings,
+    ) -> Result<Self, RetrievalError> {
+        bags.validate(descriptor.eigenpairs)?;
+        let descriptors = descriptor.descriptor.compute(shape)?;
+        let weights = bags.weights.compute(shape)?;
+        let global = match &bags.global {
+            Some(g) => g.compute(shape)?,
+            None => Vec::new(),
+        };
+        let mut features = Self::new(name, shape, descriptors, weights, global)?;
+        if bags.spatial.is_some() {
+            features.attach_spectrum(shape)?;
+        }
+        Ok(features)
+    }
+
+    /// Keeps the wFEM eigenpairs of `shape` (restricted to its described vertices), which
+    /// spatial bags need.
+    ///
+    /// # Errors
+    /// Those of the eigensolver; [`RetrievalError::DimensionMismatch`] if `shape` is not the
+    /// one described.
+    pub fn attach_spectrum(&mut self, shape: &mut ShapeDescriptors) -> Result<(), RetrievalError> {
+        let m = shape.described_vertices();
+        check::same("described vertices vs features", self.weights.len(), m)?;
+        let area = shape.area();
+        let basis = shape.eigenbasis(false)?;
+        self.spectrum = Some(ShapeSpectrum {
+            values: basis.values.clone(),
+            vectors: basis.vectors.subrows(0, m).to_owned(),
+            area,
+        });
+        Ok(())
+    }
+
+    /// Assembles the features of `shape` from their parts, keeping the rows of the shape's own
+    /// vertices only ([`ShapeDescriptors::described_vertices`]: the vertices of filled holes
+    /// take part in the operators, not in the bags). `descriptors` has a row per vertex of the
+    /// prepared mesh (or per own vertex), `weights` one per own vertex, as
+    /// [`VertexWeights::compute`](super::VertexWeights::compute) gives them.
+    ///
+    /// # Errors
+    /// [`RetrievalError::DimensionMismatch`] if the sizes do not match the shape.
+    pub fn new(
+        name: &str,
+        shape: &ShapeDescriptors,
+        descriptors: Mat<f64>,
+        weights: Vec<f64>,
+        global: Vec<f64>,
+    ) -> Result<Self, RetrievalError> {
+        let m = shape.described_vertices();
+        check::same("vertex weights vs described vertices", m, weights.len())?;
+        let descriptors = if descriptors.nrows() == m {
+            descriptors
+        } else {
+            check::same(
+                "descriptor rows vs vertices",
+                shape.mesh().n_vertices(),
+                descriptors.nrows(),
+            )?;
+            descriptors.subrows(0, m).to_owned()
+        };
+        Ok(Self {
+            name: name.to_string(),
+            descriptors,
+            weights,
+            global,
+            spectrum: None,
+        })
+    }
+
+    /// [`Self::compute`] for many meshes in parallel (one eigensolve per mesh), in input order.
+    ///
+    /// # Errors
+    /// The first failure, as [`RetrievalError::Shape`] naming the mesh.
+    pub fn compute_many(
+        meshes: &[(String, TriMesh)],
+        descriptor: &DescriptorSettings,
+        bags: &BagSettings,
+    ) -> Result<Vec<Self>, RetrievalError> {
+        crate::collection::describe_collection(meshes, descriptor, bags, crate::collection::Tolerance::Strict, &|_| ())
+            .map(|d| d.features)
+    }
+}
+
+/// Where a vocabulary was trained: for provenance and for the "optimistic" warning.
+#[derive(Clone, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainingInfo {
+    /// Names of the training shapes.
+    pub shapes: Vec<String>,
+    /// Number of pooled descriptors k-means ran on.
+    pub descriptors: usize,
+}
+
+/// A trained vocabulary with everything needed to use it on new shapes: the descriptor settings,
+/// the z-score statistics and the words. Its own artifact (`wfem retrieval vocab`).
+#[derive(Clone, Debug)]
+pub struct VocabularyModel {
+    descriptor: DescriptorSettings,
+    training: TrainingParams,
+    standardizer: Option<Standardizer>,
+    vocabulary: Vocabulary,
+    info: TrainingInfo,
+}
+
+impl VocabularyModel {
+    /// Trains on the descriptors of `shapes`: pool them, fit the z-score statistics (if
+    /// `params.standardize`) on the pool, then k-means on a seeded subsample of at most
+    /// `max_training_points` z-scored rows; σ = the median nearest-word distance.
+    ///
+    /// # Errors
+    /// [`RetrievalError::Empty`] without shapes, [`RetrievalError::DimensionMismatch`] if the
+    /// descriptors disagree with the settings, and those of [`Standardizer::fit`] and
+    /// [`Vocabulary::train`].
+    pub fn train(
+        descriptor: &DescriptorSettings,
+        params: &TrainingParams,
+        shapes: &[ShapeFeatures],
+    ) -> Result<Self, RetrievalError> {
+        descriptor.validate()?;
+        check::non_empty("training shapes", shapes.len())?;
+        let d = descriptor.descriptor.dimension();
+        for s in shapes {
+            check::same("training descriptor dimension", d, s.descriptors.ncols())?;
+        }
+        let rows: usize = shapes.iter().map(|s| s.descriptors.nrows()).sum();
+        let mut pooled = Mat::<f64>::zeros(rows, d);
+        let mut r0 = 0;
+        for s in shapes {
+            pooled
+                .as_mut()
+                .submatrix_mut(r0, 0, s.descriptors.nrows(), d)
+                .copy_from(s.descriptors.as_ref());
+            r0 += s.descriptors.nrows();
+        }
+        let standardizer = if params.standardize {
+            let z = Standardizer::fit(pooled.as_ref())?;
+            pooled = z.apply(pooled.as_ref())?;
+            Some(z)
+        } else {
+            None
+        };
+        let vocabulary = Vocabulary::train(
+            pooled.as_ref(),
+            &VocabularyParams {
+                size: params.words,
+                max_iter: params.max_iter,
+                seed: params.seed,
+                sigma: None,
+                max_training_points: Some(params.max_training_points),
+            },
+        )?;
+        Ok(Self {
+            descriptor: descriptor.clone(),
+            training: *params,
+            standardizer,
+            vocabulary,
+            info: TrainingInfo {
+                shapes: shapes.iter().map(|s| s.name.clone()).collect(),
+                descriptors: rows.min(params.max_training_points),
+            },
+        })
+    }
+
+    /// Reassembles a model from its parts (e.g. read from storage), checking consistency.
+    ///
+    /// # Errors
+    /// [`RetrievalError::InvalidModel`] if the settings are invalid or the dimensions of the
+    /// statistics and words disagree with the descriptor.
+    pub fn from_parts(
+        descriptor: DescriptorSettings,
+        training: TrainingParams,
+        standardizer: Option<Standardizer>,
+        vocabulary: Vocabulary,
+        info: TrainingInfo,
+    ) -> Result<Self, RetrievalError> {
+        let invalid = |reason: String| RetrievalError::InvalidModel {
+            what: "vocabulary",
+            reason,
+        };
+        descriptor.validate().map_err(|e| invalid(e.to_string()))?;
+        let d = descriptor.descriptor.dimension();
+        if vocabulary.words().ncols() != d {
+            return Err(invalid(format!(
+                "words have dimension {} but the {} descriptor has {d}",
+                vocabulary.words().ncols(),
+                descriptor.descriptor.kind().label()
+            )));
+        }
+        if let Some(z) = &standardizer {
+            if z.dimension() != d {
+                return Err(invalid(format!(
+                    "z-score statistics have dimension {} but the descriptor has {d}",
+                    z.dimension()
+                )));
+            }
+        }
+        if training.words != vocabulary.size() {
+            return Err(invalid(format!(
+                "{} words stored, {} recorded as trained",
+                vocabulary.size(),
+                training.words
+            )));
+        }
+        Ok(Self {
+            descriptor,
+            training,
+            standardizer,
+            vocabulary,
+            info,
+        })
+    }
+
+    /// The descriptor settings the words were trained for.
+    pub fn descriptor(&self) -> &DescriptorSettings {
+        &self.descriptor
+    }
+
+    /// The training parameters.
+    pub fn training(&self) -> &TrainingParams {
+        &self.training
+    }
+
+    /// The z-score statistics (`None` if trained without standardisation).
+    pub fn standardizer(&self) -> Option<&Standardizer> {
+        self.standardizer.as_ref()
+    }
+
+    /// The words and σ.
+    pub fn vocabulary(&self) -> &Vocabulary {
+        &self.vocabulary
+    }
+
+    /// Where it was trained.
+    pub fn info(&self) -> &TrainingInfo {
+        &self.info
+    }
+
+    /// The normalised bag `Θᵀw / 1ᵀΘᵀw` of descriptors (n × d) with vertex weights w (length n)
+    /// and the given assignment Θ (for the normalised assignment the denominator is Σw).
+    ///
+    /// # Errors
+    /// Those of [`Standardizer::apply`] and [`Vocabulary::bag_of_features`];
+    /// [`RetrievalError::InvalidModel`] if the weights sum to zero.
+    pub fn bag(
+        &self,
+        descriptors: MatRef<'_, f64>,
+        weights: &[f64],
+        assignment: Assignment,
+    ) -> Result<Vec<f64>, RetrievalError> {
+        let theta = self.assignment(descriptors, assignment)?;
+        Self::normalised_bag(theta.as_ref(), weights)
+    }
+
+    /// The assignment Θ (n × V) of descriptors (n × d, not z-scored) to the words.
+    ///
+    /// # Errors
+    /// Those of [`Standardizer::apply`] and [`Vocabulary::soft_assignment`].
+    pub fn assignment(&self, descriptors: MatRef<'_, f64>, assignment: Assignment) -> Result<Mat<f64>, RetrievalError> {
+        let standardized;
+        let descriptors = match &self.standardizer {
+            Some(z) => {
+                standardized = z.apply(descriptors)?;
+                standardized.as_ref()
+            }
+            None => descriptors,
+        };
+        match assignment {
+            Assignment::Normalized => self.vocabulary.soft_assignment(descriptors),
+            Assignment::Kernel => self.vocabulary.kernel_assignment(descriptors),
+        }
+    }
+
+    /// The bag of a shape under `bags`: the normalised bag, followed by the spatial histogram
+    /// when `bags.spatial` is on (each half of the mass; see [`crate::spatial`]).
+    ///
+    /// # Errors
+    /// Those of [`Self::assignment`] and [`SpatialBag::histogram`](crate::spatial::SpatialBag::histogram);
+    /// [`RetrievalError::InvalidModel`] if the weights sum to zero or the features lack the
+    /// eigenpairs a spatial bag needs.
+    pub fn shape_bag(&self, features: &ShapeFeatures, bags: &BagSettings) -> Result<Vec<f64>, RetrievalError> {
+        let theta = self.assignment(features.descriptors.as_ref(), bags.assignment)?;
+        let bag = Self::normalised_bag(theta.as_ref(), &features.weights)?;
+        let Some(spatial) = &bags.spatial else {
+            return Ok(bag);
+        };
+        let spectrum = features.spectrum.as_ref().ok_or_else(|| RetrievalError::InvalidModel {
+            what: "features",
+            reason: format!(
+                "{}: spatial bags need the eigenpairs (ShapeFeatures::attach_spectrum)",
+                features.name
+            ),
+        })?;
+        let flow = spatial.histogram(theta.as_ref(), &features.weights, spectrum)?;
+        Ok(bag.iter().chain(&flow).map(|x| 0.5 * x).collect())
+    }
+
+    /// `Θᵀw / 1ᵀΘᵀw`.
+    fn normalised_bag(theta: MatRef<'_, f64>, weights: &[f64]) -> Result<Vec<f64>, RetrievalError> {
+        check::same("vertex weights vs descriptors", theta.nrows(), weights.len())?;
+        check::finite_slice("vertex weights", weights)?;
+        let mut bag: Vec<f64> = (0..theta.ncols())
+            .map(|c| theta.col(c).iter().zip(weights).map(|(t, a)| t * a).sum())
+            .collect();
+        let total: f64 = bag.iter().sum();
+        if !(total > 0.0 && total.is_finite()) {
+            return Err(RetrievalError::InvalidModel {
+                what: "bag",
+                reason: format!("the vertex weights sum to {total}"),
+            });
+        }
+        bag.iter_mut().for_each(|x| *x /= total);
+        Ok(bag)
+    }
+}
