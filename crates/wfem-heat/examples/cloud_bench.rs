@@ -87,7 +87,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
         _ => {
-            return Err("usage: cloud_bench operators|heat-cloud POINTS.npy [t] | heat-mesh N [t] | heat-cloud-torus N [t]".into())
+            return Err(
+                "usage: cloud_bench operators|heat-cloud POINTS.npy [t] | heat-mesh N [t] | heat-cloud-torus N [t]"
+                    .into(),
+            )
         }
     }
     Ok(())
