@@ -260,6 +260,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     meta.insert("approximation".into(), record(&approx));
     let how = Writing {
         render: args.render,
+        splats: input.splats.as_ref(),
         highlight: &approx.anchors,
         meta,
     };

@@ -100,15 +100,16 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
         meta.insert(
             "diagonal".into(),
             match info.hops {
-                Some(hops) => json!({ "name": info.method.name(), "columns": info.columns, "hops": hops, "relative_tail": info.relative_tail }),
+                Some(hops) => json!({ "name": info.method.name(), "probe_columns": info.columns, "hops": hops, "relative_tail": info.relative_tail }),
                 None if info.columns == 0 => json!({ "name": info.method.name() }),
-                None => json!({ "name": info.method.name(), "columns": info.columns }),
+                None => json!({ "name": info.method.name(), "probe_columns": info.columns }),
             },
         );
     }
     meta.insert("method".into(), super::heat::method_meta(&method));
     let how = Writing {
         render: args.render,
+        splats: input.splats.as_ref(),
         highlight: &[i],
         meta,
     };

@@ -338,6 +338,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let highlight: Vec<u32> = source.into_iter().collect();
     let how = Writing {
         render: args.render,
+        splats: input.splats.as_ref(),
         highlight: &highlight,
         meta,
     };

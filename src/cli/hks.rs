@@ -212,6 +212,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     );
     let how = Writing {
         render: args.render,
+        splats: input.splats.as_ref(),
         highlight: &[],
         meta,
     };

@@ -11,6 +11,7 @@ use mesh_fem::{
 };
 use std::path::{Path, PathBuf};
 use wfem_choice::Choice;
+use wfem_render::Splats;
 
 /// The mesh argument shared by every subcommand that reads a mesh.
 #[derive(Args, Clone, Debug, Default)]
@@ -126,6 +127,9 @@ pub struct Input {
     /// The point cloud, when the file holds one; `mesh` is then its neighbourhood mesh (the
     /// merged local triangles on the points, for figures and graph searches).
     pub cloud: Option<PointCloud>,
+    /// The point cloud drawn as splats in figures (its points with the normals of its
+    /// tangent planes and radii from its neighbourhood triangles), when the file holds one.
+    pub splats: Option<Splats>,
     /// The Laplacian of `--laplacian`.
     pub laplacian: Laplacian,
 }
@@ -296,8 +300,8 @@ pub fn read_input(args: &MeshArgs) -> Result<Input, CliError> {
         load_shape(&args.mesh, &LoadOptions::with_triangulation(args.triangulate))
     })?;
     let laplacian = args.laplacian();
-    let (mesh, load_report, cloud) = match shape {
-        Shape::Mesh(mesh, report) => (mesh, report, None),
+    let (mesh, load_report, cloud, splats) = match shape {
+        Shape::Mesh(mesh, report) => (mesh, report, None, None),
         Shape::Cloud(cloud) => {
             if !args.repair.is_empty() {
                 return Err(CliError::Usage(format!(
@@ -319,7 +323,8 @@ pub fn read_input(args: &MeshArgs) -> Result<Input, CliError> {
                 triangulated_polygons: 0,
                 notes: vec!["point cloud".into()],
             };
-            (ops.neighbourhood, report, Some(cloud))
+            let splats = Splats::from_triangles(cloud.positions().to_vec(), ops.normals, ops.neighbourhood.faces())?;
+            (ops.neighbourhood, report, Some(cloud), Some(splats))
         }
     };
     let file_vertices = mesh.n_vertices();
@@ -330,6 +335,7 @@ pub fn read_input(args: &MeshArgs) -> Result<Input, CliError> {
         file_vertices,
         name,
         cloud,
+        splats,
         laplacian,
     };
     if !args.repair.is_empty() {

@@ -9,7 +9,7 @@ use mesh_fem::TriMesh;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
 use wfem_choice::Choice;
-use wfem_render::{render_png, symmetric_range, Colormap, Frame, RenderParams, Up, View};
+use wfem_render::{render_png, render_splats_png, symmetric_range, Colormap, Frame, RenderParams, Splats, Up, View};
 
 /// The format of an output file, from its extension: a per-vertex field file or a rendered
 /// figure. Parsed once, when the arguments are parsed, so a wrong extension is refused before
@@ -316,18 +316,23 @@ pub fn figure_params(title: &str, values: &[f64], highlight: &[u32], views: Vec<
     }
 }
 
-/// A view facing vertex `v` from outside: along its area-weighted normal, turned to point
-/// away from the centroid (orientation-independent), with the frame's up as screen-up where
-/// it can be. `None` for a vertex without faces.
-fn source_view(mesh: &TriMesh, v: u32, frame: &Frame) -> Option<View> {
+/// A view facing vertex `v` from outside: along its area-weighted normal (the normal of its
+/// splat for a point cloud, whose neighbourhood triangles are not consistently oriented),
+/// turned to point away from the centroid (orientation-independent), with the frame's up as
+/// screen-up where it can be. `None` for a vertex without faces.
+fn source_view(mesh: &TriMesh, splats: Option<&Splats>, v: u32, frame: &Frame) -> Option<View> {
     use mesh_fem::vec3::{cross, dot, norm, sub};
     let positions = mesh.positions();
     let p = *positions.get(v as usize)?;
     let mut normal = [0.0; 3];
-    for f in mesh.faces().iter().filter(|f| f.contains(&v)) {
-        let [a, b, c] = f.map(|i| positions[i as usize]);
-        let n = cross(sub(b, a), sub(c, a));
-        normal = [normal[0] + n[0], normal[1] + n[1], normal[2] + n[2]];
+    if let Some(splats) = splats {
+        normal = *splats.normals().get(v as usize)?;
+    } else {
+        for f in mesh.faces().iter().filter(|f| f.contains(&v)) {
+            let [a, b, c] = f.map(|i| positions[i as usize]);
+            let n = cross(sub(b, a), sub(c, a));
+            normal = [normal[0] + n[0], normal[1] + n[1], normal[2] + n[2]];
+        }
     }
     let n = positions.len() as f64;
     let centroid = positions
@@ -388,6 +393,9 @@ pub struct Column {
 pub struct Writing<'a> {
     /// Figure options.
     pub render: RenderArgs,
+    /// The point cloud as splats, when the input is one: figures draw it instead of the mesh
+    /// (its neighbourhood triangles).
+    pub splats: Option<&'a Splats>,
     /// Vertices marked in the figures (e.g. the source of K_t e_i).
     pub highlight: &'a [u32],
     /// Metadata of the run (command, mesh, method, kernel, …) for the sidecar.
@@ -395,7 +403,8 @@ pub struct Writing<'a> {
 }
 
 /// Writes per-vertex fields in the format of `output`, all-or-nothing: `.png` renders one
-/// figure per field (the path itself for one field, `stem-<suffix>.png` beside it for several),
+/// figure per field (the path itself for one field, `stem-<suffix>.png` beside it for several;
+/// a point cloud is drawn as splats, in the views chosen from its neighbourhood mesh),
 /// `.ply` holds the mesh with one vertex property per field and vertex colors of the first,
 /// `.csv` one column per field, and `.npy` an n × k array plus its `.json` sidecar.
 ///
@@ -427,7 +436,10 @@ pub fn write_fields(
             let frame = how.render.frame(mesh);
             let mut views = View::standard_in(&frame);
             // The last (oblique) view looks at the highlighted vertex, so it is seen at least once.
-            let source = how.highlight.first().and_then(|&v| source_view(mesh, v, &frame));
+            let source = how
+                .highlight
+                .first()
+                .and_then(|&v| source_view(mesh, how.splats, v, &frame));
             if let Some(view) = source {
                 views[3] = view;
             }
@@ -444,8 +456,12 @@ pub fn write_fields(
             } else {
                 String::new()
             };
+            let splatted = match how.splats {
+                Some(splats) => format!("; the {} points drawn as splats", splats.len()),
+                None => String::new(),
+            };
             progress::note(&format!(
-                "figures: {up}views from {} (the broadest side), {}, above, and {last}",
+                "figures: {up}views from {} (the broadest side), {}, above, and {last}{splatted}",
                 wfem_render::direction_label(frame.front),
                 wfem_render::direction_label(frame.right),
             ));
@@ -453,7 +469,10 @@ pub fn write_fields(
             for (column, target) in columns.iter().zip(&targets) {
                 bar.set_detail(&column.suffix);
                 let params = figure_params(&column.title, &column.values, how.highlight, views.clone());
-                let png = render_png(mesh, &column.values, &params)?;
+                let png = match how.splats {
+                    Some(splats) => render_splats_png(splats, &column.values, &params)?,
+                    None => render_png(mesh, &column.values, &params)?,
+                };
                 set.stage(target, |w| w.write_all(&png))?;
                 bar.inc(&column.suffix);
             }

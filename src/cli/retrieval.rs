@@ -42,8 +42,7 @@ use shape_retrieval::spatial::SpatialBag;
 use shape_retrieval::Descriptor;
 use shape_retrieval::{
     BagDistance, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexStore, JsonFile,
-    RetrievalError, RetrievalIndex, RetrievalSettings, ShapeFeatures, Smoothing, VertexWeights, VocabularyModel,
-    VocabularyStore,
+    RetrievalIndex, RetrievalSettings, ShapeFeatures, Smoothing, VertexWeights, VocabularyModel, VocabularyStore,
 };
 use std::io::Write;
 use std::path::PathBuf;
@@ -91,11 +90,9 @@ pub enum RetrievalAction {
         /// it in parallel and `add` appends to it), or one JSON document (`.json`).
         #[arg(long)]
         out: PathBuf,
-        /// Reuse a vocabulary from `wfem retrieval vocab` (its descriptor settings are used).
-        /// Without it, the vocabulary is trained on the indexed meshes themselves, which is
-        /// optimistic when those same meshes are then used to measure retrieval.
-        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore", "laplacian"])]
-        vocab: Option<PathBuf>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        vocab: VocabArg,
         /// Replace `--out` if it exists (without it an existing index is never overwritten).
         #[arg(long)]
         force: bool,
@@ -131,9 +128,9 @@ pub enum RetrievalAction {
         /// its name without extension and digits (`stem`: cat10.off → cat).
         #[arg(long, conflicts_with = "labels", value_parser = choice::<ClassRule>())]
         class_from: Option<ClassRule>,
-        /// Reuse a vocabulary from `wfem retrieval vocab` (recommended: trained on other shapes).
-        #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore", "laplacian"])]
-        vocab: Option<PathBuf>,
+        #[command(flatten)]
+        #[allow(missing_docs)]
+        vocab: VocabArg,
         /// Also write the report (with every query) as JSON.
         #[arg(long)]
         json: Option<PathBuf>,
@@ -174,6 +171,17 @@ pub enum RetrievalAction {
     },
 }
 
+/// `--vocab` of `build` and `eval`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct VocabArg {
+    /// Reuse a vocabulary from `wfem retrieval vocab` (its descriptor settings are used;
+    /// recommended: trained on other shapes). Without it, the vocabulary is trained on the given
+    /// meshes themselves, which is optimistic when those same meshes are then used to measure
+    /// retrieval.
+    #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore", "laplacian"])]
+    pub vocab: Option<PathBuf>,
+}
+
 /// `--strict`: all-or-nothing over a collection.
 #[derive(Args, Clone, Copy, Debug, Default)]
 pub struct StrictArg {
@@ -211,6 +219,21 @@ impl Refused {
         }
     }
 
+    /// The library's tolerance for this flag.
+    fn tolerance(&self) -> shape_retrieval::collection::Tolerance {
+        if self.strict {
+            shape_retrieval::collection::Tolerance::Strict
+        } else {
+            shape_retrieval::collection::Tolerance::Skip
+        }
+    }
+
+    /// Records the shapes the library left out.
+    fn extend(&mut self, left_out: Vec<shape_retrieval::collection::Refusal>) {
+        self.files
+            .extend(left_out.into_iter().map(|r| (r.name, r.reason.to_string())));
+    }
+
     /// Nothing usable left: the error names every refused file.
     fn check_some(&self, left: usize, total: usize) -> Result<(), CliError> {
         if left > 0 {
@@ -240,39 +263,22 @@ impl Refused {
     }
 }
 
-/// Describes every mesh (in parallel, a bar per shape); a shape that cannot be described is
-/// refused (or, strict, the error).
+/// Describes every mesh (in parallel, a bar per shape; `shape_retrieval::collection`); a shape
+/// that cannot be described is refused (or, strict, the error).
 fn describe_all(
     meshes: &[(String, Shape)],
     descriptor: &shape_retrieval::DescriptorSettings,
     bags: &shape_retrieval::BagSettings,
     refused: &mut Refused,
 ) -> Result<Vec<ShapeFeatures>, CliError> {
-    use rayon::prelude::*;
-    descriptor.validate()?;
-    bags.validate(descriptor.eigenpairs)?;
+    use shape_retrieval::collection::describe_collection;
     let bar = super::progress::bar(meshes.len(), "describing shapes");
-    let results: Vec<Result<ShapeFeatures, RetrievalError>> = meshes
-        .par_iter()
-        .map(|(name, mesh)| {
-            let features = ShapeFeatures::compute(name, mesh, descriptor, bags);
-            bar.inc(name);
-            features
-        })
-        .collect();
+    let described = describe_collection(meshes, descriptor, bags, refused.tolerance(), &|name| bar.inc(name));
     bar.done();
-    let mut kept = Vec::with_capacity(meshes.len());
-    for ((name, _), result) in meshes.iter().zip(results) {
-        let result = result.map_err(|e| {
-            CliError::from(RetrievalError::Shape {
-                name: name.clone(),
-                source: Box::new(e),
-            })
-        });
-        kept.extend(refused.keep(name, result)?);
-    }
-    refused.check_some(kept.len(), meshes.len())?;
-    Ok(kept)
+    let described = described?;
+    refused.extend(described.refused);
+    refused.check_some(described.features.len(), meshes.len())?;
+    Ok(described.features)
 }
 
 /// Descriptor options (recorded in the vocabulary).
@@ -540,6 +546,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             bags,
             strict,
         } => {
+            let vocab = &vocab.vocab;
             let inputs: Vec<&std::path::Path> = files.iter().chain(vocab).map(PathBuf::as_path).collect();
             shape_retrieval::check_index_output(path, &inputs, *force)?;
             let (settings, vocabulary) =
@@ -587,6 +594,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             training,
             bags,
         } => {
+            let vocab = &vocab.vocab;
             let outputs: Vec<&std::path::Path> = json.iter().chain(index).map(PathBuf::as_path).collect();
             let labelled = labelled_files(files, labels.as_deref(), class_from.unwrap_or_default())?;
             let (settings, vocabulary) =
@@ -642,13 +650,13 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 &mut refused,
             )?;
             let bar = super::progress::bar(meshes.len(), "describing shapes");
-            let mut entries = Vec::with_capacity(meshes.len());
-            for (name, shape) in &meshes {
-                let entry = settings.describe(name, shape).map_err(CliError::from);
-                bar.inc(name);
-                entries.extend(refused.keep(name, entry)?);
-            }
+            let described =
+                shape_retrieval::collection::describe_entries(&settings, &meshes, refused.tolerance(), &|name| {
+                    bar.inc(name)
+                });
             bar.done();
+            let (entries, left_out) = described?;
+            refused.extend(left_out);
             refused.check_some(entries.len(), files.len())?;
             store.append(&settings, &entries)?;
             writeln!(

@@ -43,6 +43,7 @@ fn heat_and_operators_read_a_point_cloud() {
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("k.json")).unwrap()).unwrap();
     assert_eq!(sidecar["input"]["laplacian"], "robust", "{sidecar}");
     assert_eq!(sidecar["input"]["point_cloud"], true, "{sidecar}");
+
     let ops = dir.path().join("ops");
     let o = wfem(&["operators", cloud.to_str().unwrap(), "--out", ops.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -90,6 +91,126 @@ fn laplacian_flag_takes_the_library_names_and_non_manifold_meshes_are_warned() {
     let o = run(Some("intrinsic"));
     assert!(!o.status.success());
     assert!(stderr(&o).contains("robust"), "{}", stderr(&o));
+}
+
+/// n points uniformly distributed on the surface of `mesh` (an area-weighted face, then
+/// uniform barycentric coordinates; SplitMix64 numbers), as `.xyz` text in `path`.
+fn write_samples(mesh: &mesh_fem::TriMesh, n: usize, path: &std::path::Path) {
+    let mut state = 0x5eed_u64;
+    let mut uniform = move || {
+        state = state.wrapping_add(0x9e3779b97f4a7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
+        (((z ^ (z >> 31)) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    };
+    let mut cumulative = Vec::with_capacity(mesh.n_faces());
+    let mut total = 0.0;
+    for f in 0..mesh.n_faces() {
+        total += mesh.face_area(f);
+        cumulative.push(total);
+    }
+    let mut text = String::new();
+    for _ in 0..n {
+        let r = uniform() * total;
+        let f = cumulative.partition_point(|&c| c < r).min(mesh.n_faces() - 1);
+        let (mut u, mut v) = (uniform(), uniform());
+        if u + v > 1.0 {
+            (u, v) = (1.0 - u, 1.0 - v);
+        }
+        let c = mesh.corners(f);
+        let p = [0, 1, 2].map(|a| (1.0 - u - v) * c[0][a] + u * c[1][a] + v * c[2][a]);
+        writeln!(text, "{} {} {}", p[0], p[1], p[2]).unwrap();
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+/// The RGB pixels of a PNG, its width and height.
+fn read_png(path: &std::path::Path) -> (Vec<u8>, usize, usize) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    buf.truncate(info.buffer_size());
+    (buf, info.width as usize, info.height as usize)
+}
+
+/// Issue #27: a cloud's figures draw it as splats — a closed surface with the silhouette of
+/// the mesh it was sampled from (the first three views are the same for both: front, side,
+/// top; the fourth faces each one's source), and the source's red dot.
+#[test]
+fn cloud_figures_are_splats_with_the_silhouette_of_the_sampled_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let torus = mesh_fem::generate::torus(1.0, 0.4, 96, 48);
+    let mesh = dir.path().join("torus.obj");
+    mesh_fem::io::write_mesh(&mesh, &torus).unwrap();
+    let cloud = dir.path().join("torus.xyz");
+    write_samples(&torus, 10_000, &cloud);
+    let figure = |input: &std::path::Path, command: &str, out: &str| {
+        let out = dir.path().join(out);
+        let flag = if command == "heat" { "--source" } else { "--from" };
+        let mut args = vec![command, input.to_str().unwrap(), "--t", "0.02", flag, "0", "--up", "z"];
+        args.extend(["-o", out.to_str().unwrap()]);
+        let o = wfem(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (read_png(&out), stderr(&o))
+    };
+    for command in ["heat", "distance"] {
+        let ((mesh_px, w, h), mesh_log) = figure(&mesh, command, "mesh.png");
+        let ((cloud_px, cw, ch), cloud_log) = figure(&cloud, command, "cloud.png");
+        assert!(!mesh_log.contains("splats"), "{mesh_log}");
+        assert!(cloud_log.contains("the 10000 points drawn as splats"), "{cloud_log}");
+        // The same layout but for the width of the title.
+        assert_eq!(h, ch);
+        let (mesh_img, cloud_img) = ((mesh_px.as_slice(), w), (cloud_px.as_slice(), cw));
+        let pixel = |(px, width): (&[u8], usize), x: usize, y: usize| -> [u8; 3] {
+            let i = 3 * (y * width + x);
+            [px[i], px[i + 1], px[i + 2]]
+        };
+        let covered = |img, x, y| pixel(img, x, y) != [255; 3];
+        let view = 480; // RenderParams::default().width
+                        // The views, below the title.
+        let (top, bottom) = (h - view, h);
+        // The sources' red dots (radius ≈ 8 px with the rim) reach past the surfaces: skip them.
+        let mut near_dot = vec![false; 3 * view * h];
+        for y in top..bottom {
+            for x in 0..3 * view {
+                if [mesh_img, cloud_img]
+                    .iter()
+                    .any(|&img| pixel(img, x, y) == [225, 25, 30])
+                {
+                    for yy in y.saturating_sub(10)..(y + 11).min(h) {
+                        for xx in x.saturating_sub(10)..(x + 11).min(3 * view) {
+                            near_dot[yy * 3 * view + xx] = true;
+                        }
+                    }
+                }
+            }
+        }
+        let (mut area, mut differ, mut holes) = (0, 0, 0);
+        for y in top..bottom {
+            for x in 0..3 * view {
+                if near_dot[y * 3 * view + x] {
+                    continue;
+                }
+                let a = covered(mesh_img, x, y);
+                area += a as usize;
+                differ += (a != covered(cloud_img, x, y)) as usize;
+                let interior = (y.saturating_sub(2)..(y + 3).min(bottom))
+                    .all(|yy| (x.saturating_sub(2)..(x + 3).min(3 * view)).all(|xx| covered(mesh_img, xx, yy)));
+                holes += (interior && !covered(cloud_img, x, y)) as usize;
+            }
+        }
+        eprintln!("{command}: {differ} of {area} silhouette pixels differ, {holes} holes");
+        assert_eq!(holes, 0, "{command}: {holes} holes in the splats");
+        assert!(
+            (differ as f64) < 0.03 * area as f64,
+            "{command}: {differ} of {area} pixels differ"
+        );
+        let red = cloud_px.chunks(3).filter(|p| *p == [225, 25, 30]).count();
+        assert!(red > 20, "{command}: {red} red pixels");
+    }
 }
 
 /// Writes an (n, 3) float64 array as `.npy` (format 1.0).

@@ -152,3 +152,77 @@ fn an_add_never_puts_bags_of_another_vocabulary_into_a_rebuilt_index() {
     let (_, store) = SqliteIndex::new(&index).open().unwrap();
     assert_eq!(store.len().unwrap(), 2);
 }
+
+/// Issue #23: `build --force` and `add` on the same path from two processes at once, many
+/// times: whichever wins, the index that is left holds only bags of its own vocabulary (each
+/// entry equals the shape described again with the final index's settings) and both commands
+/// either succeed or say why.
+#[test]
+fn a_build_racing_an_add_in_another_process_never_mixes_vocabularies() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    let index = dir.path().join("index.sqlite");
+    assert!(build(&files[..2], &index, &[]).status.success());
+    let exe = env!("CARGO_BIN_EXE_wfem");
+    let mut outcomes = std::collections::BTreeMap::<String, usize>::new();
+    // The add starts at spread points of the rebuild's duration (measured once), so the rounds
+    // cover the add committing before, during and after the rebuild.
+    let t0 = std::time::Instant::now();
+    assert!(build(&files[..2], &index, &["--force"]).status.success());
+    let duration = t0.elapsed();
+    const ROUNDS: u32 = 8;
+    for round in 0..ROUNDS {
+        let seed = (round + 1).to_string();
+        let mut args = vec!["retrieval", "build", files[0].as_str(), files[1].as_str()];
+        args.extend(["--out", index.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+        args.extend(["--force", "--seed", seed.as_str()]);
+        let mut rebuild = std::process::Command::new(exe)
+            .args(&args)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(duration * round / ROUNDS);
+        let mut add = std::process::Command::new(exe)
+            .args(["retrieval", "add", index.to_str().unwrap(), files[2].as_str()])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let rebuilt = rebuild.wait().unwrap();
+        let added = add.wait().unwrap();
+        let mut add_err = String::new();
+        std::io::Read::read_to_string(add.stderr.as_mut().unwrap(), &mut add_err).unwrap();
+        assert!(rebuilt.success(), "round {round}: the rebuild failed");
+        if !added.success() {
+            // Refused because the index was replaced or rebuilt under it, or the name exists.
+            assert!(
+                add_err.contains("replaced") || add_err.contains("rebuilt") || add_err.contains("already"),
+                "round {round}: {add_err}"
+            );
+        }
+        let (settings, store) = SqliteIndex::new(&index).open().unwrap();
+        let shapes = store.shapes().unwrap();
+        *outcomes
+            .entry(format!("{} shapes, add ok {}", shapes.len(), added.success()))
+            .or_default() += 1;
+        let stored = shape_retrieval::IndexStore::load_index(&SqliteIndex::new(&index)).unwrap();
+        for entry in stored.entries() {
+            let (mesh, _) = mesh_fem::io::load(Path::new(&entry.name), &Default::default()).unwrap();
+            let again = settings.describe(&entry.name, &mesh).unwrap();
+            let worst = entry
+                .signature
+                .bag
+                .iter()
+                .zip(&again.signature.bag)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                worst < 1e-5,
+                "round {round}: {} holds a bag of another vocabulary ({worst})",
+                entry.name
+            );
+        }
+    }
+    eprintln!("outcomes: {outcomes:?}");
+}

@@ -9,7 +9,10 @@
 //! 4. the extension built by maturin in the **dev** profile, the one `cargo test` just used, so
 //!    the dependencies compiled for the tests are reused, and installed into the venv as a
 //!    wheel (like a user's `pip install`);
-//! 5. pytest on `crates/wfem-py/tests`.
+//! 5. pytest on `crates/wfem-py/tests`;
+//! 6. the wheel route of a new user: the same wheel with its declared dependencies (and the
+//!    `batch` extra) in a venv of its own, running the Python README's quick start and both
+//!    examples from a temporary folder.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -139,8 +142,87 @@ pub(crate) fn ensure_requirements(python: &Path, venv: &Path, requirements: &Pat
     std::fs::write(&stamp, &wanted).map_err(|e| StepError(format!("{}: {e}", stamp.display())))
 }
 
-/// Builds the wheel (dev profile) and installs it into the venv.
-fn install_wfem(python: &Path, venv: &Path, root: &Path, target: &Path) -> Result<(), StepError> {
+/// The wheel route of a new user, on the wheel the suite just built: a venv of its own with
+/// only `pip install 'wfem-….whl[batch]'` (the declared dependencies and the `batch` extra, no
+/// test packages), then, from a temporary folder, the Python README's quick start and both
+/// examples (`smooth.py` on its default mesh, `retrieval.py` on twelve shapes of the corpus).
+fn wheel_route(root: &Path, target: &Path, wheel: &Path) -> Result<(), StepError> {
+    let venv = target.join("python-wheel-venv");
+    let python = ensure_venv(&venv)?;
+    let spec = format!("{}[batch]", wheel.display());
+    run_step(
+        "pip install the wheel with its dependencies",
+        pip_install(&python).arg(&spec),
+    )?;
+    // The same version as last time is "already satisfied": put this build's wheel in.
+    run_step(
+        "pip install this build's wheel",
+        pip_install(&python).args(["--force-reinstall", "--no-deps"]).arg(wheel),
+    )?;
+    let work = target.join("python-wheel-route");
+    let _ = std::fs::remove_dir_all(&work);
+    std::fs::create_dir_all(&work).map_err(|e| StepError(format!("{}: {e}", work.display())))?;
+    let readme = root.join("crates/wfem-py/README.md");
+    let text = std::fs::read_to_string(&readme).map_err(|e| StepError(format!("{}: {e}", readme.display())))?;
+    let quick = text
+        .split_once("## Quick start")
+        .and_then(|(_, rest)| rest.split_once("```python\n"))
+        .and_then(|(_, rest)| rest.split_once("```"))
+        .map(|(code, _)| code.to_string());
+    let Some(quick) = quick else {
+        return fail(format!(
+            "{}: no ```python block under \"## Quick start\"",
+            readme.display()
+        ));
+    };
+    let script = work.join("quick_start.py");
+    std::fs::write(&script, quick).map_err(|e| StepError(format!("{}: {e}", script.display())))?;
+    run_step(
+        "README quick start from the wheel",
+        Command::new(&python).arg(&script).current_dir(&work),
+    )?;
+    let examples = root.join("crates/wfem-py/examples");
+    run_step(
+        "examples/smooth.py from the wheel",
+        Command::new(&python).arg(examples.join("smooth.py")).current_dir(&work),
+    )?;
+    // Twelve shapes of four classes (the example's default folder is all 76).
+    let corpus = mesh_fem::corpus::meshes_dir().map_err(|e| StepError(e.to_string()))?;
+    let tosca = corpus.join("tosca-bcicp-5k").join("TOSCA_Isometric");
+    let folder = work.join("shapes");
+    std::fs::create_dir_all(&folder).map_err(|e| StepError(format!("{}: {e}", folder.display())))?;
+    let mut names: Vec<String> = std::fs::read_dir(&tosca)
+        .map_err(|e| StepError(format!("{}: {e}", tosca.display())))?
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".off"))
+        .collect();
+    names.sort();
+    for class in ["cat", "dog", "horse", "wolf"] {
+        let poses = names.iter().filter(|n| {
+            n.trim_end_matches(".off")
+                .trim_end_matches(|c: char| c.is_ascii_digit())
+                == class
+        });
+        for name in poses.take(3) {
+            std::fs::copy(tosca.join(name), folder.join(name))
+                .map_err(|e| StepError(format!("{}: {e}", tosca.join(name).display())))?;
+        }
+    }
+    run_step(
+        "examples/retrieval.py from the wheel",
+        Command::new(&python)
+            .arg(examples.join("retrieval.py"))
+            .arg(&folder)
+            .args(["--words", "16", "--index"])
+            .arg(work.join("index.sqlite"))
+            .current_dir(&work),
+    )?;
+    let _ = std::fs::remove_dir_all(&work);
+    Ok(())
+}
+
+/// Builds the wheel (dev profile) and installs it into the venv; returns the wheel.
+fn install_wfem(python: &Path, venv: &Path, root: &Path, target: &Path) -> Result<PathBuf, StepError> {
     let wheels = target.join("python-wheels");
     let _ = std::fs::remove_dir_all(&wheels);
     run_step(
@@ -172,7 +254,8 @@ fn install_wfem(python: &Path, venv: &Path, root: &Path, target: &Path) -> Resul
     run_step(
         "pip install wfem",
         pip_install(python).args(["--no-deps", "--force-reinstall"]).arg(&wheel),
-    )
+    )?;
+    Ok(wheel)
 }
 
 fn pip_install(python: &Path) -> Command {
@@ -207,7 +290,7 @@ pub fn run(opts: &TestAllOptions) -> Result<(), StepError> {
         ensure_requirements(&python, &venv, &root.join("crates/wfem-py/requirements-test.txt"))?;
         times.push(("Python environment", t.elapsed()));
         let t = Instant::now();
-        install_wfem(&python, &venv, &root, &target)?;
+        let wheel = install_wfem(&python, &venv, &root, &target)?;
         times.push(("wfem extension (maturin, dev profile)", t.elapsed()));
         let t = Instant::now();
         let mut pytest = Command::new(&python);
@@ -225,6 +308,9 @@ pub fn run(opts: &TestAllOptions) -> Result<(), StepError> {
         }
         run_step("Python suite", &mut pytest)?;
         times.push(("Python suite (pytest)", t.elapsed()));
+        let t = Instant::now();
+        wheel_route(&root, &target, &wheel)?;
+        times.push(("wheel route (fresh venv: quick start, both examples)", t.elapsed()));
     }
     eprintln!("==> all suites passed");
     for (name, d) in times {

@@ -383,13 +383,13 @@ pub(crate) fn faces_around_vertices(faces: &[[u32; 3]], first: &[usize]) -> Vec<
 }
 
 /// L and B as column arrays on one pattern, and the lumped diagonal.
-struct Columns {
-    col_ptr: Vec<usize>,
+pub(crate) struct Columns {
+    pub col_ptr: Vec<usize>,
     /// The row indices, once for L and once for B (each matrix owns a copy).
-    row_idx: [Vec<usize>; 2],
-    l_val: Vec<f64>,
-    b_val: Vec<f64>,
-    lumped_diagonal: Vec<f64>,
+    pub row_idx: [Vec<usize>; 2],
+    pub l_val: Vec<f64>,
+    pub b_val: Vec<f64>,
+    pub lumped_diagonal: Vec<f64>,
 }
 
 /// The half-edges (j, i) of face `f` at its corner j, with their stiffness values: the edge
@@ -417,14 +417,62 @@ fn merge_columns(
     elements: &[FaceElement],
     corner_mass: &[[f64; 3]],
 ) -> Columns {
-    let n = first.len() - 1;
     let voronoi = !corner_mass.is_empty();
     // 3a. Count the distinct rows of each column, then lay out the column pointers.
     let (chunks, col_ptr) = column_layout(around, first, faces);
-    let nnz = col_ptr[n];
 
-    // 3b. Write the merged entries of L, B, D and the three copies of the row indices into
-    //     disjoint per-chunk slices of the final arrays, in parallel.
+    // 3b. Write the merged entries (shared pass: `write_columns`).
+    write_columns(&chunks, col_ptr, |j, buf| {
+        let mut d_jj = 0.0;
+        for &f in &around[first[j]..first[j + 1]] {
+            let f = f as usize;
+            let e = elements[f];
+            let (k, half_edges) = corner_half_edges(faces[f], j, e.cots);
+            // B_ij = Σ|T|/12 over the faces of edge ij.
+            let b = e.area / 12.0;
+            // Merge duplicates as they come (an interior edge appears once per incident
+            // face), so each entry is summed in face order, the same order as on the other
+            // side of the diagonal: L and B come out bitwise symmetric.
+            for (i, lv) in half_edges {
+                match buf.iter_mut().find(|e| e.0 == i) {
+                    Some(e) => {
+                        e.1 += lv;
+                        e.2 += b;
+                    }
+                    None => buf.push((i, lv, b)),
+                }
+            }
+            d_jj += if voronoi { corner_mass[f][k] } else { e.area / 3.0 };
+        }
+        // Each incident face puts |T|/12 on two edges at j, so the off-diagonal sum of column
+        // j of B is Σ_{T∋j}|T|/6 = B_jj.
+        ColumnDiagonal {
+            lumped: d_jj,
+            mass: None,
+        }
+    })
+}
+
+/// The diagonal entries of one column (what [`write_columns`] cannot derive).
+pub(crate) struct ColumnDiagonal {
+    /// D_jj.
+    pub lumped: f64,
+    /// B_jj, or `None` for the sum of the column's off-diagonal B entries.
+    pub mass: Option<f64>,
+}
+
+/// The write pass shared by the cotangent and the intrinsic assembly: for every column j (in
+/// parallel over `chunks`), `column(j, buf)` fills `buf` with the merged off-diagonal entries
+/// `(row, L, B)` of column j (distinct rows, any order) and returns its diagonal entries; the
+/// rows are sorted, `L_jj = −Σ_i L_ij` (so `L·1 = 0`), and the entries are written into disjoint
+/// per-chunk slices of the final arrays at `col_ptr`.
+pub(crate) fn write_columns(
+    chunks: &[(usize, usize)],
+    col_ptr: Vec<usize>,
+    column: impl Fn(usize, &mut Vec<(u32, f64, f64)>) -> ColumnDiagonal + Sync,
+) -> Columns {
+    let n = col_ptr.len() - 1;
+    let nnz = col_ptr[n];
     let mut row_idx = [vec![0usize; nnz], vec![0usize; nnz]];
     let mut l_val = vec![0.0f64; nnz];
     let mut b_val = vec![0.0f64; nnz];
@@ -438,8 +486,9 @@ fn merge_columns(
             .zip(split_at_bounds(&mut l_val, &bounds))
             .zip(split_at_bounds(&mut b_val, &bounds))
             .zip(lumped_diagonal.chunks_mut(COLUMNS_PER_CHUNK))
-            .zip(&chunks)
+            .zip(chunks)
             .collect();
+        let col_ptr = &col_ptr;
         work.into_par_iter()
             .for_each(|(((((l_rows, b_rows), l), b), diag), &(col_start, col_end))| {
                 // Half-edges (row i, L value, B value) of column j.
@@ -447,36 +496,13 @@ fn merge_columns(
                 let base = col_ptr[col_start];
                 for j in col_start..col_end {
                     buf.clear();
-                    let mut d_jj = 0.0;
-                    for &f in &around[first[j]..first[j + 1]] {
-                        let f = f as usize;
-                        let e = elements[f];
-                        let (k, half_edges) = corner_half_edges(faces[f], j, e.cots);
-                        // B_ij = Σ|T|/12 over the faces of edge ij.
-                        let b = e.area / 12.0;
-                        // Merge duplicates as they come (an interior edge appears once per
-                        // incident face), so each entry is summed in face order, the same
-                        // order as on the other side of the diagonal: L and B come out
-                        // bitwise symmetric.
-                        for (i, lv) in half_edges {
-                            match buf.iter_mut().find(|e| e.0 == i) {
-                                Some(e) => {
-                                    e.1 += lv;
-                                    e.2 += b;
-                                }
-                                None => buf.push((i, lv, b)),
-                            }
-                        }
-                        d_jj += if voronoi { corner_mass[f][k] } else { e.area / 3.0 };
-                    }
+                    let d = column(j, &mut buf);
                     // The rows are distinct now.
                     buf.sort_unstable_by_key(|e| e.0);
-                    diag[j - col_start] = d_jj;
+                    diag[j - col_start] = d.lumped;
                     let merged = &buf[..];
                     let l_diag = -merged.iter().map(|e| e.1).sum::<f64>();
-                    // Each incident face puts |T|/12 on two edges at j, so the off-diagonal
-                    // sum of column j of B is Σ_{T∋j}|T|/6 = B_jj.
-                    let b_diag = merged.iter().map(|e| e.2).sum::<f64>();
+                    let b_diag = d.mass.unwrap_or_else(|| merged.iter().map(|e| e.2).sum::<f64>());
                     let split = merged.partition_point(|e| (e.0 as usize) < j);
                     let mut p = col_ptr[j] - base;
                     let mut put = |i: usize, lv: f64, bv: f64| {
@@ -496,7 +522,6 @@ fn merge_columns(
                 }
             });
     }
-
     Columns {
         col_ptr,
         row_idx,

@@ -136,6 +136,14 @@ pub enum RetrievalError {
         /// The failure.
         source: Box<RetrievalError>,
     },
+    /// No shape of a collection could be described (each is named with its reason).
+    #[error("none of the {shapes} shapes could be used: {reasons}")]
+    NothingUsable {
+        /// How many shapes were given.
+        shapes: usize,
+        /// `name: reason` of each, separated by `; `.
+        reasons: String,
+    },
     /// A time window in units of the surface area was asked for, and the area is not known.
     #[error("the time window is in units of the surface area: call Spectrum::with_area")]
     AreaRequired,

@@ -15,6 +15,8 @@
 //! * [`sihks`]: the scale-invariant HKS of Bronstein & Kokkinos;
 //! * [`kmeans`](mod@kmeans), [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;
 //! * [`retrieval`]: ranking, average precision, mAP, precision/recall;
+//! * [`collection`]: a collection described or indexed in parallel, with progress, its
+//!   unusable shapes left out and reported (or fatal);
 //! * [`eval`](mod@eval): a labelled collection evaluated leave-one-out (mAP, NN, tiers,
 //!   E-measure, DCG, per class, confused pairs);
 //! * [`descriptor`]: from a mesh to DHK1–DHK3, SI-HKS and the SHK1/SHK2 feature points;
@@ -28,6 +30,7 @@
 
 pub mod bof;
 mod check;
+pub mod collection;
 pub mod descriptor;
 pub mod distance;
 mod error;

@@ -203,6 +203,7 @@ impl Lanczos<'_, '_> {
         // Rayleigh–Ritz checks between restarts: a few per cycle (each is O(m³) dense work).
         let mut next_check = self.check_stride();
         loop {
+            crate::interrupt::checkpoint()?;
             let (j0, dim) = (self.j0, self.dim);
             let mut w = (self.apply)(self.v.as_ref().get(.., j0..dim), self.mq.as_ref())?;
             self.applications += dim - j0;

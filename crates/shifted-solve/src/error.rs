@@ -4,6 +4,9 @@ use faer::c64;
 #[derive(Debug, Clone, thiserror::Error)]
 #[non_exhaustive]
 pub enum SolveError {
+    /// The computation was interrupted by its caller ([`crate::interrupt`]).
+    #[error(transparent)]
+    Interrupted(#[from] crate::interrupt::Interrupted),
     /// Matrix or vector dimensions do not agree.
     #[error("dimension mismatch: {what} (expected {expected}, got {got})")]
     DimensionMismatch {

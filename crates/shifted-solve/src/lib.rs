@@ -34,6 +34,8 @@
 //! * [`symmetric_eigen`]: the one scale-robust dense symmetric eigensolver of the Lanczos
 //!   methods and of wfem-heat's dense reference.
 //! * [`rng`]: the workspace's one seeded generator.
+//! * [`interrupt`]: cooperative interruption of long computations (checkpoints between poles,
+//!   restarts, times and blocks).
 //! * [`ConditionReport`]: 2-norm condition numbers of tL − zB and of the preconditioned
 //!   operator (paper Fig. 2c,d).
 
@@ -49,6 +51,7 @@ mod eigen;
 mod error;
 mod factor;
 mod function;
+pub mod interrupt;
 mod iterative;
 mod lanczos;
 mod ldlt;

@@ -5,6 +5,7 @@
 //! cloud_bench operators cloud.npy           # L, B, D from the cloud (k = 30)
 //! cloud_bench heat-cloud cloud.npy 0.01     # operators, then K_t x on the cloud
 //! cloud_bench heat-mesh 1000000 0.01        # a torus mesh of about that many vertices
+//! cloud_bench heat-cloud-torus 1000000 0.01 # the same torus's vertices as a cloud
 //! ```
 //! `kernel_seconds` excludes reading the file; `heat_seconds` is `HeatKernel::new` plus one
 //! `apply` (the wFEM kernel, fast exact path).
@@ -21,6 +22,13 @@ fn heat_seconds(ops: &FemOperators, f: &[f64], t: f64) -> Result<f64, Box<dyn st
     let seconds = start.elapsed().as_secs_f64();
     assert!(g.iter().all(|x| x.is_finite()));
     Ok(seconds)
+}
+
+/// A torus of nu × nv ≈ n vertices with nu = 2.5 nv (well-shaped triangles).
+fn torus_of(n: usize) -> mesh_fem::TriMesh {
+    let nv = ((n as f64 / 2.5).sqrt()).round() as usize;
+    let nu = n.div_ceil(nv);
+    generate::torus(1.0, 0.4, nu, nv)
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -47,12 +55,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ops.report.n_triangles
             );
         }
+        "heat-cloud-torus" => {
+            // The vertices of the torus mesh of `heat-mesh`, as a cloud (no faces): the same
+            // points and surface, so the two runs compare the cloud path with the mesh path.
+            let n: usize = args.get(1).map_or(Ok(1_000_000), |s| s.parse())?;
+            let mesh = torus_of(n);
+            let cloud = mesh_fem::PointCloud::new(mesh.positions().to_vec(), None)?;
+            let start = Instant::now();
+            let ops = assemble_cloud(&cloud, &CloudParams::default(), &AssemblyParams::default())?;
+            let kernel_seconds = start.elapsed().as_secs_f64();
+            let f: Vec<f64> = cloud.positions().iter().map(|p| p[0]).collect();
+            let heat = heat_seconds(&ops.operators, &f, t)?;
+            println!(
+                "{{\"n\": {}, \"nnz\": {}, \"kernel_seconds\": {kernel_seconds}, \"heat_seconds\": {heat}}}",
+                cloud.n_points(),
+                ops.operators.stiffness.val().len()
+            );
+        }
         "heat-mesh" => {
             let n: usize = args.get(1).map_or(Ok(1_000_000), |s| s.parse())?;
-            // A torus of nu × nv vertices with nu = 2.5 nv (well-shaped triangles).
-            let nv = ((n as f64 / 2.5).sqrt()).round() as usize;
-            let nu = n.div_ceil(nv);
-            let mesh = generate::torus(1.0, 0.4, nu, nv);
+            let mesh = torus_of(n);
             let start = Instant::now();
             let ops = assemble(&mesh, &AssemblyParams::default())?;
             let kernel_seconds = start.elapsed().as_secs_f64();
@@ -64,7 +86,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ops.stiffness.val().len()
             );
         }
-        _ => return Err("usage: cloud_bench operators|heat-cloud POINTS.npy [t] | heat-mesh N [t]".into()),
+        _ => {
+            return Err(
+                "usage: cloud_bench operators|heat-cloud POINTS.npy [t] | heat-mesh N [t] | heat-cloud-torus N [t]"
+                    .into(),
+            )
+        }
     }
     Ok(())
 }

@@ -61,7 +61,7 @@ wfem_choice::registry! {
             "selected inversion of the rational method's factors: exact at every t, no eigenpairs (default)",
         DiagonalMethod::Probing { .. } = DiagonalMethod::Probing { tol: DEFAULT_PROBING_TOL } => "probing":
             "probing with a distance-p colouring of the mesh (Tang & Saad), relative tail tol",
-        DiagonalMethod::UnitColumns = DiagonalMethod::UnitColumns => "columns" ["unit-columns"]:
+        DiagonalMethod::UnitColumns = DiagonalMethod::UnitColumns => "unit-columns" ["columns"]:
             "n unit columns (small meshes; a reference)",
     }
 }

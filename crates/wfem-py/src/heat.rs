@@ -316,7 +316,7 @@ impl PyHeatKernel {
         let series = run(py, move |_| Ok(kernel.diagonal(&times, which, &params)?))?;
         let info = PyDict::new(py);
         info.set_item("method", series.info.method.name())?;
-        info.set_item("columns", series.info.columns)?;
+        info.set_item("probe_columns", series.info.columns)?;
         info.set_item("hops", series.info.hops)?;
         info.set_item("relative_tail", series.info.relative_tail)?;
         info.set_item("error_estimates", series.error_estimates)?;

@@ -3,15 +3,16 @@
 //! A file built here is queried by `wfem retrieval query` and vice versa.
 
 use crate::convert::mesh_in;
-use crate::errors::{invalid_param, Error};
-use crate::run::run;
+use crate::errors::Error;
+use crate::run::{run, run_reporting, Progress};
 use mesh_fem::io::{load_shape, LoadOptions, Shape};
 use mesh_fem::Laplacian;
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use retrieval_store::SqliteIndex;
+use shape_retrieval::collection::{build_index, describe_entries, Refusal, Tolerance};
 use shape_retrieval::eval::{evaluate_index, vocabulary_source, ClassRule};
-use shape_retrieval::{IndexStore, JsonFile, RetrievalIndex, RetrievalSettings, VocabularyStore};
+use shape_retrieval::{IndexStore, JsonFile, RetrievalError, RetrievalIndex, RetrievalSettings, VocabularyStore};
 use std::path::PathBuf;
 use wfem_choice::Choice;
 
@@ -21,33 +22,84 @@ pub struct PyRetrievalIndex {
     path: PathBuf,
 }
 
-/// Meshes and point clouds, whichever each file holds (`mesh_fem::io::load_shape`).
-fn read_all(paths: &[PathBuf]) -> Result<Vec<(String, Shape)>, Error> {
-    paths
-        .iter()
-        .map(|p| Ok((p.display().to_string(), load_shape(p, &LoadOptions::default())?)))
-        .collect()
+/// Files of a collection left out, with why (`(file, reason)`, in input order).
+type Refused = Vec<(String, String)>;
+
+/// Reads every file, a mesh or a point cloud (`mesh_fem::io::load_shape`); one that cannot be
+/// read is refused (or, strict, the error).
+fn read_all(
+    paths: &[PathBuf],
+    tolerance: Tolerance,
+    progress: &Progress,
+) -> Result<(Vec<(String, Shape)>, Refused), Error> {
+    let mut meshes = Vec::with_capacity(paths.len());
+    let mut refused = Refused::new();
+    for p in paths {
+        let name = p.display().to_string();
+        match load_shape(p, &LoadOptions::default()) {
+            Ok(shape) => meshes.push((name, shape)),
+            Err(e) if tolerance == Tolerance::Skip => {
+                // A refused file is a finished step too: the bar counts every file.
+                progress.step(&name);
+                refused.push((name, e.to_string()));
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
+    Ok((meshes, refused))
 }
 
-/// The Laplacian of `laplacian=`, which must be `recorded` (an index's or a vocabulary's):
-/// shapes described with another one would not be comparable with the stored ones.
-fn same_laplacian(py: Python<'_>, laplacian: Option<&str>, recorded: Laplacian, whose: &str) -> PyResult<()> {
-    if laplacian.is_none() {
-        return Ok(());
+fn tolerance(strict: bool) -> Tolerance {
+    if strict {
+        Tolerance::Strict
+    } else {
+        Tolerance::Skip
     }
-    let asked: Laplacian = crate::choices::parse(py, "laplacian", laplacian)?;
-    if asked == recorded {
-        return Ok(());
+}
+
+/// Adds the library's refusals to the files that could not be read, in the order of `paths`;
+/// no usable shape left is the error naming every file.
+fn merge_refused(
+    paths: &[PathBuf],
+    mut refused: Refused,
+    left_out: Vec<Refusal>,
+    kept: usize,
+) -> Result<Refused, Error> {
+    refused.extend(left_out.into_iter().map(|r| (r.name, r.reason.to_string())));
+    let order: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    refused.sort_by_key(|(name, _)| order.iter().position(|o| o == name));
+    if kept == 0 && !refused.is_empty() {
+        let reasons: Vec<String> = refused.iter().map(|(f, why)| format!("{f}: {why}")).collect();
+        return Err(RetrievalError::NothingUsable {
+            shapes: refused.len(),
+            reasons: reasons.join("; "),
+        }
+        .into());
     }
-    Err(invalid_param(
-        py,
-        "laplacian",
-        format!(
-            "{:?}: {whose} was built with the {:?} Laplacian, and shapes are described as its own were (omit laplacian=)",
-            asked.name(),
-            recorded.name()
-        ),
-    ))
+    Ok(refused)
+}
+
+/// `laplacian=` must name `recorded` (an index's or a vocabulary's Laplacian): shapes described
+/// with another one would not be comparable with the stored ones.
+fn same_laplacian(asked: Option<Laplacian>, recorded: Laplacian, whose: &str) -> Result<(), Error> {
+    match asked {
+        Some(asked) if asked != recorded => Err(Error::Invalid(
+            "InvalidParameter",
+            format!(
+                "invalid parameter `laplacian`: {:?}, but {whose} was built with the {:?} Laplacian and shapes are described as its own were (omit laplacian=)",
+                asked.name(),
+                recorded.name()
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The Laplacian a `laplacian=` names, if given (parsed with the registry's names).
+fn laplacian_arg(py: Python<'_>, laplacian: Option<&str>) -> PyResult<Option<Laplacian>> {
+    laplacian
+        .map(|name| crate::choices::parse::<Laplacian>(py, "laplacian", Some(name)))
+        .transpose()
 }
 
 fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
@@ -63,14 +115,15 @@ impl PyRetrievalIndex {
     /// `despike` / `fill_holes` / `denoise`: the spike threshold, the largest hole perimeter
     /// (in √area) and the target roughness, `None` for off; `overwrite`: replace an existing
     /// `out` (never an input); `laplacian`: the Laplacian of the meshes (a name of
-    /// `mesh_fem::Laplacian`, default cotan; point clouds always use the robust one), which
-    /// must be the vocabulary's when one is given.
+    /// `mesh_fem::Laplacian`, default cotan; point clouds always use the robust one), recorded
+    /// in the index, which must be the vocabulary's when one is given.
     #[staticmethod]
     #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0,
         despike=Some(mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD),
         fill_holes=Some(mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER),
         denoise=Some(shape_retrieval::DEFAULT_TARGET_ROUGHNESS), overwrite=false,
-        spatial=Some(shape_retrieval::spatial::DEFAULT_SPATIAL_TIME), laplacian=None))]
+        spatial=Some(shape_retrieval::spatial::DEFAULT_SPATIAL_TIME), strict=false, progress=None,
+        laplacian=None))]
     #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
@@ -84,20 +137,15 @@ impl PyRetrievalIndex {
         denoise: Option<f64>,
         overwrite: bool,
         spatial: Option<f64>,
+        strict: bool,
+        progress: Option<Py<PyAny>>,
         laplacian: Option<&str>,
-    ) -> PyResult<Self> {
+    ) -> PyResult<(Self, Refused)> {
         let path = out.clone();
-        let chosen: Laplacian = crate::choices::parse(py, "laplacian", laplacian)?;
-        let (inputs, target) = (paths.clone(), out.clone());
-        let vocabulary = run(py, move |_| {
-            let inputs: Vec<&std::path::Path> = inputs.iter().chain(&vocabulary).map(PathBuf::as_path).collect();
-            shape_retrieval::check_index_output(&target, &inputs, overwrite)?;
-            Ok(vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?)
-        })?;
-        if let Some(v) = &vocabulary {
-            same_laplacian(py, laplacian, v.descriptor().laplacian, "the vocabulary")?;
-        }
-        run(py, move |_| {
+        let asked = laplacian_arg(py, laplacian)?;
+        let refused = run_reporting(py, progress, move |cancel, progress| {
+            let inputs: Vec<&std::path::Path> = paths.iter().chain(&vocabulary).map(PathBuf::as_path).collect();
+            shape_retrieval::check_index_output(&out, &inputs, overwrite)?;
             let mut settings = RetrievalSettings::default();
             if let Some(w) = words {
                 settings.training.words = w;
@@ -111,17 +159,43 @@ impl PyRetrievalIndex {
                 ..Default::default()
             });
             settings.bags.spatial = spatial.map(|time| shape_retrieval::spatial::SpatialBag { time });
-            settings.descriptor.laplacian = chosen;
+            settings.descriptor.laplacian = asked.unwrap_or_default();
+            let vocabulary = vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?;
+            if let Some(v) = &vocabulary {
+                same_laplacian(asked, v.descriptor().laplacian, "the vocabulary")?;
+            }
             match &vocabulary {
                 Some(v) => shape_retrieval::limits::check_sizes(v.descriptor().eigenpairs, v.vocabulary().size())?,
                 None => shape_retrieval::limits::check_sizes(settings.descriptor.eigenpairs, settings.training.words)?,
             }
-            let meshes = read_all(&paths)?;
-            let index = RetrievalIndex::build(&meshes, &settings, vocabulary)?;
+            let (meshes, refused) = read_all(&paths, tolerance(strict), progress)?;
+            if meshes.is_empty() {
+                merge_refused(&paths, refused, Vec::new(), 0)?;
+                return Err(RetrievalError::Empty { what: "paths" }.into());
+            }
+            let built = build_index(&meshes, &settings, vocabulary, tolerance(strict), &|name| {
+                progress.step(name)
+            });
+            let (index, left_out) = match built {
+                // Every read file refused too: name the unreadable ones as well.
+                Err(RetrievalError::NothingUsable { shapes, reasons }) if !refused.is_empty() => {
+                    let mut all: Vec<String> = refused.iter().map(|(f, why)| format!("{f}: {why}")).collect();
+                    all.push(reasons);
+                    return Err(RetrievalError::NothingUsable {
+                        shapes: shapes + refused.len(),
+                        reasons: all.join("; "),
+                    }
+                    .into());
+                }
+                other => other?,
+            };
+            let refused = merge_refused(&paths, refused, left_out, index.entries().len())?;
+            // An interrupted call (Ctrl-C, a raising progress callback) writes nothing.
+            cancel.check()?;
             SqliteIndex::new(&out).save_index(&index)?;
-            Ok(())
+            Ok(refused)
         })?;
-        Ok(Self { path })
+        Ok((Self { path }, refused))
     }
 
     /// Opens an index file (written by `build` here or by `wfem retrieval build`).
@@ -154,18 +228,27 @@ impl PyRetrievalIndex {
     }
 
     /// Appends mesh or point-cloud files (bags from the stored vocabulary, described with the
-    /// index's Laplacian; one transaction; nothing rebuilt).
-    fn add_paths(&self, py: Python<'_>, paths: Vec<PathBuf>) -> PyResult<usize> {
+    /// index's Laplacian; one transaction; nothing rebuilt);
+    /// returns how many were added and the refused files (`strict`: the first failure instead).
+    #[pyo3(signature = (paths, strict=false, progress=None))]
+    fn add_paths(
+        &self,
+        py: Python<'_>,
+        paths: Vec<PathBuf>,
+        strict: bool,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<(usize, Refused)> {
         let path = self.path.clone();
-        run(py, move |_| {
+        run_reporting(py, progress, move |cancel, progress| {
             let index = SqliteIndex::new(&path);
             let settings = index.open()?.0;
-            let entries = read_all(&paths)?
-                .iter()
-                .map(|(name, mesh)| settings.describe(name, mesh))
-                .collect::<Result<Vec<_>, _>>()?;
+            let (meshes, refused) = read_all(&paths, tolerance(strict), progress)?;
+            let (entries, left_out) =
+                describe_entries(&settings, &meshes, tolerance(strict), &|name| progress.step(name))?;
+            let refused = merge_refused(&paths, refused, left_out, entries.len())?;
+            cancel.check()?;
             index.append(&settings, &entries)?;
-            Ok(entries.len())
+            Ok((entries.len(), refused))
         })
     }
 
@@ -186,15 +269,12 @@ impl PyRetrievalIndex {
             Some(f) => Ok(mesh_in(py, &v, f)?),
             None => Err(crate::cloud::cloud_in(py, &v, None)?.0),
         };
+        let asked = laplacian_arg(py, laplacian)?;
         let path = self.path.clone();
-        if laplacian.is_some() {
-            let p = path.clone();
-            let recorded = run(py, move |_| Ok(open(&p)?.vocabulary().descriptor().laplacian))?;
-            same_laplacian(py, laplacian, recorded, "the index")?;
-        }
         run(py, move |_| {
             let index = SqliteIndex::new(&path);
             let (settings, store) = index.open()?;
+            same_laplacian(asked, settings.vocabulary().descriptor().laplacian, "the index")?;
             let shape: shape_retrieval::ShapeRef<'_> = match &shape {
                 Ok(mesh) => mesh.into(),
                 Err(cloud) => cloud.into(),

@@ -48,5 +48,6 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     retrieval::register(m)?;
     store::register(m)?;
     index::register(m)?;
+    m.add_function(wrap_pyfunction!(run::_live_workers, m)?)?;
     Ok(())
 }

@@ -6,27 +6,55 @@
 
 use crate::errors::Error;
 use pyo3::prelude::*;
+use shifted_solve::interrupt::Interrupt;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{channel, RecvTimeoutError};
-use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc::{channel, RecvTimeoutError, Sender};
 use std::time::Duration;
 
 /// Polling period for signals while the work runs.
 const POLL: Duration = Duration::from_millis(50);
 
-/// Set when the caller has given up (Ctrl-C); checked by the work between chunks.
+/// Set when the caller has given up (Ctrl-C, a raising progress callback): the library's
+/// interrupt ([`shifted_solve::interrupt`]), installed on the worker thread, so every
+/// checkpoint of the library (between poles, Lanczos restarts, shapes) stops the work; the
+/// bindings check it too, between their own chunks and before writing a file.
 #[derive(Clone, Default)]
-pub struct Cancel(Arc<AtomicBool>);
+pub struct Cancel(Interrupt);
 
 impl Cancel {
     /// `Err` once the caller has given up, so the work can stop early.
     pub fn check(&self) -> Result<(), Error> {
-        if self.0.load(Ordering::Relaxed) {
+        if self.0.is_raised() {
             Err(Error::Invalid("Cancelled", "the call was interrupted".into()))
         } else {
             Ok(())
         }
+    }
+}
+
+/// Worker threads of abandoned or running calls still alive (for the tests of cancellation).
+static LIVE_WORKERS: AtomicUsize = AtomicUsize::new(0);
+
+/// How many worker threads are alive: 0 soon after an interrupted call when its work stopped.
+#[pyfunction]
+pub fn _live_workers() -> usize {
+    LIVE_WORKERS.load(Ordering::SeqCst)
+}
+
+/// Counts a live worker for as long as it exists.
+struct Live;
+
+impl Live {
+    fn new() -> Self {
+        LIVE_WORKERS.fetch_add(1, Ordering::SeqCst);
+        Live
+    }
+}
+
+impl Drop for Live {
+    fn drop(&mut self) {
+        LIVE_WORKERS.fetch_sub(1, Ordering::SeqCst);
     }
 }
 
@@ -40,34 +68,79 @@ fn panic_message(payload: Box<dyn std::any::Any + Send>) -> String {
     }
 }
 
+/// Progress of a long call: the work reports a step (e.g. the shape it has just described)
+/// from any of its threads; the caller's thread passes each one to the Python callback while
+/// it waits, so the callback runs on the caller's thread, with the GIL, like any Python code.
+#[derive(Clone)]
+pub struct Progress(Option<Sender<String>>);
+
+impl Progress {
+    /// Reports one finished step (nothing without a callback).
+    pub fn step(&self, what: &str) {
+        if let Some(tx) = &self.0 {
+            // The receiver is gone if the caller was interrupted: nothing to do then.
+            let _ = tx.send(what.to_string());
+        }
+    }
+}
+
 /// Runs `work` on a worker thread, releasing the GIL, interruptible by signals.
 pub fn run<T, F>(py: Python<'_>, work: F) -> PyResult<T>
 where
     T: Send + 'static,
     F: FnOnce(&Cancel) -> Result<T, Error> + Send + 'static,
 {
+    run_reporting(py, None, move |cancel, _| work(cancel))
+}
+
+/// [`run`] with progress: `callback(step)` is called on the caller's thread for every step the
+/// work reports. An exception raised by the callback stops the call (the work is cancelled)
+/// and propagates.
+pub fn run_reporting<T, F>(py: Python<'_>, callback: Option<Py<PyAny>>, work: F) -> PyResult<T>
+where
+    T: Send + 'static,
+    F: FnOnce(&Cancel, &Progress) -> Result<T, Error> + Send + 'static,
+{
+    let (progress_tx, progress_rx) = channel::<String>();
+    let progress = Progress(callback.is_some().then_some(progress_tx));
     let cancel = Cancel::default();
     let (tx, rx) = channel::<Result<T, Error>>();
     let worker_cancel = cancel.clone();
     std::thread::Builder::new()
         .name("wfem-worker".into())
         .spawn(move || {
-            let result = catch_unwind(AssertUnwindSafe(|| work(&worker_cancel)))
-                .unwrap_or_else(|payload| Err(Error::Panic(panic_message(payload))));
+            let _live = Live::new();
+            let interrupt = worker_cancel.0.clone();
+            let result = catch_unwind(AssertUnwindSafe(|| {
+                interrupt.install(|| work(&worker_cancel, &progress))
+            }))
+            .unwrap_or_else(|payload| Err(Error::Panic(panic_message(payload))));
             // The receiver is gone if the caller was interrupted: nothing to do then.
             let _ = tx.send(result);
         })
         .map_err(|e| Error::Panic(format!("cannot start a worker thread: {e}")).into_py(py))?;
     let mut rx = rx;
+    let report = |py: Python<'_>| -> PyResult<()> {
+        if let Some(callback) = &callback {
+            for step in progress_rx.try_iter() {
+                callback.call1(py, (step,))?;
+            }
+        }
+        Ok(())
+    };
     loop {
         // The receiver moves into the GIL-free closure and back (it is Send, not Sync).
         let (received, back) = py.detach(move || (rx.recv_timeout(POLL), rx));
         rx = back;
+        if let Err(e) = report(py) {
+            cancel.0.raise();
+            return Err(e);
+        }
         match received {
             Ok(result) => return result.map_err(|e| e.into_py(py)),
             Err(RecvTimeoutError::Timeout) => {
                 if let Err(e) = py.check_signals() {
-                    cancel.0.store(true, Ordering::Relaxed);
+                    cancel.0.raise();
                     return Err(e);
                 }
             }

@@ -350,7 +350,7 @@ type MeshHksOut<'py> = (
 /// The heat kernel signature of a mesh: shape_retrieval's one orchestration (auto / exact /
 /// spectral), as `wfem hks` runs it.
 #[pyfunction]
-#[pyo3(signature = (v, f, times=None, num_times=None, k=shape_retrieval::DEFAULT_EIGENPAIRS, mass=None, method=None, convention=None, scaled=false, normalization=None, basis=None, tol=shape_retrieval::DEFAULT_TRUNCATION_TOL, laplacian=None, n_neighbors=None))]
+#[pyo3(signature = (v, f, times=None, num_times=None, k=shape_retrieval::DEFAULT_EIGENPAIRS, mass=None, method=None, convention=None, scaled=false, normalization=None, basis=None, tol=shape_retrieval::DEFAULT_TRUNCATION_TOL, laplacian=None, n_neighbors=None, cloud_time_unit=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn mesh_hks<'py>(
     py: Python<'py>,
@@ -368,6 +368,7 @@ pub fn mesh_hks<'py>(
     tol: f64,
     laplacian: Option<&str>,
     n_neighbors: Option<usize>,
+    cloud_time_unit: Option<&str>,
 ) -> PyResult<MeshHksOut<'py>> {
     use shape_retrieval::{HksMethod, HksSource, MeshHksParams};
     // A mesh, or (no F) a point cloud with its neighbourhood size.
@@ -376,6 +377,9 @@ pub fn mesh_hks<'py>(
         None => Err(crate::cloud::cloud_in(py, &v, n_neighbors)?),
     };
     let laplacian = crate::cloud::assembly_laplacian(py, laplacian, None)?;
+    // A cloud's given times in a unit (`time_unit=`): the unit is measured on its neighbourhood
+    // mesh once the operators are built, as `wfem hks CLOUD --time-unit …` does.
+    let cloud_unit: shape_retrieval::TimeUnit = choices::parse(py, "time_unit", cloud_time_unit)?;
     let method = match choices::parse::<HksMethod>(py, "method", method)? {
         HksMethod::Auto { .. } => HksMethod::Auto { tol },
         other => other,
@@ -414,8 +418,21 @@ pub fn mesh_hks<'py>(
         Ok(mesh) => Ok(shape_retrieval::mesh_hks(&mesh, &params, basis, &mut |_| {})?),
         Err((cloud, cloud_params)) => {
             let assembly = mesh_fem::AssemblyParams::for_mass(params.mass);
-            let fem = mesh_fem::assemble_cloud(&cloud, &cloud_params, &assembly)?.operators;
-            Ok(shape_retrieval::operators_hks(&fem, &params, basis, &mut |_| {})?)
+            let built = mesh_fem::assemble_cloud(&cloud, &cloud_params, &assembly)?;
+            let mut params = params;
+            if let TimeSampling::Explicit(times) = &mut params.times {
+                let lengths = shape_retrieval::MeshLengths::of(&built.neighbourhood);
+                let unit = cloud_unit
+                    .on(&lengths)
+                    .map_err(|e| Error::Invalid("InvalidParameter", format!("time_unit: {e}")))?;
+                times.iter_mut().for_each(|t| *t *= unit);
+            }
+            Ok(shape_retrieval::operators_hks(
+                &built.operators,
+                &params,
+                basis,
+                &mut |_| {},
+            )?)
         }
     })?;
     let sources = hks

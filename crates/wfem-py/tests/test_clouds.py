@@ -181,3 +181,19 @@ def test_retrieval_index_mixes_meshes_and_point_clouds(tmp_path):
     assert robust.settings["vocabulary"]["descriptor"]["laplacian"] == "robust"
     with pytest.raises(wfem.InvalidInputError, match="laplacian"):
         wfem.RetrievalIndex.build(paths, tmp_path / "bad.sqlite", words=6, laplacian="intrinsic")
+
+
+def test_hks_of_a_cloud_reads_times_in_area_units():
+    """``time_unit="area"`` on a cloud: t = τ·A with A measured on the cloud (as the CLI does),
+    so the HKS is exactly scale covariant — a cloud scaled by s has K_t(x, x) divided by s²
+    (the kernel value of a surface of area s²A) at the same τ; absolute times are not."""
+    P = sphere_points(1500, seed=3)
+    tau = [1e-3, 1e-2]
+    h1 = wfem.hks(P, times=tau, time_unit="area", method="exact")
+    h2 = wfem.hks(2.0 * P, times=tau, time_unit="area", method="exact")
+    assert np.allclose(h2, h1 / 4.0, rtol=1e-8, atol=0.0)
+    # Absolute times on the scaled cloud are another point of the curve.
+    h3 = wfem.hks(2.0 * P, times=tau, method="exact")
+    assert not np.allclose(h3, h1 / 4.0, rtol=1e-3)
+    with pytest.raises(wfem.InvalidInputError, match="time_unit"):
+        wfem.hks(P, times=tau, time_unit="fortnight")

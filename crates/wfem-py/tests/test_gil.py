@@ -64,3 +64,36 @@ def test_ctrl_c_interrupts_a_long_call(big):
     timer.cancel()
     # The kernel still works after an interrupted call.
     assert np.isfinite(K.apply(V[:, 0], 0.1)).all()
+
+
+def _wait_for_no_worker(timeout):
+    from wfem import _wfem
+
+    deadline = time.perf_counter() + timeout
+    while _wfem._live_workers() > 0 and time.perf_counter() < deadline:
+        time.sleep(0.05)
+    return _wfem._live_workers()
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        # The exact HKS: selected inversions, pole by pole (minutes here if not stopped).
+        lambda V, F: wfem.hks(V, F, method="exact", num_times=100),
+        # The eigensolver behind the spectral HKS: Lanczos restarts.
+        lambda V, F: wfem.eigenbasis(V, F, k=300),
+    ],
+    ids=["hks-exact", "eigenbasis"],
+)
+def test_an_abandoned_call_stops_its_work(big, call):
+    """Issue #23: after Ctrl-C the worker does not keep computing (it held the cores for the
+    next call for 42 s): the library's checkpoints stop it within one step."""
+    _, V = big
+    F = wfem.generate.icosphere(6)[1]
+    assert _wait_for_no_worker(30) == 0
+    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        call(V, F)
+    timer.cancel()
+    assert _wait_for_no_worker(10) == 0

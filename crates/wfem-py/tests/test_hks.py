@@ -139,11 +139,11 @@ def test_exact_hks_without_eigenpairs_equals_dense_truth(convention):
     assert np.max(np.abs(h - ref) / np.abs(ref)) <= 1e-8
     values, info = wfem.HeatKernel(V, F).diagonal(times, convention, return_info=True)
     np.testing.assert_array_equal(values, h)
-    assert info["columns"] == 0  # selected inversion: no probe columns
-    for method in ("probing", "columns"):
+    assert info["probe_columns"] == 0  # selected inversion: no probe columns
+    for method in ("probing", "unit-columns"):
         other, info = wfem.HeatKernel(V, F).diagonal(times, convention, method=method, return_info=True)
         assert np.max(np.abs(other - ref) / np.abs(ref)) <= 1e-8
-        assert 0 < info["columns"] <= len(V)
+        assert 0 < info["probe_columns"] <= len(V)
     with pytest.raises(wfem.InvalidInputError, match="selected-inversion"):
         wfem.HeatKernel(V, F).diagonal(times, method="eigen")
     # Exact values at the automatic times (chosen from 60 eigenpairs), as `wfem hks --method exact`.

@@ -1,5 +1,5 @@
-//! Headless software rendering of a scalar field on a triangle mesh, for figures such as the
-//! level-set pictures of K_t e_i in the paper (Figs. 2, 4, 5, 8).
+//! Headless software rendering of a scalar field on a triangle mesh or a point cloud, for
+//! figures such as the level-set pictures of K_t e_i in the paper (Figs. 2, 4, 5, 8).
 //!
 //! The mesh is drawn from a few fixed orthographic views side by side, coloured by the
 //! piecewise-linear interpolant of the per-vertex field through a perceptually uniform
@@ -7,6 +7,10 @@
 //! `n_isolines` equally spaced levels, optional red dots on highlighted vertices (e.g. the
 //! anchor p_i of K_t e_i), a legend bar with tick labels and an optional title. Everything is
 //! pure Rust (z-buffer rasteriser, built-in 5×7 font, PNG through the `png` crate).
+//!
+//! A point cloud is drawn as [`Splats`] — an oriented disc per point, blended into a closed
+//! surface — by [`render_splats_png`] / [`render_splats_rgb`], with the same views, colours,
+//! lighting, iso-lines, highlights and legend as a mesh.
 //!
 //! ```no_run
 //! use wfem_render::{render_png, RenderParams};
@@ -22,10 +26,12 @@ mod font;
 mod frame;
 mod legend;
 mod raster;
+mod splat;
 mod vec3;
 
 pub use colormap::Colormap;
 pub use frame::{direction_label, Frame, Up, UpAxis};
+pub use splat::Splats;
 
 use mesh_fem::TriMesh;
 use rayon::prelude::*;
@@ -34,10 +40,10 @@ use rayon::prelude::*;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RenderError {
-    /// The field does not have one value per vertex.
-    #[error("field has {got} values, but the mesh has {expected} vertices")]
+    /// The field does not have one value per vertex (per point of [`Splats`]).
+    #[error("field has {got} values, but the surface has {expected} vertices (or points)")]
     FieldLength {
-        /// Number of mesh vertices.
+        /// Number of mesh vertices or splats.
         expected: usize,
         /// Length of the field passed in.
         got: usize,
@@ -83,6 +89,37 @@ pub enum RenderError {
         vertex: u32,
         /// Number of mesh vertices.
         n_vertices: usize,
+    },
+    /// [`Splats`] without points.
+    #[error("no points to draw as splats")]
+    NoPoints,
+    /// The normals or radii of [`Splats`] are not one per point.
+    #[error("{got} {what} for {expected} splats: need one per point")]
+    SplatLength {
+        /// "normals" or "radii".
+        what: &'static str,
+        /// Number of points.
+        expected: usize,
+        /// Number given.
+        got: usize,
+    },
+    /// A triangle given for the radii of [`Splats`] uses a point that does not exist.
+    #[error("triangle {triangle} uses point {index}, but there are {n_points} points")]
+    TriangleOutOfRange {
+        /// Index of the triangle.
+        triangle: usize,
+        /// The offending corner.
+        index: u32,
+        /// Number of points.
+        n_points: usize,
+    },
+    /// A splat cannot be drawn.
+    #[error("splat {point}: {what}")]
+    InvalidSplat {
+        /// Index of the point.
+        point: usize,
+        /// What is wrong with it.
+        what: &'static str,
     },
     /// The PNG encoder failed.
     #[error("PNG encoding failed: {0}")]
@@ -148,7 +185,8 @@ pub struct RenderParams {
     pub legend: bool,
     /// Title printed centred above the views.
     pub title: Option<String>,
-    /// Vertices marked with red dots (e.g. the anchor of K_t e_i), when visible.
+    /// Vertices (points of [`Splats`]) marked with red dots (e.g. the anchor of K_t e_i),
+    /// when visible.
     pub highlight: Vec<u32>,
     /// Supersampling factor per axis (1..=4) used to anti-alias edges and iso-lines.
     pub supersample: u32,
@@ -328,7 +366,8 @@ const MAX_SUPERSAMPLED_PIXELS: u64 = 1 << 25;
 fn check_size(params: &RenderParams) -> Result<(), RenderError> {
     let ok_dim = |d: u32| (1..=8192).contains(&d);
     let ss = params.supersample as u64;
-    // Each view needs ≈ 19 bytes per supersampled pixel; cap that at 2²⁵ pixels (≈ 640 MB).
+    // Each view needs ≈ 19 bytes per supersampled pixel (≈ 31 for splats); cap that at 2²⁵
+    // pixels (≈ 640 MB, 1 GB for splats).
     let too_many = params.width as u64 * params.height as u64 * ss * ss > MAX_SUPERSAMPLED_PIXELS;
     if !ok_dim(params.width) || !ok_dim(params.height) || !(1..=4).contains(&params.supersample) || too_many {
         return Err(RenderError::InvalidSize {
@@ -354,27 +393,24 @@ pub fn symmetric_range(field: &[f64]) -> Option<(f64, f64)> {
     (m > 0.0).then_some((-m, m))
 }
 
-/// Validates the inputs and returns the colour range (lo, hi); lo == hi for a constant field
-/// without an explicit range.
-fn validate(mesh: &TriMesh, field: &[f64], params: &RenderParams) -> Result<(f64, f64), RenderError> {
+/// Validates the inputs for a surface of `n_vertices` vertices (or splats) and returns the
+/// colour range (lo, hi); lo == hi for a constant field without an explicit range.
+fn validate(n_vertices: usize, field: &[f64], params: &RenderParams) -> Result<(f64, f64), RenderError> {
     check_size(params)?;
     if params.views.is_empty() {
         return Err(RenderError::NoViews);
     }
-    if field.len() != mesh.n_vertices() {
+    if field.len() != n_vertices {
         return Err(RenderError::FieldLength {
-            expected: mesh.n_vertices(),
+            expected: n_vertices,
             got: field.len(),
         });
     }
     if let Some((vertex, &value)) = field.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(RenderError::NonFiniteValue { vertex, value });
     }
-    if let Some(&vertex) = params.highlight.iter().find(|&&v| v as usize >= mesh.n_vertices()) {
-        return Err(RenderError::HighlightOutOfRange {
-            vertex,
-            n_vertices: mesh.n_vertices(),
-        });
+    if let Some(&vertex) = params.highlight.iter().find(|&&v| v as usize >= n_vertices) {
+        return Err(RenderError::HighlightOutOfRange { vertex, n_vertices });
     }
     for (index, v) in params.views.iter().enumerate() {
         if raster::Camera::new(v).is_none() {
@@ -408,10 +444,48 @@ fn validate(mesh: &TriMesh, field: &[f64], params: &RenderParams) -> Result<(f64
 /// [`RenderError::DegenerateView`], [`RenderError::InvalidSize`], [`RenderError::InvalidRange`],
 /// [`RenderError::HighlightOutOfRange`].
 pub fn render_rgb(mesh: &TriMesh, field: &[f64], params: &RenderParams) -> Result<RgbImage, RenderError> {
-    let range = validate(mesh, field, params)?;
+    let range = validate(mesh.n_vertices(), field, params)?;
+    let surface = raster::Surface::mesh(mesh.positions(), mesh.faces());
+    render_surface(mesh.positions(), surface, field, params, range)
+}
+
+/// Renders `field` (one value per point) on a point cloud drawn as splats (module
+/// documentation of [`Splats`]): the same figure as [`render_rgb`] draws for a mesh, with
+/// the field blended between neighbouring splats and iso-lines at the same levels.
+///
+/// # Errors
+/// Those of [`render_rgb`], with [`RenderError::FieldLength`] and
+/// [`RenderError::HighlightOutOfRange`] counting points.
+pub fn render_splats_rgb(splats: &Splats, field: &[f64], params: &RenderParams) -> Result<RgbImage, RenderError> {
+    let range = validate(splats.len(), field, params)?;
+    render_surface(
+        splats.positions(),
+        raster::Surface::splats(splats, field),
+        field,
+        params,
+        range,
+    )
+}
+
+/// Renders like [`render_splats_rgb`] and encodes the result as PNG bytes.
+///
+/// # Errors
+/// Those of [`render_splats_rgb`], and [`RenderError::Encode`].
+pub fn render_splats_png(splats: &Splats, field: &[f64], params: &RenderParams) -> Result<Vec<u8>, RenderError> {
+    render_splats_rgb(splats, field, params)?.to_png()
+}
+
+/// The figure of a validated surface and field: the views side by side, legend and title.
+fn render_surface(
+    positions: &[[f64; 3]],
+    surface: raster::Surface<'_>,
+    field: &[f64],
+    params: &RenderParams,
+    range: (f64, f64),
+) -> Result<RgbImage, RenderError> {
     let lay = layout(params, range)?;
     let mut img = RgbImage::new(lay.width, lay.height, [255; 3]);
-    let scene = raster::Scene::new(mesh, field, params, range);
+    let scene = raster::Scene::new(positions, surface, field, params, range);
     let views: Vec<RgbImage> = params.views.par_iter().map(|v| scene.render_view(v, params)).collect();
     for (rect, view) in lay.views.iter().zip(&views) {
         for y in 0..view.height {

@@ -1,7 +1,8 @@
-//! Z-buffer rasterisation and per-pixel shading of one orthographic view.
+//! Z-buffer rasterisation and per-pixel shading of one orthographic view: triangles here,
+//! splats in [`crate::splat`]; both end in the same per-pixel shading ([`Scene::color`]).
 
+use super::splat::{self, Slope, Splats};
 use super::{RenderParams, RgbImage, View};
-use mesh_fem::TriMesh;
 use rayon::prelude::*;
 
 use super::vec3::{cross, dot, normalized, V3};
@@ -9,9 +10,9 @@ use super::vec3::{cross, dot, normalized, V3};
 /// Orthonormal camera frame: `right`, `up` span the screen, `dir` points towards the viewer.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Camera {
-    right: V3,
-    up: V3,
-    dir: V3,
+    pub(crate) right: V3,
+    pub(crate) up: V3,
+    pub(crate) dir: V3,
 }
 
 impl Camera {
@@ -28,7 +29,7 @@ impl Camera {
         Some(Self { right, up, dir })
     }
 
-    fn project(&self, p: V3) -> (f64, f64, f64) {
+    pub(crate) fn project(&self, p: V3) -> (f64, f64, f64) {
         (dot(p, self.right), dot(p, self.up), dot(p, self.dir))
     }
 }
@@ -43,12 +44,41 @@ const ISO_WIDTH: f32 = 1.3;
 /// Fraction of the view left empty on each side.
 const MARGIN: f64 = 0.05;
 
+/// What is drawn: the triangles of a mesh (with its area-weighted vertex normals) or the
+/// splats of a point cloud.
+pub(crate) enum Surface<'a> {
+    /// A triangle mesh.
+    Mesh {
+        faces: &'a [[u32; 3]],
+        normals: Vec<[f32; 3]>,
+    },
+    /// Oriented discs, one per point, with their fields ([`Splats::slopes`]).
+    Splats { splats: &'a Splats, slopes: Vec<Slope> },
+}
+
+impl<'a> Surface<'a> {
+    /// The triangles of `faces` on `positions`.
+    pub(crate) fn mesh(positions: &[[f64; 3]], faces: &'a [[u32; 3]]) -> Self {
+        Surface::Mesh {
+            faces,
+            normals: vertex_normals(positions, faces),
+        }
+    }
+
+    /// The splats of a cloud with the field `field` on it.
+    pub(crate) fn splats(splats: &'a Splats, field: &[f64]) -> Self {
+        Surface::Splats {
+            splats,
+            slopes: splats.slopes(field),
+        }
+    }
+}
+
 /// Everything shared by the views of one render.
 pub(crate) struct Scene<'a> {
     positions: &'a [[f64; 3]],
-    faces: &'a [[u32; 3]],
+    surface: Surface<'a>,
     field: &'a [f64],
-    normals: Vec<[f32; 3]>,
     lut: Vec<[u8; 3]>,
     lo: f64,
     /// 1/(hi − lo), or 0 for a constant field (then t = 1/2 everywhere).
@@ -64,9 +94,13 @@ pub(crate) struct Scene<'a> {
 }
 
 impl<'a> Scene<'a> {
-    pub(crate) fn new(mesh: &'a TriMesh, field: &'a [f64], params: &'a RenderParams, range: (f64, f64)) -> Self {
-        let positions = mesh.positions();
-        let faces = mesh.faces();
+    pub(crate) fn new(
+        positions: &'a [[f64; 3]],
+        surface: Surface<'a>,
+        field: &'a [f64],
+        params: &'a RenderParams,
+        range: (f64, f64),
+    ) -> Self {
         let (lo, hi) = range;
         let constant = hi <= lo;
         let inv_range = if constant { 0.0 } else { 1.0 / (hi - lo) };
@@ -100,9 +134,8 @@ impl<'a> Scene<'a> {
 
         Self {
             positions,
-            faces,
+            surface,
             field,
-            normals: vertex_normals(positions, faces),
             lut: params.colormap.table(LUT_SIZE),
             lo,
             inv_range,
@@ -135,20 +168,29 @@ impl<'a> Scene<'a> {
             })
             .collect();
 
-        let buf = self.rasterize(&screen, w, h);
-        let mut pixels = self.shade(&buf, &cam, w, h, ss);
-        self.draw_highlights(&mut pixels, &buf, &screen, w, h, ss);
+        let shading = Shading::new(&cam, ss);
+        let (mut pixels, depth) = match &self.surface {
+            Surface::Mesh { faces, normals } => {
+                let buf = self.rasterize(faces, &screen, w, h);
+                (self.shade(faces, normals, &buf, &shading, w, h), buf.depth)
+            }
+            Surface::Splats { splats, slopes } => {
+                let buf = splat::rasterize(splats, slopes, &screen, &cam, scale, w, h);
+                (self.shade_splats(&buf, &shading, w), buf.depth)
+            }
+        };
+        self.draw_highlights(&mut pixels, &depth, &screen, w, h, ss);
         downsample(&pixels, w, h, ss)
     }
 
-    fn rasterize(&self, screen: &[[f64; 3]], w: usize, h: usize) -> Buffers {
+    fn rasterize(&self, faces: &[[u32; 3]], screen: &[[f64; 3]], w: usize, h: usize) -> Buffers {
         let mut buf = Buffers {
             depth: vec![f32::NEG_INFINITY; w * h],
             face: vec![u32::MAX; w * h],
             bary: vec![[0.0; 2]; w * h],
-            grad: vec![0.0; self.faces.len()],
+            grad: vec![0.0; faces.len()],
         };
-        for (fi, f) in self.faces.iter().enumerate() {
+        for (fi, f) in faces.iter().enumerate() {
             let [a, b, c] = f.map(|v| screen[v as usize]);
             let area = edge(a, b, c);
             // Edge-on and zero-area triangles cover no pixel centre; skipping them also keeps
@@ -201,21 +243,15 @@ impl<'a> Scene<'a> {
         buf
     }
 
-    fn shade(&self, buf: &Buffers, cam: &Camera, w: usize, h: usize, ss: usize) -> Vec<[u8; 3]> {
-        // Key light from the viewer's upper left, plus a weak specular highlight.
-        let light = normalized([
-            cam.dir[0] + 0.5 * cam.up[0] - 0.35 * cam.right[0],
-            cam.dir[1] + 0.5 * cam.up[1] - 0.35 * cam.right[1],
-            cam.dir[2] + 0.5 * cam.up[2] - 0.35 * cam.right[2],
-        ])
-        .unwrap_or(cam.dir);
-        let half = normalized([light[0] + cam.dir[0], light[1] + cam.dir[1], light[2] + cam.dir[2]]).unwrap_or(cam.dir);
-        let light = light.map(|c| c as f32);
-        let half = half.map(|c| c as f32);
-        let view_dir = cam.dir.map(|c| c as f32);
-        let half_width = 0.5 * ISO_WIDTH * ss as f32;
-        let lut_max = (LUT_SIZE - 1) as f64;
-
+    fn shade(
+        &self,
+        faces: &[[u32; 3]],
+        normals: &[[f32; 3]],
+        buf: &Buffers,
+        shading: &Shading,
+        w: usize,
+        h: usize,
+    ) -> Vec<[u8; 3]> {
         let mut out = vec![[255u8; 3]; w * h];
         out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             for (x, px) in row.iter_mut().enumerate() {
@@ -224,63 +260,93 @@ impl<'a> Scene<'a> {
                 if fi == u32::MAX {
                     continue;
                 }
-                let face = self.faces[fi as usize];
+                let face = faces[fi as usize];
                 let [b0, b1] = buf.bary[i];
                 let b2 = 1.0 - b0 - b1;
                 let [v0, v1, v2] = face.map(|v| v as usize);
                 let f = b0 as f64 * self.field[v0] + b1 as f64 * self.field[v1] + b2 as f64 * self.field[v2];
-                let t = if self.inv_range > 0.0 {
-                    (f - self.lo) * self.inv_range
-                } else {
-                    0.5
-                };
-                let base = self.lut[(t.clamp(0.0, 1.0) * lut_max).round() as usize];
-
-                // Interpolated vertex normal, flipped towards the viewer (two-sided lighting,
-                // so that open meshes and inconsistent orientations look right).
-                let (n0, n1, n2) = (self.normals[v0], self.normals[v1], self.normals[v2]);
-                let mut n = [0, 1, 2].map(|k| b0 * n0[k] + b1 * n1[k] + b2 * n2[k]);
-                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-                n = if len > 1e-12 { n.map(|c| c / len) } else { view_dir };
-                if n[0] * view_dir[0] + n[1] * view_dir[1] + n[2] * view_dir[2] < 0.0 {
-                    n = n.map(|c| -c);
-                }
-                let diffuse = (n[0] * light[0] + n[1] * light[1] + n[2] * light[2]).max(0.0);
-                let spec = (n[0] * half[0] + n[1] * half[1] + n[2] * half[2]).max(0.0).powi(48);
-                let shade = 0.42 + 0.58 * diffuse;
-                let mut c = base.map(|v| v as f32 * shade + 255.0 * 0.12 * spec);
-
-                if self.level_step > 0.0 {
-                    // Distance (in supersampled pixels) to the nearest level set, from the
-                    // value distance and the face's screen-space gradient.
-                    let s = (f - self.lo) / self.level_step;
-                    let k = s.round().clamp(1.0, self.n_levels as f64);
-                    let dv = ((s - k) * self.level_step).abs() as f32;
-                    let g = buf.grad[fi as usize];
-                    let dpx = if g > 0.0 {
-                        dv / g
-                    } else if dv == 0.0 {
-                        0.0
-                    } else {
-                        f32::INFINITY
-                    };
-                    let alpha = (half_width + 0.5 - dpx).clamp(0.0, 1.0) * ISO_OPACITY;
-                    if alpha > 0.0 {
-                        // Blend towards the line colour, never lightening a pixel darker than it.
-                        c = [0, 1, 2].map(|k| c[k] * (1.0 - alpha) + c[k].min(ISO_COLOR[k]) * alpha);
-                    }
-                }
-                *px = c.map(|v| (v + 0.5).clamp(0.0, 255.0) as u8);
+                // Interpolated vertex normal.
+                let (n0, n1, n2) = (normals[v0], normals[v1], normals[v2]);
+                let n = [0, 1, 2].map(|k| b0 * n0[k] + b1 * n1[k] + b2 * n2[k]);
+                *px = self.color(shading, f, n, buf.grad[fi as usize]);
             }
         });
         out
+    }
+
+    /// The pixels of a splat view: the blended field and normal of every covered pixel
+    /// ([`splat::rasterize`]), with the iso-line width from the field's screen-space gradient.
+    fn shade_splats(&self, buf: &splat::SplatBuffers, shading: &Shading, w: usize) -> Vec<[u8; 3]> {
+        let mut out = vec![[255u8; 3]; buf.depth.len()];
+        out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            for (x, px) in row.iter_mut().enumerate() {
+                let i = y * w + x;
+                if buf.depth[i] == f32::NEG_INFINITY {
+                    continue;
+                }
+                *px = self.color(shading, buf.field[i], buf.normal[i], buf.gradient(x, y));
+            }
+        });
+        out
+    }
+
+    /// The colour of a surface pixel with field value `f`, (unnormalised) normal `n` and
+    /// field gradient `g` in supersampled pixels⁻¹: `colormap((f − lo)/(hi − lo))` times the
+    /// Lambert shading plus a weak specular highlight, darkened near an iso-level.
+    fn color(&self, shading: &Shading, f: f64, n: [f32; 3], g: f32) -> [u8; 3] {
+        let Shading {
+            light,
+            half,
+            view_dir,
+            half_width,
+        } = *shading;
+        let lut_max = (LUT_SIZE - 1) as f64;
+        let t = if self.inv_range > 0.0 {
+            (f - self.lo) * self.inv_range
+        } else {
+            0.5
+        };
+        let base = self.lut[(t.clamp(0.0, 1.0) * lut_max).round() as usize];
+
+        // The normal flipped towards the viewer (two-sided lighting, so that open meshes,
+        // inconsistent orientations and the arbitrary signs of a cloud's normals look right).
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let mut n = if len > 1e-12 { n.map(|c| c / len) } else { view_dir };
+        if n[0] * view_dir[0] + n[1] * view_dir[1] + n[2] * view_dir[2] < 0.0 {
+            n = n.map(|c| -c);
+        }
+        let diffuse = (n[0] * light[0] + n[1] * light[1] + n[2] * light[2]).max(0.0);
+        let spec = (n[0] * half[0] + n[1] * half[1] + n[2] * half[2]).max(0.0).powi(48);
+        let shade = 0.42 + 0.58 * diffuse;
+        let mut c = base.map(|v| v as f32 * shade + 255.0 * 0.12 * spec);
+
+        if self.level_step > 0.0 {
+            // Distance (in supersampled pixels) to the nearest level set, from the value
+            // distance and the screen-space gradient.
+            let s = (f - self.lo) / self.level_step;
+            let k = s.round().clamp(1.0, self.n_levels as f64);
+            let dv = ((s - k) * self.level_step).abs() as f32;
+            let dpx = if g > 0.0 {
+                dv / g
+            } else if dv == 0.0 {
+                0.0
+            } else {
+                f32::INFINITY
+            };
+            let alpha = (half_width + 0.5 - dpx).clamp(0.0, 1.0) * ISO_OPACITY;
+            if alpha > 0.0 {
+                // Blend towards the line colour, never lightening a pixel darker than it.
+                c = [0, 1, 2].map(|k| c[k] * (1.0 - alpha) + c[k].min(ISO_COLOR[k]) * alpha);
+            }
+        }
+        c.map(|v| (v + 0.5).clamp(0.0, 255.0) as u8)
     }
 
     /// Red dots with a dark rim at visible highlighted vertices.
     fn draw_highlights(
         &self,
         pixels: &mut [[u8; 3]],
-        buf: &Buffers,
+        depth: &[f32],
         screen: &[[f64; 3]],
         w: usize,
         h: usize,
@@ -295,8 +361,8 @@ impl<'a> Scene<'a> {
                 continue;
             }
             let i = sy as usize * w + sx as usize;
-            // Hidden behind other parts of the surface?
-            if buf.face[i] != u32::MAX && (z as f32) < buf.depth[i] - tol {
+            // Hidden behind other parts of the surface? (An uncovered pixel has depth −∞.)
+            if (z as f32) < depth[i] - tol {
                 continue;
             }
             let r_out = radius + rim;
@@ -314,6 +380,35 @@ impl<'a> Scene<'a> {
                     }
                 }
             }
+        }
+    }
+}
+
+/// The lights of one view, in world coordinates: a key light from the viewer's upper left and
+/// the half vector of a weak specular highlight; and the iso-line half-width in supersampled
+/// pixels.
+#[derive(Clone, Copy)]
+struct Shading {
+    light: [f32; 3],
+    half: [f32; 3],
+    view_dir: [f32; 3],
+    half_width: f32,
+}
+
+impl Shading {
+    fn new(cam: &Camera, ss: usize) -> Self {
+        let light = normalized([
+            cam.dir[0] + 0.5 * cam.up[0] - 0.35 * cam.right[0],
+            cam.dir[1] + 0.5 * cam.up[1] - 0.35 * cam.right[1],
+            cam.dir[2] + 0.5 * cam.up[2] - 0.35 * cam.right[2],
+        ])
+        .unwrap_or(cam.dir);
+        let half = normalized([light[0] + cam.dir[0], light[1] + cam.dir[1], light[2] + cam.dir[2]]).unwrap_or(cam.dir);
+        Self {
+            light: light.map(|c| c as f32),
+            half: half.map(|c| c as f32),
+            view_dir: cam.dir.map(|c| c as f32),
+            half_width: 0.5 * ISO_WIDTH * ss as f32,
         }
     }
 }

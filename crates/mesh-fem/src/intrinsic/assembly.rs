@@ -22,7 +22,7 @@
 use super::{cot_opposite, triangle_area, IntrinsicTriangulation};
 use crate::mesh::mul_pow2;
 use crate::operators::{
-    column_layout, faces_around_vertices, split_at_bounds, FemOperators, Lumping, COLUMNS_PER_CHUNK,
+    column_layout, faces_around_vertices, write_columns, ColumnDiagonal, Columns, FemOperators, Lumping,
 };
 use crate::MeshError;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
@@ -111,87 +111,59 @@ pub(crate) fn assemble(tri: &IntrinsicTriangulation, weight: f64, lumped: Lumpin
     };
     // 1. Count the distinct rows of each column.
     let (chunks, col_ptr) = column_layout(&around, &first, triangles);
-    let nnz = col_ptr[n];
-
-    // 2. Write the merged entries.
-    let mut row_idx = [vec![0usize; nnz], vec![0usize; nnz]];
-    let mut l_val = vec![0.0f64; nnz];
-    let mut b_val = vec![0.0f64; nnz];
-    let mut lumped_diagonal = vec![0.0f64; n];
+    // 2. Write the merged entries (the pass shared with the cotangent assembly).
     let area_scale = |x: f64| if scale == 0 { x } else { mul_pow2(x, 2 * scale) };
-    {
-        let bounds: Vec<usize> = chunks.iter().map(|&(_, end)| col_ptr[end]).collect();
-        let [l_rows, b_rows] = &mut row_idx;
-        let work: Vec<_> = split_at_bounds(l_rows, &bounds)
-            .into_iter()
-            .zip(split_at_bounds(b_rows, &bounds))
-            .zip(split_at_bounds(&mut l_val, &bounds))
-            .zip(split_at_bounds(&mut b_val, &bounds))
-            .zip(lumped_diagonal.chunks_mut(COLUMNS_PER_CHUNK))
-            .zip(&chunks)
-            .collect();
-        work.into_par_iter()
-            .for_each(|(((((l_rows, b_rows), l), b), diag), &(col_start, col_end))| {
-                let mut buf: Vec<(u32, f64, f64)> = Vec::new();
-                let base = col_ptr[col_start];
-                for j in col_start..col_end {
-                    buf.clear();
-                    let ju = j as u32;
-                    let (mut d_jj, mut b_jj) = (0.0f64, 0.0f64);
-                    let mut previous = u32::MAX;
-                    for &f in &around[first[j]..first[j + 1]] {
-                        // A triangle with j at two corners is listed twice, consecutively.
-                        if f == previous {
-                            continue;
+    let columns = write_columns(&chunks, col_ptr, |j, buf| {
+        let ju = j as u32;
+        let (mut d_jj, mut b_jj) = (0.0f64, 0.0f64);
+        let mut previous = u32::MAX;
+        for &f in &around[first[j]..first[j + 1]] {
+            // A triangle with j at two corners is listed twice, consecutively.
+            if f == previous {
+                continue;
+            }
+            previous = f;
+            let t = triangles[f as usize];
+            let e = element_of(f as usize);
+            let b_edge = weight * e.area / 12.0;
+            for k in 0..3 {
+                let (x, y) = (t[k], t[(k + 1) % 3]);
+                if x == ju && y == ju {
+                    b_jj += 2.0 * b_edge;
+                } else if x == ju || y == ju {
+                    let i = if x == ju { y } else { x };
+                    // Edge k faces corner k + 2.
+                    let lv = -0.5 * weight * e.cots[(k + 2) % 3];
+                    match buf.iter_mut().find(|entry| entry.0 == i) {
+                        Some(entry) => {
+                            entry.1 += lv;
+                            entry.2 += b_edge;
                         }
-                        previous = f;
-                        let t = triangles[f as usize];
-                        let e = element_of(f as usize);
-                        let b_edge = weight * e.area / 12.0;
-                        for k in 0..3 {
-                            let (x, y) = (t[k], t[(k + 1) % 3]);
-                            if x == ju && y == ju {
-                                b_jj += 2.0 * b_edge;
-                            } else if x == ju || y == ju {
-                                let i = if x == ju { y } else { x };
-                                // Edge k faces corner k + 2.
-                                let lv = -0.5 * weight * e.cots[(k + 2) % 3];
-                                match buf.iter_mut().find(|entry| entry.0 == i) {
-                                    Some(entry) => {
-                                        entry.1 += lv;
-                                        entry.2 += b_edge;
-                                    }
-                                    None => buf.push((i, lv, b_edge)),
-                                }
-                            }
-                        }
-                        for k in (0..3).filter(|&k| t[k] == ju) {
-                            d_jj += weight * e.corner_mass[k];
-                            b_jj += weight * e.area / 6.0;
-                        }
-                    }
-                    buf.sort_unstable_by_key(|entry| entry.0);
-                    diag[j - col_start] = area_scale(d_jj);
-                    let l_diag = -buf.iter().map(|entry| entry.1).sum::<f64>();
-                    let split = buf.partition_point(|entry| (entry.0 as usize) < j);
-                    let mut p = col_ptr[j] - base;
-                    let mut put = |i: usize, lv: f64, bv: f64| {
-                        l_rows[p] = i;
-                        b_rows[p] = i;
-                        l[p] = lv;
-                        b[p] = area_scale(bv);
-                        p += 1;
-                    };
-                    for entry in &buf[..split] {
-                        put(entry.0 as usize, entry.1, entry.2);
-                    }
-                    put(j, l_diag, b_jj);
-                    for entry in &buf[split..] {
-                        put(entry.0 as usize, entry.1, entry.2);
+                        None => buf.push((i, lv, b_edge)),
                     }
                 }
-            });
-    }
+            }
+            for k in (0..3).filter(|&k| t[k] == ju) {
+                d_jj += weight * e.corner_mass[k];
+                b_jj += weight * e.area / 6.0;
+            }
+        }
+        // The lengths were scaled by 2^−scale: areas come back by 2^(2·scale).
+        for entry in buf.iter_mut() {
+            entry.2 = area_scale(entry.2);
+        }
+        ColumnDiagonal {
+            lumped: area_scale(d_jj),
+            mass: Some(area_scale(b_jj)),
+        }
+    });
+    let Columns {
+        col_ptr,
+        row_idx,
+        l_val,
+        b_val,
+        lumped_diagonal,
+    } = columns;
     drop(around);
     let [l_rows, b_rows] = row_idx;
     let pattern = |rows: Vec<usize>| SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, rows);

@@ -254,23 +254,13 @@ impl RetrievalIndex {
         settings: &RetrievalSettings,
         vocabulary: Option<VocabularyModel>,
     ) -> Result<Self, RetrievalError> {
-        let descriptor = vocabulary
-            .as_ref()
-            .map_or(&settings.descriptor, |v| v.descriptor())
-            .clone();
-        // The parameters are checked before any mesh is read, so a bad one is reported as
-        // such and not as the failure of the first mesh.
-        descriptor.validate()?;
-        settings.bags.validate(descriptor.eigenpairs)?;
-        let features = ShapeFeatures::compute_many(shapes, &descriptor, &settings.bags)?;
-        let vocabulary = match vocabulary {
-            Some(v) => v,
-            None => VocabularyModel::train(&descriptor, &settings.training, &features)?,
-        };
-        let mut index = Self::new(vocabulary, settings.bags.clone())?;
-        for f in &features {
-            index.insert(f)?;
-        }
-        Ok(index)
+        crate::collection::build_index(
+            shapes,
+            settings,
+            vocabulary,
+            crate::collection::Tolerance::Strict,
+            &|_| (),
+        )
+        .map(|(index, _)| index)
     }
 }

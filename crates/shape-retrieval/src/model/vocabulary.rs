@@ -9,7 +9,6 @@ use crate::spatial::ShapeSpectrum;
 use crate::standardize::Standardizer;
 use crate::RetrievalError;
 use faer::{Mat, MatRef};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// The dense descriptors of one shape with what its bag needs: the vertex weights and the
@@ -136,15 +135,8 @@ impl ShapeFeatures {
         descriptor: &DescriptorSettings,
         bags: &BagSettings,
     ) -> Result<Vec<Self>, RetrievalError> {
-        shapes
-            .par_iter()
-            .map(|(name, shape)| {
-                Self::compute(name, shape, descriptor, bags).map_err(|e| RetrievalError::Shape {
-                    name: name.clone(),
-                    source: Box::new(e),
-                })
-            })
-            .collect()
+        crate::collection::describe_collection(shapes, descriptor, bags, crate::collection::Tolerance::Strict, &|_| ())
+            .map(|d| d.features)
     }
 }
 

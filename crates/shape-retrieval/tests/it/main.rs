@@ -5,6 +5,7 @@ mod common;
 
 mod bof;
 mod clouds;
+mod collection;
 mod descriptor;
 mod distance;
 mod eval;

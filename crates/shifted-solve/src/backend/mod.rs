@@ -235,7 +235,16 @@ pub(crate) fn sum_over_poles<T: Sync>(
     term: impl Fn(&T) -> Result<(Mat<f64>, PoleReport), SolveError> + Sync,
 ) -> Result<(Mat<f64>, Vec<PoleReport>), SolveError> {
     use rayon::prelude::*;
-    let parts: Vec<(Mat<f64>, PoleReport)> = terms.par_iter().map(&term).collect::<Result<_, SolveError>>()?;
+    let interrupt = crate::interrupt::current();
+    let parts: Vec<(Mat<f64>, PoleReport)> = terms
+        .par_iter()
+        .map(|t| {
+            crate::interrupt::within(interrupt.as_ref(), || {
+                crate::interrupt::checkpoint()?;
+                term(t)
+            })
+        })
+        .collect::<Result<_, SolveError>>()?;
     let mut out = Mat::<f64>::zeros(n, ncols);
     let mut reports = Vec::with_capacity(parts.len());
     for (m, r) in parts {

@@ -241,3 +241,47 @@ fn selected_inversion_diagonal_is_scale_covariant() {
         }
     }
 }
+
+/// Issue #23: an abandoned computation stops at its next checkpoint — the exact diagonal
+/// (selected inversion, pole by pole), K_t f by every path, the partial eigensolver — with
+/// `SolveError::Interrupted`, and the same calls succeed without the raised interrupt.
+#[test]
+fn a_raised_interrupt_stops_every_long_path() {
+    use wfem_heat::shifted_solve::interrupt::Interrupt;
+    use wfem_heat::shifted_solve::SolveError;
+    let (_, ops) = ops_of(&generate::icosphere(3));
+    let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+    let rational = HeatKernel::new(
+        &ops,
+        HeatParams {
+            method: wfem_heat::Method::Rational {
+                degree: wfem_heat::shifted_solve::DEFAULT_DEGREE,
+                backend: Default::default(),
+            },
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let f: Vec<f64> = (0..ops.n()).map(|i| (i % 7) as f64).collect();
+    let interrupted = |e: HeatError| matches!(e, HeatError::Solve(SolveError::Interrupted(_)));
+    let raised = Interrupt::new();
+    raised.raise();
+    raised.install(|| {
+        let e = kernel
+            .diagonal(&[1e-3, 1e-2], KernelDiagonal::KernelValue, &DiagonalParams::default())
+            .unwrap_err();
+        assert!(interrupted(e));
+        assert!(interrupted(kernel.apply(&f, 1e-2).unwrap_err()));
+        assert!(interrupted(rational.apply(&f, 1e-2).unwrap_err()));
+        let e = Eigenbasis::partial_of(kernel.operators(), 20, &Default::default()).unwrap_err();
+        assert!(interrupted(e));
+    });
+    let quiet = Interrupt::new();
+    quiet.install(|| {
+        kernel
+            .diagonal(&[1e-3], KernelDiagonal::KernelValue, &DiagonalParams::default())
+            .unwrap();
+        rational.apply(&f, 1e-2).unwrap();
+        Eigenbasis::partial_of(kernel.operators(), 20, &Default::default()).unwrap();
+    });
+}

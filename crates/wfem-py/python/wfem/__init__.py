@@ -37,6 +37,7 @@ from ._errors import (
     RetrievalError,
     SolverError,
     StoreError,
+    RefusedShapesWarning,
     TimeWarning,
     WfemError,
 )
@@ -149,6 +150,7 @@ __all__ = [
     "IllConditionedError",
     "StoreError",
     "InternalError",
+    "RefusedShapesWarning",
     "TimeWarning",
     "DENSE_MAX_VERTICES",
     "__version__",

@@ -115,6 +115,12 @@ class TimeWarning(UserWarning):
     ``warnings.simplefilter("ignore", wfem.TimeWarning)``."""
 
 
+class RefusedShapesWarning(UserWarning):
+    """Some files of a collection could not be used (unreadable, or a shape that cannot be
+    described) and were left out of the index; the message names each file with its reason,
+    and the index's ``refused`` lists them. Pass ``strict=True`` for all-or-nothing."""
+
+
 def warn_user(message: str, category: type[Warning]) -> None:
     """``warnings.warn`` attributed to the caller's own code: the first frame outside the wfem
     package (however many wfem frames — wrappers, helpers — lie between), so the warning shows

@@ -259,7 +259,7 @@ class HeatKernel:
         ``method="probing"`` (Tang & Saad): a distance-p colouring of the mesh chosen so that
         the kernel's tail beyond p edges is below ``tol`` relative, one block evaluation of all
         times per block of probes; large t (a non-local kernel) needs too many probes and is
-        refused (``max_columns``). ``method="columns"``: n unit columns (a reference).
+        refused (``max_columns``). ``method="unit-columns"``: n unit columns (a reference).
         """
         ts, _ = as_times(np.atleast_1d(times))
         values, info = self._k.diagonal(ts, convention, method, tol, max_columns, block)
@@ -343,7 +343,7 @@ class HeatKernel:
         (``diagonal="selected-inversion"``, default; exact at every t, about a second at 50K
         vertices; the mass-weighted Gram matrix is probed instead), probing
         (``diagonal="probing"``, relative tail ``diagonal_tol``) or n unit columns
-        (``diagonal="columns"``). ``time_unit`` reads t as in :meth:`apply` (with the same
+        (``diagonal="unit-columns"``). ``time_unit`` reads t as in :meth:`apply` (with the same
         :class:`TimeWarning`; the diffusion distance is made of kernel values at 2t).
         """
         (t_abs,) = self._times([float(t)], time_unit, kind or "")

@@ -12,8 +12,9 @@ import numpy as np
 
 from . import _choices, _wfem
 from ._arrays import as_float_array, as_indices, as_mesh, as_vector, points_of
-from ._errors import InvalidInputError
+from ._errors import InvalidInputError, RefusedShapesWarning, warn_user
 from ._heat import HeatKernel
+from ._progress import ProgressArg, reporter
 
 __all__ = [
     "DESCRIPTORS",
@@ -308,6 +309,15 @@ class IndexStore:
         return np.asarray(self._s.vectors())
 
 
+def _report_refused(refused: list[tuple[str, str]], what: str) -> list[tuple[str, str]]:
+    """One :class:`RefusedShapesWarning` naming every refused file; the list back."""
+    refused = [(str(f), str(why)) for f, why in refused]
+    if refused:
+        lines = "".join(f"\n  {f}: {why}" for f, why in refused)
+        warn_user(f"{len(refused)} file(s) {what} (strict=True refuses instead):{lines}", RefusedShapesWarning)
+    return refused
+
+
 class RetrievalIndex:
     """The retrieval index of wfem, shared with the command line: one SQLite file holding the
     recipe (descriptor, time window, z-score statistics, vocabulary, bag settings, distance) and
@@ -328,6 +338,8 @@ class RetrievalIndex:
 
     def __init__(self, inner: Any) -> None:
         self._i = inner
+        #: Files the last ``build`` / ``add_meshes`` of this object left out: ``[(path, reason)]``.
+        self.refused: list[tuple[str, str]] = []
 
     @classmethod
     def build(
@@ -343,6 +355,8 @@ class RetrievalIndex:
         denoise: float | None = _wfem.DEFAULT_TARGET_ROUGHNESS,
         overwrite: bool = False,
         spatial: float | None = _wfem.DEFAULT_SPATIAL_TIME,
+        strict: bool = False,
+        progress: ProgressArg = None,
         laplacian: str | None = None,
     ) -> "RetrievalIndex":
         """Indexes mesh and point-cloud files with the default recipe into a new file ``out``.
@@ -369,14 +383,27 @@ class RetrievalIndex:
 
         ``spatial``: spatially sensitive bags (Shape Google Sect. 4.2), the bag also holding the
         heat that flows between words in time ``spatial · area``; ``None`` for plain bags.
-        ``words`` defaults to 96."""
+        ``words`` defaults to 96.
+
+        A file that cannot be read or described is left out: the index holds every usable
+        shape, a :class:`RefusedShapesWarning` names each refused file with its reason, and
+        :attr:`refused` lists them; with ``strict=True`` the first such file raises instead
+        (no index is written). No usable file at all always raises.
+
+        ``progress``: ``None`` (default) shows a tqdm bar when tqdm is installed and standard
+        error is a terminal; ``True`` always reports (tqdm, or a line per shape), ``False``
+        never; a callable is called as ``progress(done, total, name)`` after each shape, on the
+        calling thread."""
         ps = [os.fspath(p) for p in paths]
         voc = None if vocabulary is None else os.fspath(vocabulary)
-        return cls(
-            _wfem.RetrievalIndex.build(
-                ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise, overwrite, spatial, laplacian
+        with reporter(progress, len(ps), "describing shapes") as step:
+            inner, refused = _wfem.RetrievalIndex.build(
+                ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise, overwrite, spatial, strict, step,
+                laplacian,
             )
-        )
+        index = cls(inner)
+        index.refused = _report_refused(refused, "left out of the index")
+        return index
 
     @classmethod
     def open(cls, path: str | os.PathLike[str]) -> "RetrievalIndex":
@@ -403,10 +430,21 @@ class RetrievalIndex:
         """The recipe recorded in the file."""
         return dict(json.loads(self._i.settings()))
 
-    def add_meshes(self, paths: Iterable[str | os.PathLike[str]]) -> int:
+    def add_meshes(
+        self,
+        paths: Iterable[str | os.PathLike[str]],
+        *,
+        strict: bool = False,
+        progress: ProgressArg = None,
+    ) -> int:
         """Appends mesh or point-cloud files (named by the path as given) in one transaction;
-        returns how many."""
-        return int(self._i.add_paths([os.fspath(p) for p in paths]))
+        returns how many were added. Unusable files are left out and reported as in
+        :meth:`build` (``strict``, ``progress`` and :attr:`refused` alike)."""
+        ps = [os.fspath(p) for p in paths]
+        with reporter(progress, len(ps), "describing shapes") as step:
+            added, refused = self._i.add_paths(ps, strict, step)
+        self.refused = _report_refused(refused, "not added")
+        return int(added)
 
     def evaluate(
         self,
@@ -447,7 +485,7 @@ class RetrievalIndex:
         ``[(name, distance)]``, nearest first.
 
         The query is described as the indexed shapes were, with the index's Laplacian
-        (``settings["descriptor"]["laplacian"]``); ``laplacian``, if given, must name it
+        (``settings["vocabulary"]["descriptor"]["laplacian"]``); ``laplacian``, if given, must name it
         (another one raises :class:`InvalidInputError`: its bag would not be comparable)."""
         P = points_of(V, F)
         if P is not None:

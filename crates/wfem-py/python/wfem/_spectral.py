@@ -239,20 +239,18 @@ def hks(
     else:
         v, f = as_mesh(V, F)
     t = None if times is None else [float(x) for x in as_vector(np.atleast_1d(times), "times")]
+    cloud_unit = None
     if t is not None and time_unit is not None:
         if f is None:
-            from ._errors import InvalidInputError
-
-            raise InvalidInputError(
-                "time_unit= needs a mesh (V, F); give a point cloud's times in absolute units",
-                "InvalidParameter",
-                name="time_unit",
-            )
-        unit = float(_wfem.mesh_time_unit(v, f, time_unit))
-        t = [x * unit for x in t]
+            # Measured on the cloud's neighbourhood mesh once its operators are built.
+            cloud_unit = time_unit
+        else:
+            unit = float(_wfem.mesh_time_unit(v, f, time_unit))
+            t = [x * unit for x in t]
     values, used, _, _ = _wfem.mesh_hks(
         v, f, t, num_times, k, mass, method, convention, scaled, normalization,
         None if basis is None else basis._b, laplacian=laplacian, n_neighbors=n_neighbors,
+        cloud_time_unit=cloud_unit,
     )
     h = np.asarray(values)
     return (h, np.asarray(used)) if return_times else h

@@ -1,3 +1,4 @@
 //! The integration tests of wfem-render, in one test binary.
 
 mod render;
+mod splats;

@@ -9,7 +9,7 @@ use wfem_render::{
 };
 
 /// Front view only (camera at −y, z up), no legend, small.
-fn front_params(n_isolines: usize) -> RenderParams {
+pub(crate) fn front_params(n_isolines: usize) -> RenderParams {
     RenderParams {
         width: 240,
         height: 240,
@@ -24,12 +24,12 @@ fn z_field(mesh: &TriMesh) -> Vec<f64> {
     mesh.positions().iter().map(|p| p[2]).collect()
 }
 
-fn luminance(c: [u8; 3]) -> f64 {
+pub(crate) fn luminance(c: [u8; 3]) -> f64 {
     0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64
 }
 
 /// The t whose colormap colour, times the best shading factor s, is closest to `c`.
-fn best_t(map: Colormap, c: [u8; 3]) -> f64 {
+pub(crate) fn best_t(map: Colormap, c: [u8; 3]) -> f64 {
     let p = c.map(|v| v as f64);
     let mut best = (f64::INFINITY, 0.0);
     for k in 0..=255 {
@@ -255,7 +255,7 @@ fn png_decodes_to_the_rgb_image() {
     assert_eq!(&buf[..info.buffer_size()], &rgb.data[..]);
 }
 
-fn count_red(img: &RgbImage) -> usize {
+pub(crate) fn count_red(img: &RgbImage) -> usize {
     img.data
         .chunks(3)
         .filter(|c| c[0] > 200 && c[1] < 60 && c[2] < 60)
