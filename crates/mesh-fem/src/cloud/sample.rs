@@ -97,7 +97,10 @@ mod tests {
         // Binomial standard deviation √(¼·¾/4000) ≈ 0.007.
         assert!((on_square - 0.25).abs() < 0.03, "{on_square}");
         for p in cloud.positions() {
-            assert!(p[2] == 0.0 && (0.0..=4.0).contains(&p[0]) && (0.0..=1.0).contains(&p[1]), "{p:?}");
+            assert!(
+                p[2] == 0.0 && (0.0..=4.0).contains(&p[0]) && (0.0..=1.0).contains(&p[1]),
+                "{p:?}"
+            );
         }
     }
 

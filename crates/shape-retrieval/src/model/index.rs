@@ -249,7 +249,13 @@ impl RetrievalIndex {
         settings: &RetrievalSettings,
         vocabulary: Option<VocabularyModel>,
     ) -> Result<Self, RetrievalError> {
-        crate::collection::build_index(meshes, settings, vocabulary, crate::collection::Tolerance::Strict, &|_| ())
-            .map(|(index, _)| index)
+        crate::collection::build_index(
+            meshes,
+            settings,
+            vocabulary,
+            crate::collection::Tolerance::Strict,
+            &|_| (),
+        )
+        .map(|(index, _)| index)
     }
 }
