@@ -173,6 +173,8 @@ fn a_build_racing_an_add_in_another_process_never_mixes_vocabularies() {
     const ROUNDS: u32 = 8;
     for round in 0..ROUNDS {
         let seed = (round + 1).to_string();
+        // The index as it is before this round: an add may describe its shape with it.
+        let (before, _) = SqliteIndex::new(&index).open().unwrap();
         let mut args = vec!["retrieval", "build", files[0].as_str(), files[1].as_str()];
         args.extend(["--out", index.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
         args.extend(["--force", "--seed", seed.as_str()]);
@@ -209,17 +211,23 @@ fn a_build_racing_an_add_in_another_process_never_mixes_vocabularies() {
         let stored = shape_retrieval::IndexStore::load_index(&SqliteIndex::new(&index)).unwrap();
         for entry in stored.entries() {
             let (mesh, _) = mesh_fem::io::load(Path::new(&entry.name), &Default::default()).unwrap();
-            let again = settings.describe(&entry.name, &mesh).unwrap();
-            let worst = entry
-                .signature
-                .bag
-                .iter()
-                .zip(&again.signature.bag)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
+            // Closer to the shape described with the final index's vocabulary than with the
+            // previous one (describing again is not bitwise reproducible under load: the
+            // eigensolver's path through near-degenerate eigenspaces depends on scheduling).
+            let gap = |other: &shape_retrieval::RetrievalIndex| {
+                let again = other.describe(&entry.name, &mesh).unwrap();
+                entry
+                    .signature
+                    .bag
+                    .iter()
+                    .zip(&again.signature.bag)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max)
+            };
+            let (own, old) = (gap(&settings), gap(&before));
             assert!(
-                worst < 1e-5,
-                "round {round}: {} holds a bag of another vocabulary ({worst})",
+                own < old,
+                "round {round}: {} holds a bag of another vocabulary ({own} from the final one, {old} from the previous)",
                 entry.name
             );
         }

@@ -191,6 +191,7 @@ impl PyRetrievalIndex {
             };
             let refused = merge_refused(&paths, refused, left_out, index.entries().len())?;
             // An interrupted call (Ctrl-C, a raising progress callback) writes nothing.
+            progress.flush();
             cancel.check()?;
             SqliteIndex::new(&out).save_index(&index)?;
             Ok(refused)
@@ -246,6 +247,7 @@ impl PyRetrievalIndex {
             let (entries, left_out) =
                 describe_entries(&settings, &meshes, tolerance(strict), &|name| progress.step(name))?;
             let refused = merge_refused(&paths, refused, left_out, entries.len())?;
+            progress.flush();
             cancel.check()?;
             index.append(&settings, &entries)?;
             Ok((entries.len(), refused))

@@ -72,14 +72,34 @@ fn panic_message(payload: Box<dyn std::any::Any + Send>) -> String {
 /// from any of its threads; the caller's thread passes each one to the Python callback while
 /// it waits, so the callback runs on the caller's thread, with the GIL, like any Python code.
 #[derive(Clone)]
-pub struct Progress(Option<Sender<String>>);
+pub struct Progress(Option<Sender<Report>>);
+
+/// What the work tells the caller's thread.
+pub enum Report {
+    /// One finished step.
+    Step(String),
+    /// Every step so far has been passed to the callback: answer on this channel.
+    Flush(Sender<()>),
+}
 
 impl Progress {
     /// Reports one finished step (nothing without a callback).
     pub fn step(&self, what: &str) {
         if let Some(tx) = &self.0 {
             // The receiver is gone if the caller was interrupted: nothing to do then.
-            let _ = tx.send(what.to_string());
+            let _ = tx.send(Report::Step(what.to_string()));
+        }
+    }
+
+    /// Waits until the callback has seen every step reported so far (so that a callback
+    /// that raises stops the call before anything is written). Nothing without a callback.
+    pub fn flush(&self) {
+        if let Some(tx) = &self.0 {
+            let (ack_tx, ack_rx) = channel();
+            if tx.send(Report::Flush(ack_tx)).is_ok() {
+                // Disconnected: the caller gave up (and raised the interrupt).
+                let _ = ack_rx.recv();
+            }
         }
     }
 }
@@ -101,7 +121,7 @@ where
     T: Send + 'static,
     F: FnOnce(&Cancel, &Progress) -> Result<T, Error> + Send + 'static,
 {
-    let (progress_tx, progress_rx) = channel::<String>();
+    let (progress_tx, progress_rx) = channel::<Report>();
     let progress = Progress(callback.is_some().then_some(progress_tx));
     let cancel = Cancel::default();
     let (tx, rx) = channel::<Result<T, Error>>();
@@ -122,8 +142,15 @@ where
     let mut rx = rx;
     let report = |py: Python<'_>| -> PyResult<()> {
         if let Some(callback) = &callback {
-            for step in progress_rx.try_iter() {
-                callback.call1(py, (step,))?;
+            for report in progress_rx.try_iter() {
+                match report {
+                    Report::Step(step) => {
+                        callback.call1(py, (step,))?;
+                    }
+                    Report::Flush(ack) => {
+                        let _ = ack.send(());
+                    }
+                }
             }
         }
         Ok(())
