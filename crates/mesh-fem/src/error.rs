@@ -128,15 +128,6 @@ pub enum MeshError {
         /// The offending value.
         value: f64,
     },
-    /// The link of a vertex is neither one cycle (interior vertex) nor one path (boundary
-    /// vertex), so the vertex is not a manifold point of the surface.
-    #[error("vertex {vertex} is non-manifold: {reason}")]
-    NonManifoldVertex {
-        /// Vertex index (0-based).
-        vertex: usize,
-        /// What is wrong with its link.
-        reason: String,
-    },
     // ===== end of morse.rs block =====
     // ---- Variants added by the mesh I/O work (branch `io`); keep this block together. ----
     /// A face in a mesh file names a negative vertex index (or an OBJ relative index that

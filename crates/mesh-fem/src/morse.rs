@@ -143,6 +143,14 @@ pub struct PersistenceDiagram {
 ///   identity becomes 2·Σ_interior ind(v) + Σ_boundary ind(v) = 2χ(M) with ind = +1 for
 ///   extrema and −multiplicity for saddles. This convention is symmetric under f ↦ −f,
 ///   unlike counting lower-link components only.
+/// * A mesh with any other link (a non-manifold vertex: an edge shared by three or more
+///   triangles, several fans pinched at one vertex — the neighbourhood mesh of a point
+///   cloud, a non-manifold scan) is not a surface, and the rules above do not apply: all its
+///   vertices are classified on the edge graph, as [`persistence`] sees it. No lower
+///   neighbour → minimum, no upper neighbour → maximum, otherwise a saddle of multiplicity m
+///   when m sublevel (or superlevel) components die at v by the elder rule (the larger of
+///   the two counts), and regular when none does. Every death vertex of [`persistence`] is a
+///   saddle, as on a surface; saddles that only create 1-cycles are not counted.
 ///
 /// Runs in O(F + Σ_v deg(v) log deg(v)), in parallel over vertices.
 ///
@@ -150,22 +158,23 @@ pub struct PersistenceDiagram {
 /// [`MeshError::ScalarFieldLength`] if `f.len() != mesh.n_vertices()`,
 /// [`MeshError::NonFiniteScalarField`] for a NaN or infinite value,
 /// [`MeshError::UnreferencedVertex`] for a vertex in no triangle (its link is empty),
-/// [`MeshError::RepeatedIndex`] for a triangle that repeats a vertex, and
-/// [`MeshError::NonManifoldVertex`] when the link of a vertex is not one cycle or one path
-/// (an edge shared by three or more triangles, or several fans pinched at one vertex).
-/// [`persistence`], [`local_maxima`] and [`local_minima`] only use the edge graph and accept
-/// such meshes.
+/// and [`MeshError::RepeatedIndex`] for a triangle that repeats a vertex.
 pub fn critical_points(mesh: &TriMesh, f: &[f64]) -> Result<Vec<CriticalPoint>, MeshError> {
     check_field(mesh, f)?;
     let rank = ranks(f);
     let incidence = VertexFaces::new(mesh);
     let faces = mesh.faces();
-    let kinds: Vec<CriticalKind> = (0..mesh.n_vertices())
+    let kinds: Vec<Option<CriticalKind>> = (0..mesh.n_vertices())
         .into_par_iter()
         .map_init(LinkScratch::default, |scratch, v| {
             classify_vertex(v as u32, &incidence, faces, &rank, scratch)
         })
         .collect::<Result<_, _>>()?;
+    let kinds: Vec<CriticalKind> = if kinds.iter().all(Option::is_some) {
+        kinds.into_iter().flatten().collect()
+    } else {
+        classify_on_the_graph(mesh, f, &rank)?
+    };
     Ok(kinds
         .into_iter()
         .enumerate()
@@ -430,13 +439,6 @@ struct LinkScratch {
     parent: Vec<usize>,
 }
 
-fn non_manifold(v: u32, reason: String) -> MeshError {
-    MeshError::NonManifoldVertex {
-        vertex: v as usize,
-        reason,
-    }
-}
-
 /// Classifies v by the number of sign changes along its link (see [`critical_points`]).
 ///
 /// The link is checked to be one cycle or one path without ordering it: every link vertex
@@ -449,7 +451,7 @@ fn classify_vertex(
     faces: &[[u32; 3]],
     rank: &[u32],
     scratch: &mut LinkScratch,
-) -> Result<CriticalKind, MeshError> {
+) -> Result<Option<CriticalKind>, MeshError> {
     let incident = incidence.of(v);
     if incident.is_empty() {
         return Err(MeshError::UnreferencedVertex { vertex: v as usize });
@@ -478,6 +480,7 @@ fn classify_vertex(
     scratch.vertices.extend(scratch.edges.iter().flat_map(|&(a, b)| [a, b]));
     scratch.vertices.sort_unstable();
     let mut n_ends = 0usize;
+    let mut manifold = true;
     let mut i = 0;
     while i < scratch.vertices.len() {
         let w = scratch.vertices[i];
@@ -488,12 +491,7 @@ fn classify_vertex(
         match j - i {
             1 => n_ends += 1,
             2 => {}
-            k => {
-                return Err(non_manifold(
-                    v,
-                    format!("its edge to vertex {w} is shared by {k} triangles"),
-                ))
-            }
+            _ => manifold = false,
         }
         i = j;
     }
@@ -514,17 +512,14 @@ fn classify_vertex(
             components -= 1;
         }
     }
-    if components != 1 {
-        return Err(non_manifold(
-            v,
-            format!("its link has {components} components (several fans pinched at one vertex)"),
-        ));
+    let rv = rank[v as usize];
+    let lower = |w: u32| rank[w as usize] < rv;
+    if !manifold || components != 1 {
+        return Ok(None);
     }
     // Connected with all degrees ≤ 2: a cycle (no ends) or a path (two ends).
     let closed = n_ends == 0;
 
-    let rv = rank[v as usize];
-    let lower = |w: u32| rank[w as usize] < rv;
     let changes = scratch.edges.iter().filter(|&&(a, b)| lower(a) != lower(b)).count();
     let extremum = || {
         if lower(scratch.edges[0].0) {
@@ -533,14 +528,44 @@ fn classify_vertex(
             CriticalKind::Minimum
         }
     };
-    Ok(match (closed, changes) {
+    Ok(Some(match (closed, changes) {
         (_, 0) => extremum(),
         (true, 2) | (false, 1) => CriticalKind::Regular,
         (true, s) => CriticalKind::Saddle {
             multiplicity: s / 2 - 1,
         },
         (false, s) => CriticalKind::Saddle { multiplicity: s - 1 },
-    })
+    }))
+}
+
+/// The kinds of all vertices of a mesh that is not a surface, on its edge graph (see
+/// [`critical_points`]): extrema by their neighbours, saddles by the components that die at
+/// them in the persistence sweeps.
+fn classify_on_the_graph(mesh: &TriMesh, f: &[f64], rank: &[u32]) -> Result<Vec<CriticalKind>, MeshError> {
+    let adjacency = Adjacency::new(mesh);
+    let diagram = persistence(mesh, f)?;
+    let mut deaths = [vec![0usize; f.len()], vec![0usize; f.len()]];
+    for (counts, pairs) in deaths.iter_mut().zip([&diagram.minima, &diagram.maxima]) {
+        for death in pairs.iter().filter_map(|p| p.death) {
+            counts[death as usize] += 1;
+        }
+    }
+    Ok((0..f.len())
+        .map(|v| {
+            let rv = rank[v];
+            let neighbours = adjacency.neighbours(v as u32);
+            if neighbours.iter().all(|&w| rank[w as usize] > rv) {
+                CriticalKind::Minimum
+            } else if neighbours.iter().all(|&w| rank[w as usize] < rv) {
+                CriticalKind::Maximum
+            } else {
+                match deaths[0][v].max(deaths[1][v]) {
+                    0 => CriticalKind::Regular,
+                    multiplicity => CriticalKind::Saddle { multiplicity },
+                }
+            }
+        })
+        .collect())
 }
 
 /// Union–find root with path halving.

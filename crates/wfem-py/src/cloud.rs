@@ -28,6 +28,22 @@ pub fn assembly_laplacian(py: Python<'_>, name: Option<&str>, mollify_factor: Op
     }
 }
 
+/// Refuses a `laplacian=` naming another Laplacian than the robust one (a point cloud has
+/// only that one); `None` is fine.
+pub fn robust_only(py: Python<'_>, laplacian: Option<&str>) -> PyResult<()> {
+    if laplacian.is_some() {
+        let l: Laplacian = choices::parse(py, "laplacian", laplacian)?;
+        if !matches!(l, Laplacian::Robust(_)) {
+            return Err(invalid_param(
+                py,
+                "laplacian",
+                format!("a point cloud has only the robust Laplacian, not {:?}", l.name()),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// An (n, 3) array as rows.
 fn rows(py: Python<'_>, a: &PyReadonlyArray2<'_, f64>, name: &str) -> PyResult<Vec<[f64; 3]>> {
     let a = a.as_array();
@@ -74,16 +90,7 @@ pub fn cloud_operators<'py>(
     mollify_factor: Option<f64>,
     laplacian: Option<&str>,
 ) -> PyResult<CloudOut<'py>> {
-    if laplacian.is_some() {
-        let l: Laplacian = choices::parse(py, "laplacian", laplacian)?;
-        if !matches!(l, Laplacian::Robust(_)) {
-            return Err(invalid_param(
-                py,
-                "laplacian",
-                format!("a point cloud has only the robust Laplacian, not {:?}", l.name()),
-            ));
-        }
-    }
+    robust_only(py, laplacian)?;
     let positions = rows(py, &p, "P")?;
     let normals = normals.map(|n| rows(py, &n, "normals")).transpose()?;
     let lumping: Lumping = choices::parse(py, "lumped_mass", lumped_mass)?;

@@ -224,11 +224,6 @@ pub fn mesh(py: Python<'_>, e: &MeshError) -> PyErr {
             "NonFiniteScalarField",
             fields!(vertex = *vertex, value = *value),
         ),
-        MeshError::NonManifoldVertex { vertex, reason } => (
-            Class::Mesh,
-            "NonManifoldVertex",
-            fields!(vertex = *vertex, reason = reason),
-        ),
         MeshError::NegativeIndex {
             path,
             line,

@@ -119,6 +119,38 @@ impl PyHeatKernel {
         })
     }
 
+    /// The kernel of a point cloud: its robust operators (`laplacian` may only name the robust
+    /// Laplacian) and its neighbourhood mesh, which the feature-driven approximation and the
+    /// edge time unit use as a mesh's edges.
+    #[staticmethod]
+    #[pyo3(signature = (p, mass=None, method_name=None, degree=None, k=None, backend=None, laplacian=None, n_neighbors=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_cloud(
+        py: Python<'_>,
+        p: PyReadonlyArray2<'_, f64>,
+        mass: Option<&str>,
+        method_name: Option<&str>,
+        degree: Option<usize>,
+        k: Option<usize>,
+        backend: Option<&str>,
+        laplacian: Option<&str>,
+        n_neighbors: Option<usize>,
+    ) -> PyResult<Self> {
+        crate::cloud::robust_only(py, laplacian)?;
+        let (cloud, params) = crate::cloud::cloud_in(py, &p, n_neighbors)?;
+        let mass: Mass = choices::parse(py, "mass", mass)?;
+        let method = method(py, method_name, degree, k, backend)?;
+        run(py, move |_| {
+            let built = mesh_fem::assemble_cloud(&cloud, &params, &AssemblyParams::for_mass(mass))?;
+            let kernel = HeatKernel::new(&built.operators, HeatParams { mass, method })?;
+            Ok(Self {
+                kernel,
+                mesh: Some(Arc::new(built.neighbourhood)),
+                scales: Default::default(),
+            })
+        })
+    }
+
     #[staticmethod]
     #[pyo3(signature = (l, m, method_name=None, degree=None, k=None, backend=None))]
     #[allow(clippy::too_many_arguments)]

@@ -197,3 +197,27 @@ def test_hks_of_a_cloud_reads_times_in_area_units():
     assert not np.allclose(h3, h1 / 4.0, rtol=1e-3)
     with pytest.raises(wfem.InvalidInputError, match="time_unit"):
         wfem.hks(P, times=tau, time_unit="fortnight")
+
+
+def test_feature_approximation_and_edge_unit_on_a_cloud():
+    # A kernel of a cloud keeps its neighbourhood mesh: the feature-driven approximation
+    # runs (critical points on the non-manifold neighbourhood mesh) and keeps a smooth f
+    # within 3 % of its range at the finest scale, as on a mesh; its kernel is the one of the
+    # cloud's operators.
+    P = sphere_points(1500, seed=3)
+    f = P[:, 0] + 0.5 * P[:, 1] * P[:, 2]
+    K = wfem.HeatKernel(P)
+    out = K.feature_approximation(f, scales=3)
+    assert len(out["anchors"]) >= 2
+    for s in out["scales"]:
+        assert np.allclose(s["global_"] + s["local"], f, atol=1e-9)
+    assert min(s["relative_linf_error"] for s in out["scales"]) <= 0.03
+    L, B, _ = wfem.operators(P)
+    ref = wfem.HeatKernel.from_operators(L, B)
+    assert max_rel_diff(K.apply(f, 0.05), ref.apply(f, 0.05)) < 1e-10
+    # The edge time unit is measured on the neighbourhood mesh (mean edge length squared).
+    a = K.apply(f, 2.0, time_unit="edge")
+    assert np.isfinite(a).all()
+    # A laplacian= other than the robust one is refused for a cloud.
+    with pytest.raises(wfem.InvalidInputError, match="laplacian"):
+        wfem.HeatKernel(P, laplacian="cotan")

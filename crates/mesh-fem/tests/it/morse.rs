@@ -642,8 +642,8 @@ fn non_finite_values_are_a_typed_error() {
 }
 
 #[test]
-fn non_manifold_links_are_a_typed_error() {
-    // Bow tie: two triangles sharing only vertex 0.
+fn non_manifold_vertices_are_classified_on_the_edge_graph() {
+    // Bow tie: two triangles sharing only vertex 0 (its link is two disjoint edges).
     let positions = vec![
         [0.0, 0.0, 0.0],
         [1.0, 0.0, 0.0],
@@ -652,17 +652,31 @@ fn non_manifold_links_are_a_typed_error() {
         [-1.0, -1.0, 0.0],
     ];
     let bowtie = TriMesh::new(positions.clone(), vec![[0, 1, 2], [0, 3, 4]]).unwrap();
-    let f = vec![0.0, 1.0, 2.0, 3.0, 4.0];
-    let err = critical_points(&bowtie, &f).unwrap_err();
-    assert!(matches!(err, MeshError::NonManifoldVertex { vertex: 0, .. }), "{err}");
-    // Persistence only needs the edge graph (connected through vertex 0).
+    let kind_of = |mesh: &TriMesh, f: &[f64], v: u32| {
+        critical_points(mesh, f)
+            .unwrap()
+            .into_iter()
+            .find(|c| c.vertex == v)
+            .map_or(CriticalKind::Regular, |c| c.kind)
+    };
+    // f(0) lowest: every link vertex is above, a minimum; highest: a maximum.
+    assert_eq!(kind_of(&bowtie, &[0.0, 1.0, 2.0, 3.0, 4.0], 0), CriticalKind::Minimum);
+    assert_eq!(kind_of(&bowtie, &[9.0, 1.0, 2.0, 3.0, 4.0], 0), CriticalKind::Maximum);
+    // In the middle: the two wings' sublevel sets (1 and 3) and superlevel sets (2 and 4) meet
+    // only at vertex 0, where persistence kills a minimum and a maximum: a saddle.
+    let f = [2.0, 0.0, 4.0, 1.0, 3.0];
+    assert_eq!(kind_of(&bowtie, &f, 0), CriticalKind::Saddle { multiplicity: 1 });
     let d = persistence(&bowtie, &f).unwrap();
-    assert_eq!(d.minima.len(), 1);
-    assert_eq!(d.maxima.len(), 2);
+    assert_eq!(d.minima.len(), 2);
+    assert!(
+        d.minima.iter().any(|p| p.birth == 3 && p.death == Some(0)),
+        "{:?}",
+        d.minima
+    );
     assert_eq!(local_maxima(&bowtie, &f).unwrap(), vec![2, 4]);
     check_against_reference(&bowtie, &f);
 
-    // Three triangles on the edge 0–1.
+    // Three triangles on the edge 0–1 (a fin): the link of 0 is the star 1–{2, 3, 4}.
     let fin = TriMesh::new(
         vec![
             [0.0, 0.0, 0.0],
@@ -674,9 +688,30 @@ fn non_manifold_links_are_a_typed_error() {
         vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]],
     )
     .unwrap();
-    let err = critical_points(&fin, &f).unwrap_err();
-    assert!(matches!(err, MeshError::NonManifoldVertex { vertex: 0, .. }), "{err}");
-    assert!(err.to_string().contains("shared by 3 triangles"), "{err}");
+    // 1 below 0, the three tips above and joined only through 0 and 1: three superlevel
+    // components meet at 0 → a saddle of multiplicity 2.
+    let f = [1.0, 0.0, 2.0, 3.0, 4.0];
+    assert_eq!(kind_of(&fin, &f, 0), CriticalKind::Saddle { multiplicity: 2 });
+    let d = persistence(&fin, &f).unwrap();
+    assert_eq!(
+        d.maxima.iter().filter(|p| p.death == Some(0)).count(),
+        2,
+        "{:?}",
+        d.maxima
+    );
+    // 1 above 0 and every tip above too: a minimum; the tips below and 1 above: the mirror
+    // saddle.
+    assert_eq!(kind_of(&fin, &[0.0, 1.0, 2.0, 3.0, 4.0], 0), CriticalKind::Minimum);
+    let mirrored = [2.0, 9.0, 1.0, 0.0, -1.0];
+    assert_eq!(kind_of(&fin, &mirrored, 0), CriticalKind::Saddle { multiplicity: 2 });
+    // 1 and 2 below (joined by their edge), 3 and 4 above (joined only through 0 and 1): a
+    // saddle of multiplicity 1. With 1, 2, 3 below and 4 above nothing merges at 0: regular.
+    assert_eq!(
+        kind_of(&fin, &[1.5, 0.0, 1.0, 2.0, 3.0], 0),
+        CriticalKind::Saddle { multiplicity: 1 }
+    );
+    assert_eq!(kind_of(&fin, &[2.5, 0.0, 1.0, 2.0, 3.0], 0), CriticalKind::Regular);
+    check_against_reference(&fin, &f);
 
     // A face repeating a vertex, and a vertex in no face.
     let repeated = TriMesh::new(positions[..4].to_vec(), vec![[0, 1, 2], [2, 3, 3]]).unwrap();
@@ -689,4 +724,43 @@ fn non_manifold_links_are_a_typed_error() {
         critical_points(&lonely, &f),
         Err(MeshError::UnreferencedVertex { vertex: 4 })
     ));
+}
+
+/// On the neighbourhood mesh of a point cloud (non-manifold: the distinct local triangles of
+/// its points) every vertex is classified on the edge graph: each death vertex of the
+/// persistence sweeps is a saddle, and a height function on a sphere cloud, whose surface has
+/// 2 critical points, has few of them (the graph's own small extrema, each paired with a
+/// saddle) instead of the hundreds the link rule would find on fragmented links.
+#[test]
+fn a_point_cloud_neighbourhood_mesh_is_classified_on_its_edge_graph() {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let n = 2000;
+    let points: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let phi = golden * i as f64;
+            // A small tilt so that z is not constant along the lattice's rows.
+            [r * phi.cos(), r * phi.sin(), z + 0.01 * r * phi.sin()]
+        })
+        .collect();
+    let cloud = mesh_fem::PointCloud::new(points.clone(), None).unwrap();
+    let built = mesh_fem::assemble_cloud(&cloud, &Default::default(), &Default::default()).unwrap();
+    let mesh = &built.neighbourhood;
+    let f: Vec<f64> = points.iter().map(|p| p[2]).collect();
+    let critical = critical_points(mesh, &f).unwrap();
+    let saddles: BTreeSet<u32> = critical
+        .iter()
+        .filter(|c| matches!(c.kind, CriticalKind::Saddle { .. }))
+        .map(|c| c.vertex)
+        .collect();
+    let d = persistence(mesh, &f).unwrap();
+    for p in d.minima.iter().chain(&d.maxima) {
+        if let Some(death) = p.death {
+            assert!(saddles.contains(&death), "death vertex {death} is not a saddle");
+        }
+    }
+    let extrema = critical.len() - saddles.len();
+    assert!(extrema >= 2);
+    assert!(critical.len() <= n / 50, "{} critical points of 2000", critical.len());
 }

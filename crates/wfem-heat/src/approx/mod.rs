@@ -416,8 +416,10 @@ impl FeatureApproximation {
 /// [`HeatError::LengthMismatch`]/[`HeatError::NonFiniteInput`] for a bad f;
 /// [`HeatError::InvalidParameter`] for k = 0, k > n, scales outside
 /// 1..=[`crate::limits::MAX_APPROX_SCALES`] or a negative/NaN threshold;
-/// [`HeatError::Mesh`] when the mesh and the kernel disagree or the mesh is not manifold
-/// (critical points); the eigensolver and kernel errors.
+/// [`HeatError::Mesh`] when the mesh and the kernel disagree; the eigensolver and kernel
+/// errors. Any triangle mesh is accepted — non-manifold ones and the neighbourhood mesh of a
+/// point cloud included ([`morse::critical_points`] classifies a non-manifold vertex by its
+/// lower and upper link components).
 pub fn feature_approximation(
     mesh: &TriMesh,
     kernel: &HeatKernel,

@@ -104,10 +104,8 @@ class HeatKernel:
         mass = _choices.mass_of(mass, kernel, lumped)
         P = points_of(V, F)
         if P is not None:
-            from ._cloud import cloud_pencil
-
-            L, M = cloud_pencil(P, mass, laplacian=laplacian, n_neighbors=n_neighbors)
-            self._k = _wfem.HeatKernel.from_operators(as_sparse(L, "L"), as_sparse(M, "M"), method, degree, k, backend)
+            p = as_float_array(P, "P", (2,))
+            self._k = _wfem.HeatKernel.from_cloud(p, mass, method, degree, k, backend, laplacian, n_neighbors)
             return
         v, f = as_mesh(V, F)
         self._k = _wfem.HeatKernel.from_mesh(v, f, mass, method, degree, k, backend, laplacian)
@@ -382,7 +380,8 @@ class HeatKernel:
         ``linf_error``, ``relative_linf_error``, ``anchor_error``, ``critical_points``,
         ``significant_critical_points``, ``persistent_extrema``. When f_glob stays more than
         3 % of the range from f at every scale, an :class:`ApproximationWarning` names the
-        option to change. Needs a kernel built from (V, F).
+        option to change. Needs a kernel built from a mesh (V, F) or a point cloud P (on its
+        neighbourhood mesh), not from operators.
         """
         out = dict(
             self._k.feature_approximation(

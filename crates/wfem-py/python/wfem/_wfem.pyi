@@ -87,6 +87,17 @@ class HeatKernel:
         laplacian: str | None = None,
     ) -> HeatKernel: ...
     @staticmethod
+    def from_cloud(
+        p: _F64,
+        mass: str | None = None,
+        method_name: str | None = None,
+        degree: int | None = None,
+        k: int | None = None,
+        backend: str | None = None,
+        laplacian: str | None = None,
+        n_neighbors: int | None = None,
+    ) -> HeatKernel: ...
+    @staticmethod
     def from_operators(
         l: _Sparse,
         m: _Sparse,
