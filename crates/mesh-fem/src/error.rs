@@ -3,7 +3,9 @@ use std::path::PathBuf;
 /// Everything that can go wrong between a file on disk and the FEM operators.
 ///
 /// Each variant names the culprit (file, line, face or vertex) so that a user can find it.
-#[derive(Debug, thiserror::Error)]
+/// Serialized (serde) as `{"Variant": {field: value}}`, which is how the Python package builds
+/// its exceptions: `kind` is the variant, the fields are the exception's attributes.
+#[derive(Debug, thiserror::Error, serde::Serialize)]
 #[non_exhaustive]
 pub enum MeshError {
     /// The mesh has no vertices or no faces.
@@ -86,6 +88,7 @@ pub enum MeshError {
         /// 1-based line (0 for binary formats or when unknown).
         line: usize,
         /// What was wrong.
+        #[serde(rename = "reason")]
         message: String,
     },
     /// An operating-system I/O error.
@@ -95,6 +98,7 @@ pub enum MeshError {
         path: PathBuf,
         /// The underlying error.
         #[source]
+        #[serde(rename = "errno", serialize_with = "errno")]
         source: std::io::Error,
     },
     /// The validation found a problem that makes the mesh unusable for the requested work.
@@ -109,6 +113,7 @@ pub enum MeshError {
         /// File involved.
         path: PathBuf,
         /// What was wrong.
+        #[serde(rename = "reason")]
         message: String,
     },
     // ===== morse.rs: critical points and persistence (appended by branch `morse`) =====
@@ -176,6 +181,7 @@ pub enum MeshError {
         /// The option's name.
         option: &'static str,
         /// What was wrong.
+        #[serde(rename = "reason")]
         message: String,
     },
     /// A line of a Matrix Market file could not be parsed.
@@ -186,6 +192,7 @@ pub enum MeshError {
         /// 1-based line number.
         line: usize,
         /// What was wrong.
+        #[serde(rename = "reason")]
         message: String,
     },
     // ---- end of variants added by the validate/stats/mtx work ----
@@ -262,4 +269,10 @@ pub enum MeshError {
         n_neighbours: usize,
     },
     // ---- end of the robust Laplacian and point-cloud block ----
+}
+
+/// An I/O error as its operating-system error number (`None` when it has none): the field
+/// `errno` of the error's serialized form (what the Python exceptions carry).
+fn errno<S: serde::Serializer>(e: &std::io::Error, s: S) -> Result<S::Ok, S::Error> {
+    serde::Serialize::serialize(&e.raw_os_error(), s)
 }

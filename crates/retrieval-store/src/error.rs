@@ -2,7 +2,9 @@ use std::path::PathBuf;
 
 /// Failures of the retrieval store. Each variant names the file and the culprit (shape name,
 /// chunk, index) so a user can find it.
-#[derive(Debug, thiserror::Error)]
+/// Serialized (serde) as `{"Variant": {field: value}}`, which is how the Python package builds
+/// its exceptions.
+#[derive(Debug, thiserror::Error, serde::Serialize)]
 #[non_exhaustive]
 pub enum StoreError {
     /// SQLite reported an error (I/O, locking, a full disk, a corrupt page).
@@ -12,6 +14,7 @@ pub enum StoreError {
         path: PathBuf,
         /// SQLite's error.
         #[source]
+        #[serde(skip)]
         source: rusqlite::Error,
     },
     /// An operating-system error outside SQLite (creating or renaming the file).
@@ -21,6 +24,7 @@ pub enum StoreError {
         path: PathBuf,
         /// The underlying error.
         #[source]
+        #[serde(rename = "errno", serialize_with = "errno")]
         source: std::io::Error,
     },
     /// The file is not a store of this format (another SQLite database, or not SQLite).
@@ -112,6 +116,7 @@ pub enum StoreError {
         /// The path.
         path: PathBuf,
         /// What it is ("a directory", "a FIFO", …).
+        #[serde(rename = "reason")]
         kind: &'static str,
     },
     /// The store file was replaced (e.g. by a `build` of the same path) after this writer
@@ -137,6 +142,7 @@ pub enum StoreError {
         /// The file.
         path: PathBuf,
         /// What was to be read.
+        #[serde(rename = "reason")]
         what: String,
     },
     /// The distance function returned NaN for a stored shape (a query must never rank NaN).
@@ -145,4 +151,10 @@ pub enum StoreError {
         /// The shape's id.
         id: u64,
     },
+}
+
+/// An I/O error as its operating-system error number (`None` when it has none): the field
+/// `errno` of the error's serialized form (what the Python exceptions carry).
+fn errno<S: serde::Serializer>(e: &std::io::Error, s: S) -> Result<S::Ok, S::Error> {
+    serde::Serialize::serialize(&e.raw_os_error(), s)
 }

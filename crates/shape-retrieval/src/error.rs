@@ -1,5 +1,7 @@
 /// Failures of descriptor computation and retrieval.
-#[derive(Debug, thiserror::Error)]
+/// Serialized (serde) as `{"Variant": {field: value}}`, which is how the Python package builds
+/// its exceptions.
+#[derive(Debug, thiserror::Error, serde::Serialize)]
 #[non_exhaustive]
 pub enum RetrievalError {
     /// An error from the heat kernel.
@@ -18,6 +20,7 @@ pub enum RetrievalError {
         /// The size implied by the other input.
         expected: usize,
         /// The size found.
+        #[serde(rename = "found")]
         actual: usize,
     },
     /// An input that must not be empty is empty.
@@ -66,6 +69,7 @@ pub enum RetrievalError {
         /// The vertex.
         vertex: usize,
         /// The diffusion time.
+        #[serde(rename = "t")]
         time: f64,
         /// The offending value.
         value: f64,
@@ -84,6 +88,7 @@ pub enum RetrievalError {
         /// Which input holds the index.
         what: &'static str,
         /// The index.
+        #[serde(rename = "vertex")]
         index: usize,
         /// The number of vertices.
         n_vertices: usize,
@@ -104,8 +109,10 @@ pub enum RetrievalError {
     #[error("distance between vertices {from} and {to} is {value}, not a finite non-negative number")]
     InvalidDistance {
         /// First vertex.
+        #[serde(rename = "source")]
         from: u32,
         /// Second vertex.
+        #[serde(rename = "target")]
         to: u32,
         /// The value returned.
         value: f64,
@@ -133,7 +140,8 @@ pub enum RetrievalError {
     Shape {
         /// The shape (e.g. its file).
         name: String,
-        /// The failure.
+        /// The failure (in the message, not serialized).
+        #[serde(skip)]
         source: Box<RetrievalError>,
     },
     /// No shape of a collection could be described (each is named with its reason).

@@ -1,7 +1,10 @@
 use faer::c64;
 
 /// Failures of the shifted solvers.
-#[derive(Debug, Clone, thiserror::Error)]
+///
+/// Serialized (serde) as `{"Variant": {field: value}}`, which is how the Python package builds
+/// its exceptions (a pole as its pair (re, im)).
+#[derive(Debug, Clone, thiserror::Error, serde::Serialize)]
 #[non_exhaustive]
 pub enum SolveError {
     /// The computation was interrupted by its caller ([`crate::interrupt`]).
@@ -15,12 +18,14 @@ pub enum SolveError {
         /// Expected size.
         expected: usize,
         /// Size found.
+        #[serde(rename = "found")]
         got: usize,
     },
     /// A matrix that must be square is not.
     #[error("{which} matrix is not square ({nrows} × {ncols})")]
     NotSquare {
         /// Which matrix (`"stiffness"` or `"mass"`).
+        #[serde(rename = "matrix")]
         which: &'static str,
         /// Rows.
         nrows: usize,
@@ -52,6 +57,7 @@ pub enum SolveError {
         /// Row.
         row: usize,
         /// Column.
+        #[serde(rename = "column")]
         col: usize,
         /// The value.
         value: f64,
@@ -60,10 +66,12 @@ pub enum SolveError {
     #[error("{which} matrix is not symmetric: entry ({row}, {col}) = {value} but ({col}, {row}) = {transposed}")]
     NotSymmetric {
         /// Which matrix.
+        #[serde(rename = "matrix")]
         which: &'static str,
         /// Row.
         row: usize,
         /// Column.
+        #[serde(rename = "column")]
         col: usize,
         /// A[row, col].
         value: f64,
@@ -74,6 +82,7 @@ pub enum SolveError {
     #[error("{which} matrix has diagonal entry {value} at index {index} (must be {requirement})")]
     BadDiagonal {
         /// Which matrix.
+        #[serde(rename = "matrix")]
         which: &'static str,
         /// Index.
         index: usize,
@@ -86,6 +95,7 @@ pub enum SolveError {
     #[error("mass matrix B is not symmetric positive definite (Cholesky failed: {detail})")]
     MassNotPositiveDefinite {
         /// faer's message.
+        #[serde(rename = "reason")]
         detail: String,
     },
     /// L + δ·diag(L) is not positive definite for a tiny relative δ > 0: L has a direction of
@@ -102,6 +112,7 @@ pub enum SolveError {
         /// Diffusion time.
         t: f64,
         /// Pole z.
+        #[serde(serialize_with = "complex")]
         pole: c64,
     },
     /// An iterative solver did not reach the requested tolerance.
@@ -114,6 +125,7 @@ pub enum SolveError {
         /// Iterations performed.
         iterations: usize,
         /// The pole.
+        #[serde(serialize_with = "complex")]
         pole: c64,
     },
     /// A shift-and-invert Lanczos iteration ([`crate::lanczos_function`],
@@ -141,6 +153,12 @@ pub enum SolveError {
         /// Which factorization.
         what: &'static str,
         /// faer's message.
+        #[serde(rename = "reason")]
         detail: String,
     },
+}
+
+/// A complex number as its pair (re, im) (serde has no complex type).
+fn complex<S: serde::Serializer>(z: &c64, s: S) -> Result<S::Ok, S::Error> {
+    serde::Serialize::serialize(&(z.re, z.im), s)
 }

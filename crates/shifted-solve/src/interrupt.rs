@@ -21,7 +21,7 @@ use std::sync::Arc;
 pub struct Interrupt(Arc<AtomicBool>);
 
 /// The computation was interrupted ([`Interrupt::raise`]) before it finished.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error, serde::Serialize)]
 #[error("the computation was interrupted")]
 pub struct Interrupted;
 

@@ -1,5 +1,8 @@
 /// Failures of heat-kernel evaluation.
-#[derive(Debug, thiserror::Error)]
+///
+/// Serialized (serde) as `{"Variant": {field: value}}`, which is how the Python package builds
+/// its exceptions (the eigenpairs an eigensolve did find are not serialized).
+#[derive(Debug, thiserror::Error, serde::Serialize)]
 #[non_exhaustive]
 pub enum HeatError {
     /// The diffusion time is not a finite positive number.
@@ -93,6 +96,7 @@ pub enum HeatError {
         /// Largest relative residual among the requested pairs.
         max_residual: f64,
         /// The converged pairs (smallest eigenvalues first).
+        #[serde(skip)]
         found: Box<crate::Eigenbasis>,
     },
     /// The rational Krylov iteration of the fast path did not reach its tolerance.
@@ -128,12 +132,14 @@ pub enum HeatError {
         /// Iterations performed (0 for the spectral inverse).
         iterations: usize,
         /// Last relative residual ‖f − K_t g‖_B / ‖f‖_B.
+        #[serde(rename = "residual")]
         relative_residual: f64,
     },
     /// A vertex index is out of range.
     #[error("vertex {index} does not exist (the mesh has {n_vertices} vertices)")]
     VertexOutOfRange {
         /// The index given.
+        #[serde(rename = "vertex")]
         index: usize,
         /// Number of vertices n.
         n_vertices: usize,
@@ -150,6 +156,7 @@ pub enum HeatError {
         /// Row of the culprit.
         row: usize,
         /// Column of the culprit.
+        #[serde(rename = "column")]
         col: usize,
         /// The value found.
         value: f64,

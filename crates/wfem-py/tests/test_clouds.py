@@ -221,3 +221,22 @@ def test_feature_approximation_and_edge_unit_on_a_cloud():
     # A laplacian= other than the robust one is refused for a cloud.
     with pytest.raises(wfem.InvalidInputError, match="laplacian"):
         wfem.HeatKernel(P, laplacian="cotan")
+
+
+def test_every_error_carries_its_fields_as_attributes():
+    # The exception attributes are generated from the library enums: variants the hand-written
+    # mapping never covered (point-cloud errors) carry their culprit too.
+    P = sphere_points(50)
+    Q = P.copy()
+    Q[7, 2] = np.inf
+    with pytest.raises(wfem.MeshError) as info:
+        wfem.operators(Q)
+    e = info.value
+    assert e.kind == "NonFinitePoint" and e.point == 7 and e.what == "coordinate"
+    assert list(e.position[:2]) == [Q[7, 0], Q[7, 1]] and e.position[2] == np.inf
+    with pytest.raises(wfem.MeshError) as info:
+        wfem.operators(P[:2])
+    assert info.value.kind == "TooFewPoints" and info.value.n_points == 2 and info.value.minimum == 3
+    with pytest.raises(wfem.MeshError) as info:
+        wfem.operators(np.vstack([P, P[4:5]]))
+    assert info.value.kind == "DuplicatePoint" and info.value.point == 50 and info.value.duplicate_of == 4
