@@ -93,7 +93,7 @@ pub enum HeatError {
         /// Largest relative residual among the requested pairs.
         max_residual: f64,
         /// The converged pairs (smallest eigenvalues first).
-        found: Box<crate::Eigenbasis>,
+        found: Box<crate::eigenbasis::Eigenbasis>,
     },
     /// The rational Krylov iteration of the fast path did not reach its tolerance.
     #[error(

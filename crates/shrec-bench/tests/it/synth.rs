@@ -5,7 +5,7 @@
 use mesh_fem::generate::bumpy;
 use mesh_fem::TriMesh;
 use shrec_bench::synth::*;
-use shrec_bench::transform::EdgeGraph;
+use shrec_bench::transform::{EdgeGraph, Transformed};
 use wfem_heat::rng::SplitMix64;
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
