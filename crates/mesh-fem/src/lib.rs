@@ -38,7 +38,6 @@ mod mesh;
 mod topology;
 
 pub mod cloud;
-pub mod corpus;
 pub mod filter;
 pub mod generate;
 pub mod handles;

@@ -722,7 +722,7 @@ pub fn validate_output(t: &Transformed, n_base: usize, diameter: f64) -> Result<
 /// Options of [`generate`].
 #[derive(Clone, Debug)]
 pub struct GenerateOptions {
-    /// Folder of the mesh corpus (`mesh_fem::corpus::meshes_dir()` by default).
+    /// Folder of the mesh corpus (`cargo xtask shrec`: `wfem_corpus::meshes_dir()` by default).
     pub meshes_dir: PathBuf,
     /// Output folder.
     pub out_dir: PathBuf,
