@@ -187,7 +187,7 @@ fn approx_rejects_bad_input() {
 fn issue_24_defaults_on_the_benchmark_small_cases() {
     use shrec_bench::approx_eval::{load_case, noise, BenchField, SMALL_CASES};
     use wfem_heat::approx::{feature_approximation, ApproxParams};
-    let meshes = mesh_fem::corpus::meshes_dir().expect("the mesh corpus is required (or set WFEM_MESHES)");
+    let meshes = wfem_corpus::meshes_dir().expect("the mesh corpus is required (or set WFEM_MESHES)");
     let dir = tempfile::tempdir().unwrap();
     for case in SMALL_CASES {
         let (mesh, kernel, lambda_k) = load_case(&meshes, &case).unwrap();

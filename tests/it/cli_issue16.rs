@@ -129,7 +129,7 @@ fn issue_16_polygons_name_the_triangulate_flag() {
 
 #[test]
 fn issue_16_the_original_stanford_bunny_works_with_repair_unreferenced() {
-    let Ok(bunny) = mesh_fem::corpus::mesh_path("common-3d-test-models/stanford-bunny.obj") else {
+    let Ok(bunny) = wfem_corpus::mesh_path("common-3d-test-models/stanford-bunny.obj") else {
         eprintln!("skipped: the mesh corpus is not available");
         return;
     };
@@ -367,7 +367,7 @@ fn issue_16_npy_outputs_carry_their_metadata_and_figures_have_short_names() {
 /// The TOSCA cat is z-up: `--up auto` (the default) says so and `--up` overrides it.
 #[test]
 fn issue_16_figures_of_the_tosca_cat_are_upright() {
-    let Ok(cat) = mesh_fem::corpus::mesh_path("tosca-bcicp-5k/TOSCA_Isometric/cat0.off") else {
+    let Ok(cat) = wfem_corpus::mesh_path("tosca-bcicp-5k/TOSCA_Isometric/cat0.off") else {
         eprintln!("skipped: the mesh corpus is not available");
         return;
     };
@@ -397,7 +397,7 @@ fn issue_16_figures_of_the_tosca_cat_are_upright() {
         ("common-3d-test-models/horse.ply", "+z"),
         ("tosca-bcicp-5k/TOSCA_Isometric/david0.off", "+z"),
     ] {
-        let Ok(path) = mesh_fem::corpus::mesh_path(rel) else {
+        let Ok(path) = wfem_corpus::mesh_path(rel) else {
             continue;
         };
         let o = wfem(&[

@@ -15,6 +15,7 @@ mod cli_retrieval_eval;
 mod common;
 mod fuzz_regressions;
 mod hostile;
+mod module_cycles;
 mod no_unwrap;
 mod registry;
 mod thin_library;

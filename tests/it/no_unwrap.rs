@@ -88,11 +88,23 @@ fn brace_delta(code: &str) -> i64 {
     depth
 }
 
-/// Scans one source text. Returns the hits and the names of modules declared as
-/// `#[cfg(test)] mod name;` (whose files are test code).
-fn scan(file: &str, source: &str) -> (Vec<Hit>, Vec<String>) {
+/// One line of library code: neither a comment nor part of test code.
+pub(crate) struct CodeLine {
+    /// 1-based line number.
+    pub(crate) number: usize,
+    /// The code without its trailing comment, string literals blanked.
+    pub(crate) code: String,
+    /// The line's own comment, or the line before it, carries `invariant:`.
+    pub(crate) justified: bool,
+}
+
+/// The library code of one source text, line by line, and the names of modules declared as
+/// `#[cfg(test)] mod name;` (whose files are test code). Skipped: comment lines (including
+/// doc comments and doc-test code) and items after `#[cfg(test)]` up to `;` or their
+/// matching `}`.
+pub(crate) fn code_lines(source: &str) -> (Vec<CodeLine>, Vec<String>) {
     let lines: Vec<&str> = source.lines().collect();
-    let mut hits = Vec::new();
+    let mut code_lines = Vec::new();
     let mut test_modules = Vec::new();
     let mut i = 0;
     let mut previous_invariant = false;
@@ -140,21 +152,35 @@ fn scan(file: &str, source: &str) -> (Vec<Hit>, Vec<String>) {
             continue;
         }
         let (code, invariant_here) = split_comment(lines[i]);
-        let code = strip_strings(code);
-        if (code.contains(".unwrap()") || code.contains(".expect(")) && !invariant_here && !previous_invariant {
-            hits.push(Hit {
-                file: file.to_string(),
-                line: i + 1,
-                text: lines[i].trim().to_string(),
-            });
-        }
+        code_lines.push(CodeLine {
+            number: i + 1,
+            code: strip_strings(code),
+            justified: invariant_here || previous_invariant,
+        });
         previous_invariant = invariant_here;
         i += 1;
     }
+    (code_lines, test_modules)
+}
+
+/// Scans one source text. Returns the hits and the names of modules declared as
+/// `#[cfg(test)] mod name;` (whose files are test code).
+fn scan(file: &str, source: &str) -> (Vec<Hit>, Vec<String>) {
+    let lines: Vec<&str> = source.lines().collect();
+    let (code, test_modules) = code_lines(source);
+    let hits = code
+        .into_iter()
+        .filter(|l| (l.code.contains(".unwrap()") || l.code.contains(".expect(")) && !l.justified)
+        .map(|l| Hit {
+            file: file.to_string(),
+            line: l.number,
+            text: lines[l.number - 1].trim().to_string(),
+        })
+        .collect();
     (hits, test_modules)
 }
 
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+pub(crate) fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
     };
@@ -170,7 +196,7 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 /// The files of a module declared `#[cfg(test)] mod name;` in `declaring`.
-fn module_files(declaring: &Path, name: &str) -> Vec<PathBuf> {
+pub(crate) fn module_files(declaring: &Path, name: &str) -> Vec<PathBuf> {
     let dir = declaring.parent().unwrap_or(Path::new("."));
     let stem = declaring.file_stem().and_then(|s| s.to_str()).unwrap_or("");
     let base = if matches!(stem, "lib" | "main" | "mod") {

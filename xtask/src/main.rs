@@ -211,7 +211,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
         } => {
             let meshes_dir = match meshes {
                 Some(d) => d,
-                None => mesh_fem::corpus::meshes_dir()?,
+                None => wfem_corpus::meshes_dir()?,
             };
             let shapes = shapes.unwrap_or_else(|| DEFAULT_SHAPES.iter().map(|s| s.to_string()).collect());
             let classes = match classes {
@@ -245,9 +245,13 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             cache,
         } => {
             let data_dir = data.unwrap_or_else(|| PathBuf::from(format!("data/shrec/eval-{}", subset.name())));
+            let meshes_dir = match meshes {
+                Some(d) => d,
+                None => wfem_corpus::meshes_dir()?,
+            };
             let report = shrec_bench::eval::run(&shrec_bench::eval::EvalOptions {
                 data_dir,
-                meshes_dir: meshes,
+                meshes_dir,
                 subset,
                 seed: 2010,
                 cache: eigen_cache(cache)?,
@@ -263,7 +267,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
         } => {
             let meshes_dir = match meshes {
                 Some(d) => d,
-                None => mesh_fem::corpus::meshes_dir()?,
+                None => wfem_corpus::meshes_dir()?,
             };
             let settings: shape_retrieval::RetrievalSettings = match settings {
                 Some(p) => serde_json::from_str(&std::fs::read_to_string(&p)?)?,
@@ -282,7 +286,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             let variants: Vec<xtask::lab::Variant> = serde_json::from_str(&std::fs::read_to_string(&variants)?)?;
             let meshes_dir = match meshes {
                 Some(d) => d,
-                None => mesh_fem::corpus::meshes_dir()?,
+                None => wfem_corpus::meshes_dir()?,
             };
             let cache = eigen_cache(cache)?;
             for v in &variants {
@@ -300,7 +304,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             use xtask::real_eval::{self, Collection, RealEvalOptions};
             let meshes_dir = match meshes {
                 Some(d) => d,
-                None => mesh_fem::corpus::meshes_dir()?,
+                None => wfem_corpus::meshes_dir()?,
             };
             let variants: Vec<xtask::lab::Variant> = match variants {
                 Some(p) => serde_json::from_str(&std::fs::read_to_string(&p)?)?,
@@ -374,7 +378,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
         Cmd::ApproxEval { meshes, out, small } => {
             let meshes_dir = match meshes {
                 Some(d) => d,
-                None => mesh_fem::corpus::meshes_dir()?,
+                None => wfem_corpus::meshes_dir()?,
             };
             let cases: &[shrec_bench::approx_eval::ApproxCase] = if small {
                 &shrec_bench::approx_eval::SMALL_CASES

@@ -187,7 +187,7 @@ fn wheel_route(root: &Path, target: &Path, wheel: &Path) -> Result<(), StepError
         Command::new(&python).arg(examples.join("smooth.py")).current_dir(&work),
     )?;
     // Twelve shapes of four classes (the example's default folder is all 76).
-    let corpus = mesh_fem::corpus::meshes_dir().map_err(|e| StepError(e.to_string()))?;
+    let corpus = wfem_corpus::meshes_dir().map_err(|e| StepError(e.to_string()))?;
     let tosca = corpus.join("tosca-bcicp-5k").join("TOSCA_Isometric");
     let folder = work.join("shapes");
     std::fs::create_dir_all(&folder).map_err(|e| StepError(format!("{}: {e}", folder.display())))?;

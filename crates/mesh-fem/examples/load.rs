@@ -7,7 +7,7 @@
 //! ```
 
 use mesh_fem::io::{load, write_mesh, LoadOptions};
-use mesh_fem::{corpus, generate, MeshError};
+use mesh_fem::{generate, MeshError};
 use std::path::{Path, PathBuf};
 
 fn show(path: &Path, opts: &LoadOptions) -> Result<(), MeshError> {
@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let opts = LoadOptions::with_triangulation(args.iter().any(|a| a == "--triangulate"));
     let paths: Vec<&String> = args.iter().filter(|a| !a.starts_with("--")).collect();
     if args.iter().any(|a| a == "--corpus") {
-        for path in corpus::all_mesh_files()? {
+        for path in wfem_corpus::all_mesh_files()? {
             if let Err(e) = show(&path, &opts) {
                 println!("{}: error: {e}", path.display());
             }

@@ -7,13 +7,13 @@
 //! ```
 
 use mesh_fem::io::{load, LoadOptions};
-use mesh_fem::{assemble, corpus, repair, stats, validate, AssemblyParams, RepairOptions};
+use mesh_fem::{assemble, repair, stats, validate, AssemblyParams, RepairOptions};
 use std::path::PathBuf;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = match std::env::args().nth(1) {
         Some(p) => PathBuf::from(p),
-        None => corpus::mesh_path("common-3d-test-models/stanford-bunny.obj")?,
+        None => wfem_corpus::mesh_path("common-3d-test-models/stanford-bunny.obj")?,
     };
     let (mesh, _) = load(&path, &LoadOptions::with_triangulation(true))?;
     println!("{}", path.display());

@@ -13,8 +13,9 @@
 //! * [`handles`]: thin handles (short non-separating cycles) found and cut.
 //! * [`holes`]: boundary loops and hole filling (smooth patches of new vertices).
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
-//! * [`operators`]: the cotangent stiffness L, the consistent mass B and the lumped mass D of
-//!   the paper's Eq. (3) and Eq. (7), assembled in parallel into faer sparse matrices.
+//! * [`assemble`]: L, B and D with the chosen [`Laplacian`]; [`operators`]: the cotangent
+//!   stiffness L, the consistent mass B and the lumped mass D of the paper's Eq. (3) and
+//!   Eq. (7), assembled in parallel into faer sparse matrices.
 //! * [`laplacian`]: the registry of Laplacians ([`Laplacian`]: `cotan`, the default, or
 //!   `robust`); [`intrinsic`]: the robust one, the intrinsic Delaunay Laplacian of the tufted
 //!   cover (Sharp & Crane 2020) with B and D on the intrinsic triangulation.
@@ -31,12 +32,12 @@
 // justified ones carry `#[allow]` and an `// invariant:` comment (checked by tests/no_unwrap.rs).
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+mod assembly;
 mod error;
 mod mesh;
 mod topology;
 
 pub mod cloud;
-pub mod corpus;
 pub mod filter;
 pub mod generate;
 pub mod handles;
@@ -51,13 +52,14 @@ pub mod stats;
 pub mod validate;
 pub mod vec3;
 
+pub use assembly::assemble;
 pub use cloud::{assemble_cloud, CloudOperators, CloudParams, CloudReport, PointCloud};
 pub use error::MeshError;
 pub use intrinsic::IntrinsicTriangulation;
 pub use laplacian::{Laplacian, RobustParams};
 pub use mesh::TriMesh;
 pub use mtx::{read_matrix_market, write_matrix_market, write_operators};
-pub use operators::{assemble, AssemblyParams, FemOperators, Lumping, Mass};
+pub use operators::{AssemblyParams, FemOperators, Lumping, Mass};
 pub use stats::{stats, MeshStats};
 pub use validate::{
     repair, validate, Problem, RepairOptions, RepairReport, RepairStep, Severity, ValidationReport, NEEDLE_ANGLE,

@@ -96,7 +96,7 @@ impl Mass {
     }
 }
 
-/// Options of [`assemble`].
+/// Options of [`crate::assemble`].
 #[derive(Clone, Copy, Debug, Default)]
 pub struct AssemblyParams {
     /// Which lumped mass D to assemble.
@@ -221,10 +221,8 @@ fn face_element(p: [[f64; 3]; 3], voronoi: bool) -> Option<(FaceElement, [f64; 3
 const FACES_PER_CHUNK: usize = 8192;
 pub(crate) const COLUMNS_PER_CHUNK: usize = 2048;
 
-/// Assembles the stiffness L, the consistent mass B and the lumped mass D of `mesh`
-/// (paper, Eq. (3) and Eq. (7)) with the Laplacian of `params.laplacian`: the cotangent
-/// operators of the mesh itself (below; the default), or the robust operators of
-/// [`crate::intrinsic::assemble_robust`] (whose errors it returns instead of these).
+/// Assembles the cotangent stiffness L, the consistent mass B and the lumped mass D of
+/// `mesh` (paper, Eq. (3) and Eq. (7)): [`crate::assemble`] with [`Laplacian::Cotan`].
 ///
 /// Runs in O(#faces) time and memory, in parallel (rayon), in three passes:
 /// 1. every face's element (area and cotangents, measured once) in parallel over faces;
@@ -247,15 +245,7 @@ pub(crate) const COLUMNS_PER_CHUNK: usize = 2048;
 /// * [`MeshError::DegenerateMesh`] if the total area Σ|T| overflows (coordinates beyond
 ///   ~1e154): B and D would hold infinities; scale the mesh down first.
 /// * [`MeshError::Invalid`] for a mesh of 2³² faces or more.
-pub fn assemble(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
-    match params.laplacian {
-        Laplacian::Cotan => assemble_cotan(mesh, params),
-        Laplacian::Robust(robust) => crate::intrinsic::assemble_robust(mesh, &robust, params).map(|(ops, _)| ops),
-    }
-}
-
-/// [`assemble`] with the cotangent Laplacian.
-fn assemble_cotan(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
+pub(crate) fn assemble_cotan(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperators, MeshError> {
     let n = mesh.n_vertices();
     let faces = mesh.faces();
     if u32::try_from(faces.len()).is_err() {
@@ -305,7 +295,7 @@ fn assemble_cotan(mesh: &TriMesh, params: &AssemblyParams) -> Result<FemOperator
     })
 }
 
-/// Step 1 of [`assemble`]: the element of every face and, for the Voronoi lumped mass, the
+/// Step 1 of [`crate::assemble`]: the element of every face and, for the Voronoi lumped mass, the
 /// mixed Voronoi area of each corner (empty otherwise), in parallel over faces; the first
 /// degenerate face (in face order) as the error.
 fn face_elements(mesh: &TriMesh, voronoi: bool) -> Result<(Vec<FaceElement>, Vec<[f64; 3]>), usize> {
@@ -344,7 +334,7 @@ fn face_elements(mesh: &TriMesh, voronoi: bool) -> Result<(Vec<FaceElement>, Vec
     }
 }
 
-/// Step 2 of [`assemble`]: the faces around every vertex j in the segment
+/// Step 2 of [`crate::assemble`]: the faces around every vertex j in the segment
 /// `first[j]..first[j + 1]`, in face order, in parallel over vertex ranges of about equal
 /// corner counts (one per thread): each range scans all faces (cheap, sequential) and records
 /// the corners it owns, so every task writes only its own slice.
@@ -408,7 +398,7 @@ fn corner_half_edges(face: [u32; 3], j: usize, cots: [f64; 3]) -> (usize, [(u32,
     (k, [(face[k1], -0.5 * cots[k2]), (face[k2], -0.5 * cots[k1])])
 }
 
-/// Step 3 of [`assemble`]: per column j, the half-edges of the faces around j merged by row
+/// Step 3 of [`crate::assemble`]: per column j, the half-edges of the faces around j merged by row
 /// (stably, in face order) into the entries of L, B and D, in parallel over chunks of columns.
 fn merge_columns(
     faces: &[[u32; 3]],

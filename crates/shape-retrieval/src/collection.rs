@@ -3,7 +3,9 @@
 //! be described either left out and reported with its reason ([`Tolerance::Skip`], the
 //! default of `wfem retrieval build` and `wfem.RetrievalIndex.build`) or fatal
 //! ([`Tolerance::Strict`]). The CLI and the Python package call these two functions; neither
-//! re-implements the loop. A collection may mix meshes and point clouds ([`AsShape`]).
+//! re-implements the loop, and the strict constructors [`RetrievalIndex::build`] and
+//! [`ShapeFeatures::compute_many`] are defined here as its strict case. A collection may mix
+//! meshes and point clouds ([`AsShape`]).
 
 use crate::model::{
     AsShape, BagSettings, DescriptorSettings, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeRef,
@@ -124,6 +126,41 @@ pub fn describe_entries(
     each_shape(&borrowed(shapes), tolerance, done, &|name, shape| {
         index.describe(name, &shape)
     })
+}
+
+// The strict constructors of the model types are the collection loop's strict case; they
+// live here, above the model, so that the model does not depend on its collections.
+impl RetrievalIndex {
+    /// Builds an index in one go: describes `shapes` — meshes, point clouds or a mix
+    /// ([`AsShape`]) — in parallel, trains the vocabulary on them unless one is given (training
+    /// on the indexed shapes themselves is optimistic; see the module docs), and inserts every
+    /// shape. A given vocabulary brings its own descriptor settings (Laplacian and cleaning
+    /// included), which then replace `settings.descriptor`: its words only mean something for
+    /// descriptors computed as its own were.
+    ///
+    /// # Errors
+    /// Those of [`ShapeFeatures::compute_many`], [`VocabularyModel::train`], [`Self::insert`].
+    pub fn build<S: AsShape>(
+        shapes: &[(String, S)],
+        settings: &RetrievalSettings,
+        vocabulary: Option<VocabularyModel>,
+    ) -> Result<Self, RetrievalError> {
+        build_index(shapes, settings, vocabulary, Tolerance::Strict, &|_| ()).map(|(index, _)| index)
+    }
+}
+
+impl ShapeFeatures {
+    /// [`Self::compute`] for many shapes in parallel (one eigensolve per shape), in input order.
+    ///
+    /// # Errors
+    /// The first failure, as [`RetrievalError::Shape`] naming the shape.
+    pub fn compute_many<S: AsShape>(
+        shapes: &[(String, S)],
+        descriptor: &DescriptorSettings,
+        bags: &BagSettings,
+    ) -> Result<Vec<Self>, RetrievalError> {
+        describe_collection(shapes, descriptor, bags, Tolerance::Strict, &|_| ()).map(|d| d.features)
+    }
 }
 
 /// The shapes of a collection, borrowed: the generic entry points hand them to one loop.

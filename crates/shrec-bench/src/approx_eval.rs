@@ -36,7 +36,7 @@ use wfem_heat::{DiagonalParams, EigenParams, Eigenbasis, HeatKernel, HeatParams}
 pub struct ApproxCase {
     /// Short name in the tables.
     pub name: &'static str,
-    /// Path below the mesh corpus ([`mesh_fem::corpus::meshes_dir`]).
+    /// Path below the mesh corpus folder (`wfem_corpus::meshes_dir` in the tests and xtask).
     pub mesh: &'static str,
 }
 

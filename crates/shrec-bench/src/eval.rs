@@ -116,9 +116,9 @@ impl std::str::FromStr for Subset {
 pub struct EvalOptions {
     /// Folder of the generated data (reused if its `manifest.json` covers the subset).
     pub data_dir: PathBuf,
-    /// Corpus folder for generation and for the clean/outside collections (default:
-    /// `mesh_fem::corpus`).
-    pub meshes_dir: Option<PathBuf>,
+    /// Corpus folder for generation and for the clean/outside collections (`cargo xtask`
+    /// defaults to the shared corpus, `wfem_corpus::meshes_dir`).
+    pub meshes_dir: PathBuf,
     /// The subset.
     pub subset: Subset,
     /// Seed of the generator and of k-means.
@@ -516,10 +516,7 @@ fn mean(values: &[f64]) -> Option<f64> {
 /// # Errors
 /// The first failure, naming the shape.
 pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
-    let meshes_dir = match &opts.meshes_dir {
-        Some(d) => d.clone(),
-        None => mesh_fem::corpus::meshes_dir()?,
-    };
+    let meshes_dir = opts.meshes_dir.clone();
     let manifest = data(opts, &meshes_dir)?;
     let subset = opts.subset;
     let (names, classes, strengths) = (subset.shapes(), subset.classes(), subset.strengths());

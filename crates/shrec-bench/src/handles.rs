@@ -16,8 +16,7 @@
 //! (`n_a·u > 0` and `n_b·u < 0`, u = b − a normalised), so that the tube runs through the
 //! air between them; the balls of all handles stay at least four hops apart.
 
-use crate::synth::{BaseShape, Transformed};
-use crate::transform::{submesh, vertex_normals};
+use crate::transform::{submesh, vertex_normals, EdgeGraph, Transformed};
 use crate::BenchError;
 use mesh_fem::vec3::{dot, lerp, norm, sub};
 use mesh_fem::TriMesh;
@@ -107,10 +106,9 @@ fn zip(lower: &[u32], lp: &[f64], upper: &[u32], up: &[f64], faces: &mut Vec<[u3
 /// Whether removing the ball of [`HANDLE_BALL_HOPS`] around `v` opens one disk-shaped hole with
 /// a simple rim: the faces touching the ball have Euler characteristic 1 and their boundary
 /// edges meet two at each rim vertex.
-fn is_disk(base: &BaseShape, v: u32) -> Result<bool, BenchError> {
-    let ball = base.graph.hops(&[v], HANDLE_BALL_HOPS)?;
-    let faces: Vec<[u32; 3]> = base
-        .mesh
+fn is_disk(mesh: &TriMesh, graph: &EdgeGraph, v: u32) -> Result<bool, BenchError> {
+    let ball = graph.hops(&[v], HANDLE_BALL_HOPS)?;
+    let faces: Vec<[u32; 3]> = mesh
         .faces()
         .iter()
         .filter(|f| f.iter().any(|&x| ball[x as usize] != u32::MAX))
@@ -137,11 +135,12 @@ fn is_disk(base: &BaseShape, v: u32) -> Result<bool, BenchError> {
 }
 
 /// Picks up to `count` endpoint pairs (see the module docs).
-fn endpoints(base: &BaseShape, count: usize, rng: &mut SplitMix64) -> Result<Vec<[u32; 2]>, BenchError> {
-    let p = base.mesh.positions();
+fn endpoints(surface: &Surface<'_>, count: usize, rng: &mut SplitMix64) -> Result<Vec<[u32; 2]>, BenchError> {
+    let (mesh, graph) = (surface.mesh, surface.graph);
+    let p = mesh.positions();
     let n = p.len();
-    let normals = vertex_normals(&base.mesh);
-    let d = base.diameter;
+    let normals = vertex_normals(mesh);
+    let d = surface.diameter;
     let mut blocked = vec![false; n];
     let mut pairs = Vec::new();
     for a in rng.permutation(n) {
@@ -152,13 +151,13 @@ fn endpoints(base: &BaseShape, count: usize, rng: &mut SplitMix64) -> Result<Vec
             continue;
         }
         let pa = p[a as usize];
-        let near = base.graph.distances(&[a], HANDLE_MIN_GRAPH_DISTANCE * d)?;
+        let near = graph.distances(&[a], HANDLE_MIN_GRAPH_DISTANCE * d)?;
         let best = (0..n)
             .filter(|&b| !blocked[b] && near[b].is_infinite())
             .filter_map(|b| {
                 let v = sub(p[b], pa);
                 let dist = norm(v);
-                if dist > HANDLE_MAX_DISTANCE * d || dist < 3.0 * base.mean_edge {
+                if dist > HANDLE_MAX_DISTANCE * d || dist < 3.0 * surface.mean_edge {
                     return None;
                 }
                 let u = v.map(|x| x / dist);
@@ -166,9 +165,9 @@ fn endpoints(base: &BaseShape, count: usize, rng: &mut SplitMix64) -> Result<Vec
             })
             .min_by(|x, y| x.0.total_cmp(&y.0));
         let Some((_, b)) = best else { continue };
-        if is_disk(base, a)? && is_disk(base, b)? {
+        if is_disk(mesh, graph, a)? && is_disk(mesh, graph, b)? {
             pairs.push([a, b]);
-            let ball = base.graph.hops(&[a, b], 2 * HANDLE_BALL_HOPS + 4)?;
+            let ball = graph.hops(&[a, b], 2 * HANDLE_BALL_HOPS + 4)?;
             for (x, h) in blocked.iter_mut().zip(&ball) {
                 *x |= *h != u32::MAX;
             }
@@ -177,31 +176,55 @@ fn endpoints(base: &BaseShape, count: usize, rng: &mut SplitMix64) -> Result<Vec
     Ok(pairs)
 }
 
-/// `count` handles on `base` (fewer if the shape offers fewer endpoint pairs; the parameters
-/// record how many).
+/// The surface handles are added to, with the measures the recipe is scaled by.
+struct Surface<'a> {
+    mesh: &'a TriMesh,
+    graph: &'a EdgeGraph,
+    /// D, the bounding-box diagonal.
+    diameter: f64,
+    /// The mean edge length.
+    mean_edge: f64,
+}
+
+/// `count` handles on `mesh` (a base shape: its edge graph, its bounding-box diagonal D and
+/// its mean edge length; fewer handles if the shape offers fewer endpoint pairs, the
+/// parameters record how many).
 ///
 /// # Errors
 /// Mesh errors of the surgery; [`BenchError::Argument`] if a removed disk does not leave one
 /// simple rim (a ball that is not a disk).
-pub fn add_handles(base: &BaseShape, count: usize, rng: &mut SplitMix64) -> Result<Transformed, BenchError> {
-    let pairs = endpoints(base, count, rng)?;
-    let n = base.mesh.n_vertices();
+pub fn add_handles(
+    mesh: &TriMesh,
+    graph: &EdgeGraph,
+    diameter: f64,
+    mean_edge: f64,
+    count: usize,
+    rng: &mut SplitMix64,
+) -> Result<Transformed, BenchError> {
+    let surface = Surface {
+        mesh,
+        graph,
+        diameter,
+        mean_edge,
+    };
+    let pairs = endpoints(&surface, count, rng)?;
+    let n = mesh.n_vertices();
     let ends: Vec<u32> = pairs.iter().flatten().copied().collect();
     let mut keep = vec![true; n];
     for &v in &ends {
-        let ball = base.graph.hops(&[v], HANDLE_BALL_HOPS)?;
+        let ball = graph.hops(&[v], HANDLE_BALL_HOPS)?;
         for (k, h) in keep.iter_mut().zip(&ball) {
             *k &= *h == u32::MAX;
         }
     }
-    let cut = submesh(&base.mesh, &keep)?;
+    let cut = submesh(mesh, &keep)?;
     let mut positions = cut.mesh.positions().to_vec();
     let mut faces = cut.mesh.faces().to_vec();
     let mut ground_truth: Vec<i64> = cut.source_vertex.iter().map(|&v| v as i64).collect();
     let rims = mesh_fem::holes::boundary_loops(&cut.mesh);
     // Each rim belongs to the endpoint within HANDLE_BALL_HOPS + 1 hops of its vertices.
     let rim_of = |end: u32| -> Result<Vec<u32>, BenchError> {
-        let near = base.graph.hops(&[end], HANDLE_BALL_HOPS + 1)?;
+        let near = graph.hops(&[end], HANDLE_BALL_HOPS + 1)?;
         rims.iter()
             .filter(|r| r.closed && r.is_simple())
             .find(|r| {
@@ -243,7 +266,7 @@ pub fn add_handles(base: &BaseShape, count: usize, rng: &mut SplitMix64) -> Resu
         let ra = Rim::new(lower, &positions, e);
         let rb = Rim::new(rim_b, &positions, e);
         let m = ra.vertices.len().max(rb.vertices.len());
-        let rings = ((length / base.mean_edge).round() as usize).max(2);
+        let rings = ((length / mean_edge).round() as usize).max(2);
         let ring_param: Vec<f64> = (0..m).map(|i| i as f64 / m as f64).collect();
         let mut previous = (ra.vertices.clone(), ra.param.clone());
         for k in 1..rings {

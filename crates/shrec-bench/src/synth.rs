@@ -29,7 +29,7 @@
 
 use crate::transform::{
     bounding_box_diagonal, close_pairs, largest_component, submesh, vertex_normals, weld_vertices, DerivedMesh,
-    EdgeGraph, QemDecimator, QemParams,
+    EdgeGraph, QemDecimator, QemParams, Transformed,
 };
 use crate::BenchError;
 use mesh_fem::vec3::{cross, dot, norm, sub};
@@ -399,17 +399,6 @@ impl BaseShape {
     }
 }
 
-/// One generated shape.
-#[derive(Clone, Debug)]
-pub struct Transformed {
-    /// The transformed mesh.
-    pub mesh: TriMesh,
-    /// For each vertex of `mesh`, the base vertex it corresponds to (−1: none).
-    pub ground_truth: Vec<i64>,
-    /// The parameters actually used (recorded in the manifest).
-    pub params: serde_json::Value,
-}
-
 fn identity_gt(n: usize) -> Vec<i64> {
     (0..n as i64).collect()
 }
@@ -554,7 +543,14 @@ pub fn transform(base: &BaseShape, class: Class, s: u8, seed: u64) -> Result<Tra
                        "max_distance": radius, "min_graph_distance": min_graph, "vertices_merged": merged}),
             ))
         }
-        Class::Handles => crate::handles::add_handles(base, crate::handles::handle_count(s), &mut rng),
+        Class::Handles => crate::handles::add_handles(
+            &base.mesh,
+            &base.graph,
+            base.diameter,
+            base.mean_edge,
+            crate::handles::handle_count(s),
+            &mut rng,
+        ),
         Class::MicroHoles => {
             let wanted = micro_hole_count(s);
             let mut blocked = vec![false; n];
@@ -726,7 +722,7 @@ pub fn validate_output(t: &Transformed, n_base: usize, diameter: f64) -> Result<
 /// Options of [`generate`].
 #[derive(Clone, Debug)]
 pub struct GenerateOptions {
-    /// Folder of the mesh corpus (`mesh_fem::corpus::meshes_dir()` by default).
+    /// Folder of the mesh corpus (`cargo xtask shrec`: `wfem_corpus::meshes_dir()` by default).
     pub meshes_dir: PathBuf,
     /// Output folder.
     pub out_dir: PathBuf,

@@ -22,6 +22,18 @@ use mesh_fem::TriMesh;
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap, HashSet};
 
+/// One generated shape (a transformation of a base shape): the mesh, its ground truth and
+/// the parameters used.
+#[derive(Clone, Debug)]
+pub struct Transformed {
+    /// The transformed mesh.
+    pub mesh: TriMesh,
+    /// For each vertex of `mesh`, the base vertex it corresponds to (−1: none).
+    pub ground_truth: Vec<i64>,
+    /// The parameters actually used (recorded in the manifest).
+    pub params: serde_json::Value,
+}
+
 /// A mesh derived from a source mesh, with the source vertex of every new vertex.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DerivedMesh {

@@ -10,7 +10,7 @@
 //! ```
 
 use mesh_fem::io::{load, LoadOptions};
-use mesh_fem::{assemble, corpus, repair, AssemblyParams, Laplacian, RepairOptions, RobustParams, TriMesh};
+use mesh_fem::{assemble, repair, AssemblyParams, Laplacian, RepairOptions, RobustParams, TriMesh};
 use mesh_fem::{Lumping, Mass};
 use wfem_heat::{HeatKernel, HeatParams};
 
@@ -36,8 +36,8 @@ fn min_over_max(mesh: &TriMesh, laplacian: Laplacian, mass: Mass, source: usize,
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let root = corpus::meshes_dir()?;
-    let files = corpus::all_mesh_files()?;
+    let root = wfem_corpus::meshes_dir()?;
+    let files = wfem_corpus::all_mesh_files()?;
     let robust = Laplacian::Robust(RobustParams::default());
     let (mut ran, mut failed, mut worst_robust, mut cotan_negative, mut refused_by_cotan) = (0, 0, 0.0f64, 0, 0);
     for path in &files {

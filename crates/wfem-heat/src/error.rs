@@ -97,7 +97,7 @@ pub enum HeatError {
         max_residual: f64,
         /// The converged pairs (smallest eigenvalues first).
         #[serde(skip)]
-        found: Box<crate::Eigenbasis>,
+        found: Box<crate::eigenbasis::Eigenbasis>,
     },
     /// The rational Krylov iteration of the fast path did not reach its tolerance.
     #[error(

@@ -52,6 +52,7 @@ pub mod basis;
 mod check;
 pub mod diagonal;
 pub mod distance;
+mod eigenbasis;
 mod error;
 pub mod kernel;
 pub mod limits;
@@ -82,4 +83,5 @@ pub use shifted_solve::{rng, Backend, KrylovParams};
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
-pub use spectral::{EigenParams, Eigenbasis, DENSE_MAX_VERTICES};
+pub use eigenbasis::Eigenbasis;
+pub use spectral::{EigenParams, DENSE_MAX_VERTICES};

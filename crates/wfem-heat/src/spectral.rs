@@ -7,6 +7,7 @@
 //! convention; the paper prints L with the opposite sign), M is the mass matrix of the
 //! kernel (B, D or I), symmetric positive definite.
 
+pub use crate::eigenbasis::Eigenbasis;
 use crate::operators::AsSparse;
 use crate::{HeatError, Operators};
 use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
@@ -17,16 +18,6 @@ use shifted_solve::{largest_eigenpairs, symmetric_block_mul, BlockLanczosParams}
 /// The largest mesh (number of vertices) for which [`Eigenbasis::dense`] runs: O(n³) time
 /// and 3 dense n × n matrices (≈ 600 MB at the limit).
 pub const DENSE_MAX_VERTICES: usize = 5000;
-
-/// Eigenpairs of the generalized problem `L xᵢ = λᵢ M xᵢ` (paper, Eq. (4)), sorted by
-/// increasing λ, with M-orthonormal eigenvectors `XᵀMX = I`.
-#[derive(Clone, Debug)]
-pub struct Eigenbasis {
-    /// Eigenvalues λ₁ ≤ λ₂ ≤ … (λ₁ ≈ 0 on a connected mesh, eigenvector the constant 1/√area).
-    pub values: Vec<f64>,
-    /// Eigenvectors as columns, n × k, M-orthonormal: `XᵀMX = I`.
-    pub vectors: Mat<f64>,
-}
 
 /// Options of [`Eigenbasis::partial`] (thick-restart block Lanczos on the shift-inverted
 /// operator, [`shifted_solve::largest_eigenpairs`]).

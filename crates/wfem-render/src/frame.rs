@@ -1,13 +1,15 @@
 //! The orientation of the standard views: which way is up and which side faces the viewer,
-//! given explicitly ([`UpAxis`]) or found from the principal axes of the mesh ([`Frame::auto`]).
+//! given explicitly ([`UpAxis`]) or found from the principal axes of the mesh ([`Frame::auto`]);
+//! and the orthonormal camera frame of a [`View`] that the triangle and splat rasterisers share.
 
 use mesh_fem::TriMesh;
 
-use crate::vec3::{cross, dot, V3};
+use crate::vec3::{cross, dot, normalized, V3};
+use crate::View;
 
 /// `a / |a|`, or `a` itself when it cannot be normalised.
 fn unit(a: V3) -> V3 {
-    crate::vec3::normalized(a).unwrap_or(a)
+    normalized(a).unwrap_or(a)
 }
 
 /// Which coordinate axis points up in the mesh's own frame.
@@ -227,6 +229,33 @@ fn auto_frame(mesh: &TriMesh) -> Option<Frame> {
         return Some(default);
     }
     Some(Frame::new(default.up, front))
+}
+
+/// Orthonormal camera frame: `right`, `up` span the screen, `dir` points towards the viewer.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Camera {
+    pub(crate) right: V3,
+    pub(crate) up: V3,
+    pub(crate) dir: V3,
+}
+
+impl Camera {
+    /// `None` if the direction is zero/non-finite or (nearly) parallel to `up`.
+    pub(crate) fn new(view: &View) -> Option<Self> {
+        let dir = normalized(view.direction)?;
+        let up = normalized(view.up)?;
+        let r = cross(up, dir);
+        if dot(r, r) < 1e-12 {
+            return None;
+        }
+        let right = normalized(r)?;
+        let up = cross(dir, right);
+        Some(Self { right, up, dir })
+    }
+
+    pub(crate) fn project(&self, p: V3) -> (f64, f64, f64) {
+        (dot(p, self.right), dot(p, self.up), dot(p, self.dir))
+    }
 }
 
 #[cfg(test)]

@@ -413,7 +413,7 @@ fn validate(n_vertices: usize, field: &[f64], params: &RenderParams) -> Result<(
         return Err(RenderError::HighlightOutOfRange { vertex, n_vertices });
     }
     for (index, v) in params.views.iter().enumerate() {
-        if raster::Camera::new(v).is_none() {
+        if frame::Camera::new(v).is_none() {
             return Err(RenderError::DegenerateView {
                 index,
                 direction: v.direction,

@@ -5,34 +5,8 @@ use super::splat::{self, Slope, Splats};
 use super::{RenderParams, RgbImage, View};
 use rayon::prelude::*;
 
+use super::frame::Camera;
 use super::vec3::{cross, dot, normalized, V3};
-
-/// Orthonormal camera frame: `right`, `up` span the screen, `dir` points towards the viewer.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Camera {
-    pub(crate) right: V3,
-    pub(crate) up: V3,
-    pub(crate) dir: V3,
-}
-
-impl Camera {
-    /// `None` if the direction is zero/non-finite or (nearly) parallel to `up`.
-    pub(crate) fn new(view: &View) -> Option<Self> {
-        let dir = normalized(view.direction)?;
-        let up = normalized(view.up)?;
-        let r = cross(up, dir);
-        if dot(r, r) < 1e-12 {
-            return None;
-        }
-        let right = normalized(r)?;
-        let up = cross(dir, right);
-        Some(Self { right, up, dir })
-    }
-
-    pub(crate) fn project(&self, p: V3) -> (f64, f64, f64) {
-        (dot(p, self.right), dot(p, self.up), dot(p, self.dir))
-    }
-}
 
 /// Entries of the colour lookup table (more than 8-bit precision in t, so no banding).
 const LUT_SIZE: usize = 1024;

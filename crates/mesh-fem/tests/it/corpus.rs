@@ -1,12 +1,12 @@
-//! Walks the whole real-mesh corpus (`mesh_fem::corpus`): every file loads with default
+//! Walks the whole real-mesh corpus (`wfem_corpus`): every file loads with default
 //! options or fails with the error listed below; counts agree with the corpus' SOURCES.md.
 
-use mesh_fem::corpus::{all_mesh_files, mesh_path, meshes_dir};
 use mesh_fem::io::{load, LoadOptions, LoadReport};
 use mesh_fem::{MeshError, TriMesh};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use wfem_corpus::{all_mesh_files, mesh_path, meshes_dir};
 
 /// Number of mesh files SOURCES.md's per-file table lists.
 const CORPUS_FILES: usize = 209;

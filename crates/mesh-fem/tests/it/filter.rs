@@ -44,7 +44,7 @@ fn clean_meshes_come_back_unchanged() {
 /// their three sharpest single-vertex tips.
 #[test]
 fn tosca_shapes_have_almost_no_spikes() {
-    let dir = mesh_fem::corpus::meshes_dir()
+    let dir = wfem_corpus::meshes_dir()
         .unwrap()
         .join("tosca-bcicp-5k/TOSCA_Isometric");
     let mut files: Vec<_> = std::fs::read_dir(&dir)

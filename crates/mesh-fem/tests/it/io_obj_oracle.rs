@@ -4,9 +4,9 @@
 //! compared), but the triangles as position triples must be the same multiset. This also
 //! checks that our fan triangulation matches tobj's.
 
-use mesh_fem::corpus::all_mesh_files;
 use mesh_fem::io::{load, LoadOptions};
 use rayon::prelude::*;
+use wfem_corpus::all_mesh_files;
 
 type Tri = [[u64; 3]; 3];
 

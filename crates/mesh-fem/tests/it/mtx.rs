@@ -31,7 +31,7 @@ fn from_triplets(nrows: usize, ncols: usize, t: &[(usize, usize, f64)]) -> Spars
 
 #[test]
 fn libigl_reference_files_read_and_match_assembly() {
-    let Some(reference) = mesh_fem::corpus::reference_dir() else {
+    let Some(reference) = wfem_corpus::reference_dir() else {
         eprintln!("../shared/reference is not present: the libigl cross-check does not run");
         return;
     };
@@ -318,7 +318,7 @@ fn reader_and_writer_agree_with_nalgebra_sparse() {
         assert_eq!(nalgebra_entries(&dir.path().join(file)), entries(m), "{file}");
     }
     // libigl's reference files read identically with both readers.
-    if let Some(reference) = mesh_fem::corpus::reference_dir() {
+    if let Some(reference) = wfem_corpus::reference_dir() {
         for name in [
             "grid_70x70_stiffness.mtx",
             "ellipsoid_L4_mass.mtx",

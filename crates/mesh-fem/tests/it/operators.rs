@@ -8,7 +8,7 @@
 //!   multiplicity 2l+1, and of the Neumann Laplacian on the unit square, π²(k² + m²),
 //!   computed by a dense generalized symmetric eigendecomposition written here;
 //! * libigl 2.6.3's `cotmatrix`, `massmatrix(FULL)` and `massmatrix(BARYCENTRIC)` stored in
-//!   `../shared/reference/` found by `mesh_fem::corpus::reference_dir` (overridable with `WFEM_REFERENCE`), compared entry by entry.
+//!   `../shared/reference/` found by `wfem_corpus::reference_dir` (overridable with `WFEM_REFERENCE`), compared entry by entry.
 
 use faer::{Mat, Par, Side};
 use mesh_fem::generate::{bumpy, grid, icosphere, irregular_sphere, torus, uv_sphere};
@@ -673,7 +673,7 @@ fn square_neumann_spectrum_approaches_pi_squared_sums() {
 // ---------------------------------------------------------------------------------------
 
 fn reference_dir() -> Option<PathBuf> {
-    let dir = mesh_fem::corpus::reference_dir();
+    let dir = wfem_corpus::reference_dir();
     if dir.is_none() {
         eprintln!("../shared/reference is not present: the libigl cross-check does not run");
     }

@@ -1,7 +1,7 @@
 //! [`RetrievalIndex`]: the vocabulary, the bag settings and one [`IndexEntry`] per shape;
 //! queries rank the entries by the fused distance.
 
-use super::{AsShape, BagSettings, RetrievalSettings, ShapeFeatures, VocabularyModel};
+use super::{AsShape, BagSettings, ShapeFeatures, VocabularyModel};
 use crate::check;
 use crate::RetrievalError;
 
@@ -238,29 +238,5 @@ impl RetrievalIndex {
             .collect();
         ranked.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.entry.cmp(&b.entry)));
         Ok(ranked)
-    }
-
-    /// Builds an index in one go: describes `shapes` — meshes, point clouds or a mix
-    /// ([`AsShape`]) — in parallel, trains the vocabulary on them unless one is given (training
-    /// on the indexed shapes themselves is optimistic; see the module docs), and inserts every
-    /// shape. A given vocabulary brings its own descriptor settings (Laplacian and cleaning
-    /// included), which then replace `settings.descriptor`: its words only mean something for
-    /// descriptors computed as its own were.
-    ///
-    /// # Errors
-    /// Those of [`ShapeFeatures::compute_many`], [`VocabularyModel::train`], [`Self::insert`].
-    pub fn build<S: AsShape>(
-        shapes: &[(String, S)],
-        settings: &RetrievalSettings,
-        vocabulary: Option<VocabularyModel>,
-    ) -> Result<Self, RetrievalError> {
-        crate::collection::build_index(
-            shapes,
-            settings,
-            vocabulary,
-            crate::collection::Tolerance::Strict,
-            &|_| (),
-        )
-        .map(|(index, _)| index)
     }
 }

@@ -125,19 +125,6 @@ impl ShapeFeatures {
             spectrum: None,
         })
     }
-
-    /// [`Self::compute`] for many shapes in parallel (one eigensolve per shape), in input order.
-    ///
-    /// # Errors
-    /// The first failure, as [`RetrievalError::Shape`] naming the shape.
-    pub fn compute_many<S: AsShape>(
-        shapes: &[(String, S)],
-        descriptor: &DescriptorSettings,
-        bags: &BagSettings,
-    ) -> Result<Vec<Self>, RetrievalError> {
-        crate::collection::describe_collection(shapes, descriptor, bags, crate::collection::Tolerance::Strict, &|_| ())
-            .map(|d| d.features)
-    }
 }
 
 /// Where a vocabulary was trained: for provenance and for the "optimistic" warning.

@@ -51,7 +51,7 @@ fn rounded(results: &[CaseResult]) -> String {
 
 #[test]
 fn small_cases_meet_the_smooth_threshold_and_pin_the_defaults() {
-    let meshes = mesh_fem::corpus::meshes_dir().expect("the mesh corpus is required (or set WFEM_MESHES)");
+    let meshes = wfem_corpus::meshes_dir().expect("the mesh corpus is required (or set WFEM_MESHES)");
     let results: Vec<CaseResult> = SMALL_CASES.iter().map(|c| evaluate_case(&meshes, c).unwrap()).collect();
     for c in &results {
         assert_eq!(c.fields.len(), BenchField::ALL.len());
@@ -76,7 +76,7 @@ fn small_cases_meet_the_smooth_threshold_and_pin_the_defaults() {
 /// A heat-kernel failure inside the benchmark is `BenchError::Heat` (here a negative time).
 #[test]
 fn heat_errors_are_reported_as_such() {
-    let meshes = mesh_fem::corpus::meshes_dir().expect("the mesh corpus is required (or set WFEM_MESHES)");
+    let meshes = wfem_corpus::meshes_dir().expect("the mesh corpus is required (or set WFEM_MESHES)");
     let (mesh, kernel, _) = load_case(&meshes, &SMALL_CASES[0]).unwrap();
     let err = BenchField::Distance.values(&mesh, &kernel, -1.0).unwrap_err();
     assert!(

@@ -10,7 +10,7 @@ fn small_subset_end_to_end() {
     let dir = tempfile::tempdir().unwrap();
     let opts = EvalOptions {
         data_dir: dir.path().to_path_buf(),
-        meshes_dir: Some(mesh_fem::corpus::meshes_dir().unwrap()),
+        meshes_dir: wfem_corpus::meshes_dir().unwrap(),
         subset: Subset::Small,
         seed: 2010,
         cache: EigenCache::none(),

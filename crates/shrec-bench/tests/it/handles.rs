@@ -5,7 +5,7 @@ use shrec_bench::handles::{handle_count, HANDLE_MAX_DISTANCE, HANDLE_MIN_GRAPH_D
 use shrec_bench::synth::*;
 
 fn david() -> BaseShape {
-    let dir = mesh_fem::corpus::meshes_dir()
+    let dir = wfem_corpus::meshes_dir()
         .unwrap()
         .join("tosca-bcicp-5k/TOSCA_Isometric");
     let (mesh, _) = mesh_fem::io::load(&dir.join("david0.off"), &Default::default()).unwrap();

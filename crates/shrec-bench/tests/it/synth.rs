@@ -5,7 +5,7 @@
 use mesh_fem::generate::bumpy;
 use mesh_fem::TriMesh;
 use shrec_bench::synth::*;
-use shrec_bench::transform::EdgeGraph;
+use shrec_bench::transform::{EdgeGraph, Transformed};
 use wfem_heat::rng::SplitMix64;
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -354,7 +354,7 @@ fn validation_rejects_bad_outputs() {
 
 #[test]
 fn generator_on_a_real_shape_writes_files_and_manifest() {
-    let meshes_dir = mesh_fem::corpus::meshes_dir().unwrap();
+    let meshes_dir = wfem_corpus::meshes_dir().unwrap();
     let out = tempfile::tempdir().unwrap();
     let opts = GenerateOptions {
         meshes_dir,
@@ -478,7 +478,7 @@ fn poses_are_ranked_by_kabsch_deformation_with_vts_ground_truth() {
 
 #[test]
 fn tosca_cat_poses_have_ground_truth() {
-    let file = mesh_fem::corpus::mesh_path("tosca-bcicp-5k/TOSCA_Isometric/cat0.off").unwrap();
+    let file = wfem_corpus::mesh_path("tosca-bcicp-5k/TOSCA_Isometric/cat0.off").unwrap();
     let (mesh, _) = mesh_fem::io::load(&file, &mesh_fem::io::LoadOptions::default()).unwrap();
     let mut b = BaseShape::new("cat0", mesh).unwrap();
     b.load_poses(&file).unwrap();

@@ -11,8 +11,7 @@
 use mesh_fem::io::{load, LoadOptions};
 use mesh_fem::Mass;
 use mesh_fem::{
-    assemble, assemble_cloud, corpus, generate, AssemblyParams, CloudParams, Laplacian, PointCloud, RobustParams,
-    TriMesh,
+    assemble, assemble_cloud, generate, AssemblyParams, CloudParams, Laplacian, PointCloud, RobustParams, TriMesh,
 };
 use wfem_heat::spectral::{EigenParams, Eigenbasis};
 use wfem_heat::{HeatKernel, HeatParams, Operators};
@@ -183,11 +182,11 @@ fn min_over_max_lumped_heat(mesh: &TriMesh, laplacian: Laplacian, source: usize,
 
 #[test]
 fn robust_lumped_heat_is_never_negative_on_non_manifold_real_meshes() {
-    let Ok(beetle) = corpus::mesh_path("common-3d-test-models/beetle.obj") else {
+    let Ok(beetle) = wfem_corpus::mesh_path("common-3d-test-models/beetle.obj") else {
         eprintln!("the shared meshes are not present: skipped");
         return;
     };
-    let camel = corpus::mesh_path("deftransfer-pyfm/camel_gallop/camel-gallop-01.off").unwrap();
+    let camel = wfem_corpus::mesh_path("deftransfer-pyfm/camel_gallop/camel-gallop-01.off").unwrap();
     for path in [beetle, camel] {
         let (mesh, _) = load(&path, &LoadOptions::default()).unwrap();
         let robust = Laplacian::Robust(RobustParams::default());

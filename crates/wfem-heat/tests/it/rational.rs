@@ -24,7 +24,7 @@ fn four_pi(mesh: TriMesh) -> TriMesh {
 }
 
 fn spot() -> Option<TriMesh> {
-    let path = mesh_fem::corpus::mesh_path("odedstein-meshes/spot/spot_low_resolution.obj").ok()?;
+    let path = wfem_corpus::mesh_path("odedstein-meshes/spot/spot_low_resolution.obj").ok()?;
     let (mesh, _) = mesh_fem::io::load(&path, &Default::default()).ok()?;
     Some(four_pi(mesh))
 }

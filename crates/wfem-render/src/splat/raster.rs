@@ -2,7 +2,7 @@
 //! documentation of [`super`]).
 
 use super::{kernel, Slope, Splats, BLEND_DEPTH, MIN_FACING, MIN_RADIUS_PX};
-use crate::raster::Camera;
+use crate::frame::Camera;
 use crate::vec3::dot;
 
 /// The blended surface of one view (supersampled), ready for shading.

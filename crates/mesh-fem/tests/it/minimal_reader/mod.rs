@@ -9,9 +9,7 @@ use std::path::PathBuf;
 /// The corpus folder through the one corpus helper (`WFEM_MESHES` overrides it). The corpus
 /// is required: `.ci/run` checks that it is there, so a missing folder is a failure, not a skip.
 pub fn corpus_dir() -> Option<PathBuf> {
-    Some(
-        mesh_fem::corpus::meshes_dir().expect("the mesh corpus ../shared/data/meshes is required (or set WFEM_MESHES)"),
-    )
+    Some(wfem_corpus::meshes_dir().expect("the mesh corpus ../shared/data/meshes is required (or set WFEM_MESHES)"))
 }
 
 /// Positions and fan-triangulated faces of an OBJ or OFF file.

@@ -66,10 +66,10 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// A real mesh: Spot (low resolution, 829 vertices) from the odedstein-meshes collection,
-/// read with tobj from the corpus (`mesh_fem::corpus`; `$WFEM_MESHES` overrides it). Returns `None`
+/// read with tobj from the corpus (`wfem_corpus`; `$WFEM_MESHES` overrides it). Returns `None`
 /// Panics when the corpus is missing: `.ci/run` guarantees it.
 pub fn spot() -> Option<(TriMesh, FemOperators)> {
-    let path = mesh_fem::corpus::mesh_path("odedstein-meshes/spot/spot_low_resolution.obj")
+    let path = wfem_corpus::mesh_path("odedstein-meshes/spot/spot_low_resolution.obj")
         .expect("the mesh corpus ../shared/data/meshes is required (or set WFEM_MESHES)");
     let (models, _) = tobj::load_obj(
         &path,

@@ -1,11 +1,18 @@
-//! The shared folder of real meshes used by tests, examples and benchmarks.
+//! # wfem-corpus
+//!
+//! The shared folder of real meshes used by tests, examples and benchmarks (test support; not
+//! published). Library crates take it as a dev-dependency; tools that default to the corpus at
+//! run time (`xtask`) as a dependency. No library code knows where the corpus is.
 //!
 //! The folder is `$WFEM_MESHES` if that variable is set, otherwise `shared/data/meshes` next
 //! to the workspace checkout: starting from this crate's directory we walk up until a
 //! directory `d` with `d/../shared/data/meshes` is found. Meshes are never copied into the
-//! repository.
+//! repository. Errors are [`MeshError::Io`] naming the path, as for any unreadable mesh file.
 
-use crate::MeshError;
+#![warn(missing_docs)]
+
+use mesh_fem::io::MeshFormat;
+use mesh_fem::MeshError;
 use std::path::{Path, PathBuf};
 
 fn missing(path: PathBuf, message: &str) -> MeshError {
@@ -104,7 +111,7 @@ pub fn all_mesh_files() -> Result<Vec<PathBuf>, MeshError> {
             } else if path
                 .extension()
                 .map(|e| e.to_string_lossy().to_ascii_lowercase())
-                .is_some_and(|e| crate::io::MeshFormat::from_extension(&e).is_some())
+                .is_some_and(|e| MeshFormat::from_extension(&e).is_some())
             {
                 out.push(path);
             }

@@ -1,8 +1,8 @@
 //! `WFEM_MESHES` overrides the corpus folder. This file holds a single test because it sets a
 //! process-wide environment variable (each integration test file is its own process).
 
-use mesh_fem::corpus::{all_mesh_files, mesh_path, meshes_dir};
 use mesh_fem::MeshError;
+use wfem_corpus::{all_mesh_files, mesh_path, meshes_dir};
 
 #[test]
 fn wfem_meshes_overrides_the_folder_and_the_walk_is_sorted_and_filtered() {
