@@ -142,11 +142,7 @@ impl HeatKernel {
         check::time(t)?;
         check::block(f, self.n())?;
         let null_space = self.ops.null_space();
-        let (deflated, coefs) = if kernel_matrix {
-            null_space.split_dual(f)
-        } else {
-            null_space.split(f)
-        };
+        let (deflated, coefs) = null_space.split_for(f, kernel_matrix);
         let mut g = if t >= self.ops.time_at_infinity() {
             Mat::zeros(f.nrows(), f.ncols())
         } else if kernel_matrix {
@@ -284,11 +280,7 @@ impl HeatKernel {
         check::times(times)?;
         check::block(f, self.n())?;
         let null_space = self.ops.null_space();
-        let (deflated, coefs) = if kernel_matrix {
-            null_space.split_dual(f)
-        } else {
-            null_space.split(f)
-        };
+        let (deflated, coefs) = null_space.split_for(f, kernel_matrix);
         // Times at which only the null space survives are exact without the method.
         let t_inf = self.ops.time_at_infinity();
         let finite: Vec<f64> = times.iter().copied().filter(|&t| t < t_inf).collect();
