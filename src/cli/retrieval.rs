@@ -98,13 +98,7 @@ pub enum RetrievalAction {
         force: bool,
         #[command(flatten)]
         #[allow(missing_docs)]
-        descriptor: DescriptorArgs,
-        #[command(flatten)]
-        #[allow(missing_docs)]
-        training: TrainingArgs,
-        #[command(flatten)]
-        #[allow(missing_docs)]
-        bags: BagArgs,
+        model: ModelArgs,
         #[command(flatten)]
         #[allow(missing_docs)]
         strict: StrictArg,
@@ -139,13 +133,7 @@ pub enum RetrievalAction {
         index: Option<PathBuf>,
         #[command(flatten)]
         #[allow(missing_docs)]
-        descriptor: DescriptorArgs,
-        #[command(flatten)]
-        #[allow(missing_docs)]
-        training: TrainingArgs,
-        #[command(flatten)]
-        #[allow(missing_docs)]
-        bags: BagArgs,
+        model: ModelArgs,
     },
     /// Add meshes to a SQLite index (their bags use the stored vocabulary; nothing is rebuilt).
     Add {
@@ -279,6 +267,20 @@ fn describe_all(
     refused.extend(described.refused);
     refused.check_some(described.features.len(), meshes.len())?;
     Ok(described.features)
+}
+
+/// The descriptor, training and bag options of `build` and `eval`.
+#[derive(Args, Clone, Debug)]
+pub struct ModelArgs {
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub descriptor: DescriptorArgs,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub training: TrainingArgs,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub bags: BagArgs,
 }
 
 /// Descriptor options (recorded in the vocabulary).
@@ -541,16 +543,13 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             out: path,
             vocab,
             force,
-            descriptor,
-            training,
-            bags,
+            model,
             strict,
         } => {
             let vocab = &vocab.vocab;
             let inputs: Vec<&std::path::Path> = files.iter().chain(vocab).map(PathBuf::as_path).collect();
             shape_retrieval::check_index_output(path, &inputs, *force)?;
-            let (settings, vocabulary) =
-                settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &[path])?;
+            let (settings, vocabulary) = settings_and_vocabulary(vocab.as_deref(), model, &[path])?;
             let from = match vocab {
                 Some(v) => format!("the vocabulary of {}", v.display()),
                 None => "a vocabulary trained on these shapes (optimistic if they are also the test set)".into(),
@@ -590,15 +589,12 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             vocab,
             json,
             index,
-            descriptor,
-            training,
-            bags,
+            model,
         } => {
             let vocab = &vocab.vocab;
             let outputs: Vec<&std::path::Path> = json.iter().chain(index).map(PathBuf::as_path).collect();
             let labelled = labelled_files(files, labels.as_deref(), class_from.unwrap_or_default())?;
-            let (settings, vocabulary) =
-                settings_and_vocabulary(vocab.as_deref(), descriptor, training, bags, &outputs)?;
+            let (settings, vocabulary) = settings_and_vocabulary(vocab.as_deref(), model, &outputs)?;
             let paths: Vec<PathBuf> = labelled.iter().map(|(f, _)| f.clone()).collect();
             // Every labelled shape is needed: one that cannot be read is an error.
             let laplacian = vocabulary
@@ -751,11 +747,14 @@ fn clouds_among(shapes: &[(String, Shape)], features: &[ShapeFeatures]) -> Strin
 /// descriptor settings win), or none (trained on the indexed shapes with the given options).
 fn settings_and_vocabulary(
     vocab: Option<&std::path::Path>,
-    descriptor: &DescriptorArgs,
-    training: &TrainingArgs,
-    bags: &BagArgs,
+    model: &ModelArgs,
     outputs: &[&std::path::Path],
 ) -> Result<(RetrievalSettings, Option<VocabularyModel>), CliError> {
+    let ModelArgs {
+        descriptor,
+        training,
+        bags,
+    } = model;
     let mut settings = RetrievalSettings::default();
     bags.apply(&mut settings)?;
     match vocab {

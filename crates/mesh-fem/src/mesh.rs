@@ -26,12 +26,8 @@ impl TriMesh {
                 n_faces: faces.len(),
             });
         }
-        if let Some((vertex, p)) = positions
-            .iter()
-            .enumerate()
-            .find(|(_, p)| p.iter().any(|c| !c.is_finite()))
-        {
-            return Err(MeshError::NonFiniteCoordinate { vertex, position: *p });
+        if let Some((vertex, position)) = crate::vec3::first_non_finite(&positions) {
+            return Err(MeshError::NonFiniteCoordinate { vertex, position });
         }
         let n = positions.len();
         for (face, f) in faces.iter().enumerate() {

@@ -62,6 +62,28 @@ pub fn bounding_box(positions: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
     (lo, hi)
 }
 
+/// The first of `points` with a NaN or infinite component, with its index.
+pub(crate) fn first_non_finite(points: &[[f64; 3]]) -> Option<(usize, [f64; 3])> {
+    points
+        .iter()
+        .enumerate()
+        .find(|(_, p)| p.iter().any(|c| !c.is_finite()))
+        .map(|(i, &p)| (i, p))
+}
+
+/// An orthonormal tangent basis (x, y) with x × y = n (n a unit vector).
+pub(crate) fn tangent_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let test = if n[0].abs() > 0.9 {
+        [0.0, 1.0, 0.0]
+    } else {
+        [1.0, 0.0, 0.0]
+    };
+    let x = cross(test, n);
+    let len = norm(x);
+    let x = x.map(|c| c / len);
+    (x, cross(n, x))
+}
+
 /// Length of the bounding-box diagonal of `positions` (0 for none).
 pub fn bbox_diagonal(positions: &[[f64; 3]]) -> f64 {
     let (lo, hi) = bounding_box(positions);

@@ -537,10 +537,7 @@ impl Store {
         }
         let path = self.path.clone();
         let sql = |source| sqlite_error(&path, source);
-        let tx = self
-            .conn
-            .transaction_with_behavior(TransactionBehavior::Immediate)
-            .map_err(sql)?;
+        let tx = begin_write(&mut self.conn, &path)?;
         tx.execute(
             "INSERT OR REPLACE INTO meta (key, value) VALUES (?1, ?2)",
             params![key, value],
@@ -593,10 +590,7 @@ impl Store {
         let chunk_rows = self.chunk_rows;
         let path = self.path.clone();
         let sql = |source| sqlite_error(&path, source);
-        let tx = self
-            .conn
-            .transaction_with_behavior(TransactionBehavior::Immediate)
-            .map_err(sql)?;
+        let tx = begin_write(&mut self.conn, &path)?;
         // Under the write lock: the file at `path` must still be the one opened (a `build` that
         // replaced it holds this lock while renaming), else these shapes would go to a file
         // no one will read again.
@@ -952,6 +946,13 @@ impl Store {
 }
 
 /// An SQLite error on `path`; "file is not a database" becomes [`StoreError::NotAStore`].
+/// A write transaction on the store at `path`: it takes the write lock at once (waiting up to
+/// the busy timeout), not at its first write.
+fn begin_write<'c>(conn: &'c mut Connection, path: &Path) -> Result<rusqlite::Transaction<'c>, StoreError> {
+    conn.transaction_with_behavior(TransactionBehavior::Immediate)
+        .map_err(|source| sqlite_error(path, source))
+}
+
 fn sqlite_error(path: &Path, source: rusqlite::Error) -> StoreError {
     match source {
         rusqlite::Error::SqliteFailure(f, _) if f.code == rusqlite::ErrorCode::NotADatabase => StoreError::NotAStore {

@@ -56,3 +56,30 @@ pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), RetrievalEr
         })
     }
 }
+
+/// Errors with [`RetrievalError::InvalidParameter`] if the count `value` is 0.
+pub(crate) fn at_least_one(name: &'static str, value: usize) -> Result<(), RetrievalError> {
+    if value == 0 {
+        Err(RetrievalError::InvalidParameter {
+            name,
+            value: 0.0,
+            reason: "must be at least 1",
+        })
+    } else {
+        Ok(())
+    }
+}
+
+/// `values` divided by their sum; [`RetrievalError::InvalidModel`] (`what`, "`sums` to …")
+/// unless the sum is finite and positive.
+pub(crate) fn unit_sum(what: &'static str, sums: &str, mut values: Vec<f64>) -> Result<Vec<f64>, RetrievalError> {
+    let total: f64 = values.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return Err(RetrievalError::InvalidModel {
+            what,
+            reason: format!("{sums} to {total}"),
+        });
+    }
+    values.iter_mut().for_each(|x| *x /= total);
+    Ok(values)
+}

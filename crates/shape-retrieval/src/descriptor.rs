@@ -235,24 +235,12 @@ impl ShapeDescriptors {
         params: &DescriptorParams,
     ) -> Result<Self, RetrievalError> {
         crate::check::same("operator size vs mesh vertices", mesh.n_vertices(), operators.n())?;
-        if params.eigenpairs == 0 {
-            return Err(RetrievalError::InvalidParameter {
-                name: "eigenpairs",
-                value: 0.0,
-                reason: "must be at least 1",
-            });
-        }
+        crate::check::at_least_one("eigenpairs", params.eigenpairs)?;
         let n = mesh.n_vertices().max(1);
         wfem_heat::limits::eigenpairs("eigenpairs", params.eigenpairs.min(n), n)?;
         params.times.check_size(n)?;
         crate::check::positive("feature_time_factor", params.feature_time_factor)?;
-        if params.feature_rings == 0 {
-            return Err(RetrievalError::InvalidParameter {
-                name: "feature_rings",
-                value: 0.0,
-                reason: "must be at least 1",
-            });
-        }
+        crate::check::at_least_one("feature_rings", params.feature_rings)?;
         if !(params.persistence_fraction.is_finite() && (0.0..=1.0).contains(&params.persistence_fraction)) {
             return Err(RetrievalError::InvalidParameter {
                 name: "persistence_fraction",

@@ -255,13 +255,7 @@ pub fn local_maxima(faces: &[[u32; 3]], values: &[f64], rings: usize) -> Result<
     let n = values.len();
     check::non_empty("values", n)?;
     check::finite_slice("values", values)?;
-    if rings == 0 {
-        return Err(RetrievalError::InvalidParameter {
-            name: "rings",
-            value: 0.0,
-            reason: "must be at least 1",
-        });
-    }
+    check::at_least_one("rings", rings)?;
     let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
     for f in faces {
         for k in 0..3 {

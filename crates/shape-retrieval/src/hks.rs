@@ -397,13 +397,7 @@ pub fn heat_trace(eigenvalues: &[f64], times: &[f64]) -> Vec<f64> {
 /// # Errors
 /// [`RetrievalError::InvalidParameter`] for `num_times = 0`, [`RetrievalError::NoNonzeroEigenvalue`].
 pub fn auto_times(eigenvalues: &[f64], num_times: usize) -> Result<Vec<f64>, RetrievalError> {
-    if num_times == 0 {
-        return Err(RetrievalError::InvalidParameter {
-            name: "num_times",
-            value: 0.0,
-            reason: "must be at least 1",
-        });
-    }
+    check::at_least_one("num_times", num_times)?;
     let lambda_max = eigenvalues.iter().fold(0.0f64, |m, &v| m.max(v));
     let lambda_2 = eigenvalues
         .iter()

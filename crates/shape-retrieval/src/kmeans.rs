@@ -61,13 +61,7 @@ pub fn kmeans(points: MatRef<'_, f64>, params: &KmeansParams) -> Result<KmeansRe
     let (n, d) = (points.nrows(), points.ncols());
     check::non_empty("points", n)?;
     check::non_empty("point dimension", d)?;
-    if params.k == 0 {
-        return Err(RetrievalError::InvalidParameter {
-            name: "k",
-            value: 0.0,
-            reason: "must be at least 1",
-        });
-    }
+    check::at_least_one("k", params.k)?;
     if n < params.k {
         return Err(RetrievalError::TooFewDescriptors {
             n_points: n,

@@ -265,13 +265,7 @@ fn check_hks_params(params: &MeshHksParams) -> Result<(), RetrievalError> {
             reason: "the exact diagonal has no scaled or normalized form: use the spectral method",
         });
     }
-    if params.eigenpairs == 0 {
-        return Err(RetrievalError::InvalidParameter {
-            name: "eigenpairs",
-            value: 0.0,
-            reason: "must be at least 1",
-        });
-    }
+    crate::check::at_least_one("eigenpairs", params.eigenpairs)?;
     Ok(())
 }
 

@@ -102,15 +102,7 @@ impl SpatialBag {
                 out.push(if a == b { x } else { 2.0 * x });
             }
         }
-        let total: f64 = out.iter().sum();
-        if !(total > 0.0 && total.is_finite()) {
-            return Err(RetrievalError::InvalidModel {
-                what: "spatial bag",
-                reason: format!("the heat flow between words sums to {total}"),
-            });
-        }
-        out.iter_mut().for_each(|x| *x /= total);
-        Ok(out)
+        check::unit_sum("spatial bag", "the heat flow between words sums", out)
     }
 }
 

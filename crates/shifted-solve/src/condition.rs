@@ -14,7 +14,7 @@ use crate::factor::{lu_symbolic, SeqLu};
 use crate::iterative::{PrecondFactor, Preconditioner, PreconditionerShift};
 use crate::lanczos::largest_ritz_value;
 use crate::solver::{check_time, ShiftedSolver};
-use crate::SolveError;
+use crate::{OperatorPair, SolveError};
 use faer::c64;
 use faer::Mat;
 
@@ -56,6 +56,20 @@ fn lanczos_max(
     Ok(theta)
 }
 
+/// A 2 × 2 block operator in L and B on the stacked vector x = [u; v] of length 2n: row i of
+/// the result is `row((Lu)ᵢ, (Bu)ᵢ, (Lv)ᵢ, (Bv)ᵢ)`, split into its entries i and n + i.
+fn stacked(ops: &OperatorPair, x: &[f64], row: impl Fn(f64, f64, f64, f64) -> (f64, f64)) -> Vec<f64> {
+    let n = ops.n();
+    let (mut lu, mut bu, mut lv, mut bv) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    ops.stiffness_mass_mul(&x[..n], &mut lu, &mut bu);
+    ops.stiffness_mass_mul(&x[n..], &mut lv, &mut bv);
+    let mut y = vec![0.0; 2 * n];
+    for i in 0..n {
+        (y[i], y[n + i]) = row(lu[i], bu[i], lv[i], bv[i]);
+    }
+    y
+}
+
 impl ShiftedSolver {
     /// Estimates κ₂(tL − zB) and the condition number of the MINRES operator preconditioned
     /// with P = tL + sB (s = |z| when `preconditioner_shift` is `None`).
@@ -81,16 +95,10 @@ impl ShiftedSolver {
         let ops = &**self.pair();
         let n = ops.n();
         let (p, q) = (pole.re, pole.im);
-        let a2 = |x: &[f64]| -> Vec<f64> {
-            let (mut lu, mut bu, mut lv, mut bv) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-            ops.stiffness_mass_mul(&x[..n], &mut lu, &mut bu);
-            ops.stiffness_mass_mul(&x[n..], &mut lv, &mut bv);
-            let mut y = vec![0.0; 2 * n];
-            for i in 0..n {
-                y[i] = t * lu[i] - p * bu[i] + q * bv[i];
-                y[n + i] = q * bu[i] - (t * lv[i] - p * bv[i]);
-            }
-            y
+        let a2 = |x: &[f64]| {
+            stacked(ops, x, |lu, bu, lv, bv| {
+                (t * lu - p * bu + q * bv, q * bu - (t * lv - p * bv))
+            })
         };
         let symbolic = lu_symbolic(ops.pattern()).map_err(|detail| SolveError::Factorization {
             what: "symbolic LU",
@@ -125,17 +133,7 @@ impl ShiftedSolver {
             t,
             s,
         )?;
-        let m_apply = |x: &[f64]| -> Vec<f64> {
-            let (mut l0, mut b0, mut l1, mut b1) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-            ops.stiffness_mass_mul(&x[..n], &mut l0, &mut b0);
-            ops.stiffness_mass_mul(&x[n..], &mut l1, &mut b1);
-            let mut y = vec![0.0; 2 * n];
-            for i in 0..n {
-                y[i] = t * l0[i] + s * b0[i];
-                y[n + i] = t * l1[i] + s * b1[i];
-            }
-            y
-        };
+        let m_apply = |x: &[f64]| stacked(ops, x, |l0, b0, l1, b1| (t * l0 + s * b0, t * l1 + s * b1));
         let m_inv = |x: &[f64]| -> Vec<f64> {
             let mut y = x.to_vec();
             precond.apply(&mut y, n);

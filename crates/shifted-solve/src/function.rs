@@ -428,9 +428,16 @@ pub fn lanczos_functions_many(
     let mut values = vec![Mat::<f64>::zeros(n, k); count];
     let mut outcomes: Vec<Vec<LanczosOutcome>> = vec![Vec::with_capacity(k); count];
     let mut warmup = 0usize;
+    let lockstep = Lockstep {
+        solve_block,
+        mass,
+        h,
+        count,
+        params,
+    };
     for start in (0..k).step_by(block.max(1)) {
         let end = (start + block.max(1)).min(k);
-        let columns = lockstep(solve_block, mass, u.get(.., start..end), h, count, params, warmup)?;
+        let columns = lockstep.run(u.get(.., start..end), warmup)?;
         let mut fewest = usize::MAX;
         for (c, (x, o)) in columns.into_iter().enumerate() {
             for (l, outcome) in o.into_iter().enumerate() {
@@ -448,79 +455,89 @@ pub fn lanczos_functions_many(
     Ok((values, outcomes))
 }
 
-/// One block of [`lanczos_functions_many`]: per column, its n × count results and outcomes;
-/// no convergence checks before step `warmup`.
-fn lockstep(
-    solve_block: &(dyn Fn(MatMut<'_, f64>) + Sync),
-    mass: &(dyn Fn(&[f64]) -> Vec<f64> + Sync),
-    u: MatRef<'_, f64>,
-    h: &(dyn Fn(usize, f64) -> f64 + Sync),
+/// The inputs of [`lanczos_functions_many`] that every block of columns shares.
+struct Lockstep<'a> {
+    solve_block: &'a (dyn Fn(MatMut<'_, f64>) + Sync),
+    mass: &'a (dyn Fn(&[f64]) -> Vec<f64> + Sync),
+    h: &'a (dyn Fn(usize, f64) -> f64 + Sync),
     count: usize,
-    params: &LanczosParams,
-    warmup: usize,
-) -> ColumnsResult {
-    use rayon::prelude::*;
-    let (n, k) = (u.nrows(), u.ncols());
-    // The operator is applied outside the processes (block solve), never through `apply`.
-    let unused = |_: &[f64], mv: &[f64]| Ok(mv.to_vec());
-    let cols: Vec<Vec<f64>> = (0..k).map(|j| u.col(j).iter().copied().collect()).collect();
-    let mut processes: Vec<LanczosProcess<'_>> = cols
-        .par_iter()
-        .map(|c| LanczosProcess::new(c, &unused, mass, Reorthogonalization::Local, params.max_iter.min(24)))
-        .collect();
-    let mut functions: Vec<Functions> = processes.iter().map(|p| Functions::new(count, p.norm())).collect();
-    let mut active: Vec<usize> = Vec::with_capacity(k);
-    for (j, (p, f)) in processes.iter().zip(functions.iter_mut()).enumerate() {
-        if p.exhausted() {
-            f.trivial();
-        } else {
-            active.push(j);
-        }
-    }
-    let mut step = 0;
-    while !active.is_empty() {
-        if step >= params.max_iter.min(n) {
-            return Err(functions[active[0]].failure());
-        }
-        crate::interrupt::checkpoint()?;
-        step += 1;
-        let mut rhs = Mat::<f64>::from_fn(n, active.len(), |i, c| processes[active[c]].next_mass_vector()[i]);
-        solve_block(rhs.as_mut());
-        // Finish the step of every active process in parallel.
-        let mut slots: Vec<ColumnSlot<'_, '_>> = processes
-            .iter_mut()
-            .zip(functions.iter_mut())
-            .enumerate()
-            .filter(|(j, _)| active.binary_search(j).is_ok())
-            .map(|(j, (p, f))| (j, p, f))
+    params: &'a LanczosParams,
+}
+
+impl Lockstep<'_> {
+    /// One block `u` of [`lanczos_functions_many`]: per column, its n × count results and
+    /// outcomes; no convergence checks before step `warmup`.
+    fn run(&self, u: MatRef<'_, f64>, warmup: usize) -> ColumnsResult {
+        use rayon::prelude::*;
+        let Lockstep {
+            solve_block,
+            mass,
+            h,
+            count,
+            params,
+        } = *self;
+        let (n, k) = (u.nrows(), u.ncols());
+        // The operator is applied outside the processes (block solve), never through `apply`.
+        let unused = |_: &[f64], mv: &[f64]| Ok(mv.to_vec());
+        let cols: Vec<Vec<f64>> = (0..k).map(|j| u.col(j).iter().copied().collect()).collect();
+        let mut processes: Vec<LanczosProcess<'_>> = cols
+            .par_iter()
+            .map(|c| LanczosProcess::new(c, &unused, mass, Reorthogonalization::Local, params.max_iter.min(24)))
             .collect();
-        let results: Vec<(usize, Result<bool, SolveError>)> = slots
-            .par_iter_mut()
-            .enumerate()
-            .map(|(c, (j, p, f))| {
-                let w: Vec<f64> = rhs.col(c).iter().copied().collect();
-                let b_j = p.step_with(w);
-                if step < warmup && !p.exhausted() {
-                    f.skip(step);
-                    return (*j, Ok(false));
-                }
-                (*j, f.advance(p, b_j, h, params.tol))
-            })
-            .collect();
-        drop(slots);
-        let mut still = Vec::with_capacity(active.len());
-        for (j, done) in results {
-            if !done? {
-                still.push(j);
+        let mut functions: Vec<Functions> = processes.iter().map(|p| Functions::new(count, p.norm())).collect();
+        let mut active: Vec<usize> = Vec::with_capacity(k);
+        for (j, (p, f)) in processes.iter().zip(functions.iter_mut()).enumerate() {
+            if p.exhausted() {
+                f.trivial();
+            } else {
+                active.push(j);
             }
         }
-        active = still;
+        let mut step = 0;
+        while !active.is_empty() {
+            if step >= params.max_iter.min(n) {
+                return Err(functions[active[0]].failure());
+            }
+            crate::interrupt::checkpoint()?;
+            step += 1;
+            let mut rhs = Mat::<f64>::from_fn(n, active.len(), |i, c| processes[active[c]].next_mass_vector()[i]);
+            solve_block(rhs.as_mut());
+            // Finish the step of every active process in parallel.
+            let mut slots: Vec<ColumnSlot<'_, '_>> = processes
+                .iter_mut()
+                .zip(functions.iter_mut())
+                .enumerate()
+                .filter(|(j, _)| active.binary_search(j).is_ok())
+                .map(|(j, (p, f))| (j, p, f))
+                .collect();
+            let results: Vec<(usize, Result<bool, SolveError>)> = slots
+                .par_iter_mut()
+                .enumerate()
+                .map(|(c, (j, p, f))| {
+                    let w: Vec<f64> = rhs.col(c).iter().copied().collect();
+                    let b_j = p.step_with(w);
+                    if step < warmup && !p.exhausted() {
+                        f.skip(step);
+                        return (*j, Ok(false));
+                    }
+                    (*j, f.advance(p, b_j, h, params.tol))
+                })
+                .collect();
+            drop(slots);
+            let mut still = Vec::with_capacity(active.len());
+            for (j, done) in results {
+                if !done? {
+                    still.push(j);
+                }
+            }
+            active = still;
+        }
+        Ok(processes
+            .iter()
+            .zip(functions)
+            .map(|(p, f)| (f.results(p), f.outcomes()))
+            .collect())
     }
-    Ok(processes
-        .iter()
-        .zip(functions)
-        .map(|(p, f)| (f.results(p), f.outcomes()))
-        .collect())
 }
 
 fn norm(a: &[f64]) -> f64 {

@@ -143,6 +143,17 @@ pub(crate) struct KrylovOutcome {
     pub converged: bool,
 }
 
+impl KrylovOutcome {
+    fn new(x: Vec<f64>, iterations: usize, history: Vec<f64>, converged: bool) -> Self {
+        KrylovOutcome {
+            x,
+            iterations,
+            history,
+            converged,
+        }
+    }
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -166,12 +177,7 @@ pub(crate) fn minres(
     let gamma1 = gamma;
     let mut history = Vec::new();
     if gamma1 == 0.0 || !gamma1.is_finite() {
-        return KrylovOutcome {
-            x,
-            iterations: 0,
-            history,
-            converged: gamma1 == 0.0,
-        };
+        return KrylovOutcome::new(x, 0, history, gamma1 == 0.0);
     }
     let mut gamma_old = 1.0;
     let mut eta = gamma;
@@ -199,12 +205,7 @@ pub(crate) fn minres(
             // an eigenvalue). Stop before x and the residual turn into NaN: the error then
             // carries the last finite residual (x did not change in this step).
             history.push(history.last().copied().unwrap_or(1.0));
-            return KrylovOutcome {
-                x,
-                iterations: it,
-                history,
-                converged: false,
-            };
+            return KrylovOutcome::new(x, it, history, false);
         }
         let a2 = s * delta + c_old * c * gamma;
         let a3 = s_old * gamma;
@@ -227,12 +228,7 @@ pub(crate) fn minres(
         let rel = eta.abs() / gamma1;
         history.push(rel);
         if !rel.is_finite() || !a1.is_finite() {
-            return KrylovOutcome {
-                x,
-                iterations: it,
-                history,
-                converged: false,
-            };
+            return KrylovOutcome::new(x, it, history, false);
         }
         // γ_new ≈ 0 relative to the current step (γ_new ≤ 1e−13·a₁): the Krylov space is
         // numerically invariant and x is the exact minimiser over it. That solves the system
@@ -242,28 +238,13 @@ pub(crate) fn minres(
         // γ fell to 5e−15 at step 6).
         let invariant = gamma <= 1e-13 * a1;
         if rel < rel_tol || (invariant && rel < rel_tol.max(1e-8)) {
-            return KrylovOutcome {
-                x,
-                iterations: it,
-                history,
-                converged: true,
-            };
+            return KrylovOutcome::new(x, it, history, true);
         }
         if invariant {
-            return KrylovOutcome {
-                x,
-                iterations: it,
-                history,
-                converged: false,
-            };
+            return KrylovOutcome::new(x, it, history, false);
         }
     }
-    KrylovOutcome {
-        x,
-        iterations: max_iters,
-        history,
-        converged: false,
-    }
+    KrylovOutcome::new(x, max_iters, history, false)
 }
 
 /// Preconditioned conjugate gradients for an SPD operator; stops on ‖r‖₂/‖b‖₂ < rel_tol.
@@ -280,12 +261,7 @@ pub(crate) fn pcg(
     let b_norm = dot(b, b).sqrt();
     let mut history = Vec::new();
     if b_norm == 0.0 {
-        return KrylovOutcome {
-            x,
-            iterations: 0,
-            history,
-            converged: true,
-        };
+        return KrylovOutcome::new(x, 0, history, true);
     }
     let mut zv = r.clone();
     apply_m_inv(&mut zv);
@@ -305,12 +281,7 @@ pub(crate) fn pcg(
             break;
         }
         if rel < rel_tol {
-            return KrylovOutcome {
-                x,
-                iterations: it,
-                history,
-                converged: true,
-            };
+            return KrylovOutcome::new(x, it, history, true);
         }
         zv.copy_from_slice(&r);
         apply_m_inv(&mut zv);
@@ -322,10 +293,5 @@ pub(crate) fn pcg(
         }
     }
     let iterations = history.len();
-    KrylovOutcome {
-        x,
-        iterations,
-        history,
-        converged: false,
-    }
+    KrylovOutcome::new(x, iterations, history, false)
 }

@@ -112,8 +112,7 @@ impl ShiftedSolver {
         t: f64,
         rhs: MatRef<'_, f64>,
     ) -> Result<(Mat<f64>, BatchReport), SolveError> {
-        check_rhs(rhs, self.n())?;
-        self.factor(approx, t)?.apply(rhs)
+        self.factor_for(approx, t, rhs)?.apply(rhs)
     }
 
     /// `2 Re Σ_j c_j (tL − z_j M)⁻¹ G` (+ the real pole), without the c0 term and without the
@@ -127,8 +126,14 @@ impl ShiftedSolver {
         t: f64,
         rhs: MatRef<'_, f64>,
     ) -> Result<(Mat<f64>, BatchReport), SolveError> {
+        self.factor_for(approx, t, rhs)?.apply_resolvent(rhs)
+    }
+
+    /// [`Self::factor`] for the right-hand sides `rhs`, checked first (before the cost of the
+    /// factorization).
+    fn factor_for(&self, approx: &RationalApprox, t: f64, rhs: MatRef<'_, f64>) -> Result<RationalFactors, SolveError> {
         check_rhs(rhs, self.n())?;
-        self.factor(approx, t)?.apply_resolvent(rhs)
+        self.factor(approx, t)
     }
 
     /// Prepares every pole of one t with the backend (complex factorizations, preconditioners,

@@ -369,6 +369,14 @@ struct Block<'a> {
     start: usize,
 }
 
+impl<'a> Block<'a> {
+    /// Column `c` of the supernode: its nc + |pattern| values.
+    fn column(&self, c: usize) -> &'a [f64] {
+        let nr = self.nc + self.pattern.len();
+        &self.vals[c * nr..(c + 1) * nr]
+    }
+}
+
 /// For one right-hand side and a supernode of at most [`SMALL`] columns: the supernode and x as
 /// a slice.
 fn one_vector<'a>(
@@ -394,18 +402,11 @@ fn one_vector<'a>(
 
 /// [`forward`] for one right-hand side held in the slice `x` (rows `rows`).
 fn forward_vec(b: Block<'_>, x: &mut [f64], rows: Range<usize>, tmp: &mut Vec<f64>, mut spill: impl FnMut(usize, f64)) {
-    let Block {
-        vals,
-        nc,
-        pattern,
-        start,
-    } = b;
-    let nr = nc + pattern.len();
-    let base = start - rows.start;
+    let (nc, pattern, base) = (b.nc, b.pattern, b.start - rows.start);
     tmp.clear();
     tmp.resize(pattern.len(), 0.0);
     for c in 0..nc {
-        let col = &vals[c * nr..(c + 1) * nr];
+        let col = b.column(c);
         let xc = x[base + c] / col[c];
         x[base + c] = xc;
         for (xi, li) in x[base + c + 1..base + nc].iter_mut().zip(&col[c + 1..nc]) {
@@ -426,14 +427,7 @@ fn forward_vec(b: Block<'_>, x: &mut [f64], rows: Range<usize>, tmp: &mut Vec<f6
 
 /// [`backward`] for one right-hand side held in the slice `x`.
 fn backward_vec(b: Block<'_>, x: &mut [f64], rows: Range<usize>, tmp: &mut Vec<f64>, outside: impl Fn(usize) -> f64) {
-    let Block {
-        vals,
-        nc,
-        pattern,
-        start,
-    } = b;
-    let nr = nc + pattern.len();
-    let base = start - rows.start;
+    let (nc, pattern, base) = (b.nc, b.pattern, b.start - rows.start);
     tmp.clear();
     tmp.extend(
         pattern
@@ -441,7 +435,7 @@ fn backward_vec(b: Block<'_>, x: &mut [f64], rows: Range<usize>, tmp: &mut Vec<f
             .map(|&r| if r < rows.end { x[r - rows.start] } else { outside(r) }),
     );
     for c in (0..nc).rev() {
-        let col = &vals[c * nr..(c + 1) * nr];
+        let col = b.column(c);
         let mut v = x[base + c] - dot(&col[nc..], tmp);
         for (xi, li) in x[base + c + 1..base + nc].iter().zip(&col[c + 1..nc]) {
             v -= li * xi;

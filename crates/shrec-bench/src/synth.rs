@@ -79,20 +79,17 @@ pub enum Class {
 }
 
 impl Class {
-    /// All classes: the nine synthetic ones, then [`Class::Pose`] (needs TOSCA pose files).
-    pub const ALL: [Class; 11] = [
-        Class::Isometry,
-        Class::Topology,
-        Class::Handles,
-        Class::MicroHoles,
-        Class::Holes,
-        Class::Scale,
-        Class::LocalScale,
-        Class::Noise,
-        Class::ShotNoise,
-        Class::Sampling,
-        Class::Pose,
-    ];
+    /// All classes: the ten [`Class::SYNTHETIC`] ones, then [`Class::Pose`] (needs TOSCA pose
+    /// files).
+    pub const ALL: [Class; 11] = {
+        let mut all = [Class::Pose; 11];
+        let mut i = 0;
+        while i < Class::SYNTHETIC.len() {
+            all[i] = Class::SYNTHETIC[i];
+            i += 1;
+        }
+        all
+    };
 
     /// The ten synthetic classes, in SHREC'10 order (handles after topology); they work on any
     /// mesh.

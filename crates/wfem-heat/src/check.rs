@@ -13,6 +13,17 @@ pub(crate) fn time(t: f64) -> Result<(), HeatError> {
     }
 }
 
+/// A non-empty list of times, each finite and positive.
+pub(crate) fn times(times: &[f64]) -> Result<(), HeatError> {
+    if times.is_empty() {
+        return Err(HeatError::InvalidParameter {
+            name: "times",
+            reason: "the list of times is empty".into(),
+        });
+    }
+    times.iter().try_for_each(|&t| time(t))
+}
+
 /// A vector of length n with finite entries.
 pub(crate) fn vector(f: &[f64], n: usize) -> Result<(), HeatError> {
     if f.len() != n {

@@ -3,7 +3,7 @@
 
 use crate::check;
 use crate::diagonal::{DiagonalInfo, DiagonalMethod, Probes};
-use crate::method::{Method, PreparedMethod};
+use crate::method::{spread_times, Method, PreparedMethod};
 use crate::spectral::Eigenbasis;
 use crate::{HeatError, Operators};
 use faer::sparse::SparseColMatRef;
@@ -142,11 +142,7 @@ impl HeatKernel {
         check::time(t)?;
         check::block(f, self.n())?;
         let null_space = self.ops.null_space();
-        let (deflated, coefs) = if kernel_matrix {
-            null_space.split_dual(f)
-        } else {
-            null_space.split(f)
-        };
+        let (deflated, coefs) = null_space.split_for(f, kernel_matrix);
         let mut g = if t >= self.ops.time_at_infinity() {
             Mat::zeros(f.nrows(), f.ncols())
         } else if kernel_matrix {
@@ -281,22 +277,10 @@ impl HeatKernel {
     }
 
     fn times(&self, f: MatRef<'_, f64>, times: &[f64], kernel_matrix: bool) -> Result<TimeSeries, HeatError> {
-        if times.is_empty() {
-            return Err(HeatError::InvalidParameter {
-                name: "times",
-                reason: "the list of times is empty".into(),
-            });
-        }
-        for &t in times {
-            check::time(t)?;
-        }
+        check::times(times)?;
         check::block(f, self.n())?;
         let null_space = self.ops.null_space();
-        let (deflated, coefs) = if kernel_matrix {
-            null_space.split_dual(f)
-        } else {
-            null_space.split(f)
-        };
+        let (deflated, coefs) = null_space.split_for(f, kernel_matrix);
         // Times at which only the null space survives are exact without the method.
         let t_inf = self.ops.time_at_infinity();
         let finite: Vec<f64> = times.iter().copied().filter(|&t| t < t_inf).collect();
@@ -306,19 +290,8 @@ impl HeatKernel {
             self.prepared
                 .apply_times(&self.ops, deflated.as_ref(), &finite, kernel_matrix)?
         };
-        let mut values = Vec::with_capacity(times.len());
-        let mut error_estimates = Vec::with_capacity(times.len());
-        let (mut it_v, mut it_e) = (computed.into_iter(), computed_estimates.into_iter());
-        for &t in times {
-            if t < t_inf {
-                values.push(it_v.next().unwrap_or_else(|| Mat::zeros(f.nrows(), f.ncols())));
-                error_estimates.push(it_e.next().flatten());
-            } else {
-                values.push(Mat::zeros(f.nrows(), f.ncols()));
-                error_estimates.push(None);
-            }
-        }
-        let mut values = values;
+        let (mut values, error_estimates) =
+            spread_times(times, t_inf, (computed, computed_estimates), (f.nrows(), f.ncols()));
         for v in &mut values {
             null_space.restore(v, &coefs);
         }
@@ -355,15 +328,7 @@ impl HeatKernel {
         which: KernelDiagonal,
         params: &DiagonalParams,
     ) -> Result<DiagonalSeries, HeatError> {
-        if times.is_empty() {
-            return Err(HeatError::InvalidParameter {
-                name: "times",
-                reason: "the list of times is empty".into(),
-            });
-        }
-        for &t in times {
-            check::time(t)?;
-        }
+        check::times(times)?;
         params.method.validate()?;
         if params.block == 0 {
             return Err(HeatError::InvalidParameter {

@@ -133,6 +133,16 @@ impl NullSpace {
         a
     }
 
+    /// [`Self::split_dual`] for the input of the kernel matrix `K̃_t` (`kernel_matrix`), else
+    /// [`Self::split`].
+    pub(crate) fn split_for(&self, f: faer::MatRef<'_, f64>, kernel_matrix: bool) -> (Mat<f64>, Vec<Vec<f64>>) {
+        if kernel_matrix {
+            self.split_dual(f)
+        } else {
+            self.split(f)
+        }
+    }
+
     /// `((I − P) f, coefficients of P f)` for every column of `f`.
     pub(crate) fn split(&self, f: faer::MatRef<'_, f64>) -> (Mat<f64>, Vec<Vec<f64>>) {
         let mut out = f.to_owned();

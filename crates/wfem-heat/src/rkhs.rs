@@ -112,7 +112,9 @@ fn amplify(basis: &Eigenbasis, ops: &Operators, y: &[f64], w: &[f64], t: f64) ->
     )
 }
 
-fn check_basis(basis: &Eigenbasis, ops: &Operators, t: f64) -> Result<usize, HeatError> {
+/// The inputs of the truncated inverse operators: t, the basis (its e^{tλ_k} finite) and the
+/// vector `v` of length n.
+fn check_input(basis: &Eigenbasis, ops: &Operators, v: &[f64], t: f64) -> Result<(), HeatError> {
     check::time(t)?;
     let n = basis.vectors.nrows();
     check_basis_size(basis, ops)?;
@@ -138,7 +140,7 @@ fn check_basis(basis: &Eigenbasis, ops: &Operators, t: f64) -> Result<usize, Hea
             relative_residual: f64::NAN,
         });
     }
-    Ok(n)
+    check::vector(v, n)
 }
 
 /// The inverse heat operator `K_{−t} f = K_t⁻¹ f = X D_{−t} Xᵀ B f` (paper, Sect. 4,
@@ -161,8 +163,7 @@ pub fn inverse_spectral(
     f: &[f64],
     t: f64,
 ) -> Result<(Vec<f64>, TruncationReport), HeatError> {
-    let n = check_basis(basis, ops, t)?;
-    check::vector(f, n)?;
+    check_input(basis, ops, f, t)?;
     let bf = ops.mass_mul(f);
     Ok(amplify(basis, ops, f, &bf, t))
 }
@@ -186,8 +187,7 @@ pub fn reproducing_kernel_apply(
     v: &[f64],
     t: f64,
 ) -> Result<(Vec<f64>, TruncationReport), HeatError> {
-    let n = check_basis(basis, ops, t)?;
-    check::vector(v, n)?;
+    check_input(basis, ops, v, t)?;
     let y = ops.mass_factor()?.solve_vec(v);
     Ok(amplify(basis, ops, &y, v, t))
 }

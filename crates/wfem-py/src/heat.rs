@@ -297,12 +297,7 @@ impl PyHeatKernel {
         // Each t has its own factorization, shared by every column, so every t gets the
         // method's full accuracy; `apply_times` trades some of it for one factorization.
         let out = run(py, move |cancel| {
-            let mut out = Vec::with_capacity(times.len());
-            for t in times {
-                cancel.check()?;
-                out.push(kernel.apply_many(f.as_ref(), t)?);
-            }
-            Ok(out)
+            cancel.map(times, |t| Ok(kernel.apply_many(f.as_ref(), t)?))
         })?;
         Ok(mats_out(py, &out, n, k))
     }
@@ -655,14 +650,7 @@ impl PyDiffusionDistance {
         let inner = self.inner.clone();
         let n = inner.n();
         let m = sources.len();
-        let rows = run(py, move |cancel| {
-            let mut rows = Vec::with_capacity(sources.len());
-            for i in sources {
-                cancel.check()?;
-                rows.push(inner.row(i)?);
-            }
-            Ok(rows)
-        })?;
+        let rows = run(py, move |cancel| cancel.map(sources, |i| Ok(inner.row(i)?)))?;
         let out = Mat::from_fn(m, n, |i, j| rows[i][j]);
         Ok(mat_out(py, out.as_ref()))
     }

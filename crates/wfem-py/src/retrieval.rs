@@ -100,12 +100,7 @@ pub fn descriptors<'py>(
     let params = descriptor_params(k, times, num_times, sihks_params(py, sihks.as_ref())?, 0.1, 1, 0.05);
     let out = run(py, move |cancel| {
         let mut shape = ShapeDescriptors::new(&mesh, &params)?;
-        let mut out = Vec::with_capacity(which.len());
-        for d in which {
-            cancel.check()?;
-            out.push(shape.dense(d)?);
-        }
-        Ok(out)
+        cancel.map(which, |d| Ok(shape.dense(d)?))
     })?;
     let d = PyDict::new(py);
     for (name, m) in kinds.iter().zip(out) {

@@ -31,6 +31,21 @@ impl Cancel {
             Ok(())
         }
     }
+
+    /// `f` of every item, in order, checking before each that the caller has not given up.
+    pub fn map<T, U>(
+        &self,
+        items: impl IntoIterator<Item = T>,
+        mut f: impl FnMut(T) -> Result<U, Error>,
+    ) -> Result<Vec<U>, Error> {
+        items
+            .into_iter()
+            .map(|item| {
+                self.check()?;
+                f(item)
+            })
+            .collect()
+    }
 }
 
 /// Worker threads of abandoned or running calls still alive (for the tests of cancellation).

@@ -52,10 +52,15 @@ fn eigen_params(
     })
 }
 
-fn compute(ops: &Operators, k: Option<usize>, params: &EigenParams) -> Result<Eigenbasis, Error> {
-    Ok(match k {
-        None => Eigenbasis::dense_of(ops)?,
-        Some(k) => Eigenbasis::partial_of(ops, k, params)?,
+/// The k smallest eigenpairs of `ops` (all of them, dense, for `None`) with the operators.
+fn compute(ops: Operators, k: Option<usize>, params: &EigenParams) -> Result<PyEigenbasis, Error> {
+    let basis = match k {
+        None => Eigenbasis::dense_of(&ops)?,
+        Some(k) => Eigenbasis::partial_of(&ops, k, params)?,
+    };
+    Ok(PyEigenbasis {
+        basis: Arc::new(basis),
+        ops,
     })
 }
 
@@ -99,12 +104,7 @@ impl PyEigenbasis {
                 ..AssemblyParams::for_mass(mass)
             };
             let fem = assemble(&mesh, &assembly)?;
-            let ops = Operators::new(&fem, mass)?;
-            let basis = compute(&ops, k, &params)?;
-            Ok(Self {
-                basis: Arc::new(basis),
-                ops,
-            })
+            compute(Operators::new(&fem, mass)?, k, &params)
         })
     }
 
@@ -127,12 +127,7 @@ impl PyEigenbasis {
         let m = sparse_arg(py, "M", &m)?;
         let params = eigen_params(py, tol, block_size, max_dim, seed, shift, max_restarts)?;
         run(py, move |_| {
-            let ops = Operators::from_matrices(l.as_ref(), m.as_ref())?;
-            let basis = compute(&ops, k, &params)?;
-            Ok(Self {
-                basis: Arc::new(basis),
-                ops,
-            })
+            compute(Operators::from_matrices(l.as_ref(), m.as_ref())?, k, &params)
         })
     }
 
@@ -254,11 +249,7 @@ impl PyEigenbasis {
             scaled,
             normalization,
         };
-        let (basis, ops) = (self.basis.clone(), self.ops.clone());
-        let sig = run(py, move |_| {
-            let spectrum = Spectrum::new(&basis.values, basis.vectors.as_ref())?.with_mass(ops.mass())?;
-            Ok(heat_kernel_signature(&spectrum, &params)?)
-        })?;
+        let sig = self.on_spectrum(py, move |spectrum| heat_kernel_signature(spectrum, &params))?;
         Ok((mat_out(py, sig.values.as_ref()), sig.times))
     }
 
@@ -294,11 +285,7 @@ impl PyEigenbasis {
             num_frequencies,
             convention,
         };
-        let (basis, ops) = (self.basis.clone(), self.ops.clone());
-        let out = run(py, move |_| {
-            let spectrum = Spectrum::new(&basis.values, basis.vectors.as_ref())?.with_mass(ops.mass())?;
-            Ok(scale_invariant_hks(&spectrum, &params)?)
-        })?;
+        let out = self.on_spectrum(py, move |spectrum| scale_invariant_hks(spectrum, &params))?;
         Ok(mat_out(py, out.as_ref()))
     }
 }
@@ -318,6 +305,19 @@ impl PyEigenbasis {
         let (basis, ops) = (self.basis.clone(), self.ops.clone());
         let (g, r) = run(py, move |_| Ok(op(&basis, &ops, &v, t)?))?;
         Ok((vec_out(py, g), truncation(py, &r)?))
+    }
+
+    /// `descriptor` of the spectrum of these pairs with their mass, without the GIL.
+    fn on_spectrum<T: Send + 'static>(
+        &self,
+        py: Python<'_>,
+        descriptor: impl FnOnce(&Spectrum<'_>) -> Result<T, shape_retrieval::RetrievalError> + Send + 'static,
+    ) -> PyResult<T> {
+        let (basis, ops) = (self.basis.clone(), self.ops.clone());
+        run(py, move |_| {
+            let spectrum = Spectrum::new(&basis.values, basis.vectors.as_ref())?.with_mass(ops.mass())?;
+            Ok(descriptor(&spectrum)?)
+        })
     }
 }
 

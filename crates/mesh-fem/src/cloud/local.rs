@@ -2,7 +2,7 @@
 //! plane of each point from its neighbours, and the triangles at the point of the Delaunay
 //! triangulation of the point and its neighbours projected onto that plane.
 
-use crate::vec3::{cross, dot, norm, sub};
+use crate::vec3::{dot, norm, sub, tangent_basis};
 
 /// The eigenvalues (ascending) and unit eigenvectors of a symmetric 3 × 3 matrix, by cyclic
 /// Jacobi rotations (accurate to rounding for every symmetric matrix, cheap at 3 × 3).
@@ -83,19 +83,6 @@ pub(crate) fn pca_normal(points: &[[f64; 3]], center: usize, neighbours: &[u32])
     let n = vectors[0];
     let len = norm(n);
     (len > 0.0).then(|| n.map(|x| x / len))
-}
-
-/// An orthonormal tangent basis (x, y) with x × y = n (n a unit vector).
-pub(crate) fn tangent_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
-    let test = if n[0].abs() > 0.9 {
-        [0.0, 1.0, 0.0]
-    } else {
-        [1.0, 0.0, 0.0]
-    };
-    let x = cross(test, n);
-    let len = norm(x);
-    let x = x.map(|c| c / len);
-    (x, cross(n, x))
 }
 
 /// Scratch space of [`one_ring`], reused across points.

@@ -48,6 +48,7 @@ pub use sample::sample_surface;
 use crate::intrinsic::{tufted, DELAUNAY_TOLERANCE};
 use crate::laplacian::DEFAULT_MOLLIFY_FACTOR;
 use crate::operators::{AssemblyParams, FemOperators};
+use crate::vec3::first_non_finite;
 use crate::{MeshError, TriMesh};
 use rayon::prelude::*;
 
@@ -79,14 +80,10 @@ impl PointCloud {
                 minimum: MIN_POINTS,
             });
         }
-        if let Some((point, p)) = positions
-            .iter()
-            .enumerate()
-            .find(|(_, p)| p.iter().any(|c| !c.is_finite()))
-        {
+        if let Some((point, position)) = first_non_finite(&positions) {
             return Err(MeshError::NonFinitePoint {
                 point,
-                position: *p,
+                position,
                 what: "coordinate",
             });
         }
@@ -97,14 +94,10 @@ impl PointCloud {
                     expected: positions.len(),
                 });
             }
-            if let Some((point, p)) = normals
-                .iter()
-                .enumerate()
-                .find(|(_, p)| p.iter().any(|c| !c.is_finite()))
-            {
+            if let Some((point, position)) = first_non_finite(normals) {
                 return Err(MeshError::NonFinitePoint {
                     point,
-                    position: *p,
+                    position,
                     what: "normal",
                 });
             }

@@ -13,7 +13,7 @@
 //! boundary. (The gluing is geometry-central's `buildIntrinsicTuftedCover`.)
 
 use super::IntrinsicTriangulation;
-use crate::vec3::{cross, dot, norm, sub};
+use crate::vec3::{dot, norm, sub, tangent_basis};
 use crate::MeshError;
 use rayon::prelude::*;
 
@@ -188,16 +188,7 @@ fn glue_edge(group: &[(u64, u32)], faces: &[[u32; 3]], q: &[[f64; 3]]) -> Vec<[u
         let pa = q[a as usize];
         let axis = sub(q[b as usize], pa);
         let axis_len = norm(axis);
-        let axis = axis.map(|c| c / axis_len);
-        let test = if axis[0].abs() > 0.9 {
-            [0.0, 1.0, 0.0]
-        } else {
-            [1.0, 0.0, 0.0]
-        };
-        let x = cross(test, axis);
-        let x_len = norm(x);
-        let x = x.map(|c| c / x_len);
-        let y = cross(axis, x);
+        let (x, y) = tangent_basis(axis.map(|c| c / axis_len));
         let angle = |f: usize| {
             let face = faces[f];
             let w = face.iter().copied().find(|&v| v != a && v != b).unwrap_or(a);

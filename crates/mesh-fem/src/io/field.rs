@@ -65,6 +65,15 @@ fn invalid_name(path: &Path, name: &str, why: &str) -> MeshError {
     }
 }
 
+/// `fields` must not be empty: `file` ("an NPY file", …) holds at least one.
+fn require_fields(path: &Path, fields: &[(&str, &[f64])], file: &str) -> Result<(), MeshError> {
+    if fields.is_empty() {
+        let why = format!("list is empty: {file} needs at least one field");
+        return Err(invalid_name(path, "", &why));
+    }
+    Ok(())
+}
+
 /// A file format for per-vertex fields ([`write_field`], [`read_field`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum FieldFormat {
@@ -188,23 +197,11 @@ pub fn stage_field(
             set.stage(path, |w| write_ply(w, mesh, fields, colors))
         }
         FieldFormat::Npy => {
-            if fields.is_empty() {
-                return Err(invalid_name(
-                    path,
-                    "",
-                    "list is empty: an NPY file needs at least one field",
-                ));
-            }
+            require_fields(path, fields, "an NPY file")?;
             set.stage(path, |w| write_npy(w, mesh.n_vertices(), fields))
         }
         FieldFormat::Csv => {
-            if fields.is_empty() {
-                return Err(invalid_name(
-                    path,
-                    "",
-                    "list is empty: a CSV file needs at least one field",
-                ));
-            }
+            require_fields(path, fields, "a CSV file")?;
             for (name, _) in fields {
                 if name.contains([',', '"', '\n', '\r']) {
                     return Err(invalid_name(path, name, "contains a comma, quote or line break"));

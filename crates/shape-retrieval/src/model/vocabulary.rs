@@ -344,17 +344,9 @@ impl VocabularyModel {
     fn normalised_bag(theta: MatRef<'_, f64>, weights: &[f64]) -> Result<Vec<f64>, RetrievalError> {
         check::same("vertex weights vs descriptors", theta.nrows(), weights.len())?;
         check::finite_slice("vertex weights", weights)?;
-        let mut bag: Vec<f64> = (0..theta.ncols())
+        let bag: Vec<f64> = (0..theta.ncols())
             .map(|c| theta.col(c).iter().zip(weights).map(|(t, a)| t * a).sum())
             .collect();
-        let total: f64 = bag.iter().sum();
-        if !(total > 0.0 && total.is_finite()) {
-            return Err(RetrievalError::InvalidModel {
-                what: "bag",
-                reason: format!("the vertex weights sum to {total}"),
-            });
-        }
-        bag.iter_mut().for_each(|x| *x /= total);
-        Ok(bag)
+        check::unit_sum("bag", "the vertex weights sum", bag)
     }
 }

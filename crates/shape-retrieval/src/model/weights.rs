@@ -58,27 +58,9 @@ impl VertexWeights {
             VertexWeights::CappedArea { factor } => check::positive("capped-area factor", factor),
             VertexWeights::RepairDamped { factor, hops } => {
                 check::positive("capped-area factor", factor)?;
-                if hops == 0 {
-                    Err(RetrievalError::InvalidParameter {
-                        name: "repair hops",
-                        value: 0.0,
-                        reason: "must be at least 1",
-                    })
-                } else {
-                    Ok(())
-                }
+                check::at_least_one("repair hops", hops as usize)
             }
-            VertexWeights::BoundaryDamped { hops } => {
-                if hops == 0 {
-                    Err(RetrievalError::InvalidParameter {
-                        name: "boundary hops",
-                        value: 0.0,
-                        reason: "must be at least 1",
-                    })
-                } else {
-                    Ok(())
-                }
-            }
+            VertexWeights::BoundaryDamped { hops } => check::at_least_one("boundary hops", hops as usize),
         }
     }
 

@@ -78,62 +78,79 @@ pub fn fit_global_component(
             reason: format!("vertex {} is repeated", w[0]),
         });
     }
+    let fit = Fit {
+        kernel,
+        anchors,
+        t,
+        coefficients,
+    };
     // Every rule is homogeneous of degree 1 in f: work on f/2ᵉ with 2ᵉ ≈ max|f| (exact), so
     // that the M-products of a field of 1e308 do not overflow, and scale back.
     let (down, up) = shifted_solve::pow2_scale(linf(f));
     if down != 1.0 {
         let scaled: Vec<f64> = f.iter().map(|x| x * down).collect();
-        let mut g = fit_unit(kernel, anchors, &scaled, t, coefficients)?;
+        let mut g = fit.unit(&scaled)?;
         g.values
             .iter_mut()
             .chain(g.coefficients.iter_mut())
             .for_each(|x| *x *= up);
         return Ok(g);
     }
-    fit_unit(kernel, anchors, f, t, coefficients)
+    fit.unit(f)
 }
 
-/// [`fit_global_component`] of a validated field of moderate size.
-fn fit_unit(
-    kernel: &HeatKernel,
-    anchors: &[u32],
-    f: &[f64],
+/// The validated inputs of [`fit_global_component`] but the field.
+#[derive(Clone, Copy)]
+struct Fit<'a> {
+    kernel: &'a HeatKernel,
+    anchors: &'a [u32],
     t: f64,
     coefficients: Coefficients,
-) -> Result<GlobalComponent, HeatError> {
-    let n = kernel.n();
-    let values_at = |a: &[u32]| a.iter().map(|&v| f[v as usize]).collect::<Vec<f64>>();
-    match coefficients {
-        Coefficients::Smooth => Ok(GlobalComponent {
-            values: kernel.apply(f, t)?,
-            anchors: Vec::new(),
-            coefficients: Vec::new(),
-        }),
-        Coefficients::Anchored => anchored(kernel, anchors, f, t),
-        _ if anchors.is_empty() => Ok(GlobalComponent {
-            values: vec![0.0; n],
-            anchors: Vec::new(),
-            coefficients: Vec::new(),
-        }),
-        Coefficients::FeatureValues => {
-            // Σ f(pᵢ) K_t eᵢ = K_t (Σ f(pᵢ) eᵢ): one application (linearity of Eq. (21)).
-            let mut masked = vec![0.0; n];
-            for &a in anchors {
-                masked[a as usize] = f[a as usize];
+}
+
+impl Fit<'_> {
+    /// [`fit_global_component`] of a validated field `f` of moderate size.
+    fn unit(self, f: &[f64]) -> Result<GlobalComponent, HeatError> {
+        let Fit {
+            kernel,
+            anchors,
+            t,
+            coefficients,
+        } = self;
+        let n = kernel.n();
+        let values_at = |a: &[u32]| a.iter().map(|&v| f[v as usize]).collect::<Vec<f64>>();
+        match coefficients {
+            Coefficients::Smooth => Ok(GlobalComponent {
+                values: kernel.apply(f, t)?,
+                anchors: Vec::new(),
+                coefficients: Vec::new(),
+            }),
+            Coefficients::Anchored => anchored(kernel, anchors, f, t),
+            _ if anchors.is_empty() => Ok(GlobalComponent {
+                values: vec![0.0; n],
+                anchors: Vec::new(),
+                coefficients: Vec::new(),
+            }),
+            Coefficients::FeatureValues => {
+                // Σ f(pᵢ) K_t eᵢ = K_t (Σ f(pᵢ) eᵢ): one application (linearity of Eq. (21)).
+                let mut masked = vec![0.0; n];
+                for &a in anchors {
+                    masked[a as usize] = f[a as usize];
+                }
+                Ok(GlobalComponent {
+                    values: kernel.apply(&masked, t)?,
+                    anchors: anchors.to_vec(),
+                    coefficients: values_at(anchors),
+                })
             }
-            Ok(GlobalComponent {
-                values: kernel.apply(&masked, t)?,
+            Coefficients::Interpolate => interpolate(kernel, anchors, f, t),
+            Coefficients::Normalized => Ok(GlobalComponent {
+                values: normalized(kernel, anchors, f, t)?,
                 anchors: anchors.to_vec(),
                 coefficients: values_at(anchors),
-            })
+            }),
+            Coefficients::LeastSquares => least_squares(kernel, anchors, f, t),
         }
-        Coefficients::Interpolate => interpolate(kernel, anchors, f, t),
-        Coefficients::Normalized => Ok(GlobalComponent {
-            values: normalized(kernel, anchors, f, t)?,
-            anchors: anchors.to_vec(),
-            coefficients: values_at(anchors),
-        }),
-        Coefficients::LeastSquares => least_squares(kernel, anchors, f, t),
     }
 }
 

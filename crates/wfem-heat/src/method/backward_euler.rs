@@ -1,6 +1,6 @@
 //! [`super::Method::BackwardEuler`]: one implicit step `(M + tL) g = M f`.
 
-use super::{FactorCache, PreparedMethod};
+use super::{mass_columns, FactorCache, PreparedMethod};
 use crate::{HeatError, Operators};
 use faer::{Mat, MatRef};
 
@@ -19,11 +19,7 @@ impl BackwardEuler {
 
 impl PreparedMethod for BackwardEuler {
     fn apply(&self, ops: &Operators, f: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
-        let mut g = Mat::<f64>::zeros(f.nrows(), f.ncols());
-        for j in 0..f.ncols() {
-            let col: Vec<f64> = f.col(j).iter().copied().collect();
-            g.col_as_slice_mut(j).copy_from_slice(&ops.mass_mul(&col));
-        }
+        let g = mass_columns(ops, f);
         self.apply_kernel_matrix(ops, g.as_ref(), t)
     }
 

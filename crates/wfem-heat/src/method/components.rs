@@ -7,7 +7,7 @@
 //! factorization then fails, or a dense eigendecomposition scaled for the big part is off by
 //! tens of per cent). Each component's own matrices are well scaled.
 
-use super::{PreparedMethod, TimesResult};
+use super::{spread_times, PreparedMethod, TimesResult};
 use crate::{HeatError, Method, Operators};
 use faer::{Mat, MatRef};
 
@@ -43,19 +43,12 @@ impl Part {
             }
             _ => self.prepared.apply_times(&self.ops, f, &finite, kernel_matrix)?,
         };
-        let (mut v, mut e) = (computed.into_iter(), estimates.into_iter());
-        let mut values = Vec::with_capacity(times.len());
-        let mut errors = Vec::with_capacity(times.len());
-        for &t in times {
-            if t < t_inf {
-                values.push(v.next().unwrap_or_else(|| Mat::zeros(f.nrows(), f.ncols())));
-                errors.push(e.next().flatten());
-            } else {
-                values.push(Mat::zeros(f.nrows(), f.ncols()));
-                errors.push(None);
-            }
-        }
-        Ok((values, errors))
+        Ok(spread_times(
+            times,
+            t_inf,
+            (computed, estimates),
+            (f.nrows(), f.ncols()),
+        ))
     }
 }
 

@@ -1,7 +1,7 @@
 //! [`super::Method::Dense`] and [`super::Method::Spectral`]: `K_t F = X e^{−tΛ} XᵀM F` with all
 //! (Eq. (6)) or the k smallest (Eq. (8)) eigenpairs of `L x = λ M x`.
 
-use super::PreparedMethod;
+use super::{mass_columns, PreparedMethod};
 use crate::spectral::{EigenParams, Eigenbasis};
 use crate::{HeatError, Operators};
 use faer::{Mat, MatRef};
@@ -32,11 +32,7 @@ impl EigenMethod {
 
 impl PreparedMethod for EigenMethod {
     fn apply(&self, ops: &Operators, f: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
-        let mut mf = Mat::<f64>::zeros(f.nrows(), f.ncols());
-        for j in 0..f.ncols() {
-            let col: Vec<f64> = f.col(j).iter().copied().collect();
-            mf.col_as_slice_mut(j).copy_from_slice(&ops.mass_mul(&col));
-        }
+        let mf = mass_columns(ops, f);
         Ok(self.basis.heat_scaled(mf.as_ref(), t))
     }
 

@@ -220,6 +220,40 @@ impl Default for Method {
 /// Values at several times with an optional per-time error estimate.
 pub(crate) type TimesResult = Result<(Vec<Mat<f64>>, Vec<Option<f64>>), HeatError>;
 
+/// The values and error estimates of every t of `times`, in order, from those `computed` for
+/// the times below `t_inf` (in order): from `t_inf` on the (deflated) result is the n × k zero
+/// block, without an estimate.
+pub(crate) fn spread_times(
+    times: &[f64],
+    t_inf: f64,
+    computed: (Vec<Mat<f64>>, Vec<Option<f64>>),
+    (n, k): (usize, usize),
+) -> (Vec<Mat<f64>>, Vec<Option<f64>>) {
+    let (mut v, mut e) = (computed.0.into_iter(), computed.1.into_iter());
+    let mut values = Vec::with_capacity(times.len());
+    let mut errors = Vec::with_capacity(times.len());
+    for &t in times {
+        if t < t_inf {
+            values.push(v.next().unwrap_or_else(|| Mat::zeros(n, k)));
+            errors.push(e.next().flatten());
+        } else {
+            values.push(Mat::zeros(n, k));
+            errors.push(None);
+        }
+    }
+    (values, errors)
+}
+
+/// `M F`, column by column ([`Operators::mass_mul`]).
+pub(crate) fn mass_columns(ops: &Operators, f: MatRef<'_, f64>) -> Mat<f64> {
+    let mut mf = Mat::<f64>::zeros(f.nrows(), f.ncols());
+    for j in 0..f.ncols() {
+        let col: Vec<f64> = f.col(j).iter().copied().collect();
+        mf.col_as_slice_mut(j).copy_from_slice(&ops.mass_mul(&col));
+    }
+    mf
+}
+
 /// A method with its t-independent data, applied by [`crate::HeatKernel`].
 pub(crate) trait PreparedMethod: Send + Sync + Debug {
     /// `K_t F` for every column of F (validated; the null space of L is deflated by the
