@@ -164,7 +164,7 @@ impl Default for DescriptorParams {
 pub struct ShapeDescriptors {
     mesh: TriMesh,
     operators: FemOperators,
-    params: DescriptorParams,
+    pub(crate) params: DescriptorParams,
     wfem: Option<Eigenbasis>,
     lumped: Option<Eigenbasis>,
     described: usize,
@@ -343,15 +343,6 @@ impl ShapeDescriptors {
             )?,
         };
         Ok(slot.insert(basis))
-    }
-
-    /// The dense descriptor (n × T for the HKS variants, n × K for SI-HKS) with the times and
-    /// SI-HKS options of this shape's [`DescriptorParams`]; see the module docs.
-    ///
-    /// # Errors
-    /// Those of [`crate::DescriptorSpec::compute`].
-    pub fn dense(&mut self, descriptor: Descriptor) -> Result<Mat<f64>, RetrievalError> {
-        crate::DescriptorSpec::with_params(descriptor, &self.params).compute(self)
     }
 
     /// The feature function of SHK1/SHK2: the wFEM HKS at `t_f = feature_time_factor · 4 ln10/λ_2`.

@@ -86,6 +86,19 @@ fn is_kernel_value(convention: &KernelDiagonal) -> bool {
 /// times resolve the humans' fingers and faces; frequencies ≥ 5 mostly carried noise. At
 /// τ = −12 the 100th mode has tλ ≈ 4π·100·2⁻¹² ≈ 0.3 (Weyl), so the first samples see the
 /// truncation of the spectrum: the descriptor depends (mildly) on k, which is recorded with it.
+impl ShapeDescriptors {
+    /// The dense descriptor (n × T for the HKS variants, n × K for SI-HKS) with the times and
+    /// SI-HKS options of this shape's [`DescriptorParams`]; see the module docs of
+    /// [`crate::descriptor`]. (Defined here, beside the one dispatch it calls, so that the
+    /// descriptor module does not depend on the model.)
+    ///
+    /// # Errors
+    /// Those of [`DescriptorSpec::compute`].
+    pub fn dense(&mut self, descriptor: Descriptor) -> Result<Mat<f64>, RetrievalError> {
+        DescriptorSpec::with_params(descriptor, &self.params).compute(self)
+    }
+}
+
 impl Default for DescriptorSpec {
     fn default() -> Self {
         Self::sihks(&SihksParams {
