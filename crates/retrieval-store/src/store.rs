@@ -558,11 +558,37 @@ impl Store {
             return Ok(None);
         };
         conn.busy_timeout(BUSY_TIMEOUT).map_err(|e| sqlite_error(path, e))?;
-        match conn.execute_batch("BEGIN IMMEDIATE") {
-            Ok(()) => Ok(Some(ReplaceLock(conn))),
-            // Not a database (e.g. a JSON index replaced by --force): nothing to lock.
-            Err(rusqlite::Error::SqliteFailure(f, _)) if f.code == rusqlite::ErrorCode::NotADatabase => Ok(None),
-            Err(e) => Err(sqlite_error(path, e)),
+        let not_a_database = |e: &rusqlite::Error| matches!(e, rusqlite::Error::SqliteFailure(f, _) if f.code == rusqlite::ErrorCode::NotADatabase);
+        // The log (`-wal`) is found by the file's name: frames a writer committed to the old
+        // file and no one folded into it yet would be read as the new file's own after the
+        // rename (its pages over the new file's). So the lock is taken with an empty log:
+        // fold it in and truncate it (waiting for readers), take the write lock, and start
+        // again if a writer committed in between.
+        let started = std::time::Instant::now();
+        loop {
+            match conn.query_row("PRAGMA wal_checkpoint(TRUNCATE)", [], |_| Ok(())) {
+                Ok(()) => {}
+                // Not a database (e.g. a JSON index replaced by --force): nothing to lock.
+                Err(e) if not_a_database(&e) => return Ok(None),
+                Err(e) => return Err(sqlite_error(path, e)),
+            }
+            match conn.execute_batch("BEGIN IMMEDIATE") {
+                Ok(()) => {}
+                Err(e) if not_a_database(&e) => return Ok(None),
+                Err(e) => return Err(sqlite_error(path, e)),
+            }
+            let log = std::fs::metadata(wal_path(path)).map_or(0, |m| m.len());
+            if log == 0 {
+                return Ok(Some(ReplaceLock(conn)));
+            }
+            conn.execute_batch("ROLLBACK").map_err(|e| sqlite_error(path, e))?;
+            if started.elapsed() > BUSY_TIMEOUT {
+                return Err(StoreError::InUse {
+                    path: path.to_path_buf(),
+                    wal: wal_path(path),
+                });
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
         }
     }
 
