@@ -3,11 +3,12 @@
 //! The wFEM heat kernel `K_t = exp(−t B⁻¹L) = X D_t Xᵀ B` (paper, Eq. (6)) applied to
 //! functions on a triangle mesh, without computing the spectrum. Modules follow the paper:
 //!
-//! * [`Operators`] — the one validated context: L, the mass M of the kernel (`mesh_fem::Mass`: (consistent B
-//!   of the wFEM kernel, lumped D, identity; Table 1)), their shared pattern, symbolic analysis and null space.
+//! * [`Operators`] — the one validated context: L, the mass M of the kernel (`mesh_fem::Mass`:
+//!   consistent B of the wFEM kernel, lumped D, identity; Table 1), their shared pattern,
+//!   symbolic analysis and null space.
 //! * [`HeatKernel`] — a context with a prepared [`Method`](method::Method), applied to many
-//!   functions and times (`K_t f`, and the kernel matrix `K̃_t = K_t M⁻¹ = X D_t Xᵀ`); [`heat`] is the
-//!   one-shot version. [`method`] lists the methods (Eq. (6), (8), (9), (11)–(13) and the fast
+//!   functions and times (`K_t f`, and the kernel matrix `K̃_t = K_t M⁻¹ = X D_t Xᵀ`); [`heat`]
+//!   is the one-shot version. [`method`] lists the methods (Eq. (6), (8), (9), (11)–(13) and the fast
 //!   exact path, the default).
 //! * [`spectral`] — [`spectral::Eigenbasis`]: generalized eigenpairs `L x = λ M x`, dense or the k
 //!   smallest (Eq. (4), (8)).
@@ -20,8 +21,8 @@
 //! * [`scale`] — λ_max and the scale-invariant kernel (Sect. 5).
 //! * [`times`] — [`times::TimeScales`]: which diffusion times mean something on a mesh.
 //! * [`diagonal`] — how diagonals of kernel matrices are computed: selected inversion (the
-//!   default, exact at every t), probing, unit columns; [`KernelDiagonal`], [`DiagonalParams`] and [`DiagonalSeries`] are the
-//!   kernel's side of it.
+//!   default, exact at every t), probing, unit columns; [`KernelDiagonal`], [`DiagonalParams`]
+//!   and [`DiagonalSeries`] are the kernel's side of it.
 //!
 //! The heat kernel *signature* (HKS) is a shape descriptor and is defined once, in the
 //! `shape-retrieval` crate, on top of [`HeatKernel::apply_kernel_matrix`] and [`spectral::Eigenbasis`].
