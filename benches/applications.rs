@@ -1,7 +1,7 @@
 //! Applications of the heat kernel on icospheres of area 4π (10K/41K/164K vertices; 655K with
 //! `WFEM_BENCH_LARGE=1`, see `common/levels.rs`):
 //!
-//! * heat kernel signature at 100 scales (`shape_retrieval::heat_kernel_signature`, automatic
+//! * heat kernel signature at 100 scales (`shape_retrieval::hks::heat_kernel_signature`, automatic
 //!   log-spaced times) from k = 100 eigenpairs (the eigensolve is benched in
 //!   `wfem-heat/benches/heat.rs`);
 //! * 1000 canonical basis functions `K_t e_i` (paper Sect. 4.1, `wfem_heat::canonical_basis`,
@@ -16,12 +16,13 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, SamplingMode};
 use mesh_fem::{assemble, generate, AssemblyParams};
-use shape_retrieval::{heat_kernel_signature, HksParams, Spectrum};
+use shape_retrieval::hks::{heat_kernel_signature, HksParams, Spectrum};
 use std::f64::consts::PI;
 use std::hint::black_box;
 use std::time::Duration;
 use wfem_heat::basis::canonical_basis;
-use wfem_heat::{DiffusionDistance, DistanceKind, DistanceParams, EigenParams, Eigenbasis};
+use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
 use wfem_heat::{HeatKernel, HeatParams};
 
 #[path = "common/levels.rs"]

@@ -5,7 +5,8 @@
 //! overflow, a hang, a huge allocation, a NaN) is a crash that libFuzzer records.
 
 use mesh_fem::io::{LoadOptions, LoadReport, MeshFormat};
-use mesh_fem::{assemble, validate, AssemblyParams, MeshError, TriMesh};
+use mesh_fem::validate::validate;
+use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
 use std::path::Path;
 
 /// The name readers put into error messages.

@@ -12,7 +12,8 @@ use wfem_choice::Choice;
 use wfem_heat::approx::{
     feature_approximation, ApproxParams, Coefficients, FeatureApproximation, Persistence, ScaleSampling,
 };
-use wfem_heat::{HeatParams, Method};
+use wfem_heat::method::Method;
+use wfem_heat::HeatParams;
 
 /// Arguments of `wfem approx`.
 #[derive(Args, Clone, Debug)]

@@ -11,7 +11,8 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 use wfem_choice::Choice;
-use wfem_heat::{HeatParams, Method};
+use wfem_heat::method::Method;
+use wfem_heat::HeatParams;
 use wfem_render::{render_png, Frame, View};
 
 /// Arguments of `wfem demo`.
@@ -97,7 +98,7 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
 
     let start = Instant::now();
     let params = HeatParams {
-        method: Method::rational(shifted_solve::DEFAULT_DEGREE),
+        method: Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
         ..Default::default()
     };
     let rational = prepare_kernel(&ops, params, n)?;

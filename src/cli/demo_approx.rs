@@ -6,11 +6,11 @@ use super::output::{figure_params, short_label};
 use super::CliError;
 use mesh_fem::io::AtomicSet;
 use mesh_fem::{morse, TriMesh};
+use shifted_solve::rng::SplitMix64;
 use std::fmt::Write as _;
 use std::path::Path;
 use wfem_choice::Choice;
 use wfem_heat::approx::{feature_approximation, fit_global_component, ranked_anchors, ApproxParams};
-use wfem_heat::rng::SplitMix64;
 use wfem_heat::HeatKernel;
 use wfem_render::{render_png, View};
 

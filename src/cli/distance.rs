@@ -8,7 +8,9 @@ use clap::Args;
 use serde_json::json;
 use std::io::Write;
 use wfem_choice::Choice;
-use wfem_heat::{DiffusionDistance, DistanceKind, DistanceParams, HeatParams, Method};
+use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
+use wfem_heat::method::Method;
+use wfem_heat::HeatParams;
 
 /// Arguments of `wfem distance`.
 #[derive(Args, Clone, Debug)]

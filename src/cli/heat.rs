@@ -9,7 +9,8 @@ use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
 use wfem_choice::Choice;
-use wfem_heat::{HeatKernel, HeatParams, Method, MethodOptions};
+use wfem_heat::method::{Method, MethodOptions};
+use wfem_heat::{HeatKernel, HeatParams};
 
 /// `--method` with its options (`--degree`, `--backend`, `--eigs`): the heat method of the
 /// library's registry ([`Method`]) with the options that apply to it.
@@ -25,8 +26,8 @@ pub struct MethodArgs {
     #[arg(long)]
     pub degree: Option<usize>,
     /// Solver of the shifted systems, --method rational only [default: ldlt].
-    #[arg(long, value_parser = choice::<shifted_solve::Backend>())]
-    pub backend: Option<shifted_solve::Backend>,
+    #[arg(long, value_parser = choice::<shifted_solve::backend::Backend>())]
+    pub backend: Option<shifted_solve::backend::Backend>,
     /// Number of eigenpairs, --method spectral only (default min(200, n); at most n/10 on
     /// meshes above 1000 vertices, where more cost more than --method dense or fast).
     #[arg(long)]
@@ -47,7 +48,7 @@ impl MethodArgs {
     pub fn named(&self) -> Method {
         match &self.method {
             Some(m) => m.clone(),
-            None if self.options(None).names_rational() => Method::rational(shifted_solve::DEFAULT_DEGREE),
+            None if self.options(None).names_rational() => Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
             None => Method::default(),
         }
     }
@@ -89,10 +90,10 @@ fn option_error(e: wfem_heat::HeatError) -> CliError {
 /// `--degree`: one of the shipped rational approximations.
 pub(crate) fn check_degree(degree: Option<usize>) -> Result<(), CliError> {
     match degree {
-        Some(d) if !shifted_solve::SHIPPED_DEGREES.contains(&d) => Err(CliError::OutOfRange {
+        Some(d) if !shifted_solve::poles::SHIPPED_DEGREES.contains(&d) => Err(CliError::OutOfRange {
             flag: "--degree",
             value: d.to_string(),
-            allowed: format!("one of {:?}", shifted_solve::SHIPPED_DEGREES),
+            allowed: format!("one of {:?}", shifted_solve::poles::SHIPPED_DEGREES),
             why: "the degrees of the shipped rational approximations of e^-x (error ≈ 9.3^-degree)".into(),
         }),
         _ => Ok(()),

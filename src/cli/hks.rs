@@ -5,8 +5,10 @@ use super::output::{short_labels, write_fields, Column, OutputFormat, RenderArgs
 use super::{limits, progress, read_usable, CliError, MassArgs, MeshArgs, Output};
 use clap::Args;
 use serde_json::json;
-use shape_retrieval::hks::TimeSampling;
-use shape_retrieval::{operators_hks, HksMethod, HksSource, HksStep, MeshHksParams, RetrievalError, DEFAULT_NUM_TIMES};
+use shape_retrieval::exact::{HksMethod, HksSource};
+use shape_retrieval::hks::{TimeSampling, DEFAULT_NUM_TIMES};
+use shape_retrieval::mesh_hks::{operators_hks, HksStep, MeshHksParams};
+use shape_retrieval::RetrievalError;
 use std::io::Write;
 use wfem_choice::Choice;
 use wfem_heat::diagonal::DiagonalMethod;
@@ -119,7 +121,11 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
 
     let input = read_usable(&args.input)?;
     let n = input.mesh.n_vertices();
-    let k = limits::descriptor_eigenpairs(args.eigs.unwrap_or(shape_retrieval::DEFAULT_EIGENPAIRS.min(n)), n)?;
+    let k = limits::descriptor_eigenpairs(
+        args.eigs
+            .unwrap_or(shape_retrieval::descriptor::DEFAULT_EIGENPAIRS.min(n)),
+        n,
+    )?;
     limits::columns(
         if args.times.is_empty() {
             "--num-times"
@@ -220,7 +226,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         writeln!(out, "wrote {}", path.display())?;
     }
     // The rigorous bound is pessimistic by orders of magnitude; the Weyl-law estimate is close
-    // (shape_retrieval::truncation_estimate): warn where a spectral column is ~1 % off.
+    // (shape_retrieval::exact::truncation_estimate): warn where a spectral column is ~1 % off.
     let truncated: Vec<f64> = hks
         .sources
         .iter()

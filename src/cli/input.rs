@@ -1,14 +1,12 @@
 //! Reading the mesh of a subcommand: load, the explicit repairs of `--repair`, validation,
 //! and the vertex numbering that per-vertex inputs and outputs refer to.
 
-use super::progress;
-use super::CliError;
+use super::{progress, CliError};
 use clap::Args;
+use mesh_fem::cloud::{assemble_cloud, CloudParams, PointCloud};
 use mesh_fem::io::{load_shape, read_field, LoadOptions, LoadReport, MeshFormat, Shape};
-use mesh_fem::{
-    assemble, assemble_cloud, repair, AssemblyParams, CloudParams, FemOperators, Laplacian, Lumping, MeshError,
-    PointCloud, RepairOptions, RepairReport, RepairStep, TriMesh,
-};
+use mesh_fem::validate::{repair, RepairOptions, RepairReport, RepairStep};
+use mesh_fem::{assemble, AssemblyParams, FemOperators, Laplacian, Lumping, MeshError, TriMesh};
 use std::path::{Path, PathBuf};
 use wfem_choice::Choice;
 use wfem_render::Splats;
@@ -216,7 +214,7 @@ impl Input {
     }
 
     /// What retrieval describes: the point cloud, or the (repaired) mesh.
-    pub fn as_shape(&self) -> shape_retrieval::ShapeRef<'_> {
+    pub fn as_shape(&self) -> shape_retrieval::model::ShapeRef<'_> {
         match &self.cloud {
             Some(cloud) => cloud.into(),
             None => (&self.mesh).into(),
@@ -383,13 +381,16 @@ pub fn read_usable(args: &MeshArgs) -> Result<Input, CliError> {
     if input.cloud.is_some() {
         return Ok(input);
     }
-    let report = progress::run("validating", || Ok::<_, CliError>(mesh_fem::validate(&input.mesh)))?;
+    let report = progress::run("validating", || {
+        Ok::<_, CliError>(mesh_fem::validate::validate(&input.mesh))
+    })?;
     let non_manifold = report
         .warnings()
         .filter(|p| {
             matches!(
                 p,
-                mesh_fem::Problem::NonManifoldEdge { .. } | mesh_fem::Problem::NonManifoldVertex { .. }
+                mesh_fem::validate::Problem::NonManifoldEdge { .. }
+                    | mesh_fem::validate::Problem::NonManifoldVertex { .. }
             )
         })
         .count();
@@ -429,7 +430,7 @@ pub fn load_shape_quietly(path: &Path, laplacian: Laplacian) -> Result<Shape, Cl
     let shape = load_shape(path, &LoadOptions::default())?;
     if let Shape::Mesh(mesh, _) = &shape {
         if !matches!(laplacian, Laplacian::Robust(_)) {
-            mesh_fem::validate(mesh).into_result()?;
+            mesh_fem::validate::validate(mesh).into_result()?;
         }
     }
     Ok(shape)
@@ -439,7 +440,7 @@ pub fn load_shape_quietly(path: &Path, laplacian: Laplacian) -> Result<Shape, Cl
 /// `--repair` that applies (non-manifold edges and vertices, components, duplicate faces,
 /// orientation; an open mesh is a note: its natural boundary conditions are a fact, not a
 /// defect).
-fn say_warnings(name: &str, report: &mesh_fem::ValidationReport) {
+fn say_warnings(name: &str, report: &mesh_fem::validate::ValidationReport) {
     let summary = with_flags(&report.summary());
     for line in summary.lines().skip(1) {
         let Some(text) = line.trim().strip_prefix("warning: ") else {
@@ -447,7 +448,7 @@ fn say_warnings(name: &str, report: &mesh_fem::ValidationReport) {
         };
         let boundary = report
             .warnings()
-            .find(|p| matches!(p, mesh_fem::Problem::Boundary { .. }));
+            .find(|p| matches!(p, mesh_fem::validate::Problem::Boundary { .. }));
         if boundary.is_some_and(|p| text.starts_with(&with_flags(&p.to_string()))) {
             progress::note(&format!("{name}: {text}"));
         } else {

@@ -81,11 +81,11 @@ pub fn columns(flag: &'static str, count: usize, n: usize) -> Result<(), CliErro
 
 /// The number of eigenpairs of a heat kernel signature: [`eigenpairs`], and at most
 /// n / [`SPECTRAL_FRACTION`] where the partial eigensolver runs (above
-/// [`wfem_heat::DENSE_MAX_VERTICES`] vertices; below, a large k uses the dense decomposition).
+/// [`wfem_heat::spectral::DENSE_MAX_VERTICES`] vertices; below, a large k uses the dense decomposition).
 pub fn descriptor_eigenpairs(k: usize, n: usize) -> Result<usize, CliError> {
     let k = eigenpairs("--eigs", k, n)?;
     let limit = n / SPECTRAL_FRACTION;
-    if n > wfem_heat::DENSE_MAX_VERTICES && k > limit {
+    if n > wfem_heat::spectral::DENSE_MAX_VERTICES && k > limit {
         return Err(out_of_range(
             "--eigs",
             k,
@@ -122,7 +122,7 @@ pub fn spectral_eigenpairs(k: usize, n: usize) -> Result<usize, CliError> {
     let k = eigenpairs("--eigs", k, n)?;
     let limit = n / SPECTRAL_FRACTION;
     if n > SMALL_MESH && k > limit {
-        let exact = if n <= wfem_heat::DENSE_MAX_VERTICES {
+        let exact = if n <= wfem_heat::spectral::DENSE_MAX_VERTICES {
             "--method dense (all eigenpairs, exact, O(n³)) or --method fast"
         } else {
             "--method fast or --method rational (exact, no eigenpairs)"

@@ -177,7 +177,7 @@ pub fn info(args: &InfoArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let input = read_input(&args.input)?;
     let (mesh, load_report) = (&input.mesh, &input.load_report);
     let stats = progress::run("statistics", || Ok::<_, CliError>(mesh_fem::stats::stats(mesh)))?;
-    let report = progress::run("validating", || Ok::<_, CliError>(mesh_fem::validate(mesh)))?;
+    let report = progress::run("validating", || Ok::<_, CliError>(mesh_fem::validate::validate(mesh)))?;
     if args.json {
         let value = serde_json::json!({
             "file": args.input.mesh.display().to_string(),

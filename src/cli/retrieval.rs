@@ -18,7 +18,7 @@
 //! `query` describe their shapes with the recorded one (`query --laplacian` naming another is
 //! refused).
 //!
-//! The defaults are [`shape_retrieval::RetrievalSettings::default`]: pinched vertices split,
+//! The defaults are [`shape_retrieval::model::RetrievalSettings::default`]: pinched vertices split,
 //! isolated spikes put back, rough and incoherent (noisy, not merely coarse) shapes smoothed by
 //! the heat kernel down to a roughness of 0.1 edge lengths, holes with rims up to 3√A closed by
 //! smooth patches that are not themselves described, thin handles (cycles up to 0.35√A) cut
@@ -35,15 +35,17 @@ use super::{check_output, CliError, MeshArgs};
 use clap::{Args, Subcommand};
 use mesh_fem::io::Shape;
 use mesh_fem::Laplacian;
-use retrieval_store::SqliteIndex;
+use retrieval_store::index::SqliteIndex;
+use shape_retrieval::descriptor::Descriptor;
+use shape_retrieval::distance::BagDistance;
 use shape_retrieval::eval::ClassRule;
 use shape_retrieval::global::GlobalKind;
-use shape_retrieval::spatial::SpatialBag;
-use shape_retrieval::Descriptor;
-use shape_retrieval::{
-    BagDistance, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, IndexStore, JsonFile,
-    RetrievalIndex, RetrievalSettings, ShapeFeatures, Smoothing, VertexWeights, VocabularyModel, VocabularyStore,
+use shape_retrieval::model::{
+    Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, RetrievalIndex, RetrievalSettings,
+    ShapeFeatures, Smoothing, VertexWeights, VocabularyModel,
 };
+use shape_retrieval::spatial::SpatialBag;
+use shape_retrieval::store::{IndexStore, JsonFile, VocabularyStore};
 use std::io::Write;
 use std::path::PathBuf;
 use wfem_choice::Choice;
@@ -255,8 +257,8 @@ impl Refused {
 /// that cannot be described is refused (or, strict, the error).
 fn describe_all(
     meshes: &[(String, Shape)],
-    descriptor: &shape_retrieval::DescriptorSettings,
-    bags: &shape_retrieval::BagSettings,
+    descriptor: &shape_retrieval::model::DescriptorSettings,
+    bags: &shape_retrieval::model::BagSettings,
     refused: &mut Refused,
 ) -> Result<Vec<ShapeFeatures>, CliError> {
     use shape_retrieval::collection::describe_collection;
@@ -295,7 +297,7 @@ pub struct DescriptorArgs {
     #[arg(long, value_parser = choice::<Laplacian>(), default_value = Laplacian::default_name())]
     pub laplacian: Laplacian,
     /// Eigenpairs k per shape.
-    #[arg(long, default_value_t = shape_retrieval::DEFAULT_EIGENPAIRS)]
+    #[arg(long, default_value_t = shape_retrieval::descriptor::DEFAULT_EIGENPAIRS)]
     pub eigs: usize,
     /// SI-HKS: first τ of the times t = A·2^τ (A = surface area) [default: −12].
     #[arg(long, allow_hyphen_values = true)]
@@ -349,7 +351,7 @@ fn number_or_off(flag: &str, text: &Option<String>) -> Result<Option<Option<f64>
 #[derive(Args, Clone, Debug)]
 pub struct TrainingArgs {
     /// Vocabulary size V.
-    #[arg(long, default_value_t = shape_retrieval::DEFAULT_WORDS)]
+    #[arg(long, default_value_t = shape_retrieval::model::DEFAULT_WORDS)]
     pub words: usize,
     /// k-means seed.
     #[arg(long, default_value_t = 0)]

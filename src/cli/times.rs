@@ -7,7 +7,7 @@ use super::{progress, CliError};
 use clap::Args;
 use mesh_fem::TriMesh;
 use serde_json::json;
-use shape_retrieval::{MeshLengths, TimeUnit};
+use shape_retrieval::sihks::{MeshLengths, TimeUnit};
 use wfem_choice::Choice;
 use wfem_heat::times::TimeScales;
 use wfem_heat::Operators;

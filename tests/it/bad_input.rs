@@ -5,7 +5,8 @@
 //! must appear in the table.
 
 use mesh_fem::io::{load, LoadOptions};
-use mesh_fem::{assemble, repair, validate, AssemblyParams, MeshError, RepairOptions};
+use mesh_fem::validate::{repair, validate, RepairOptions};
+use mesh_fem::{assemble, AssemblyParams, MeshError};
 use std::collections::BTreeSet;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};

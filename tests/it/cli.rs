@@ -79,9 +79,9 @@ fn operators_writes_three_matrix_market_files_that_read_back() {
     let out = dir.path().join("ops");
     let o = wfem(&["operators", mesh.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let l = mesh_fem::read_matrix_market(out.join("stiffness.mtx")).unwrap();
-    let b = mesh_fem::read_matrix_market(out.join("mass.mtx")).unwrap();
-    let d = mesh_fem::read_matrix_market(out.join("lumped_mass.mtx")).unwrap();
+    let l = mesh_fem::mtx::read_matrix_market(out.join("stiffness.mtx")).unwrap();
+    let b = mesh_fem::mtx::read_matrix_market(out.join("mass.mtx")).unwrap();
+    let d = mesh_fem::mtx::read_matrix_market(out.join("lumped_mass.mtx")).unwrap();
     let ops = mesh_fem::assemble(&mesh_fem::generate::icosphere(2), &Default::default()).unwrap();
     // Round trip is exact (17 significant digits), so compare entry by entry.
     for (read, ours) in [(&l, &ops.stiffness), (&b, &ops.mass)] {

@@ -326,7 +326,7 @@ fn killed_process_leaves_absent_or_complete_outputs() {
                     "round {round}: {name} is incomplete ({} bytes)",
                     got.len()
                 );
-                mesh_fem::read_matrix_market(&path).unwrap();
+                mesh_fem::mtx::read_matrix_market(&path).unwrap();
             }
         }
         // A SIGKILL leaves no chance to clean up: a hidden `.NAME.tmp-PID-N` may remain, but

@@ -297,7 +297,7 @@ fn write_xyz(path: &std::path::Path, points: &[[f64; 3]]) {
 
 /// n points uniform on a mesh's surface (the workspace's seeded generator).
 fn sample(mesh: &mesh_fem::TriMesh, n: usize, seed: u64) -> Vec<[f64; 3]> {
-    let mut rng = wfem_heat::rng::SplitMix64::new(seed);
+    let mut rng = shifted_solve::rng::SplitMix64::new(seed);
     mesh_fem::cloud::sample_surface(mesh, n, &mut || rng.next_f64())
         .unwrap()
         .positions()

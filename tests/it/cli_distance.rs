@@ -23,7 +23,7 @@ fn distance_row_matches_the_dense_spectral_formula() {
     let before = std::fs::read(&mesh_path).unwrap();
     let m = mesh.n_vertices();
     let ops = mesh_fem::assemble(&mesh, &Default::default()).unwrap();
-    let basis = wfem_heat::Eigenbasis::dense(&ops.stiffness, &ops.mass).unwrap();
+    let basis = wfem_heat::spectral::Eigenbasis::dense(&ops.stiffness, &ops.mass).unwrap();
     let (from, t) = (5usize, 0.02);
     for (kind, ext) in [("wfem", "csv"), ("linear", "npy"), ("wfem", "ply")] {
         let out = dir.path().join(format!("d-{kind}.{ext}"));

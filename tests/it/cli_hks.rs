@@ -3,7 +3,7 @@
 use mesh_fem::{assemble, AssemblyParams, Lumping};
 use std::path::Path;
 use std::process::Command;
-use wfem_heat::Eigenbasis;
+use wfem_heat::spectral::Eigenbasis;
 
 fn wfem(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_wfem"))
@@ -579,7 +579,7 @@ fn time_units_and_warnings_of_heat_and_hks() {
     let mesh = mesh_fem::generate::icosphere(2).with_area(0.057).unwrap();
     mesh_fem::io::write_mesh(&mesh_path, &mesh).unwrap();
     let m = mesh_path.to_str().unwrap();
-    let stats = mesh_fem::stats(&mesh);
+    let stats = mesh_fem::stats::stats(&mesh);
     let edge2 = stats.mean_edge_length * stats.mean_edge_length;
     let run = |args: &[&str]| {
         let o = crate::common::wfem(args);

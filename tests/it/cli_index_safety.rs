@@ -4,7 +4,7 @@
 //! `add` never mixes bags of another vocabulary into a rebuilt index.
 
 use super::common::{stderr, wfem};
-use retrieval_store::SqliteIndex;
+use retrieval_store::index::SqliteIndex;
 use std::path::{Path, PathBuf};
 
 fn meshes(dir: &Path) -> Vec<String> {
@@ -208,13 +208,13 @@ fn a_build_racing_an_add_in_another_process_never_mixes_vocabularies() {
         *outcomes
             .entry(format!("{} shapes, add ok {}", shapes.len(), added.success()))
             .or_default() += 1;
-        let stored = shape_retrieval::IndexStore::load_index(&SqliteIndex::new(&index)).unwrap();
+        let stored = shape_retrieval::store::IndexStore::load_index(&SqliteIndex::new(&index)).unwrap();
         for entry in stored.entries() {
             let (mesh, _) = mesh_fem::io::load(Path::new(&entry.name), &Default::default()).unwrap();
             // Closer to the shape described with the final index's vocabulary than with the
             // previous one (describing again is not bitwise reproducible under load: the
             // eigensolver's path through near-degenerate eigenspaces depends on scheduling).
-            let gap = |other: &shape_retrieval::RetrievalIndex| {
+            let gap = |other: &shape_retrieval::model::RetrievalIndex| {
                 let again = other.describe(&entry.name, &mesh).unwrap();
                 entry
                     .signature

@@ -10,7 +10,8 @@
 //! normal doubles, and beyond it the error names the real culprit.
 
 use mesh_fem::io::{load, LoadOptions};
-use mesh_fem::{assemble, validate, AssemblyParams, MeshError, Problem};
+use mesh_fem::validate::{validate, Problem};
+use mesh_fem::{assemble, AssemblyParams, MeshError};
 use std::collections::BTreeSet;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};

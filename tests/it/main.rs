@@ -13,6 +13,7 @@ mod cli_index_safety;
 mod cli_issue16;
 mod cli_retrieval_eval;
 mod common;
+mod crate_roots;
 mod fuzz_regressions;
 mod hostile;
 mod module_cycles;

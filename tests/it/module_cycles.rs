@@ -30,7 +30,7 @@ fn is_ident_char(c: char) -> bool {
 }
 
 /// The leading identifier of `s` (after whitespace).
-fn leading_ident(s: &str) -> &str {
+pub(crate) fn leading_ident(s: &str) -> &str {
     let s = s.trim_start();
     let end = s.find(|c: char| !is_ident_char(c)).unwrap_or(s.len());
     &s[..end]
@@ -38,7 +38,7 @@ fn leading_ident(s: &str) -> &str {
 
 /// The first segment of every path of a `{…}` group starting at `s` (which begins after the
 /// `{`), e.g. `a, b::c, d::{e, f}}` gives `[a, b, d]`.
-fn group_heads(s: &str) -> Vec<&str> {
+pub(crate) fn group_heads(s: &str) -> Vec<&str> {
     let mut heads = Vec::new();
     let mut depth = 0usize;
     let mut start = 0;

@@ -24,14 +24,18 @@ fn flag<T: Choice>(subcommand: &'static [&'static str], flag: &'static str) -> F
 }
 
 fn flags() -> Vec<Flag> {
-    use mesh_fem::{Mass, RepairStep};
-    use shape_retrieval::{BagDistance, Descriptor, HksMethod};
+    use mesh_fem::validate::RepairStep;
+    use mesh_fem::Mass;
+    use shape_retrieval::descriptor::Descriptor;
+    use shape_retrieval::distance::BagDistance;
+    use shape_retrieval::exact::HksMethod;
     use wfem_heat::approx::Coefficients;
-    use wfem_heat::{DistanceKind, Method};
+    use wfem_heat::distance::DistanceKind;
+    use wfem_heat::method::Method;
     vec![
         flag::<Mass>(&["heat"], "--mass"),
         flag::<Method>(&["heat"], "--method"),
-        flag::<shifted_solve::Backend>(&["heat"], "--backend"),
+        flag::<shifted_solve::backend::Backend>(&["heat"], "--backend"),
         flag::<Up>(&["heat"], "--up"),
         flag::<RepairStep>(&["heat"], "--repair"),
         flag::<Mass>(&["hks"], "--mass"),
@@ -130,19 +134,19 @@ fn all_spellings() -> Vec<&'static str> {
     let mut out = Vec::new();
     of::<mesh_fem::Mass>(&mut out);
     of::<mesh_fem::Lumping>(&mut out);
-    of::<mesh_fem::RepairStep>(&mut out);
+    of::<mesh_fem::validate::RepairStep>(&mut out);
     of::<mesh_fem::io::FieldFormat>(&mut out);
-    of::<shifted_solve::Backend>(&mut out);
-    of::<wfem_heat::Method>(&mut out);
+    of::<shifted_solve::backend::Backend>(&mut out);
+    of::<wfem_heat::method::Method>(&mut out);
     of::<wfem_heat::KernelDiagonal>(&mut out);
     of::<wfem_heat::diagonal::DiagonalMethod>(&mut out);
-    of::<wfem_heat::DistanceKind>(&mut out);
+    of::<wfem_heat::distance::DistanceKind>(&mut out);
     of::<wfem_heat::approx::Coefficients>(&mut out);
-    of::<shape_retrieval::HksMethod>(&mut out);
-    of::<shape_retrieval::SpectrumNormalization>(&mut out);
-    of::<shape_retrieval::Descriptor>(&mut out);
-    of::<shape_retrieval::FeatureDetector>(&mut out);
-    of::<shape_retrieval::BagDistance>(&mut out);
+    of::<shape_retrieval::exact::HksMethod>(&mut out);
+    of::<shape_retrieval::hks::SpectrumNormalization>(&mut out);
+    of::<shape_retrieval::descriptor::Descriptor>(&mut out);
+    of::<shape_retrieval::descriptor::FeatureDetector>(&mut out);
+    of::<shape_retrieval::distance::BagDistance>(&mut out);
     of::<retrieval_store::Metric>(&mut out);
     of::<Up>(&mut out);
     out

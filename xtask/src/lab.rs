@@ -1,7 +1,7 @@
 //! `cargo xtask retrieval-lab`: evaluates retrieval settings variants (the experiments behind
 //! docs/SHREC-RESULTS.md) on TOSCA-76 and the synthetic SHREC'10 data, one line per number.
 
-use shape_retrieval::RetrievalSettings;
+use shape_retrieval::model::RetrievalSettings;
 use shrec_bench::protocol::{self, shrec_protocol, EigenCache, ShapeFile};
 use shrec_bench::synth::Manifest;
 use shrec_bench::BenchError;

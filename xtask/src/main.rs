@@ -269,7 +269,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 Some(d) => d,
                 None => wfem_corpus::meshes_dir()?,
             };
-            let settings: shape_retrieval::RetrievalSettings = match settings {
+            let settings: shape_retrieval::model::RetrievalSettings = match settings {
                 Some(p) => serde_json::from_str(&std::fs::read_to_string(&p)?)?,
                 None => Default::default(),
             };

@@ -4,10 +4,9 @@
 
 use crate::lab::Variant;
 use shape_retrieval::eval::EvalReport;
-use shape_retrieval::RetrievalSettings;
+use shape_retrieval::model::RetrievalSettings;
 use shrec_bench::protocol::{self, CloudSampling, EigenCache, ShapeFile};
-use shrec_bench::real;
-use shrec_bench::BenchError;
+use shrec_bench::{real, BenchError};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -225,7 +224,7 @@ pub fn run(opts: &RealEvalOptions<'_>) -> Result<Vec<CollectionResult>, BenchErr
             let t0 = std::time::Instant::now();
             let settings: &RetrievalSettings = &v.settings;
             let described = real::describe(files.clone(), settings, opts.cache)?;
-            let mut vocabularies: Vec<(String, Option<shape_retrieval::VocabularyModel>)> =
+            let mut vocabularies: Vec<(String, Option<shape_retrieval::model::VocabularyModel>)> =
                 vec![("indexed shapes".into(), None)];
             if opts.outside {
                 let outside = real::describe(collection.outside(opts.meshes_dir)?, settings, opts.cache)?;

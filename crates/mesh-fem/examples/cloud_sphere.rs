@@ -2,7 +2,9 @@
 //! them to a folder (stiffness.mtx, mass.mtx, lumped_mass.mtx), printing what was done:
 //! `cargo run --release -p mesh-fem --example cloud_sphere -- 2000 /tmp/cloud`.
 
-use mesh_fem::{assemble_cloud, write_operators, AssemblyParams, CloudParams, PointCloud};
+use mesh_fem::cloud::{assemble_cloud, CloudParams, PointCloud};
+use mesh_fem::mtx::write_operators;
+use mesh_fem::AssemblyParams;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);

@@ -4,7 +4,10 @@
 //! Run with `cargo run -p mesh-fem --example operators [level]` (default level 4).
 
 use mesh_fem::generate::icosphere;
-use mesh_fem::{assemble, stats, validate, write_operators, AssemblyParams};
+use mesh_fem::mtx::write_operators;
+use mesh_fem::stats::stats;
+use mesh_fem::validate::validate;
+use mesh_fem::{assemble, AssemblyParams};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let level: u32 = std::env::args().nth(1).map(|s| s.parse()).transpose()?.unwrap_or(4);

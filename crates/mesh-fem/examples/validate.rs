@@ -7,7 +7,9 @@
 //! ```
 
 use mesh_fem::io::{load, LoadOptions};
-use mesh_fem::{assemble, repair, stats, validate, AssemblyParams, RepairOptions};
+use mesh_fem::stats::stats;
+use mesh_fem::validate::{repair, validate, RepairOptions};
+use mesh_fem::{assemble, AssemblyParams};
 use std::path::PathBuf;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -9,7 +9,7 @@ use crate::{MeshError, TriMesh};
 
 /// Assembles the stiffness L, the consistent mass B and the lumped mass D of `mesh`
 /// (paper, Eq. (3) and Eq. (7)) with the Laplacian of `params.laplacian`: the cotangent
-/// operators of the mesh itself (the default; see [`crate::operators`] for the O(#faces)
+/// operators of the mesh itself (the default, [`FemOperators`](crate::FemOperators); an O(#faces)
 /// parallel assembly), or the robust operators of [`crate::intrinsic::assemble_robust`]
 /// (whose errors it returns instead of the ones below).
 ///

@@ -355,11 +355,11 @@ mod tests {
     /// The mesh of the faces that `keep` accepts, without unreferenced vertices.
     fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> TriMesh {
         let faces = mesh.faces().iter().copied().filter(|f| keep(f)).collect();
-        let opts = crate::RepairOptions {
+        let opts = crate::validate::RepairOptions {
             drop_unreferenced_vertices: true,
             ..Default::default()
         };
-        crate::repair(&TriMesh::new(mesh.positions().to_vec(), faces).unwrap(), &opts)
+        crate::validate::repair(&TriMesh::new(mesh.positions().to_vec(), faces).unwrap(), &opts)
             .unwrap()
             .0
     }
@@ -401,10 +401,10 @@ mod tests {
         assert_eq!(shared, 12, "two 6-vertex rims");
         let out = fill_holes(&mesh, DEFAULT_MAX_HOLE_PERIMETER).unwrap();
         assert_eq!(out.filled, 2);
-        let report = crate::validate(&out.mesh);
+        let report = crate::validate::validate(&out.mesh);
         assert!(report.is_usable(), "{report:?}");
         assert!(is_closed(&out.mesh), "{:?}", boundary_loops(&out.mesh));
-        assert_eq!(crate::stats(&out.mesh).genus, Some(0));
+        assert_eq!(crate::stats::stats(&out.mesh).genus, Some(0));
     }
 
     #[test]
@@ -421,7 +421,7 @@ mod tests {
         let flipped = TriMesh::new(mesh.positions().to_vec(), faces).unwrap();
         assert!(boundary_loops(&flipped).iter().any(|l| !l.closed));
         let out = fill_holes(&flipped, DEFAULT_MAX_HOLE_PERIMETER).unwrap();
-        let count = |m: &TriMesh| crate::validate(m).counts.non_manifold_edges;
+        let count = |m: &TriMesh| crate::validate::validate(m).counts.non_manifold_edges;
         assert!(count(&out.mesh) <= count(&flipped));
         assert_eq!(&out.mesh.faces()[..flipped.n_faces()], flipped.faces());
     }
@@ -447,10 +447,10 @@ mod tests {
         assert!(is_closed(&out.mesh));
         assert_eq!(&out.mesh.positions()[..mesh.n_vertices()], mesh.positions());
         assert_eq!(&out.mesh.faces()[..mesh.n_faces()], mesh.faces());
-        let report = crate::validate(&out.mesh);
+        let report = crate::validate::validate(&out.mesh);
         assert!(report.is_usable(), "{report:?}");
         // Euler characteristic 2 again: a closed orientable sphere.
-        let stats = crate::stats(&out.mesh);
+        let stats = crate::stats::stats(&out.mesh);
         assert_eq!(stats.n_boundary_loops, 0);
         assert_eq!(stats.genus, Some(0));
         // The area comes back to within the curvature of the missing caps.
@@ -475,7 +475,7 @@ mod tests {
         assert_eq!(out.filled, 1);
         assert!(is_closed(&out.mesh));
         assert!(out.mesh.n_vertices() - mesh.n_vertices() > loops[0].vertices.len());
-        let r = crate::validate(&out.mesh);
+        let r = crate::validate::validate(&out.mesh);
         assert!(r.is_usable(), "{r:?}");
         // Harmonic cap of a planar-ish loop: the new vertices stay near the plane z ≈ 0.7.
         for x in &out.mesh.positions()[mesh.n_vertices()..] {

@@ -16,7 +16,7 @@ use crate::MeshError;
 
 /// The default relative mollification of the robust Laplacian, δ = 1e-5 × the mean edge
 /// length (robust_laplacian's default).
-pub const DEFAULT_MOLLIFY_FACTOR: f64 = 1e-5;
+pub(crate) const DEFAULT_MOLLIFY_FACTOR: f64 = 1e-5;
 
 /// Parameters of the robust (intrinsic Delaunay, tufted cover) Laplacian.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -13,14 +13,14 @@
 //! * [`handles`]: thin handles (short non-separating cycles) found and cut.
 //! * [`holes`]: boundary loops and hole filling (smooth patches of new vertices).
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
-//! * [`assemble`]: L, B and D with the chosen [`Laplacian`]; [`operators`]: the cotangent
-//!   stiffness L, the consistent mass B and the lumped mass D of the paper's Eq. (3) and
-//!   Eq. (7), assembled in parallel into faer sparse matrices.
-//! * [`laplacian`]: the registry of Laplacians ([`Laplacian`]: `cotan`, the default, or
-//!   `robust`); [`intrinsic`]: the robust one, the intrinsic Delaunay Laplacian of the tufted
+//! * [`assemble`] with [`AssemblyParams`]: [`FemOperators`], the cotangent stiffness L, the
+//!   consistent mass B and the lumped mass D of the paper's Eq. (3) and Eq. (7) ([`Mass`],
+//!   [`Lumping`]), assembled in parallel into faer sparse matrices.
+//! * [`Laplacian`]: the registry of Laplacians (`cotan`, the default, or `robust` with
+//!   [`RobustParams`]); [`intrinsic`]: the robust one, the intrinsic Delaunay Laplacian of the tufted
 //!   cover (Sharp & Crane 2020) with B and D on the intrinsic triangulation.
-//! * [`cloud`]: point clouds ([`PointCloud`]) and their robust L, B, D from local
-//!   triangulations of the k nearest neighbours ([`assemble_cloud`]).
+//! * [`cloud`]: point clouds ([`PointCloud`](cloud::PointCloud)) and their robust L, B, D from local
+//!   triangulations of the k nearest neighbours ([`assemble_cloud`](cloud::assemble_cloud)).
 //!
 //! **Sign convention.** Throughout wfem the stiffness matrix L is symmetric positive
 //! semidefinite: positive diagonal, non-positive off-diagonal entries on well-shaped meshes,
@@ -34,7 +34,9 @@
 
 mod assembly;
 mod error;
+mod laplacian;
 mod mesh;
+mod operators;
 mod topology;
 
 pub mod cloud;
@@ -44,23 +46,16 @@ pub mod handles;
 pub mod holes;
 pub mod intrinsic;
 pub mod io;
-pub mod laplacian;
 pub mod morse;
 pub mod mtx;
-pub mod operators;
 pub mod stats;
 pub mod validate;
 pub mod vec3;
 
+// The curated root (ARCHITECTURE.md, "Crate roots"): the mesh, the operators and how they are
+// assembled, the error. Every other item is reached through its public module only.
 pub use assembly::assemble;
-pub use cloud::{assemble_cloud, CloudOperators, CloudParams, CloudReport, PointCloud};
 pub use error::MeshError;
-pub use intrinsic::IntrinsicTriangulation;
 pub use laplacian::{Laplacian, RobustParams};
 pub use mesh::TriMesh;
-pub use mtx::{read_matrix_market, write_matrix_market, write_operators};
 pub use operators::{AssemblyParams, FemOperators, Lumping, Mass};
-pub use stats::{stats, MeshStats};
-pub use validate::{
-    repair, validate, Problem, RepairOptions, RepairReport, RepairStep, Severity, ValidationReport, NEEDLE_ANGLE,
-};

@@ -12,7 +12,8 @@
 //! The files are what scipy (`scipy.io.mmread`), MATLAB (`mmread.m`) and libigl read.
 //!
 //! ```
-//! use mesh_fem::{assemble, generate, read_matrix_market, write_operators, AssemblyParams};
+//! use mesh_fem::mtx::{read_matrix_market, write_operators};
+//! use mesh_fem::{assemble, generate, AssemblyParams};
 //! let ops = assemble(&generate::icosphere(1), &AssemblyParams::default())?;
 //! let dir = std::env::temp_dir().join(format!("mesh-fem-mtx-doc-{}", std::process::id()));
 //! write_operators(&dir, &ops)?;

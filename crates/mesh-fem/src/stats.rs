@@ -89,7 +89,8 @@ fn mean_length(topo: &Topology, positions: &[[f64; 3]]) -> f64 {
 /// Computes the [`MeshStats`] of `mesh` in O(F log F).
 ///
 /// ```
-/// use mesh_fem::{generate, stats};
+/// use mesh_fem::stats::stats;
+/// use mesh_fem::generate;
 /// let s = stats(&generate::torus(2.0, 0.5, 24, 12));
 /// assert_eq!((s.euler_characteristic, s.genus, s.is_closed), (0, Some(1), true));
 /// ```

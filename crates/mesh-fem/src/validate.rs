@@ -404,7 +404,8 @@ impl ValidationReport {
 /// Runs in O(F log F). See the [module documentation](self) for what each problem means.
 ///
 /// ```
-/// use mesh_fem::{validate, MeshError, Problem, TriMesh};
+/// use mesh_fem::validate::{Problem, validate};
+/// use mesh_fem::{MeshError, TriMesh};
 /// // Two triangles; vertex 4 belongs to no face.
 /// let p = vec![[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [1., 1., 0.], [5., 5., 5.]];
 /// let mesh = TriMesh::new(p, vec![[0, 1, 2], [2, 1, 3]])?;
@@ -717,7 +718,8 @@ impl RepairReport {
 /// Applies the repairs turned on in `opts` and reports what changed.
 ///
 /// ```
-/// use mesh_fem::{repair, validate, MeshError, RepairOptions, TriMesh};
+/// use mesh_fem::validate::{repair, RepairOptions, validate};
+/// use mesh_fem::{MeshError, TriMesh};
 /// let p = vec![[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [1., 1., 0.], [5., 5., 5.]];
 /// let mesh = TriMesh::new(p, vec![[0, 1, 2], [2, 1, 3]])?;
 /// let opts = RepairOptions { drop_unreferenced_vertices: true, ..Default::default() };

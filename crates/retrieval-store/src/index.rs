@@ -1,5 +1,5 @@
 //! shape-retrieval's [`RetrievalIndex`] in one SQLite store: the index settings (vocabulary,
-//! z-score statistics, bag settings; [`shape_retrieval::index_settings`]) as one metadata
+//! z-score statistics, bag settings; [`shape_retrieval::store::index_settings`]) as one metadata
 //! entry, and every shape's signature — its bag followed by its global signature — as one
 //! vector. This is the default index file of `wfem retrieval build/query/add`.
 //!
@@ -15,9 +15,9 @@
 //! within the rounding of `f32` (1e−4), and otherwise refused like a hand-edited JSON bag.
 
 use crate::{Entry, Store, StoreError, StoreParams};
-use shape_retrieval::{
-    index_from_settings, index_settings, IndexEntry, IndexStore, RetrievalError, RetrievalIndex, ShapeSignature,
-};
+use shape_retrieval::model::{IndexEntry, RetrievalIndex, ShapeSignature};
+use shape_retrieval::store::{index_from_settings, index_settings, IndexStore};
+use shape_retrieval::RetrievalError;
 use std::path::{Path, PathBuf};
 
 /// Metadata key of the index settings.

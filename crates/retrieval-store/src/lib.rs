@@ -26,7 +26,7 @@
 //! see only committed shapes; since shapes are only appended, a scan planned on a snapshot
 //! reads the same rows from any connection.
 //!
-//! [`SqliteIndex`] ([`index`]) stores shape-retrieval's `RetrievalIndex` this way (its
+//! [`index::SqliteIndex`] stores shape-retrieval's `RetrievalIndex` this way (its
 //! `IndexStore` for SQLite): the default index file of `wfem retrieval`.
 //!
 //! ```
@@ -51,7 +51,6 @@ pub mod index;
 mod store;
 
 pub use error::StoreError;
-pub use index::{IndexHit, SqliteIndex};
 pub use store::{
     Entry, Hit, Metric, ShapeRow, Store, StoreParams, DEFAULT_CHUNK_ROWS, FORMAT, FORMAT_VERSION, MAX_CHUNK_BYTES,
     MAX_DIMENSION,

@@ -3,7 +3,7 @@
 use crate::StoreError;
 use rayon::prelude::*;
 use rusqlite::{params, Connection, OpenFlags, OptionalExtension, TransactionBehavior, MAIN_DB};
-use shape_retrieval::BagDistance;
+use shape_retrieval::distance::BagDistance;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};

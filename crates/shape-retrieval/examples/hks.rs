@@ -9,9 +9,9 @@
 #[path = "../tests/it/common/mod.rs"]
 mod common;
 
-use shape_retrieval::{
-    heat_kernel_signature, heat_trace, scale_invariant_hks, HksParams, RetrievalError, SihksParams, Spectrum,
-};
+use shape_retrieval::hks::{heat_kernel_signature, heat_trace, HksParams, Spectrum};
+use shape_retrieval::sihks::{scale_invariant_hks, SihksParams};
+use shape_retrieval::RetrievalError;
 use wfem_heat::KernelDiagonal;
 
 fn main() -> Result<(), RetrievalError> {

@@ -13,15 +13,14 @@
 //!    (Eq. (6)) applied to the V columns of Θ by a caller-supplied operator.
 //! 5. Shapes are compared with the **L1 distance** between bags (or χ², see [`crate::distance`]).
 
-use crate::check;
 use crate::kmeans::{kmeans, nearest_center, squared_distance, KmeansParams};
-use crate::RetrievalError;
+use crate::{check, RetrievalError};
 use faer::linalg::matmul::matmul;
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatRef, Par};
 use rayon::prelude::*;
-use wfem_heat::rng::SplitMix64;
+use shifted_solve::rng::SplitMix64;
 
 /// Options of [`Vocabulary::train`].
 #[derive(Clone, Copy, Debug, PartialEq)]

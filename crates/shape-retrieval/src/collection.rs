@@ -13,7 +13,7 @@ use crate::model::{
 };
 use crate::RetrievalError;
 use rayon::prelude::*;
-use wfem_heat::shifted_solve::{interrupt, SolveError};
+use shifted_solve::{interrupt, SolveError};
 use wfem_heat::HeatError;
 
 /// What a collection does with a shape that cannot be described.

@@ -3,7 +3,7 @@
 //!
 //! Every descriptor is computed from the k smallest eigenpairs of a generalized problem
 //! `L φ = λ M φ`, `ΦᵀMΦ = I` (paper, Eq. (4)), found by the shift-invert block Lanczos of
-//! [`wfem_heat::Eigenbasis::partial`]. L is the cotangent stiffness (symmetric positive
+//! [`wfem_heat::spectral::Eigenbasis::partial`]. L is the cotangent stiffness (symmetric positive
 //! semidefinite, positive diagonal); M is the mass of the kernel:
 //!
 //! | descriptor | kernel | mass M | HKS |
@@ -11,7 +11,7 @@
 //! | [`Descriptor::Dhk1`] | Voronoi-cot, `K*_t = X D_t Xᵀ D` (Eq. (7)) | lumped D (mixed Voronoi areas) | `Σ_k e^{−λ_k t} φ_k(i)²` |
 //! | [`Descriptor::Dhk2`] | wFEM, `K_t = X D_t Xᵀ B` (Eq. (6)) | consistent B | `Σ_k e^{−λ_k t} φ_k(i)²` |
 //! | [`Descriptor::Dhk3`] | wFEM, eigenvalues divided by λ_max (Sect. 5) | consistent B | `Σ_k e^{−(λ_k/λ_max) t} φ_k(i)²/λ_max` |
-//! | [`Descriptor::SiHks`] | wFEM | consistent B | [`crate::scale_invariant_hks`] |
+//! | [`Descriptor::SiHks`] | wFEM | consistent B | [`crate::sihks::scale_invariant_hks`] |
 //!
 //! (all in the kernel-value convention `h(i, t) = K_t(x_i, x_i)` of [`crate::hks`]).
 //! DHK1/DHK2 are scale-covariant (`K_t(αM) = K_{α⁻²t}(M)`), DHK3 and SI-HKS scale-invariant.
@@ -25,7 +25,7 @@
 //! starts there.
 //!
 //! When n ≤ max(3k, 400) (small meshes) the eigenpairs come from the dense decomposition
-//! [`wfem_heat::Eigenbasis::dense`] instead, truncated to k: it costs well under a second there,
+//! [`wfem_heat::spectral::Eigenbasis::dense`] instead, truncated to k: it costs well under a second there,
 //! and the block Lanczos can stall when its Krylov space reaches n.
 //!
 //! **Sparse features.** SHK1 = strict local maxima (within `rings` edge rings) of the DHK2
@@ -37,10 +37,10 @@ use crate::hks::{heat_kernel_signature, HksParams, Spectrum, TimeSampling};
 use crate::sihks::SihksParams;
 use crate::RetrievalError;
 use faer::Mat;
-use mesh_fem::{
-    assemble, assemble_cloud, AssemblyParams, CloudParams, FemOperators, Laplacian, Lumping, PointCloud, TriMesh,
-};
-use wfem_heat::{EigenParams, Eigenbasis, Operators};
+use mesh_fem::cloud::{assemble_cloud, CloudParams, PointCloud};
+use mesh_fem::{assemble, AssemblyParams, FemOperators, Laplacian, Lumping, TriMesh};
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::Operators;
 
 /// Default number k of eigenpairs (see the module docs).
 pub const DEFAULT_EIGENPAIRS: usize = 100;
@@ -49,8 +49,8 @@ pub const DEFAULT_EIGENPAIRS: usize = 100;
 const DENSE_BELOW: usize = 400;
 
 /// A dense (per-vertex) descriptor, without its parameters (paper, Sect. 5): the registry of
-/// descriptor names. [`crate::DescriptorSpec`] is a descriptor with its parameters, and the
-/// one place a descriptor is computed ([`crate::DescriptorSpec::compute`]).
+/// descriptor names. [`crate::model::DescriptorSpec`] is a descriptor with its parameters, and the
+/// one place a descriptor is computed ([`crate::model::DescriptorSpec::compute`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Descriptor {
     /// Scale-invariant HKS of Bronstein & Kokkinos on the wFEM spectrum ([`crate::sihks`]),
@@ -63,7 +63,7 @@ pub enum Descriptor {
     Dhk1,
     /// HKS of the wFEM kernel, spectrum of (L, B) (Eq. (6)).
     Dhk2,
-    /// Scale-invariant wFEM HKS: eigenvalues divided by λ_max ([`SpectrumNormalization::MaxEigenvalue`](crate::SpectrumNormalization::MaxEigenvalue)).
+    /// Scale-invariant wFEM HKS: eigenvalues divided by λ_max ([`SpectrumNormalization::MaxEigenvalue`](crate::hks::SpectrumNormalization::MaxEigenvalue)).
     Dhk3,
 }
 
@@ -202,7 +202,7 @@ impl ShapeDescriptors {
         Self::from_operators(mesh, operators, params)
     }
 
-    /// The operators of a point cloud ([`mesh_fem::assemble_cloud`] with its default
+    /// The operators of a point cloud ([`mesh_fem::cloud::assemble_cloud`] with its default
     /// neighbourhood size: the robust Laplacian from local triangulations of the 30 nearest
     /// neighbours, B and the Voronoi lumped D on its intrinsic triangulation); the shape's mesh
     /// is the cloud's neighbourhood mesh (the merged local triangles on the points), which gives
@@ -410,7 +410,7 @@ impl ShapeDescriptors {
 pub fn smallest_eigenpairs(ops: &Operators, k: usize, eigen: &EigenParams) -> Result<Eigenbasis, RetrievalError> {
     let n = ops.n();
     let k = k.min(n);
-    if n <= (3 * k).max(DENSE_BELOW) && n <= wfem_heat::DENSE_MAX_VERTICES {
+    if n <= (3 * k).max(DENSE_BELOW) && n <= wfem_heat::spectral::DENSE_MAX_VERTICES {
         let mut full = Eigenbasis::dense_of(ops)?;
         full.values.truncate(k);
         full.vectors = full.vectors.subcols(0, k).to_owned();
@@ -424,7 +424,7 @@ pub fn smallest_eigenpairs(ops: &Operators, k: usize, eigen: &EigenParams) -> Re
 /// one shape, use [`ShapeDescriptors`] to share the eigenbases.
 ///
 /// ```
-/// use shape_retrieval::{dense_descriptor, Descriptor, DescriptorParams};
+/// use shape_retrieval::descriptor::{dense_descriptor, Descriptor, DescriptorParams};
 /// let mesh = mesh_fem::generate::icosphere(2);
 /// let params = DescriptorParams { eigenpairs: 20, ..Default::default() };
 /// let d = dense_descriptor(&mesh, Descriptor::Dhk2, &params)?;

@@ -27,10 +27,9 @@
 //! second description). Without a vocabulary trained on other shapes, the words are fit to the
 //! very shapes that are then retrieved, which is optimistic; the report says which was used.
 
-use crate::check;
 use crate::model::{RetrievalIndex, RetrievalSettings, VocabularyModel};
 use crate::retrieval::average_precision;
-use crate::RetrievalError;
+use crate::{check, RetrievalError};
 use faer::MatRef;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -406,7 +405,7 @@ pub struct CollectionEvaluation {
     pub report: EvalReport,
 }
 
-/// Builds an index of labelled shapes — meshes, point clouds or both ([`crate::AsShape`]) —
+/// Builds an index of labelled shapes — meshes, point clouds or both ([`crate::model::AsShape`]) —
 /// ([`RetrievalIndex::build`]: trained on them unless a
 /// vocabulary is given) and evaluates it ([`evaluate_index`]). The one call behind
 /// `wfem retrieval eval`.
@@ -415,7 +414,7 @@ pub struct CollectionEvaluation {
 /// [`RetrievalError::DimensionMismatch`] if classes and shapes differ in number, and those of
 /// [`RetrievalIndex::build`] and [`evaluate_index`].
 pub fn evaluate_collection(
-    shapes: &[(String, impl crate::AsShape)],
+    shapes: &[(String, impl crate::model::AsShape)],
     classes: &[String],
     settings: &RetrievalSettings,
     vocabulary: Option<VocabularyModel>,

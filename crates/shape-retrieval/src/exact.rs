@@ -156,7 +156,7 @@ impl HksSource {
 }
 
 /// The HKS at `times` by `method`: `spectral` is the truncated sum (n × T, e.g. from
-/// [`crate::heat_kernel_signature`] at the same times, unnormalized), `eigenvalues` the K
+/// [`crate::hks::heat_kernel_signature`] at the same times, unnormalized), `eigenvalues` the K
 /// smallest eigenvalues it was built from, `kernel` the heat kernel of the same pencil.
 /// Returns the values and, per time, where they came from.
 ///

@@ -16,8 +16,7 @@
 //!   of an intrinsic distance), compared by χ². Its terms decay like `1/i²`, so a few dozen
 //!   eigenpairs resolve it on any mesh, and a thin tube or a small hole moves few pairs.
 
-use crate::check;
-use crate::RetrievalError;
+use crate::{check, RetrievalError};
 use faer::MatRef;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -119,7 +118,9 @@ impl GlobalKind {
         match self {
             GlobalKind::LogShapeDna => g.iter().zip(h).map(|(a, b)| (a - b).abs()).sum::<f64>() / g.len().max(1) as f64,
             GlobalKind::WeylShapeDna => g.iter().zip(h).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt(),
-            GlobalKind::Biharmonic => crate::BagDistance::ChiSquared.of_pairs(g.iter().copied().zip(h.iter().copied())),
+            GlobalKind::Biharmonic => {
+                crate::distance::BagDistance::ChiSquared.of_pairs(g.iter().copied().zip(h.iter().copied()))
+            }
         }
     }
 }

@@ -22,8 +22,7 @@
 //! the shape rescaled so that λ_max = 1 (the paper's choice for its scale-invariant dense
 //! descriptor, DHK3) or so that its area is 1; either makes both conventions scale-invariant.
 
-use crate::check;
-use crate::RetrievalError;
+use crate::{check, RetrievalError};
 use faer::linalg::matmul::matmul;
 use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::SparseColMatRef;
@@ -155,7 +154,7 @@ impl<'a> Spectrum<'a> {
 
     /// Applies the truncated wFEM heat kernel to a block of functions (paper, Eq. (8)):
     /// `K_t F = Φ D_t Φᵀ B F = Σ_k e^{−λ_k t} ⟨F, φ_k⟩_B φ_k`, for F n × m. Cost O(n·k·m).
-    /// Suits [`crate::Vocabulary::spatially_sensitive_bag`] as its kernel.
+    /// Suits [`crate::bof::Vocabulary::spatially_sensitive_bag`] as its kernel.
     ///
     /// # Errors
     /// [`RetrievalError::MassRequired`] without B, [`RetrievalError::DimensionMismatch`] if F
@@ -331,7 +330,7 @@ pub struct HeatKernelSignature {
 ///
 /// ```
 /// use faer::Mat;
-/// use shape_retrieval::{heat_kernel_signature, HksParams, Spectrum, TimeSampling};
+/// use shape_retrieval::hks::{heat_kernel_signature, HksParams, Spectrum, TimeSampling};
 ///
 /// // Two vertices, B = I: φ₀ = (1, 1)/√2 with λ₀ = 0 and φ₁ = (1, −1)/√2 with λ₁ = 2,
 /// // so h(i, t) = (1 + e^{−2t})/2 at both vertices.

@@ -6,12 +6,12 @@
 //! Descriptors are computed from a truncated spectrum of the generalized eigenproblem
 //! `L φ_k = λ_k B φ_k`, `ΦᵀBΦ = I` (paper, Eq. (4)), with L the cotangent stiffness
 //! (symmetric positive semidefinite, positive diagonal) and B the mass matrix, given as plain
-//! inputs ([`Spectrum`]), so any eigensolver can feed them:
+//! inputs ([`hks::Spectrum`]), so any eigensolver can feed them:
 //!
 //! * [`hks`]: heat kernel signature in the kernel-value and operator-diagonal conventions,
 //!   scaled and scale-normalized variants;
 //! * [`exact`]: the HKS without eigen truncation (the kernel's diagonal by selected inversion) and the
-//!   per-time choice between it and the truncated sum ([`HksMethod`], default auto);
+//!   per-time choice between it and the truncated sum ([`exact::HksMethod`], default auto);
 //! * [`sihks`]: the scale-invariant HKS of Bronstein & Kokkinos;
 //! * [`kmeans`](mod@kmeans), [`bof`]: vocabularies, soft-assigned (spatially sensitive) bags of features;
 //! * [`retrieval`]: ranking, average precision, mAP, precision/recall;
@@ -20,6 +20,9 @@
 //! * [`eval`](mod@eval): a labelled collection evaluated leave-one-out (mAP, NN, tiers,
 //!   E-measure, DCG, per class, confused pairs);
 //! * [`descriptor`]: from a mesh to DHK1–DHK3, SI-HKS and the SHK1/SHK2 feature points;
+//! * [`model`]: the retrieval model — [`model::RetrievalSettings`], [`model::RetrievalIndex`],
+//!   the vocabulary, the cleaning steps, the vertex weights and the global signature; [`store`]:
+//!   where an index and a vocabulary are kept;
 //! * [`features`]: feature points (local maxima), their repeatability, and robustness of
 //!   dense descriptors.
 
@@ -50,32 +53,8 @@ pub mod spatial;
 pub mod standardize;
 pub mod store;
 
-pub use bof::{vertex_areas, Assignment, Vocabulary, VocabularyParams};
-pub use descriptor::{
-    dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, ShapeDescriptors,
-    DEFAULT_EIGENPAIRS,
-};
-pub use distance::{chi_squared_distance, l1_distance, pairwise_distances, pairwise_l1, BagDistance};
+// The curated root (ARCHITECTURE.md, "Crate roots"): the error and the output check of an
+// index. Every other item — the index and its settings included, in `model` with the rest of
+// the retrieval model — is reached through its public module only.
 pub use error::RetrievalError;
-pub use exact::{
-    exact_signature, signature_by_method, truncation_bound, truncation_estimate, HksMethod, HksSource,
-    DEFAULT_TRUNCATION_TOL,
-};
-pub use features::{descriptor_distance, local_maxima, repeatability, DistanceOracle, FeatureSet, RepeatabilityReport};
-pub use hks::{
-    heat_kernel_signature, heat_trace, HeatKernelSignature, HksParams, Spectrum, SpectrumNormalization, TimeSampling,
-    DEFAULT_NUM_TIMES,
-};
-pub use kmeans::{kmeans, KmeansParams, KmeansReport};
-pub use mesh_hks::{mesh_hks, operators_hks, HksStep, MeshHks, MeshHksParams};
-pub use model::{
-    AsShape, BagSettings, Denoising, DescriptorSettings, DescriptorSpec, Despiking, GlobalSignature, HoleFilling,
-    IndexEntry, Ranked, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeRef, ShapeSignature, Smoothing,
-    TopologyRepair, TrainingInfo, TrainingParams, VertexWeights, VocabularyModel,
-};
-pub use model::{DEFAULT_AREA_CAP, DEFAULT_MAX_COHERENCE, DEFAULT_TARGET_ROUGHNESS, DEFAULT_WORDS};
 pub use output::check_index_output;
-pub use retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalReport};
-pub use sihks::{scale_invariant_hks, MeshLengths, SihksParams, TimeUnit};
-pub use standardize::Standardizer;
-pub use store::{index_from_settings, index_settings, IndexStore, JsonFile, VocabularyStore};

@@ -4,7 +4,7 @@
 //!
 //! Steps: assemble the operators of the kernel's [`Mass`]; when the method or automatic times
 //! need them, the k smallest eigenpairs and the truncated sum of Eq. (8); then, per
-//! [`HksMethod`], the exact diagonal of the heat kernel ([`crate::signature_by_method`],
+//! [`HksMethod`], the exact diagonal of the heat kernel ([`crate::exact::signature_by_method`],
 //! selected inversion by default) where the truncated sum is not accurate. The report says,
 //! per time, which one was used and with what error bound.
 
@@ -15,7 +15,9 @@ use crate::RetrievalError;
 use faer::Mat;
 use mesh_fem::{assemble, AssemblyParams, FemOperators, Laplacian, Mass, TriMesh};
 use wfem_choice::Choice;
-use wfem_heat::{DiagonalParams, EigenParams, Eigenbasis, HeatKernel, HeatParams, KernelDiagonal, Method, Operators};
+use wfem_heat::method::Method;
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::{DiagonalParams, HeatKernel, HeatParams, KernelDiagonal, Operators};
 
 /// Options of [`mesh_hks`].
 #[derive(Clone, Debug, PartialEq)]
@@ -27,7 +29,7 @@ pub struct MeshHksParams {
     pub method: HksMethod,
     /// The times (default [`TimeSampling::default`]: automatic, log-spaced).
     pub times: TimeSampling,
-    /// Eigenpairs k of the truncated sum (default [`crate::DEFAULT_EIGENPAIRS`], at most n).
+    /// Eigenpairs k of the truncated sum (default [`crate::descriptor::DEFAULT_EIGENPAIRS`], at most n).
     pub eigenpairs: usize,
     /// Eigensolver options.
     pub eigen: EigenParams,
@@ -49,7 +51,7 @@ impl Default for MeshHksParams {
             mass: Mass::default(),
             method: HksMethod::default(),
             times: TimeSampling::default(),
-            eigenpairs: crate::DEFAULT_EIGENPAIRS,
+            eigenpairs: crate::descriptor::DEFAULT_EIGENPAIRS,
             eigen: EigenParams::default(),
             convention: KernelDiagonal::default(),
             scaled: false,
@@ -118,7 +120,7 @@ pub fn mesh_hks(
 }
 
 /// [`mesh_hks`] on operators already assembled (of a mesh with any Laplacian, or of a point
-/// cloud, [`mesh_fem::assemble_cloud`]); they must hold the lumped mass of `params.mass`.
+/// cloud, [`mesh_fem::cloud::assemble_cloud`]); they must hold the lumped mass of `params.mass`.
 /// `params.laplacian` is not used.
 ///
 /// # Errors

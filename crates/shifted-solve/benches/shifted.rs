@@ -18,9 +18,10 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
 use faer::sparse::SparseColMat;
 use faer::{c64, Mat, Side};
-use shifted_solve::{
-    Backend, CholeskyPattern, MinresParams, Preconditioner, PreconditionerShift, RationalApprox, ShiftedSolver,
-};
+use shifted_solve::backend::Backend;
+use shifted_solve::iterative::{MinresParams, Preconditioner, PreconditionerShift};
+use shifted_solve::poles::RationalApprox;
+use shifted_solve::{CholeskyPattern, ShiftedSolver};
 
 const T: f64 = 0.01;
 

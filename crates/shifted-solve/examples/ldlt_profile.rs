@@ -4,7 +4,9 @@ use std::time::Instant;
 
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering};
 use faer::Side;
-use shifted_solve::{Backend, CholeskyPattern, RationalApprox, ShiftedSolver};
+use shifted_solve::backend::Backend;
+use shifted_solve::poles::RationalApprox;
+use shifted_solve::{CholeskyPattern, ShiftedSolver};
 
 fn main() {
     let level: u32 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(5);

@@ -6,7 +6,10 @@
 
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
-use shifted_solve::{Backend, MinresParams, RationalApprox, ShiftedSolver};
+use shifted_solve::backend::Backend;
+use shifted_solve::iterative::MinresParams;
+use shifted_solve::poles::RationalApprox;
+use shifted_solve::ShiftedSolver;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("degree  solves  E_n (documented)  max|r_n(x) − e^-x| (f64)  Σ2|c_j|");

@@ -5,7 +5,10 @@
 //! Run: `cargo run --release -p shifted-solve --example solve_timing -- 6 [--dump /tmp]`
 
 use faer::Mat;
-use shifted_solve::{Backend, MinresParams, RationalApprox, ShiftedSolver};
+use shifted_solve::backend::Backend;
+use shifted_solve::iterative::MinresParams;
+use shifted_solve::poles::RationalApprox;
+use shifted_solve::ShiftedSolver;
 use std::io::Write;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -131,7 +131,7 @@ pub(crate) fn carathéodory_fejér(n: usize) -> CfApprox {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::RationalApprox;
+    use crate::poles::RationalApprox;
 
     /// The CF poles of degree 2…12 land on the shipped (Remez, 200-digit) poles; CF is
     /// near-best, so the agreement is to the CF–best gap, not to machine precision.

@@ -128,8 +128,8 @@ pub enum SolveError {
         #[serde(serialize_with = "complex")]
         pole: c64,
     },
-    /// A shift-and-invert Lanczos iteration ([`crate::lanczos_function`],
-    /// [`crate::Backend::MultiShift`]) did not meet its tolerance.
+    /// A shift-and-invert Lanczos iteration ([`crate::function::lanczos_function`],
+    /// [`crate::backend::Backend::MultiShift`]) did not meet its tolerance.
     #[error("Lanczos iteration stopped after {iterations} steps with error estimate {estimate:e}")]
     KrylovNoConvergence {
         /// Steps performed.

@@ -9,7 +9,7 @@
 //!
 //! Users: the fast path of wfem-heat (h(s) = exp(−(1/s − 1)/γ), the heat kernel itself;
 //! van den Eshof & Hochbruck, SIAM J. Sci. Comput. 27 (2006) 1438–1457), the same for a whole
-//! list of times from one space ([`lanczos_functions`]), and [`crate::Backend::MultiShift`],
+//! list of times from one space ([`lanczos_functions`]), and [`crate::backend::Backend::MultiShift`],
 //! where h is the rational approximant written in s, so that every shifted system of paper
 //! Eq. (13) is solved in the one Krylov space (shift invariance: with σ = γt,
 //! `tL − zB = (1/γ) A (I − (1 + γz) S)`, a function of S). When h is smooth on (0, 1] with its
@@ -22,7 +22,7 @@ use faer::{Mat, MatMut, MatRef};
 
 /// Parameters of the shift-and-invert Krylov methods on S = (M + γtL)⁻¹M: the fast exact path
 /// of wfem-heat (h(s) = exp(−(1/s − 1)/γ), i.e. K_t itself) and the multi-shift backend
-/// ([`crate::Backend::MultiShift`], h = the rational approximant written in s). One type for
+/// ([`crate::backend::Backend::MultiShift`], h = the rational approximant written in s). One type for
 /// both: they are the same iteration with a different h.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KrylovParams {

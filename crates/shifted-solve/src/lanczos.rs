@@ -126,7 +126,7 @@ pub enum Reorthogonalization {
 /// product ⟨u, v⟩_M = uᵀMv, m steps from a start vector u give
 /// `S V_m = V_m T_m + β_m v_{m+1} e_mᵀ` with `V_mᵀ M V_m = I` and T_m tridiagonal.
 ///
-/// Users: [`crate::lanczos_function`] (h(S)u, the fast path and the multi-shift backend), the
+/// Users: [`crate::function::lanczos_function`] (h(S)u, the fast path and the multi-shift backend), the
 /// extreme eigenvalues of the condition estimates and of λ_max (wfem-heat's scale
 /// normalisation).
 pub struct LanczosProcess<'a> {

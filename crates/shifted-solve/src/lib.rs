@@ -2,7 +2,7 @@
 //!
 //! The linear-algebra engine behind the paper's Eq. (10)–(14): a best uniform rational
 //! approximation `e^{-x} ≈ r_n(x) = c0 + 2 Re Σ_j c_j / (x − z_j)` of the exponential on
-//! [0, ∞) (Eq. (10)–(11), [`RationalApprox`]) turns the heat operator into shifted sparse
+//! [0, ∞) (Eq. (10)–(11), [`poles::RationalApprox`]) turns the heat operator into shifted sparse
 //! solves (Eq. (12)–(13)):
 //!
 //! ```text
@@ -16,23 +16,26 @@
 //!
 //! * [`OperatorPair`]: the validated pair (L, M) on one shared pattern with its one symbolic
 //!   Cholesky analysis — the context every solver and method works on (validated once).
-//! * [`ShiftedSolver`]: a [`Backend`] prepared on a pair; applies r_n(tM⁻¹L) or the resolvent
-//!   sum to n × k right-hand sides. Backends (one module each under [`backend`]):
-//!   [`Backend::DirectLdlt`] (complex-symmetric supernodal LDLᵀ without pivoting, the default),
-//!   [`Backend::DirectLu`] (pivoted complex sparse LU), [`Backend::Minres`] (the paper's
-//!   preconditioned MINRES on the real 2n×2n form) and [`Backend::MultiShift`] (every pole in
+//! * [`ShiftedSolver`]: a [`backend::Backend`] prepared on a pair; applies r_n(tM⁻¹L) or the
+//!   resolvent sum to n × k right-hand sides. Backends (one module each under [`backend`]):
+//!   [`DirectLdlt`](backend::Backend::DirectLdlt) (complex-symmetric supernodal LDLᵀ without
+//!   pivoting, the default), [`DirectLu`](backend::Backend::DirectLu) (pivoted complex sparse
+//!   LU), [`Minres`](backend::Backend::Minres) (the paper's preconditioned MINRES on the real
+//!   2n×2n form, [`iterative`]) and [`MultiShift`](backend::Backend::MultiShift) (every pole in
 //!   one shift-and-invert Lanczos space, one real Cholesky per t).
 //! * [`RationalFactors`]: all poles of one t factored once, reused for many right-hand sides.
 //! * [`SelectedInversion`]: the resolvent sum (the heat-kernel matrix H_t) on the sparsity
 //!   pattern — its diagonal is the exact heat kernel signature — by selected inversion of the
 //!   LDLᵀ factors, at about the cost of the factorizations, for every t.
-//! * [`lanczos_function`] with [`KrylovParams`]: h(S)u for S = (M + γtL)⁻¹M, the engine of
-//!   wfem-heat's fast exact path and of the multi-shift backend.
-//! * [`largest_eigenpairs`] with [`BlockLanczosParams`]: thick-restart block Lanczos with
-//!   locking for the largest eigenpairs of an M-self-adjoint operator — with S = (L − σM)⁻¹M the
-//!   smallest pairs of `L x = λ M x`, the engine of wfem-heat's spectral path.
-//! * [`symmetric_eigen`]: the one scale-robust dense symmetric eigensolver of the Lanczos
-//!   methods and of wfem-heat's dense reference.
+//! * [`function::lanczos_function`] with [`function::KrylovParams`]: h(S)u for
+//!   S = (M + γtL)⁻¹M, the engine of wfem-heat's fast exact path and of the multi-shift backend.
+//! * [`eigen::largest_eigenpairs`] with [`eigen::BlockLanczosParams`]: thick-restart block
+//!   Lanczos with locking for the largest eigenpairs of an M-self-adjoint operator — with
+//!   S = (L − σM)⁻¹M the smallest pairs of `L x = λ M x`, the engine of wfem-heat's spectral path.
+//! * [`lanczos`]: the one Lanczos process; [`lanczos::symmetric_eigen`], the one scale-robust
+//!   dense symmetric eigensolver of the Lanczos methods and of wfem-heat's dense reference.
+//! * [`CholeskyPattern`], [`SpdFactor`]: the real sparse Cholesky (symbolic once, numeric per
+//!   shift) with its tree-parallel solve.
 //! * [`rng`]: the workspace's one seeded generator.
 //! * [`interrupt`]: cooperative interruption of long computations (checkpoints between poles,
 //!   restarts, times and blocks).
@@ -47,13 +50,13 @@
 pub mod backend;
 mod blocks;
 mod condition;
-mod eigen;
+pub mod eigen;
 mod error;
 mod factor;
-mod function;
+pub mod function;
 pub mod interrupt;
-mod iterative;
-mod lanczos;
+pub mod iterative;
+pub mod lanczos;
 mod ldlt;
 mod operators;
 pub mod poles;
@@ -65,23 +68,11 @@ mod trisolve;
 #[cfg(test)]
 mod cf;
 
-pub use backend::{Backend, BatchReport, PoleReport, SolveMethod};
+// The curated root (ARCHITECTURE.md, "Crate roots"): the validated pair, the solver and what it
+// factors, the error. Every other item is reached through its public module only.
 pub use condition::ConditionReport;
-pub use eigen::{
-    largest_eigenpairs, symmetric_block_mul, BlockLanczosOutcome, BlockLanczosParams, BlockMass, BlockOperator,
-};
 pub use error::SolveError;
 pub use factor::{CholeskyPattern, SpdFactor};
-pub use faer::c64;
-pub use function::{
-    lanczos_function, lanczos_function_many, lanczos_functions, lanczos_functions_many, FunctionsResult, KrylovParams,
-    LanczosOutcome, LanczosParams,
-};
-pub use iterative::{MinresParams, Preconditioner, PreconditionerShift};
-pub use lanczos::{
-    largest_ritz_value, pow2_scale, symmetric_eigen, LanczosOperator, LanczosProcess, Reorthogonalization,
-};
 pub use operators::OperatorPair;
-pub use poles::{RationalApprox, DEFAULT_DEGREE, PAPER_DEGREE, SHIPPED_DEGREES};
 pub use selected::SelectedInversion;
 pub use solver::{RationalFactors, ShiftedSolver};

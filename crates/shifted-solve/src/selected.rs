@@ -21,8 +21,9 @@
 use crate::backend::direct::shift_scale;
 use crate::backend::Pole;
 use crate::ldlt::{LdltFactor, LdltSymbolic};
+use crate::poles::RationalApprox;
 use crate::solver::check_time;
-use crate::{OperatorPair, RationalApprox, SolveError};
+use crate::{OperatorPair, SolveError};
 use rayon::prelude::*;
 use std::sync::Arc;
 

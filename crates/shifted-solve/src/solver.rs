@@ -2,8 +2,9 @@
 //! (paper Eq. (12)–(13), written with upper-half-plane poles, see [`crate::poles`]), on a
 //! validated [`OperatorPair`] with one of the [`Backend`]s.
 
-use crate::backend::{BatchReport, Pole, PoleReport, PreparedBackend, ShiftedSolve};
-use crate::{Backend, OperatorPair, RationalApprox, SolveError};
+use crate::backend::{Backend, BatchReport, Pole, PoleReport, PreparedBackend, ShiftedSolve};
+use crate::poles::RationalApprox;
+use crate::{OperatorPair, SolveError};
 use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef};
 use std::sync::Arc;

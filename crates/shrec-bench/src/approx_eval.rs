@@ -9,7 +9,7 @@
 //!   scale (the paper's claim: below 2 %), at the coarsest, the largest scale still within
 //!   2 %, the error at the anchors and the persistent extrema of f_glob against f's;
 //! * **noisy**: the map plus Gaussian noise of standard deviation [`NOISE_FRACTION`] of its
-//!   range (seed [`NOISE_SEED`], [`wfem_heat::rng::SplitMix64`]), decomposed with the anchors
+//!   range (seed [`NOISE_SEED`], [`shifted_solve::rng::SplitMix64`]), decomposed with the anchors
 //!   of every persistence of [`PERSISTENCE_SWEEP`] (Fig. 13: simplified from 40 % to 10 %):
 //!   the distance of f_glob to the **clean** map at the best scale, the correlation of f_loc
 //!   with the noise there, and the critical points of f_glob per persistence (Fig. 13(d));
@@ -19,17 +19,16 @@
 //!   `(i/10)/λ_k`) beside the default, and the default coefficients on the paper's scales.
 
 use crate::BenchError;
-use mesh_fem::morse;
-use mesh_fem::{assemble, AssemblyParams, TriMesh};
+use mesh_fem::{assemble, morse, AssemblyParams, TriMesh};
+use shifted_solve::rng::SplitMix64;
 use std::path::Path;
 use wfem_heat::approx::{
     feature_approximation, fit_global_component, persistent_extremum_count, ranked_anchors, ApproxParams, Coefficients,
     FeatureApproximation, Persistence, ScaleSampling,
 };
 use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
-use wfem_heat::rng::SplitMix64;
-use wfem_heat::KernelDiagonal;
-use wfem_heat::{DiagonalParams, EigenParams, Eigenbasis, HeatKernel, HeatParams};
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::{DiagonalParams, HeatKernel, HeatParams, KernelDiagonal};
 
 /// One mesh of the benchmark: its path below the corpus folder and a short name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -128,7 +127,7 @@ impl BenchField {
         Ok(match self {
             BenchField::Coordinate => z,
             BenchField::Hks => {
-                let d = shape_retrieval::exact_signature(
+                let d = shape_retrieval::exact::exact_signature(
                     kernel,
                     &[5.0 / lambda_k],
                     KernelDiagonal::KernelValue,

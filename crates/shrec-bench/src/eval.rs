@@ -3,9 +3,9 @@
 //!
 //! For every null shape X and every transformed shape Y of it (class × strength):
 //!
-//! 1. **Features** SHK1/SHK2 ([`shape_retrieval::FeatureDetector`]) on X and Y and their
+//! 1. **Features** SHK1/SHK2 ([`shape_retrieval::descriptor::FeatureDetector`]) on X and Y and their
 //!    repeatability `(rep(Y, X) + rep(X, Y))/2` within R = 5 % of the diameter of X
-//!    ([`shape_retrieval::repeatability`]).
+//!    ([`shape_retrieval::features::repeatability`]).
 //!    *Approximation:* geodesic distances are edge-graph (Dijkstra) distances
 //!    ([`crate::transform::EdgeGraph::distances`]), which overestimate surface geodesics by a
 //!    few per cent, and the diameter is the double-sweep lower bound of the edge-graph diameter
@@ -13,9 +13,9 @@
 //!    of the ground truth (null vertices without a preimage, e.g. removed by sampling, are
 //!    ignored).
 //! 2. **Robustness** of the dense descriptors DHK1, DHK2, DHK3 and SI-HKS (the default of
-//!    [`shape_retrieval::DescriptorSpec`], area time unit): the average relative L2 distance
+//!    [`shape_retrieval::model::DescriptorSpec`], area time unit): the average relative L2 distance
 //!    `‖f_X(x) − f_Y(y)‖/‖f_X(x)‖` over all ground-truth pairs
-//!    ([`shape_retrieval::descriptor_distance`]), Table 4 style.
+//!    ([`shape_retrieval::features::descriptor_distance`]), Table 4 style.
 //! 3. **Retrieval** (Table 5): every [`Method`] of the subset through the protocols of
 //!    [`crate::protocol`] — SHREC'10's cumulative "strength ≤ s" mAP beside the paper's rows,
 //!    the same queries against the clean TOSCA collection, per transformation and per family —
@@ -34,11 +34,15 @@ use crate::transform::EdgeGraph;
 use crate::BenchError;
 use faer::Mat;
 use rayon::prelude::*;
+use shape_retrieval::bof::Assignment;
+use shape_retrieval::descriptor::FeatureDetector;
+use shape_retrieval::distance::BagDistance;
+use shape_retrieval::features::{descriptor_distance, repeatability, FeatureSet};
 use shape_retrieval::hks::TimeSampling;
-use shape_retrieval::{
-    descriptor_distance, repeatability, Assignment, BagDistance, BagSettings, DescriptorSettings, DescriptorSpec,
-    FeatureDetector, FeatureSet, GlobalSignature, RetrievalError, RetrievalSettings, TrainingParams, VertexWeights,
+use shape_retrieval::model::{
+    BagSettings, DescriptorSettings, DescriptorSpec, GlobalSignature, RetrievalSettings, TrainingParams, VertexWeights,
 };
+use shape_retrieval::RetrievalError;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

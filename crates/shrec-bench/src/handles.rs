@@ -21,7 +21,7 @@ use crate::BenchError;
 use mesh_fem::vec3::{dot, lerp, norm, sub};
 use mesh_fem::TriMesh;
 use serde_json::json;
-use wfem_heat::rng::SplitMix64;
+use shifted_solve::rng::SplitMix64;
 
 /// Largest Euclidean distance between the endpoints of a handle, as a fraction of D.
 pub const HANDLE_MAX_DISTANCE: f64 = 0.15;

@@ -15,7 +15,7 @@
 //!   docs/APPROX-RESULTS.md).
 //!
 //! `xtask` is a thin command line over this crate. All randomness comes from the one seeded
-//! generator [`wfem_heat::rng::SplitMix64`].
+//! generator [`shifted_solve::rng::SplitMix64`].
 
 #![warn(missing_docs)]
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]

@@ -2,7 +2,7 @@
 //! collection, and leave-one-out retrieval on TOSCA-76.
 //!
 //! Average precision of one query q over its ranked list (the query itself excluded):
-//! `AP(q) = (1/R_q) Σ_k P_q(k)·rel_q(k)` ([`shape_retrieval::average_precision`]); mAP is its
+//! `AP(q) = (1/R_q) Σ_k P_q(k)·rel_q(k)` ([`shape_retrieval::retrieval::average_precision`]); mAP is its
 //! mean over the queries.
 //!
 //! * **SHREC'10, cumulative** ([`shrec_protocol`]). The column "≤ s" of the paper's Table 5: the
@@ -21,14 +21,15 @@ use crate::BenchError;
 use faer::Mat;
 use mesh_fem::TriMesh;
 use rayon::prelude::*;
-use shape_retrieval::{
-    average_precision, DescriptorSettings, DescriptorSpec, RetrievalIndex, RetrievalSettings, ShapeDescriptors,
-    ShapeFeatures, VocabularyModel,
+use shape_retrieval::descriptor::ShapeDescriptors;
+use shape_retrieval::model::{
+    DescriptorSettings, DescriptorSpec, RetrievalIndex, RetrievalSettings, ShapeFeatures, VocabularyModel,
 };
+use shape_retrieval::retrieval::average_precision;
+use shifted_solve::rng::SplitMix64;
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use wfem_heat::rng::SplitMix64;
-use wfem_heat::Eigenbasis;
+use wfem_heat::spectral::Eigenbasis;
 
 /// The paper's Table 5 (mAP in %, strength ≤ 1 … ≤ 5): method, description, values.
 pub const PAPER_TABLE5: [(&str, &str, [f64; 5]); 10] = [

@@ -15,8 +15,9 @@ use crate::protocol::{self, EigenCache, ShapeFile};
 use crate::BenchError;
 use faer::Mat;
 use rayon::prelude::*;
+use shape_retrieval::descriptor::{DescriptorParams, ShapeDescriptors};
 use shape_retrieval::eval::{evaluate_distances, evaluate_index, EvalReport};
-use shape_retrieval::{DescriptorParams, DescriptorSettings, RetrievalSettings, ShapeDescriptors, ShapeFeatures};
+use shape_retrieval::model::{DescriptorSettings, RetrievalSettings, ShapeFeatures};
 use std::path::Path;
 
 /// The SHREC'11 folder of the corpus (`labels.csv` = `file,class`).
@@ -107,7 +108,7 @@ pub fn describe(
 pub fn evaluate(
     described: &Described,
     settings: &RetrievalSettings,
-    vocabulary: Option<&shape_retrieval::VocabularyModel>,
+    vocabulary: Option<&shape_retrieval::model::VocabularyModel>,
     vocabulary_note: &str,
 ) -> Result<EvalReport, BenchError> {
     let trained;

@@ -71,7 +71,7 @@ fn check_vertex(index: u32, n_vertices: usize) -> Result<(), BenchError> {
 /// Length of the diagonal of the axis-aligned bounding box, a cheap stand-in for the shape
 /// diameter (within a factor √3 of the extrinsic diameter).
 pub fn bounding_box_diagonal(mesh: &TriMesh) -> f64 {
-    mesh_fem::stats(mesh).bbox_diagonal
+    mesh_fem::stats::stats(mesh).bbox_diagonal
 }
 
 /// Area-weighted unit vertex normals n(v) = Σ_{T∋v} (b − a) × (c − a) / ‖·‖ (outward for

@@ -1,5 +1,5 @@
 //! The eigensolver of the spectral path: `Eigenbasis::partial` (shift-and-invert thick-restart
-//! block Lanczos, `shifted_solve::largest_eigenpairs`) for the k = 100 smallest pairs of
+//! block Lanczos, `shifted_solve::eigen::largest_eigenpairs`) for the k = 100 smallest pairs of
 //! (L, B), on icospheres of area 4π (10K/41K vertices; 164K with `WFEM_BENCH_LARGE=1`), by
 //! block size b (default 8) and basis bound (default 2k + b; also 3k: fewer restarts, more
 //! memory).
@@ -12,7 +12,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Samplin
 use mesh_fem::{assemble, generate, AssemblyParams};
 use std::f64::consts::PI;
 use std::time::Duration;
-use wfem_heat::{EigenParams, Eigenbasis};
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
 
 #[path = "../../../benches/common/levels.rs"]
 mod levels;

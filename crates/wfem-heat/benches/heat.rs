@@ -19,14 +19,16 @@
 //! measures the same quantities at every size as one-shot medians with peak memory.
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
 use mesh_fem::{assemble, generate, AssemblyParams};
-use shifted_solve::{Backend, KrylovParams, MinresParams};
+use shifted_solve::backend::Backend;
+use shifted_solve::function::KrylovParams;
+use shifted_solve::iterative::MinresParams;
 use std::f64::consts::PI;
 use std::hint::black_box;
 use std::time::Duration;
-use wfem_heat::{
-    DiagonalParams, DiffusionDistance, DistanceKind, DistanceParams, EigenParams, Eigenbasis, HeatKernel, HeatParams,
-    KernelDiagonal, Method,
-};
+use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
+use wfem_heat::method::Method;
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::{DiagonalParams, HeatKernel, HeatParams, KernelDiagonal};
 
 #[path = "../../../benches/common/levels.rs"]
 mod levels;

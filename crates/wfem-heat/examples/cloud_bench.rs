@@ -10,8 +10,9 @@
 //! `kernel_seconds` excludes reading the file; `heat_seconds` is `HeatKernel::new` plus one
 //! `apply` (the wFEM kernel, fast exact path).
 
+use mesh_fem::cloud::{assemble_cloud, CloudParams};
 use mesh_fem::io::load_points;
-use mesh_fem::{assemble, assemble_cloud, generate, AssemblyParams, CloudParams, FemOperators};
+use mesh_fem::{assemble, generate, AssemblyParams, FemOperators};
 use std::time::Instant;
 use wfem_heat::{HeatKernel, HeatParams};
 
@@ -60,7 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             // points and surface, so the two runs compare the cloud path with the mesh path.
             let n: usize = args.get(1).map_or(Ok(1_000_000), |s| s.parse())?;
             let mesh = torus_of(n);
-            let cloud = mesh_fem::PointCloud::new(mesh.positions().to_vec(), None)?;
+            let cloud = mesh_fem::cloud::PointCloud::new(mesh.positions().to_vec(), None)?;
             let start = Instant::now();
             let ops = assemble_cloud(&cloud, &CloudParams::default(), &AssemblyParams::default())?;
             let kernel_seconds = start.elapsed().as_secs_f64();

@@ -7,8 +7,10 @@
 //! (level 5: 10,242 vertices; 6: 40,962; 7: 163,842; 8: 655,362).
 
 use mesh_fem::{assemble, generate, AssemblyParams};
+use shifted_solve::function::KrylovParams;
 use std::time::Instant;
-use wfem_heat::{HeatKernel, HeatParams, KrylovParams, Method};
+use wfem_heat::method::Method;
+use wfem_heat::{HeatKernel, HeatParams};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);

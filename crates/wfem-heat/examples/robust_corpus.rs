@@ -10,8 +10,8 @@
 //! ```
 
 use mesh_fem::io::{load, LoadOptions};
-use mesh_fem::{assemble, repair, AssemblyParams, Laplacian, RepairOptions, RobustParams, TriMesh};
-use mesh_fem::{Lumping, Mass};
+use mesh_fem::validate::{repair, RepairOptions};
+use mesh_fem::{assemble, AssemblyParams, Laplacian, Lumping, Mass, RobustParams, TriMesh};
 use wfem_heat::{HeatKernel, HeatParams};
 
 /// min/max of K_t e_source, or the error's text.

@@ -3,10 +3,12 @@
 //! dense reference (paper, Eq. (6)).
 //!
 //! Run: `cargo run -p wfem-heat --example smooth`.
-use mesh_fem::{assemble, generate, AssemblyParams};
+use mesh_fem::{assemble, generate, AssemblyParams, Mass};
 use std::f64::consts::PI;
 use std::time::Instant;
-use wfem_heat::{EigenParams, HeatError, HeatKernel, HeatParams, Mass, Method};
+use wfem_heat::method::Method;
+use wfem_heat::spectral::EigenParams;
+use wfem_heat::{HeatError, HeatKernel, HeatParams};
 
 fn main() -> Result<(), HeatError> {
     let mesh = generate::bumpy(3).with_area(4.0 * PI)?;

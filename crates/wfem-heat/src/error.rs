@@ -42,7 +42,7 @@ pub enum HeatError {
     TooLargeForDense {
         /// Number of vertices of the mesh.
         n_vertices: usize,
-        /// The limit, [`crate::DENSE_MAX_VERTICES`].
+        /// The limit, [`crate::spectral::DENSE_MAX_VERTICES`].
         limit: usize,
     },
     /// A parameter is outside its valid range.
@@ -54,7 +54,7 @@ pub enum HeatError {
         reason: String,
     },
     /// An option given beside a method's name that belongs to another method (it is refused,
-    /// not ignored; [`crate::Method::with_options`]).
+    /// not ignored; [`crate::method::Method::with_options`]).
     #[error("option `{option}` applies to the {owner} method only, not to {method}")]
     MisplacedOption {
         /// The option (`degree`, `backend`, `eigenpairs`).

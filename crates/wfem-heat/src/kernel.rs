@@ -1,11 +1,10 @@
 //! The heat kernel object `K_t = exp(−t M⁻¹L)` (paper, Eq. (5)–(9)): an operator context
 //! ([`Operators`]) with a prepared [`Method`], applied to any number of functions and times.
 
-use crate::check;
 use crate::diagonal::{DiagonalInfo, DiagonalMethod, Probes};
 use crate::method::{spread_times, Method, PreparedMethod};
 use crate::spectral::Eigenbasis;
-use crate::{HeatError, Operators};
+use crate::{check, HeatError, Operators};
 use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef};
 use mesh_fem::{FemOperators, Mass};
@@ -369,7 +368,7 @@ impl HeatKernel {
         let n = self.n();
         let pair = self.ops.pair();
         let selected = shifted_solve::SelectedInversion::new(pair.clone())?;
-        let approx = shifted_solve::RationalApprox::cram(shifted_solve::DEFAULT_DEGREE)?;
+        let approx = shifted_solve::poles::RationalApprox::cram(shifted_solve::poles::DEFAULT_DEGREE)?;
         let matrix = which == KernelDiagonal::OperatorDiagonal;
         let (ptr, idx) = (pair.pattern().col_ptr(), pair.pattern().row_idx());
         let mass = pair.mass_values();

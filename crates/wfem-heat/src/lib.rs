@@ -3,27 +3,29 @@
 //! The wFEM heat kernel `K_t = exp(−t B⁻¹L) = X D_t Xᵀ B` (paper, Eq. (6)) applied to
 //! functions on a triangle mesh, without computing the spectrum. Modules follow the paper:
 //!
-//! * [`Operators`] — the one validated context: L, the [`Mass`] M of the kernel (consistent B
-//!   of the wFEM kernel, lumped D, identity; Table 1), their shared pattern, symbolic analysis and null space.
-//! * [`kernel`] — [`HeatKernel`]: a context with a prepared [`Method`], applied to many
-//!   functions and times (`K_t f`, and the kernel matrix `K̃_t = K_t M⁻¹ = X D_t Xᵀ`); [`heat`] is the
-//!   one-shot version. [`method`] lists the methods (Eq. (6), (8), (9), (11)–(13) and the fast
+//! * [`Operators`] — the one validated context: L, the mass M of the kernel (`mesh_fem::Mass`:
+//!   consistent B of the wFEM kernel, lumped D, identity; Table 1), their shared pattern,
+//!   symbolic analysis and null space.
+//! * [`HeatKernel`] — a context with a prepared [`Method`](method::Method), applied to many
+//!   functions and times (`K_t f`, and the kernel matrix `K̃_t = K_t M⁻¹ = X D_t Xᵀ`); [`heat`]
+//!   is the one-shot version. [`method`] lists the methods (Eq. (6), (8), (9), (11)–(13) and the fast
 //!   exact path, the default).
-//! * [`spectral`] — [`Eigenbasis`]: generalized eigenpairs `L x = λ M x`, dense or the k
+//! * [`spectral`] — [`spectral::Eigenbasis`]: generalized eigenpairs `L x = λ M x`, dense or the k
 //!   smallest (Eq. (4), (8)).
 //! * [`rkhs`] — the time-dependent scalar product (Eq. (16)), the inverse `K_{−t}`, the
 //!   reproducing kernel `H_t = X D_{−t} Xᵀ` and the embeddings (Prop. 3.1, Eq. (15)–(20)).
-//! * [`distance`] — [`DiffusionDistance`] on any kernel (Eq. (18)).
+//! * [`distance`] — [`distance::DiffusionDistance`] on any kernel (Eq. (18)).
 //! * [`basis`] — the canonical basis `K_t eᵢ` (Sect. 4.1, Eq. (21)).
 //! * [`approx`] — feature points and the feature-driven approximation f = f_glob + f_loc
 //!   (Sect. 4.2).
 //! * [`scale`] — λ_max and the scale-invariant kernel (Sect. 5).
 //! * [`times`] — [`times::TimeScales`]: which diffusion times mean something on a mesh.
 //! * [`diagonal`] — how diagonals of kernel matrices are computed: selected inversion (the
-//!   default, exact at every t), probing, unit columns.
+//!   default, exact at every t), probing, unit columns; [`KernelDiagonal`], [`DiagonalParams`]
+//!   and [`DiagonalSeries`] are the kernel's side of it.
 //!
 //! The heat kernel *signature* (HKS) is a shape descriptor and is defined once, in the
-//! `shape-retrieval` crate, on top of [`HeatKernel::apply_kernel_matrix`] and [`Eigenbasis`].
+//! `shape-retrieval` crate, on top of [`HeatKernel::apply_kernel_matrix`] and [`spectral::Eigenbasis`].
 //!
 //! ```
 //! use mesh_fem::{assemble, generate, AssemblyParams};
@@ -54,7 +56,7 @@ pub mod diagonal;
 pub mod distance;
 mod eigenbasis;
 mod error;
-pub mod kernel;
+mod kernel;
 pub mod limits;
 pub mod method;
 mod null_space;
@@ -64,24 +66,16 @@ pub mod scale;
 pub mod spectral;
 pub mod times;
 
-pub use distance::{DiffusionDistance, DistanceKind, DistanceParams};
+// The curated root (ARCHITECTURE.md, "Crate roots"): the validated operators, the kernel applied
+// to functions and its diagonal, the error. Every other item is reached through its public
+// module only; mesh-fem and shifted-solve are dependencies of their own, not re-exported.
 pub use error::HeatError;
 pub use kernel::{
     heat, DiagonalParams, DiagonalSeries, HeatKernel, HeatParams, KernelDiagonal, TimeSeries, MAX_ROUNDING_ERROR,
 };
-/// The mesh and FEM operator crate, re-exported so that depending on `wfem-heat` alone is
-/// enough to build the operators.
-pub use mesh_fem;
-pub use mesh_fem::Mass;
-pub use method::{Method, MethodOptions};
 pub use operators::{AsSparse, Conditioning, Operators};
-/// The shifted-solver crate (rational approximations, backends), re-exported.
-pub use shifted_solve;
-pub use shifted_solve::{rng, Backend, KrylovParams};
 
 /// The README's examples, compiled as doc tests.
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
-pub use eigenbasis::Eigenbasis;
-pub use spectral::{EigenParams, DENSE_MAX_VERTICES};

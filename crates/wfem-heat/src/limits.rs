@@ -70,7 +70,7 @@ pub fn columns(name: &'static str, count: usize, n: usize) -> Result<(), HeatErr
     Ok(())
 }
 
-/// Memory in bytes of [`crate::Eigenbasis::partial`] for k pairs of an n-vertex mesh: the
+/// Memory in bytes of [`crate::spectral::Eigenbasis::partial`] for k pairs of an n-vertex mesh: the
 /// basis V and MV (n × d each) and the projected matrix (d × d), d = min(n, max(6k, k + 200)).
 pub fn partial_eigensolver_bytes(n: usize, k: usize) -> u64 {
     let (n, k) = (n as u64, k as u64);

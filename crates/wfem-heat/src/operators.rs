@@ -2,8 +2,8 @@
 //! [`Mass`] (paper, Table 1), their shared pattern and symbolic Cholesky analysis
 //! ([`shifted_solve::OperatorPair`]) and the null space of L (the constants on every
 //! connected component). Built once, validated once, shared (cheap clones) by
-//! [`crate::HeatKernel`] and every method, [`crate::DiffusionDistance`], the RKHS algebra
-//! ([`crate::rkhs`]) and the eigensolver ([`crate::Eigenbasis`]).
+//! [`crate::HeatKernel`] and every method, [`crate::distance::DiffusionDistance`], the RKHS algebra
+//! ([`crate::rkhs`]) and the eigensolver ([`crate::spectral::Eigenbasis`]).
 
 use crate::null_space::NullSpace;
 use crate::HeatError;

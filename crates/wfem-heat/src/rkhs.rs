@@ -9,7 +9,7 @@
 //! eigenvectors `XᵀBX = I` (Eq. (4)); `S_t = B K_t = B X D_t Xᵀ B` induces `⟨·,·⟩_t`.
 //! The paper's reproducing kernel is `H_t = X D_{−t} Xᵀ = K_{−t} B⁻¹ = S_t⁻¹` (it *grows*
 //! with t); it is not the heat-kernel matrix `H̃_t = K_t B⁻¹ = X D_t Xᵀ` of the diffusion
-//! distances (docs/NUMERICS.md §1), see [`crate::DiffusionDistance`].
+//! distances (docs/NUMERICS.md §1), see [`crate::distance::DiffusionDistance`].
 //!
 //! **Two honest caveats** (the paper glosses over both):
 //!
@@ -26,7 +26,8 @@
 
 use crate::check::{self, unit_columns};
 use crate::operators::dot;
-use crate::{Eigenbasis, HeatError, HeatKernel, Operators};
+use crate::spectral::Eigenbasis;
+use crate::{HeatError, HeatKernel, Operators};
 use faer::Mat;
 
 fn check_basis_size(basis: &Eigenbasis, ops: &Operators) -> Result<(), HeatError> {

@@ -1,11 +1,10 @@
 //! The scale behaviour of the kernel (paper, Sect. 5): the largest eigenvalue λ_n and the
 //! normalised, scale-invariant kernel.
 
-use crate::check;
-use crate::{HeatError, HeatKernel, HeatParams, Operators};
+use crate::{check, HeatError, HeatKernel, HeatParams, Operators};
 use faer::Mat;
 use mesh_fem::FemOperators;
-use shifted_solve::largest_ritz_value;
+use shifted_solve::lanczos::largest_ritz_value;
 use shifted_solve::rng::SplitMix64;
 
 /// Options of [`largest_eigenvalue`] (Lanczos on M⁻¹L).
@@ -32,7 +31,7 @@ impl Default for LargestEigenParams {
 /// The largest eigenvalue λ_n of `L x = λ M x` (paper, Sect. 5: the normalisation of the
 /// scale-invariant kernel, "computed using the inverse method").
 ///
-/// Lanczos ([`shifted_solve::largest_ritz_value`]) on S = M⁻¹L, which is self-adjoint in
+/// Lanczos ([`shifted_solve::lanczos::largest_ritz_value`]) on S = M⁻¹L, which is self-adjoint in
 /// ⟨u, v⟩_M = uᵀMv, with full reorthogonalisation in that inner product: each step is one
 /// product with L and one solve with M (the context's sparse Cholesky of M). The largest Ritz value θ of the tridiagonal
 /// projection converges first (an extreme eigenvalue); it stops when the residual

@@ -1,6 +1,6 @@
 //! The spectral side of the kernel: generalized eigenpairs `L x = λ M x` (paper, Eq. (4)–(6)
 //! and (8)) — the dense reference and a thick-restart shift-invert block Lanczos for the k
-//! smallest pairs (the engine is shifted-solve's [`shifted_solve::largest_eigenpairs`]) —
+//! smallest pairs (the engine is shifted-solve's [`shifted_solve::eigen::largest_eigenpairs`]) —
 //! and the (truncated) spectral kernel `X e^{−tΛ} Xᵀ`.
 //!
 //! L (stiffness) is symmetric positive **semi**definite with a positive diagonal (wfem sign
@@ -13,14 +13,14 @@ use crate::{HeatError, Operators};
 use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
 use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef, Par, Side};
-use shifted_solve::{largest_eigenpairs, symmetric_block_mul, BlockLanczosParams};
+use shifted_solve::eigen::{largest_eigenpairs, symmetric_block_mul, BlockLanczosParams};
 
 /// The largest mesh (number of vertices) for which [`Eigenbasis::dense`] runs: O(n³) time
 /// and 3 dense n × n matrices (≈ 600 MB at the limit).
 pub const DENSE_MAX_VERTICES: usize = 5000;
 
 /// Options of [`Eigenbasis::partial`] (thick-restart block Lanczos on the shift-inverted
-/// operator, [`shifted_solve::largest_eigenpairs`]).
+/// operator, [`shifted_solve::eigen::largest_eigenpairs`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EigenParams {
     /// Shift σ < 0 of the factored matrix `L − σM` (SPD because L is PSD). `None` picks
@@ -127,8 +127,8 @@ impl Eigenbasis {
         solve_lower_triangular_in_place(r, c.as_mut(), Par::rayon(0));
         // The symmetric part of C, power-of-two scaled for faer's eigensolver, which is not
         // scale invariant (mesh scaling by α multiplies C by α⁻²; see
-        // `shifted_solve::symmetric_eigen`, tested here by `eigen_scale.rs`).
-        let (values, u) = shifted_solve::symmetric_eigen(c.as_ref()).map_err(|_| HeatError::DenseEigen)?;
+        // `shifted_solve::lanczos::symmetric_eigen`, tested here by `eigen_scale.rs`).
+        let (values, u) = shifted_solve::lanczos::symmetric_eigen(c.as_ref()).map_err(|_| HeatError::DenseEigen)?;
         drop(c);
         let mut x = u;
         solve_upper_triangular_in_place(r.transpose(), x.as_mut(), Par::rayon(0));
@@ -137,7 +137,7 @@ impl Eigenbasis {
 
     /// The `k` smallest eigenpairs by thick-restart block Lanczos with locking, in the
     /// M-inner product, on the shift-inverted operator (docs/NUMERICS.md §5;
-    /// [`shifted_solve::largest_eigenpairs`]).
+    /// [`shifted_solve::eigen::largest_eigenpairs`]).
     ///
     /// The operator S = (L − σM)⁻¹M (σ < 0, one sparse Cholesky of the SPD matrix L − σM) is
     /// self-adjoint in ⟨u, v⟩_M = uᵀMv and has eigenvalues θ = 1/(λ − σ), so the smallest λ

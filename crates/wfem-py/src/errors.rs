@@ -304,7 +304,7 @@ impl Error {
 }
 
 /// `(values, vectors)` arrays of a basis (for `ConvergenceError.found`).
-fn found_arrays(py: Python<'_>, basis: &wfem_heat::Eigenbasis) -> PyResult<Py<PyAny>> {
+fn found_arrays(py: Python<'_>, basis: &wfem_heat::spectral::Eigenbasis) -> PyResult<Py<PyAny>> {
     let values = vec_out(py, basis.values.clone());
     let vectors = mat_out(py, basis.vectors.as_ref());
     Ok((values, vectors).into_pyobject(py)?.into_any().unbind())

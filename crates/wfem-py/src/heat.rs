@@ -6,19 +6,20 @@ use crate::errors::{invalid, invalid_param};
 use crate::out::{mat_out, mats_out, sparse_out, vec_out, SparseOut};
 use crate::run::run;
 use faer::Mat;
-use mesh_fem::{assemble, AssemblyParams, TriMesh};
+use mesh_fem::{assemble, AssemblyParams, Mass, TriMesh};
 use numpy::{PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use shape_retrieval::{MeshLengths, TimeUnit};
-use shifted_solve::Backend;
+use shape_retrieval::sihks::{MeshLengths, TimeUnit};
+use shifted_solve::backend::Backend;
 use std::sync::Arc;
 use wfem_choice::Choice;
 use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
+use wfem_heat::method::{Method, MethodOptions};
 use wfem_heat::rkhs::{heat_inner_product, inverse_cg, InverseParams};
 use wfem_heat::scale::{largest_eigenvalue, LargestEigenParams};
 use wfem_heat::times::TimeScales;
-use wfem_heat::{HeatError, HeatKernel, HeatParams, Mass, Method, MethodOptions, Operators};
+use wfem_heat::{HeatError, HeatKernel, HeatParams, Operators};
 
 /// The method of a name and its options (`degree`, `backend` for the rational method; `k` for
 /// the spectral one); an option that does not belong to the method is refused.
@@ -39,7 +40,7 @@ pub fn method(
         eigenpairs: k,
     };
     let method: Method = match name {
-        None if options.names_rational() => Method::rational(shifted_solve::DEFAULT_DEGREE),
+        None if options.names_rational() => Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
         other => choices::parse(py, "method", other)?,
     };
     if matches!(method, Method::Spectral { .. }) && k.is_none() {
@@ -141,7 +142,7 @@ impl PyHeatKernel {
         let mass: Mass = choices::parse(py, "mass", mass)?;
         let method = method(py, method_name, degree, k, backend)?;
         run(py, move |_| {
-            let built = mesh_fem::assemble_cloud(&cloud, &params, &AssemblyParams::for_mass(mass))?;
+            let built = mesh_fem::cloud::assemble_cloud(&cloud, &params, &AssemblyParams::for_mass(mass))?;
             let kernel = HeatKernel::new(&built.operators, HeatParams { mass, method })?;
             Ok(Self {
                 kernel,
@@ -350,12 +351,12 @@ impl PyHeatKernel {
         Ok((mat_out(py, series.values.as_ref()), info))
     }
 
-    /// The HKS by method (`shape_retrieval::signature_by_method`): `spectral` (n, T) is the
+    /// The HKS by method (`shape_retrieval::exact::signature_by_method`): `spectral` (n, T) is the
     /// truncated sum from `eigenvalues` at `times`; "auto" replaces the columns whose truncation
     /// bound is above `tol` by the exact diagonal (selected inversion, as the CLI), "exact"
     /// replaces every column.
     /// Returns (values, [(source, bound)]).
-    #[pyo3(signature = (eigenvalues, spectral, times, convention=None, method=None, tol=shape_retrieval::DEFAULT_TRUNCATION_TOL))]
+    #[pyo3(signature = (eigenvalues, spectral, times, convention=None, method=None, tol=shape_retrieval::exact::DEFAULT_TRUNCATION_TOL))]
     #[allow(clippy::too_many_arguments)]
     fn hks_by_method<'py>(
         &self,
@@ -367,7 +368,7 @@ impl PyHeatKernel {
         method: Option<&str>,
         tol: f64,
     ) -> PyResult<Sourced<'py>> {
-        use shape_retrieval::{HksMethod, HksSource};
+        use shape_retrieval::exact::{HksMethod, HksSource};
         use wfem_heat::DiagonalParams;
         check_times(py, &times)?;
         let convention = choices::parse(py, "convention", convention)?;
@@ -379,7 +380,7 @@ impl PyHeatKernel {
         let spectral = mat_in(&spectral);
         let kernel = self.kernel.clone();
         let (values, sources) = run(py, move |_| {
-            Ok(shape_retrieval::signature_by_method(
+            Ok(shape_retrieval::exact::signature_by_method(
                 &kernel,
                 &eigenvalues,
                 spectral,

@@ -1,5 +1,5 @@
 //! The retrieval index shared with the CLI: shape-retrieval's model (the default recipe of
-//! `wfem retrieval build`) in retrieval-store's SQLite file (`retrieval_store::SqliteIndex`).
+//! `wfem retrieval build`) in retrieval-store's SQLite file (`retrieval_store::index::SqliteIndex`).
 //! A file built here is queried by `wfem retrieval query` and vice versa.
 
 use crate::convert::mesh_in;
@@ -9,10 +9,12 @@ use mesh_fem::io::{load_shape, LoadOptions, Shape};
 use mesh_fem::Laplacian;
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
-use retrieval_store::SqliteIndex;
+use retrieval_store::index::SqliteIndex;
 use shape_retrieval::collection::{build_index, describe_entries, Refusal, Tolerance};
 use shape_retrieval::eval::{evaluate_index, vocabulary_source, ClassRule};
-use shape_retrieval::{IndexStore, JsonFile, RetrievalError, RetrievalIndex, RetrievalSettings, VocabularyStore};
+use shape_retrieval::model::{RetrievalIndex, RetrievalSettings};
+use shape_retrieval::store::{IndexStore, JsonFile, VocabularyStore};
+use shape_retrieval::RetrievalError;
 use std::path::PathBuf;
 use wfem_choice::Choice;
 
@@ -121,7 +123,7 @@ impl PyRetrievalIndex {
     #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0,
         despike=Some(mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD),
         fill_holes=Some(mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER),
-        denoise=Some(shape_retrieval::DEFAULT_TARGET_ROUGHNESS), overwrite=false,
+        denoise=Some(shape_retrieval::model::DEFAULT_TARGET_ROUGHNESS), overwrite=false,
         spatial=Some(shape_retrieval::spatial::DEFAULT_SPATIAL_TIME), strict=false, progress=None,
         laplacian=None))]
     #[allow(clippy::too_many_arguments)]
@@ -151,10 +153,10 @@ impl PyRetrievalIndex {
                 settings.training.words = w;
             }
             settings.training.seed = seed;
-            settings.descriptor.despiking = despike.map(|threshold| shape_retrieval::Despiking { threshold });
+            settings.descriptor.despiking = despike.map(|threshold| shape_retrieval::model::Despiking { threshold });
             settings.descriptor.hole_filling =
-                fill_holes.map(|max_perimeter| shape_retrieval::HoleFilling { max_perimeter });
-            settings.descriptor.denoising = denoise.map(|roughness| shape_retrieval::Denoising {
+                fill_holes.map(|max_perimeter| shape_retrieval::model::HoleFilling { max_perimeter });
+            settings.descriptor.denoising = denoise.map(|roughness| shape_retrieval::model::Denoising {
                 roughness,
                 ..Default::default()
             });
@@ -225,7 +227,7 @@ impl PyRetrievalIndex {
     /// The recipe recorded in the file (descriptor, window, words, distance, …) as JSON.
     fn settings(&self, py: Python<'_>) -> PyResult<String> {
         let path = self.path.clone();
-        run(py, move |_| Ok(shape_retrieval::index_settings(&open(&path)?)?))
+        run(py, move |_| Ok(shape_retrieval::store::index_settings(&open(&path)?)?))
     }
 
     /// Appends mesh or point-cloud files (bags from the stored vocabulary, described with the
@@ -277,7 +279,7 @@ impl PyRetrievalIndex {
             let index = SqliteIndex::new(&path);
             let (settings, store) = index.open()?;
             same_laplacian(asked, settings.vocabulary().descriptor().laplacian, "the index")?;
-            let shape: shape_retrieval::ShapeRef<'_> = match &shape {
+            let shape: shape_retrieval::model::ShapeRef<'_> = match &shape {
                 Ok(mesh) => mesh.into(),
                 Err(cloud) => cloud.into(),
             };

@@ -23,23 +23,26 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add("DENSE_MAX_VERTICES", wfem_heat::DENSE_MAX_VERTICES)?;
-    m.add("DEFAULT_DEGREE", shifted_solve::DEFAULT_DEGREE)?;
+    m.add("DENSE_MAX_VERTICES", wfem_heat::spectral::DENSE_MAX_VERTICES)?;
+    m.add("DEFAULT_DEGREE", shifted_solve::poles::DEFAULT_DEGREE)?;
     m.add("DEFAULT_SPIKE_THRESHOLD", mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD)?;
     m.add(
         "DEFAULT_MAX_HOLE_PERIMETER",
         mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER,
     )?;
-    m.add("DEFAULT_TARGET_ROUGHNESS", shape_retrieval::DEFAULT_TARGET_ROUGHNESS)?;
+    m.add(
+        "DEFAULT_TARGET_ROUGHNESS",
+        shape_retrieval::model::DEFAULT_TARGET_ROUGHNESS,
+    )?;
     m.add("DEFAULT_SPATIAL_TIME", shape_retrieval::spatial::DEFAULT_SPATIAL_TIME)?;
-    m.add("SHIPPED_DEGREES", shifted_solve::SHIPPED_DEGREES.to_vec())?;
+    m.add("SHIPPED_DEGREES", shifted_solve::poles::SHIPPED_DEGREES.to_vec())?;
     m.add(
         "PAPER_DESCRIPTORS",
-        shape_retrieval::Descriptor::PAPER
+        shape_retrieval::descriptor::Descriptor::PAPER
             .map(|d| wfem_choice::Choice::name(&d))
             .to_vec(),
     )?;
-    m.add("DEFAULT_NUM_TIMES", shape_retrieval::DEFAULT_NUM_TIMES)?;
+    m.add("DEFAULT_NUM_TIMES", shape_retrieval::hks::DEFAULT_NUM_TIMES)?;
     choices::register(m)?;
     mesh::register(m)?;
     cloud::register(m)?;

@@ -10,11 +10,13 @@ use crate::run::run;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use shape_retrieval::bof::{Vocabulary, VocabularyParams};
+use shape_retrieval::descriptor::{Descriptor, DescriptorParams, FeatureDetector, ShapeDescriptors};
 use shape_retrieval::hks::TimeSampling;
-use shape_retrieval::{
-    evaluate, kmeans, Descriptor, DescriptorParams, FeatureDetector, KmeansParams, RetrievalError, ShapeDescriptors,
-    SihksParams, Vocabulary, VocabularyParams,
-};
+use shape_retrieval::kmeans::{kmeans, KmeansParams};
+use shape_retrieval::retrieval::evaluate;
+use shape_retrieval::sihks::SihksParams;
+use shape_retrieval::RetrievalError;
 use std::sync::Arc;
 
 /// The descriptor pipeline's parameters from Python values.
@@ -296,7 +298,7 @@ pub fn evaluate_retrieval(
 pub fn pairwise_l1<'py>(py: Python<'py>, bags: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let b = mat_in(&bags);
     let rows: Vec<Vec<f64>> = (0..b.nrows()).map(|i| b.row(i).iter().copied().collect()).collect();
-    let out = run(py, move |_| Ok(shape_retrieval::pairwise_l1(&rows)?))?;
+    let out = run(py, move |_| Ok(shape_retrieval::distance::pairwise_l1(&rows)?))?;
     Ok(mat_out(py, out.as_ref()))
 }
 

@@ -7,17 +7,17 @@ use crate::errors::{invalid_param, Error};
 use crate::out::{mat_out, vec_out};
 use crate::run::run;
 use faer::Mat;
-use mesh_fem::{assemble, AssemblyParams};
+use mesh_fem::{assemble, AssemblyParams, Mass};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use shape_retrieval::{
-    heat_kernel_signature, scale_invariant_hks, HksParams, SihksParams, Spectrum, SpectrumNormalization, TimeSampling,
-};
+use shape_retrieval::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalization, TimeSampling};
+use shape_retrieval::sihks::{scale_invariant_hks, SihksParams};
 use std::sync::Arc;
 use wfem_choice::Choice;
 use wfem_heat::rkhs::{inverse_spectral, reproducing_kernel_apply, TruncationReport};
-use wfem_heat::{EigenParams, Eigenbasis, KernelDiagonal, Mass, Operators};
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::{KernelDiagonal, Operators};
 
 /// Largest number of τ samples of an SI-HKS window (385 by default); beyond it a typo in
 /// the step would exhaust memory.
@@ -223,7 +223,7 @@ impl PyEigenbasis {
     }
 
     /// The heat kernel signature (n, T) and its times.
-    #[pyo3(signature = (times=None, num_times=shape_retrieval::DEFAULT_NUM_TIMES, convention=None, scaled=false, normalization=None))]
+    #[pyo3(signature = (times=None, num_times=shape_retrieval::hks::DEFAULT_NUM_TIMES, convention=None, scaled=false, normalization=None))]
     fn hks<'py>(
         &self,
         py: Python<'py>,
@@ -350,7 +350,7 @@ type MeshHksOut<'py> = (
 /// The heat kernel signature of a mesh: shape_retrieval's one orchestration (auto / exact /
 /// spectral), as `wfem hks` runs it.
 #[pyfunction]
-#[pyo3(signature = (v, f, times=None, num_times=None, k=shape_retrieval::DEFAULT_EIGENPAIRS, mass=None, method=None, convention=None, scaled=false, normalization=None, basis=None, tol=shape_retrieval::DEFAULT_TRUNCATION_TOL, laplacian=None, n_neighbors=None, cloud_time_unit=None))]
+#[pyo3(signature = (v, f, times=None, num_times=None, k=shape_retrieval::descriptor::DEFAULT_EIGENPAIRS, mass=None, method=None, convention=None, scaled=false, normalization=None, basis=None, tol=shape_retrieval::exact::DEFAULT_TRUNCATION_TOL, laplacian=None, n_neighbors=None, cloud_time_unit=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn mesh_hks<'py>(
     py: Python<'py>,
@@ -370,7 +370,8 @@ pub fn mesh_hks<'py>(
     n_neighbors: Option<usize>,
     cloud_time_unit: Option<&str>,
 ) -> PyResult<MeshHksOut<'py>> {
-    use shape_retrieval::{HksMethod, HksSource, MeshHksParams};
+    use shape_retrieval::exact::{HksMethod, HksSource};
+    use shape_retrieval::mesh_hks::MeshHksParams;
     // A mesh, or (no F) a point cloud with its neighbourhood size.
     let shape = match &f {
         Some(f) => Ok(mesh_in(py, &v, f)?),
@@ -379,7 +380,7 @@ pub fn mesh_hks<'py>(
     let laplacian = crate::cloud::assembly_laplacian(py, laplacian, None)?;
     // A cloud's given times in a unit (`time_unit=`): the unit is measured on its neighbourhood
     // mesh once the operators are built, as `wfem hks CLOUD --time-unit …` does.
-    let cloud_unit: shape_retrieval::TimeUnit = choices::parse(py, "time_unit", cloud_time_unit)?;
+    let cloud_unit: shape_retrieval::sihks::TimeUnit = choices::parse(py, "time_unit", cloud_time_unit)?;
     let method = match choices::parse::<HksMethod>(py, "method", method)? {
         HksMethod::Auto { .. } => HksMethod::Auto { tol },
         other => other,
@@ -390,7 +391,7 @@ pub fn mesh_hks<'py>(
         times: match times {
             Some(t) => TimeSampling::Explicit(t),
             None => TimeSampling::Auto {
-                num_times: num_times.unwrap_or(shape_retrieval::DEFAULT_NUM_TIMES),
+                num_times: num_times.unwrap_or(shape_retrieval::hks::DEFAULT_NUM_TIMES),
             },
         },
         eigenpairs: k,
@@ -415,19 +416,19 @@ pub fn mesh_hks<'py>(
     }
     let basis = basis.map(|b| (*b.basis).clone());
     let hks = run(py, move |_| match shape {
-        Ok(mesh) => Ok(shape_retrieval::mesh_hks(&mesh, &params, basis, &mut |_| {})?),
+        Ok(mesh) => Ok(shape_retrieval::mesh_hks::mesh_hks(&mesh, &params, basis, &mut |_| {})?),
         Err((cloud, cloud_params)) => {
             let assembly = mesh_fem::AssemblyParams::for_mass(params.mass);
-            let built = mesh_fem::assemble_cloud(&cloud, &cloud_params, &assembly)?;
+            let built = mesh_fem::cloud::assemble_cloud(&cloud, &cloud_params, &assembly)?;
             let mut params = params;
             if let TimeSampling::Explicit(times) = &mut params.times {
-                let lengths = shape_retrieval::MeshLengths::of(&built.neighbourhood);
+                let lengths = shape_retrieval::sihks::MeshLengths::of(&built.neighbourhood);
                 let unit = cloud_unit
                     .on(&lengths)
                     .map_err(|e| Error::Invalid("InvalidParameter", format!("time_unit: {e}")))?;
                 times.iter_mut().for_each(|t| *t *= unit);
             }
-            Ok(shape_retrieval::operators_hks(
+            Ok(shape_retrieval::mesh_hks::operators_hks(
                 &built.operators,
                 &params,
                 basis,

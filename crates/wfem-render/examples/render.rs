@@ -12,8 +12,9 @@
 //! come from its neighbourhood triangles, as in `wfem heat cloud.xyz … -o x.png`: the picture
 //! should look like the mesh's (a closed surface, smooth colours and iso-lines).
 
+use mesh_fem::cloud::{assemble_cloud, CloudParams, PointCloud};
 use mesh_fem::generate::bumpy;
-use mesh_fem::{assemble_cloud, AssemblyParams, CloudParams, PointCloud};
+use mesh_fem::AssemblyParams;
 use std::time::Instant;
 use wfem_render::{render_png, render_splats_png, RenderParams, Splats};
 

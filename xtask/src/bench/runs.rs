@@ -238,7 +238,7 @@ pub(crate) fn figure2(options: &BenchOptions) -> Result<Vec<Figure2>, BenchError
     let solver = ShiftedSolver::new(ops.stiffness.as_ref(), ops.mass.as_ref(), Backend::DirectLu)
         .map_err(solve_err("figure 2 solver"))?;
     let mut out = Vec::new();
-    for degree in [shifted_solve::PAPER_DEGREE, shifted_solve::DEFAULT_DEGREE] {
+    for degree in [shifted_solve::poles::PAPER_DEGREE, shifted_solve::poles::DEFAULT_DEGREE] {
         progress(&format!("figure 2: n = {n}, degree {degree}"));
         let approx = RationalApprox::cram(degree).map_err(solve_err(format!("degree {degree}")))?;
         let mut poles: Vec<c64> = approx.poles.to_vec();

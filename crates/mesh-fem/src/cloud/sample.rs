@@ -1,6 +1,7 @@
 //! Point clouds sampled from a mesh: n points uniformly distributed on its surface.
 
-use crate::{MeshError, PointCloud, TriMesh};
+use crate::cloud::PointCloud;
+use crate::{MeshError, TriMesh};
 
 /// n points drawn independently and uniformly from the surface of `mesh` (no normals): a face
 /// with probability proportional to its area, then a point of it with uniform barycentric

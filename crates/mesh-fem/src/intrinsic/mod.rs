@@ -310,12 +310,12 @@ impl IntrinsicTriangulation {
 ///
 /// On a closed manifold mesh whose triangulation is already (intrinsically) Delaunay and
 /// whose triangles are not within δ of degenerate, the cover is two copies of the mesh,
-/// nothing is flipped and L, B, D are the cotangent operators of [`crate::operators`].
+/// nothing is flipped and L, B, D are the cotangent operators of [`crate::assemble`].
 ///
 /// # Errors
 /// * [`MeshError::InvalidParameter`] for a bad mollification factor;
 /// * [`MeshError::RepeatedIndex`] for a face that repeats a vertex (not a triangle; drop such
-///   faces with [`crate::repair`]'s `degenerate` option);
+///   faces with [`crate::validate::repair`]'s `degenerate` option);
 /// * [`MeshError::UnreferencedVertex`] for a vertex that belongs to no face;
 /// * [`MeshError::DegenerateIntrinsicTriangle`] for a flat face when mollification is off;
 /// * [`MeshError::DegenerateMesh`] for a mesh whose edges are all of length zero or whose

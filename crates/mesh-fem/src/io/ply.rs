@@ -132,7 +132,7 @@ pub(crate) fn has_faces(bytes: &[u8]) -> Option<bool> {
 /// Reads the `vertex` element of a PLY file as a point cloud: positions, and normals when
 /// the vertices have `nx`, `ny`, `nz`. Other elements are skipped; a `face` element with
 /// records is refused (the file is a mesh).
-pub(crate) fn read_points(bytes: &[u8], path: &Path) -> Result<crate::PointCloud, MeshError> {
+pub(crate) fn read_points(bytes: &[u8], path: &Path) -> Result<crate::cloud::PointCloud, MeshError> {
     let mut reader = Reader::new(bytes);
     let header = Parser::<Skip>::new()
         .read_header(&mut reader)
@@ -166,7 +166,7 @@ pub(crate) fn read_points(bytes: &[u8], path: &Path) -> Result<crate::PointCloud
         }
     }
     let normals = with_normals.then(|| points.iter().map(|v| v.n).collect());
-    crate::PointCloud::new(points.into_iter().map(|v| v.p).collect(), normals)
+    crate::cloud::PointCloud::new(points.into_iter().map(|v| v.p).collect(), normals)
 }
 
 fn check_vertex_header(path: &Path, header: &Header) -> Result<(), MeshError> {

@@ -14,7 +14,8 @@
 use super::field::parse_npy_array;
 use super::text::{show, Lines};
 use super::{load_bytes, parse_error, read_regular_file, LoadOptions, LoadReport, MeshFormat};
-use crate::{MeshError, PointCloud, TriMesh};
+use crate::cloud::PointCloud;
+use crate::{MeshError, TriMesh};
 use std::path::Path;
 
 /// A point-cloud file format.

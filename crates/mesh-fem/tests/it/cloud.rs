@@ -1,4 +1,4 @@
-//! Tests of the point-cloud operators (`mesh_fem::assemble_cloud`).
+//! Tests of the point-cloud operators (`mesh_fem::cloud::assemble_cloud`).
 //!
 //! References, independent of the code under test: closed-form identities (L·1 = 0,
 //! symmetry, D = row sums of B, total mass = area of the sampled surface), the exactness of
@@ -7,7 +7,8 @@
 //! convergence of K_t f are tested in wfem-heat (which has the eigensolver and the kernel).
 
 use crate::operators::{asymmetry, entries, matvec, max_abs};
-use mesh_fem::{assemble_cloud, AssemblyParams, CloudParams, MeshError, PointCloud};
+use mesh_fem::cloud::{assemble_cloud, CloudParams, PointCloud};
+use mesh_fem::{AssemblyParams, MeshError};
 
 /// SplitMix64 uniforms in (0, 1).
 pub(crate) struct Rng(pub u64);
@@ -38,7 +39,7 @@ pub(crate) fn sphere_cloud(n: usize, seed: u64) -> Vec<[f64; 3]> {
         .collect()
 }
 
-fn cloud_ops(points: Vec<[f64; 3]>) -> mesh_fem::CloudOperators {
+fn cloud_ops(points: Vec<[f64; 3]>) -> mesh_fem::cloud::CloudOperators {
     let cloud = PointCloud::new(points, None).unwrap();
     assemble_cloud(&cloud, &CloudParams::default(), &AssemblyParams::default()).unwrap()
 }

@@ -3,7 +3,8 @@
 
 use mesh_fem::generate::{grid, icosphere, torus};
 use mesh_fem::handles::{cut_handles, short_handle_cycle, DEFAULT_MAX_HANDLE_LENGTH};
-use mesh_fem::{stats, MeshError};
+use mesh_fem::stats::stats;
+use mesh_fem::MeshError;
 
 #[test]
 fn the_shortest_cycle_of_a_torus_is_a_minor_circle() {

@@ -744,8 +744,8 @@ fn a_point_cloud_neighbourhood_mesh_is_classified_on_its_edge_graph() {
             [r * phi.cos(), r * phi.sin(), z + 0.01 * r * phi.sin()]
         })
         .collect();
-    let cloud = mesh_fem::PointCloud::new(points.clone(), None).unwrap();
-    let built = mesh_fem::assemble_cloud(&cloud, &Default::default(), &Default::default()).unwrap();
+    let cloud = mesh_fem::cloud::PointCloud::new(points.clone(), None).unwrap();
+    let built = mesh_fem::cloud::assemble_cloud(&cloud, &Default::default(), &Default::default()).unwrap();
     let mesh = &built.neighbourhood;
     let f: Vec<f64> = points.iter().map(|p| p[2]).collect();
     let critical = critical_points(mesh, &f).unwrap();

@@ -5,10 +5,11 @@ use crate::minimal_reader;
 
 use faer::sparse::{SparseColMat, Triplet};
 use mesh_fem::generate::{bumpy, icosphere};
-use mesh_fem::mtx::{from_nalgebra_csc, to_nalgebra_csc, to_nalgebra_csr};
-use mesh_fem::{
-    assemble, read_matrix_market, stats, write_matrix_market, write_operators, AssemblyParams, MeshError, TriMesh,
+use mesh_fem::mtx::{
+    from_nalgebra_csc, read_matrix_market, to_nalgebra_csc, to_nalgebra_csr, write_matrix_market, write_operators,
 };
+use mesh_fem::stats::stats;
+use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
 use std::collections::BTreeMap;
 use std::path::Path;
 

@@ -4,7 +4,8 @@
 use crate::minimal_reader;
 
 use mesh_fem::generate::{grid, icosphere, torus};
-use mesh_fem::{stats, MeshStats, TriMesh};
+use mesh_fem::stats::{stats, MeshStats};
+use mesh_fem::TriMesh;
 use std::f64::consts::PI;
 
 /// Two copies of `mesh`, the second shifted by `offset` along x.
@@ -546,7 +547,7 @@ fn whole_corpus_matches_sources_table() {
             ));
         }
         // Validation and assembly agree on every real mesh.
-        let usable = mesh_fem::validate(&mesh).is_usable();
+        let usable = mesh_fem::validate::validate(&mesh).is_usable();
         let assembles = mesh_fem::assemble(&mesh, &Default::default()).is_ok();
         if usable != assembles {
             bad.push(format!("validate usable {usable} but assemble ok {assembles}"));

@@ -5,10 +5,11 @@
 use crate::minimal_reader;
 
 use mesh_fem::generate::{grid, icosphere, torus};
-use mesh_fem::validate::{is_degenerate_triangle, DEGENERATE_AREA_RATIO};
-use mesh_fem::{
-    assemble, repair, stats, validate, AssemblyParams, MeshError, Problem, RepairOptions, Severity, TriMesh,
+use mesh_fem::stats::stats;
+use mesh_fem::validate::{
+    is_degenerate_triangle, repair, validate, Problem, RepairOptions, Severity, DEGENERATE_AREA_RATIO,
 };
+use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
 
 fn mesh(p: Vec<[f64; 3]>, f: Vec<[u32; 3]>) -> TriMesh {
     TriMesh::new(p, f).unwrap()

@@ -2,8 +2,7 @@
 //! [`Smoothing`], [`Despiking`], [`Denoising`], [`HoleFilling`], [`TopologyRepair`]; their order
 //! is [`super::DescriptorSettings::shape`]'s.
 
-use crate::check;
-use crate::RetrievalError;
+use crate::{check, RetrievalError};
 use faer::Mat;
 use mesh_fem::{AssemblyParams, FemOperators, Laplacian, TriMesh};
 use serde::{Deserialize, Serialize};
@@ -14,7 +13,7 @@ use serde::{Deserialize, Serialize};
 /// not depend on the resolution). This is implicit fairing with the exact kernel: the
 /// high-frequency part of the geometry (additive noise, isolated spikes) decays like
 /// `e^{−λt}` while the shape's large scales are kept. Evaluated by the fast exact path of
-/// [`wfem_heat::Method::Fast`] (one sparse Cholesky).
+/// [`wfem_heat::method::Method::Fast`] (one sparse Cholesky).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Smoothing {
@@ -78,8 +77,8 @@ impl EmbeddingFlow {
         let kernel = wfem_heat::HeatKernel::new(
             ops,
             wfem_heat::HeatParams {
-                mass: wfem_heat::Mass::Consistent,
-                method: wfem_heat::Method::Fast(Default::default()),
+                mass: mesh_fem::Mass::Consistent,
+                method: wfem_heat::method::Method::Fast(Default::default()),
             },
         )?;
         let x = Mat::from_fn(positions.len(), 3, |i, j| positions[i][j]);

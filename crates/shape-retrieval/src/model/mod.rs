@@ -7,8 +7,8 @@
 //!    of (L, B) (Eq. (4), truncated as in Eq. (8)). Default: SI-HKS with times in units of the
 //!    surface area, exactly scale invariant ([`crate::sihks`]).
 //! 2. **Vocabulary** ([`VocabularyModel`]): the descriptors of a training set are z-scored per
-//!    dimension ([`Standardizer`](crate::Standardizer), statistics kept with the vocabulary) and quantised by k-means
-//!    into V words with a soft-assignment width σ ([`Vocabulary`](crate::Vocabulary)).
+//!    dimension ([`Standardizer`](crate::standardize::Standardizer), statistics kept with the vocabulary) and quantised by k-means
+//!    into V words with a soft-assignment width σ ([`Vocabulary`](crate::bof::Vocabulary)).
 //! 3. **Bag** of a shape: `f = Θᵀ w / Σ w` with the soft assignment Θ (n × V) of its z-scored
 //!    descriptors and vertex weights w ([`VertexWeights`]; default the areas `B·1` capped at 3
 //!    medians), a histogram
@@ -16,7 +16,7 @@
 //! 4. **Global signature** (optional fusion, [`GlobalSignature`]): the Shape-DNA
 //!    `g_i = ln(λ_i A)`, i = 1 … m, of the same spectrum (A = 1ᵀB1), scale invariant.
 //! 5. **Distance** between shapes X, Y: `d(X, Y) = d_bag(f_X, f_Y) + w_g · (1/m) Σ_i |g_i(X) − g_i(Y)|`
-//!    with d_bag = L1 or χ² ([`BagDistance`](crate::BagDistance)).
+//!    with d_bag = L1 or χ² ([`BagDistance`](crate::distance::BagDistance)).
 //!
 //! [`RetrievalIndex`] holds the vocabulary, the bag settings and one entry (bag + global
 //! signature) per indexed shape. A query costs one descriptor computation (one eigensolve) and

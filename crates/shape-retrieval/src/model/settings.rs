@@ -6,19 +6,19 @@ use super::{
     VertexWeights, DEFAULT_AREA_CAP,
 };
 use crate::bof::Assignment;
-use crate::check;
 use crate::descriptor::{DescriptorParams, ShapeDescriptors};
 use crate::distance::BagDistance;
 use crate::spatial::SpatialBag;
-use crate::RetrievalError;
-use mesh_fem::{Laplacian, PointCloud, TriMesh};
+use crate::{check, RetrievalError};
+use mesh_fem::cloud::PointCloud;
+use mesh_fem::{Laplacian, TriMesh};
 use serde::{Deserialize, Serialize};
 
 /// How a shape's vertices are described: the Laplacian, the cleaning, the eigenpairs and the
 /// dense descriptor. A vocabulary is only meaningful for descriptors computed with the same
 /// settings, so they are stored with it.
 ///
-/// **Point clouds** ([`Self::shape`] of a [`mesh_fem::PointCloud`]) always get the robust
+/// **Point clouds** ([`Self::shape`] of a [`mesh_fem::cloud::PointCloud`]) always get the robust
 /// Laplacian of their neighbourhoods ([`ShapeDescriptors::from_cloud`]), whatever
 /// [`Self::laplacian`] says, and of the cleaning steps only those that need no faces apply:
 /// despiking (on the neighbourhood mesh's adjacency; the operators are then rebuilt from the
@@ -70,7 +70,7 @@ pub struct DescriptorSettings {
 impl Default for DescriptorSettings {
     fn default() -> Self {
         Self {
-            eigenpairs: crate::DEFAULT_EIGENPAIRS,
+            eigenpairs: crate::descriptor::DEFAULT_EIGENPAIRS,
             laplacian: Laplacian::default(),
             descriptor: DescriptorSpec::default(),
             smoothing: None,

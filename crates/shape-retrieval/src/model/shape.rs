@@ -1,13 +1,14 @@
 //! What an index describes: a triangle mesh or a point cloud ([`ShapeRef`], [`AsShape`]).
 //!
-//! Both give the same [`ShapeDescriptors`](crate::ShapeDescriptors) — L, B, D and their
+//! Both give the same [`ShapeDescriptors`](crate::descriptor::ShapeDescriptors) — L, B, D and their
 //! eigenpairs — so everything after [`super::DescriptorSettings::shape`] (descriptors,
 //! vocabularies, bags, distances) is one pipeline, and one collection may mix meshes and
 //! clouds. A mesh is assembled with the Laplacian of the settings
 //! ([`super::DescriptorSettings::laplacian`]), a cloud always with the robust construction
-//! ([`mesh_fem::assemble_cloud`]).
+//! ([`mesh_fem::cloud::assemble_cloud`]).
 
-use mesh_fem::{PointCloud, TriMesh};
+use mesh_fem::cloud::PointCloud;
+use mesh_fem::TriMesh;
 
 /// A shape to describe, borrowed: a triangle mesh or a point cloud.
 #[derive(Clone, Copy, Debug)]

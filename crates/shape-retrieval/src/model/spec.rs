@@ -1,10 +1,9 @@
 //! [`DescriptorSpec`]: a dense descriptor with its parameters, and the one place it is computed.
 
-use crate::check;
 use crate::descriptor::{Descriptor, DescriptorParams, ShapeDescriptors};
 use crate::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalization, TimeSampling};
 use crate::sihks::{scale_invariant_hks, SihksParams, TimeUnit};
-use crate::RetrievalError;
+use crate::{check, RetrievalError};
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 use wfem_heat::KernelDiagonal;
@@ -136,7 +135,7 @@ impl DescriptorSpec {
     }
 
     /// A descriptor with the times and SI-HKS options of `params` (the parameters of
-    /// [`crate::ShapeDescriptors::dense`]; area-HKS takes its explicit times, or none).
+    /// [`crate::descriptor::ShapeDescriptors::dense`]; area-HKS takes its explicit times, or none).
     pub fn with_params(descriptor: Descriptor, params: &DescriptorParams) -> Self {
         let times = params.times.clone();
         match descriptor {

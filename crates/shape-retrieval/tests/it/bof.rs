@@ -5,10 +5,11 @@ use crate::common;
 use common::{dense_kernel_matrix, dense_spectrum};
 use faer::Mat;
 use mesh_fem::generate::{bumpy, icosphere, irregular_sphere};
-use shape_retrieval::{
-    evaluate, heat_kernel_signature, l1_distance, pairwise_l1, vertex_areas, HksParams, RetrievalError, Spectrum,
-    SpectrumNormalization, TimeSampling, Vocabulary, VocabularyParams,
-};
+use shape_retrieval::bof::{vertex_areas, Vocabulary, VocabularyParams};
+use shape_retrieval::distance::{l1_distance, pairwise_l1};
+use shape_retrieval::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalization, TimeSampling};
+use shape_retrieval::retrieval::evaluate;
+use shape_retrieval::RetrievalError;
 
 /// log HKS at 6 fixed times of the unit-area-normalized spectrum (first 80 eigenpairs).
 fn descriptors(s: &common::DenseSpectrum) -> Mat<f64> {

@@ -4,12 +4,14 @@
 //! shape described with them.
 
 use crate::common::small_settings;
+use mesh_fem::cloud::PointCloud;
 use mesh_fem::generate::{bumpy, icosphere, torus};
-use mesh_fem::{assemble, AssemblyParams, Laplacian, Lumping, PointCloud, RobustParams, TriMesh};
-use shape_retrieval::{
-    DescriptorSettings, RetrievalError, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeRef, Smoothing,
+use mesh_fem::{assemble, AssemblyParams, Laplacian, Lumping, RobustParams, TriMesh};
+use shape_retrieval::model::{
+    DescriptorSettings, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeRef, Smoothing,
 };
-use wfem_heat::rng::SplitMix64;
+use shape_retrieval::RetrievalError;
+use shifted_solve::rng::SplitMix64;
 
 /// n points uniform on the mesh's surface, seeded (the workspace's one generator).
 fn cloud_of(mesh: &TriMesh, n: usize, seed: u64) -> PointCloud {
@@ -92,7 +94,7 @@ fn a_cloud_is_described_by_its_robust_operators_and_skips_the_mesh_repairs() {
     let shape = settings.shape(&cloud).unwrap();
     assert_eq!(shape.described_vertices(), POINTS);
     assert_eq!(shape.mesh().positions(), cloud.positions());
-    let reference = mesh_fem::assemble_cloud(
+    let reference = mesh_fem::cloud::assemble_cloud(
         &cloud,
         &Default::default(),
         &AssemblyParams {
@@ -211,7 +213,8 @@ fn a_vocabulary_brings_its_laplacian_to_the_index_and_its_queries() {
     robust.descriptor.laplacian = Laplacian::Robust(RobustParams::default());
     robust.descriptor.eigenpairs = 20;
     let features = ShapeFeatures::compute_many(&meshes, &robust.descriptor, &robust.bags).unwrap();
-    let vocabulary = shape_retrieval::VocabularyModel::train(&robust.descriptor, &robust.training, &features).unwrap();
+    let vocabulary =
+        shape_retrieval::model::VocabularyModel::train(&robust.descriptor, &robust.training, &features).unwrap();
     let cotan = RetrievalSettings {
         bags: robust.bags.clone(),
         ..small_settings()

@@ -7,11 +7,13 @@ use common::{dense_spectrum, rel_err, sig};
 use faer::Mat;
 use mesh_fem::generate::bumpy;
 use mesh_fem::{assemble, AssemblyParams, Lumping};
-use shape_retrieval::{
-    dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, RetrievalError, ShapeDescriptors,
-    SihksParams, TimeSampling, TimeUnit,
+use shape_retrieval::descriptor::{
+    dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, ShapeDescriptors,
 };
-use wfem_heat::Eigenbasis;
+use shape_retrieval::hks::TimeSampling;
+use shape_retrieval::sihks::{SihksParams, TimeUnit};
+use shape_retrieval::RetrievalError;
+use wfem_heat::spectral::Eigenbasis;
 
 const TIMES: [f64; 4] = [0.02, 0.1, 0.5, 2.0];
 

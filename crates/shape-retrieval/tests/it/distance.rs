@@ -1,6 +1,7 @@
 //! L1 and χ² bag distances against hand computations.
 
-use shape_retrieval::{chi_squared_distance, l1_distance, pairwise_distances, BagDistance, RetrievalError};
+use shape_retrieval::distance::{chi_squared_distance, l1_distance, pairwise_distances, BagDistance};
+use shape_retrieval::RetrievalError;
 use wfem_choice::Choice;
 
 #[test]

@@ -7,7 +7,8 @@ use mesh_fem::{generate, TriMesh};
 use shape_retrieval::eval::{
     evaluate_collection, evaluate_distances, evaluate_index, evaluate_rankings, parse_labels, ClassRule, Measures,
 };
-use shape_retrieval::{RetrievalError, RetrievalIndex, ShapeFeatures, VocabularyModel};
+use shape_retrieval::model::{RetrievalIndex, ShapeFeatures, VocabularyModel};
+use shape_retrieval::RetrievalError;
 use std::path::Path;
 use wfem_choice::Choice;
 

@@ -4,12 +4,11 @@
 use crate::common::{dense_spectrum, rel_err};
 use faer::Mat;
 use mesh_fem::generate;
-use shape_retrieval::{
-    exact_signature, heat_kernel_signature, signature_by_method, truncation_bound, truncation_estimate, HksMethod,
-    HksParams, HksSource, Spectrum, TimeSampling,
+use shape_retrieval::exact::{
+    exact_signature, signature_by_method, truncation_bound, truncation_estimate, HksMethod, HksSource,
 };
-use wfem_heat::KernelDiagonal;
-use wfem_heat::{DiagonalParams, HeatKernel, HeatParams};
+use shape_retrieval::hks::{heat_kernel_signature, HksParams, Spectrum, TimeSampling};
+use wfem_heat::{DiagonalParams, HeatKernel, HeatParams, KernelDiagonal};
 
 /// HKS (kernel-value convention) from the first k of the dense eigenpairs.
 fn truncated(s: &crate::common::DenseSpectrum, k: usize, times: &[f64]) -> Mat<f64> {

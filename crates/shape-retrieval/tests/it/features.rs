@@ -6,10 +6,9 @@ use common::{dense_spectrum, sig};
 use faer::Mat;
 use mesh_fem::generate::{bumpy, icosphere};
 use mesh_fem::TriMesh;
-use shape_retrieval::{
-    descriptor_distance, heat_kernel_signature, repeatability, FeatureSet, HksParams, RetrievalError, Spectrum,
-    SpectrumNormalization,
-};
+use shape_retrieval::features::{descriptor_distance, repeatability, FeatureSet};
+use shape_retrieval::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalization};
+use shape_retrieval::RetrievalError;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use wfem_heat::KernelDiagonal;
@@ -250,7 +249,7 @@ fn hks_robustness_scale_and_noise() {
     let dhk3 = HksParams {
         convention: KernelDiagonal::OperatorDiagonal,
         normalization: SpectrumNormalization::MaxEigenvalue,
-        times: shape_retrieval::TimeSampling::Explicit(vec![0.002, 0.005, 0.01, 0.02, 0.05, 0.1]),
+        times: shape_retrieval::hks::TimeSampling::Explicit(vec![0.002, 0.005, 0.01, 0.02, 0.05, 0.1]),
         ..Default::default()
     };
     let plain = HksParams {
@@ -289,7 +288,10 @@ fn local_maxima_of_height_and_brute_force() {
     // The height z has one maximum on the sphere: the topmost vertex.
     let z: Vec<f64> = mesh.positions().iter().map(|p| p[2]).collect();
     let top = (0..n).max_by(|&a, &b| z[a].total_cmp(&z[b])).unwrap() as u32;
-    assert_eq!(shape_retrieval::local_maxima(mesh.faces(), &z, 1).unwrap(), vec![top]);
+    assert_eq!(
+        shape_retrieval::features::local_maxima(mesh.faces(), &z, 1).unwrap(),
+        vec![top]
+    );
     // Pseudo-random values: compare with a brute-force k-ring from all-pairs hop distances.
     let mut state = 5u64;
     let values: Vec<f64> = (0..n)
@@ -302,7 +304,7 @@ fn local_maxima_of_height_and_brute_force() {
         .collect();
     let hops = all_pairs_hops(&mesh);
     for rings in [1, 2, 3] {
-        let got = shape_retrieval::local_maxima(mesh.faces(), &values, rings).unwrap();
+        let got = shape_retrieval::features::local_maxima(mesh.faces(), &values, rings).unwrap();
         let want: Vec<u32> = (0..n)
             .filter(|&v| {
                 (0..n)
@@ -316,18 +318,18 @@ fn local_maxima_of_height_and_brute_force() {
     // A constant function: ties go to the higher index, so the last vertex is a maximum and none
     // of its neighbours is.
     let flat = vec![1.0; n];
-    let flat_max = shape_retrieval::local_maxima(mesh.faces(), &flat, 1).unwrap();
+    let flat_max = shape_retrieval::features::local_maxima(mesh.faces(), &flat, 1).unwrap();
     let last = n - 1;
     assert!(flat_max.contains(&(last as u32)));
     assert!(flat_max
         .iter()
         .all(|&v| v as usize == last || hops[last][v as usize] > 1));
     assert!(matches!(
-        shape_retrieval::local_maxima(mesh.faces(), &flat, 0),
+        shape_retrieval::features::local_maxima(mesh.faces(), &flat, 0),
         Err(RetrievalError::InvalidParameter { .. })
     ));
     assert!(matches!(
-        shape_retrieval::local_maxima(&[[0, 1, 99]], &[1.0, 2.0], 1),
+        shape_retrieval::features::local_maxima(&[[0, 1, 99]], &[1.0, 2.0], 1),
         Err(RetrievalError::VertexOutOfRange { index: 99, .. })
     ));
 }

@@ -5,10 +5,10 @@ use crate::common;
 use common::{dense_kernel_matrix, dense_spectrum, rel_err, sig};
 use faer::Mat;
 use mesh_fem::generate::{bumpy, icosphere};
-use shape_retrieval::hks::auto_times;
-use shape_retrieval::{
-    heat_kernel_signature, heat_trace, HksParams, RetrievalError, Spectrum, SpectrumNormalization, TimeSampling,
+use shape_retrieval::hks::{
+    auto_times, heat_kernel_signature, heat_trace, HksParams, Spectrum, SpectrumNormalization, TimeSampling,
 };
+use shape_retrieval::RetrievalError;
 use wfem_heat::KernelDiagonal;
 
 #[test]
@@ -337,7 +337,7 @@ fn bad_inputs_are_typed_errors() {
 }
 
 /// Every 16th vertex and every 11th time, 6 significant digits.
-fn table(hks: &shape_retrieval::HeatKernelSignature) -> String {
+fn table(hks: &shape_retrieval::hks::HeatKernelSignature) -> String {
     let mut out = String::from("times:");
     let cols: Vec<usize> = (0..hks.times.len()).step_by(11).collect();
     for &j in &cols {
@@ -355,7 +355,7 @@ fn table(hks: &shape_retrieval::HeatKernelSignature) -> String {
 }
 
 /// The snapshots were taken with 100 automatic times (the default before it became
-/// [`shape_retrieval::DEFAULT_NUM_TIMES`] = 16); every 11th column is shown.
+/// [`shape_retrieval::hks::DEFAULT_NUM_TIMES`] = 16); every 11th column is shown.
 fn hundred() -> HksParams {
     HksParams {
         times: shape_retrieval::hks::TimeSampling::Auto { num_times: 100 },

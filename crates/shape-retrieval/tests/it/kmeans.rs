@@ -1,7 +1,8 @@
 //! k-means: recovery of separated clusters, determinism, Lloyd optimality, errors.
 
 use faer::Mat;
-use shape_retrieval::{kmeans, KmeansParams, RetrievalError};
+use shape_retrieval::kmeans::{kmeans, KmeansParams};
+use shape_retrieval::RetrievalError;
 
 /// Points around `centers` with deterministic pseudo-random offsets of size ≤ `spread`.
 fn blobs(centers: &[[f64; 3]], per: usize, spread: f64) -> (Mat<f64>, Vec<usize>) {

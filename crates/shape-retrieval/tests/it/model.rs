@@ -9,11 +9,13 @@ use common::{sig, small_collection, small_settings};
 use faer::Mat;
 use mesh_fem::generate::{grid, icosphere};
 use mesh_fem::TriMesh;
-use shape_retrieval::{
-    Assignment, BagDistance, Denoising, DescriptorSettings, DescriptorSpec, GlobalSignature, IndexEntry,
-    RetrievalError, RetrievalIndex, ShapeFeatures, ShapeSignature, Smoothing, TrainingParams, VertexWeights,
-    Vocabulary, VocabularyModel,
+use shape_retrieval::bof::{Assignment, Vocabulary};
+use shape_retrieval::distance::BagDistance;
+use shape_retrieval::model::{
+    Denoising, DescriptorSettings, DescriptorSpec, GlobalSignature, IndexEntry, RetrievalIndex, ShapeFeatures,
+    ShapeSignature, Smoothing, TrainingParams, VertexWeights, VocabularyModel,
 };
+use shape_retrieval::RetrievalError;
 
 fn small_index() -> RetrievalIndex {
     RetrievalIndex::build(&small_collection(), &small_settings(), None).unwrap()
@@ -248,12 +250,12 @@ fn smoothing_is_the_heat_kernel_applied_to_the_coordinates() {
     let c = 1e-3;
     let smoothed = Smoothing { time: c }.apply(&sphere).unwrap();
     let ops = mesh_fem::assemble(&sphere, &Default::default()).unwrap();
-    let area: f64 = shape_retrieval::vertex_areas(ops.mass.as_ref()).iter().sum();
+    let area: f64 = shape_retrieval::bof::vertex_areas(ops.mass.as_ref()).iter().sum();
     let dense = wfem_heat::HeatKernel::new(
         &ops,
         wfem_heat::HeatParams {
-            mass: wfem_heat::Mass::Consistent,
-            method: wfem_heat::Method::Dense,
+            mass: mesh_fem::Mass::Consistent,
+            method: wfem_heat::method::Method::Dense,
         },
     )
     .unwrap();
@@ -279,7 +281,7 @@ fn smoothing_is_the_heat_kernel_applied_to_the_coordinates() {
 
 /// The mesh with every vertex moved by N(0, σ²I₃) (deterministic).
 fn noisy(mesh: &TriMesh, sigma: f64) -> TriMesh {
-    let mut rng = wfem_heat::rng::SplitMix64::new(11);
+    let mut rng = shifted_solve::rng::SplitMix64::new(11);
     let p = mesh
         .positions()
         .iter()
@@ -387,7 +389,7 @@ fn invalid_settings_and_inputs_are_typed_errors() {
         tau_max: 1.0,
         tau_step: 0.5,
         frequencies: 5,
-        time_unit: shape_retrieval::TimeUnit::Area(1.0),
+        time_unit: shape_retrieval::sihks::TimeUnit::Area(1.0),
         convention: wfem_heat::KernelDiagonal::KernelValue,
     };
     assert!(matches!(
@@ -500,11 +502,12 @@ fn punched(mesh: &TriMesh, seeds: &[u32]) -> (TriMesh, Vec<usize>) {
         .copied()
         .filter(|f| !f.iter().any(|v| seeds.contains(v)))
         .collect();
-    let opts = mesh_fem::RepairOptions {
+    let opts = mesh_fem::validate::RepairOptions {
         drop_unreferenced_vertices: true,
         ..Default::default()
     };
-    let (holed, report) = mesh_fem::repair(&TriMesh::new(mesh.positions().to_vec(), faces).unwrap(), &opts).unwrap();
+    let (holed, report) =
+        mesh_fem::validate::repair(&TriMesh::new(mesh.positions().to_vec(), faces).unwrap(), &opts).unwrap();
     let mut kept = vec![0; holed.n_vertices()];
     for (old, new) in report.vertex_map.iter().enumerate() {
         if let Some(new) = new {
@@ -527,7 +530,7 @@ fn hole_filling_brings_a_holed_shape_back_to_the_intact_one() {
         hole_filling: None,
         ..filled.clone()
     };
-    let bags = shape_retrieval::BagSettings::default();
+    let bags = shape_retrieval::model::BagSettings::default();
     let reference = ShapeFeatures::compute("intact", &intact, &filled, &bags).unwrap();
     // A closed shape is described alike with and without hole filling.
     let reference_open = ShapeFeatures::compute("intact", &intact, &open, &bags).unwrap();
@@ -554,7 +557,7 @@ fn hole_filling_brings_a_holed_shape_back_to_the_intact_one() {
     assert!(e_with < 0.5 * e_without, "filled {e_with} vs open {e_without}");
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         let settings = DescriptorSettings {
-            hole_filling: Some(shape_retrieval::HoleFilling { max_perimeter: bad }),
+            hole_filling: Some(shape_retrieval::model::HoleFilling { max_perimeter: bad }),
             ..filled.clone()
         };
         assert!(matches!(
@@ -609,7 +612,7 @@ fn features_from_parts_keep_the_own_vertices_and_check_sizes() {
     ));
     // The weights cover the own vertices only.
     assert_eq!(
-        shape_retrieval::BagSettings::default()
+        shape_retrieval::model::BagSettings::default()
             .weights
             .compute(&shape)
             .unwrap()

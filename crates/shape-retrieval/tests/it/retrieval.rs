@@ -1,7 +1,8 @@
 //! Retrieval metrics against hand-computed values and a brute-force reference.
 
 use faer::Mat;
-use shape_retrieval::{average_precision, evaluate, precision_recall, rank, RetrievalError};
+use shape_retrieval::retrieval::{average_precision, evaluate, precision_recall, rank};
+use shape_retrieval::RetrievalError;
 
 #[test]
 fn hand_computed_average_precision() {

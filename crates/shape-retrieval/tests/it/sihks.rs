@@ -5,10 +5,9 @@ use crate::common;
 use common::{dense_spectrum, sig};
 use faer::Mat;
 use mesh_fem::generate::bumpy;
-use shape_retrieval::{
-    heat_kernel_signature, scale_invariant_hks, HksParams, RetrievalError, SihksParams, Spectrum, TimeSampling,
-    TimeUnit,
-};
+use shape_retrieval::hks::{heat_kernel_signature, HksParams, Spectrum, TimeSampling};
+use shape_retrieval::sihks::{scale_invariant_hks, SihksParams, TimeUnit};
+use shape_retrieval::RetrievalError;
 
 /// Bronstein & Kokkinos' absolute window (the SHREC'11 parameter file): t = 2^τ, τ ∈ [1, 25] in
 /// steps of 1/16, K = 6 — the default before issue #13.
@@ -223,7 +222,7 @@ fn sihks_area_unit_is_exactly_scale_invariant() {
     // and log h moves by −2 ln β only: the descriptor is unchanged to rounding, for any β (the
     // absolute unit of the test above changes by up to 4e−3 even inside its window).
     let s = dense_spectrum(&bumpy(2));
-    let area: f64 = shape_retrieval::vertex_areas(s.ops.mass.as_ref()).iter().sum();
+    let area: f64 = shape_retrieval::bof::vertex_areas(s.ops.mass.as_ref()).iter().sum();
     let params = SihksParams::default();
     let base = Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref())
         .unwrap()
@@ -264,7 +263,7 @@ fn sihks_area_unit_is_exactly_scale_invariant() {
 fn snapshot_sihks_area_unit_on_bumpy() {
     // The default window (area unit) on the unscaled bumpy sphere: a change of default shows here.
     let s = dense_spectrum(&bumpy(2));
-    let area: f64 = shape_retrieval::vertex_areas(s.ops.mass.as_ref()).iter().sum();
+    let area: f64 = shape_retrieval::bof::vertex_areas(s.ops.mass.as_ref()).iter().sum();
     let spectrum = Spectrum::new(&s.eigenvalues, s.eigenvectors.as_ref())
         .unwrap()
         .with_area(area)
@@ -285,7 +284,7 @@ fn snapshot_sihks_area_unit_on_bumpy() {
 /// isosceles triangle: A = 1/2, edges 1, 1, √2.
 #[test]
 fn time_units_on_a_mesh() {
-    use shape_retrieval::MeshLengths;
+    use shape_retrieval::sihks::MeshLengths;
     use wfem_choice::Choice;
     let mesh =
         mesh_fem::TriMesh::new(vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();

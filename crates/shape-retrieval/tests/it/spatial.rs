@@ -5,11 +5,10 @@ use crate::common::{dense_spectrum, small_collection, small_settings};
 use faer::Mat;
 use mesh_fem::generate::{bumpy, icosphere};
 use shape_retrieval::global::{GlobalKind, BIHARMONIC_BINS};
+use shape_retrieval::model::{DescriptorSettings, GlobalSignature, RetrievalIndex, ShapeFeatures, VertexWeights};
 use shape_retrieval::spatial::{ShapeSpectrum, SpatialBag};
-use shape_retrieval::{
-    DescriptorSettings, GlobalSignature, IndexStore, JsonFile, RetrievalError, RetrievalIndex, ShapeFeatures,
-    VertexWeights,
-};
+use shape_retrieval::store::{IndexStore, JsonFile};
+use shape_retrieval::RetrievalError;
 use wfem_choice::Choice;
 
 /// A fixed assignment Θ (n × V, rows summing to 1) from a smooth function of the position.
@@ -29,7 +28,7 @@ fn spatial_histogram_is_the_heat_flow_between_words() {
     let n = mesh.n_vertices();
     let theta = assignment(&mesh, 4);
     let weights: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * (i % 5) as f64).collect();
-    let area: f64 = shape_retrieval::vertex_areas(s.ops.mass.as_ref()).iter().sum();
+    let area: f64 = shape_retrieval::bof::vertex_areas(s.ops.mass.as_ref()).iter().sum();
     let bag = SpatialBag { time: 0.01 };
     let t = 0.01 * area;
     let kernel = Mat::from_fn(n, n, |i, j| {
@@ -68,7 +67,7 @@ fn spatial_histogram_is_the_heat_flow_between_words() {
     assert!(matches!(e, RetrievalError::InvalidParameter { .. }), "{e}");
 }
 
-fn spatial_settings() -> shape_retrieval::RetrievalSettings {
+fn spatial_settings() -> shape_retrieval::model::RetrievalSettings {
     let mut settings = small_settings();
     settings.bags.spatial = Some(SpatialBag::default());
     settings
@@ -220,9 +219,9 @@ fn repair_damped_weights_fade_next_to_added_vertices() {
         .filter(|f| f.iter().all(|&v| keep[v as usize]))
         .copied()
         .collect();
-    let holed = mesh_fem::repair(
+    let holed = mesh_fem::validate::repair(
         &mesh_fem::TriMesh::new(intact.positions().to_vec(), faces).unwrap(),
-        &mesh_fem::RepairOptions {
+        &mesh_fem::validate::RepairOptions {
             drop_unreferenced_vertices: true,
             ..Default::default()
         },

@@ -1,7 +1,8 @@
 //! z-scoring against a hand computation and its error paths.
 
 use faer::Mat;
-use shape_retrieval::{RetrievalError, Standardizer};
+use shape_retrieval::standardize::Standardizer;
+use shape_retrieval::RetrievalError;
 
 #[test]
 fn statistics_match_a_hand_computation() {

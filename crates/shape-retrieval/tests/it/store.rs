@@ -3,7 +3,9 @@
 use crate::common;
 
 use common::{small_collection, small_settings};
-use shape_retrieval::{IndexStore, JsonFile, RetrievalError, RetrievalIndex, VocabularyStore};
+use shape_retrieval::model::RetrievalIndex;
+use shape_retrieval::store::{IndexStore, JsonFile, VocabularyStore};
+use shape_retrieval::RetrievalError;
 
 fn index() -> RetrievalIndex {
     RetrievalIndex::build(&small_collection(), &small_settings(), None).unwrap()

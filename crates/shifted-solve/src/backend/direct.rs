@@ -10,8 +10,7 @@
 
 use super::{relative, Pole, PoleReport, ShiftedSolve, SolveMethod};
 use crate::{OperatorPair, SolveError, SpdFactor};
-use faer::c64;
-use faer::{Mat, MatMut, MatRef};
+use faer::{c64, Mat, MatMut, MatRef};
 use rayon::prelude::*;
 use std::fmt::Debug;
 use std::sync::Arc;
@@ -48,7 +47,7 @@ pub(crate) struct DirectSolve {
 }
 
 /// The power of two 2⁻ᵉ with 2ᵉ ≈ the largest |diagonal entry| of `tL − zM`
-/// ([`crate::pow2_scale`]).
+/// ([`crate::lanczos::pow2_scale`]).
 pub(crate) fn shift_scale(pair: &OperatorPair, t: f64, z: c64) -> f64 {
     let l = pair.diagonal(1.0, 0.0);
     let m = pair.diagonal(0.0, 1.0);
@@ -57,7 +56,7 @@ pub(crate) fn shift_scale(pair: &OperatorPair, t: f64, z: c64) -> f64 {
         .zip(&m)
         .map(|(&l, &m)| c64::new(t * l - z.re * m, -z.im * m).norm())
         .fold(0.0f64, f64::max);
-    crate::pow2_scale(big).0
+    crate::lanczos::pow2_scale(big).0
 }
 
 /// Factors every pole at t (in parallel): complex poles with `complex` (given the scaled

@@ -3,8 +3,8 @@
 //! real pole (iterations: `crate::iterative`).
 
 use super::{relative, Pole, PoleReport, PreparedBackend, ShiftedSolve, SolveMethod};
-use crate::iterative::{minres, pcg, PrecondFactor};
-use crate::{MinresParams, OperatorPair, Preconditioner, PreconditionerShift, SolveError};
+use crate::iterative::{minres, pcg, MinresParams, PrecondFactor, Preconditioner, PreconditionerShift};
+use crate::{OperatorPair, SolveError};
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
 use std::sync::Arc;

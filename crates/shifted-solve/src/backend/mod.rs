@@ -21,9 +21,10 @@ pub mod lu;
 pub mod minres;
 pub mod multishift;
 
-use crate::{KrylovParams, MinresParams, OperatorPair, SolveError};
-use faer::c64;
-use faer::{Mat, MatRef};
+use crate::function::KrylovParams;
+use crate::iterative::MinresParams;
+use crate::{OperatorPair, SolveError};
+use faer::{c64, Mat, MatRef};
 use std::fmt::Debug;
 use std::sync::Arc;
 
@@ -104,7 +105,7 @@ pub(crate) struct Pole {
 
 impl Pole {
     /// The poles of `approx`: the upper-half-plane ones, then the real pole of odd degrees.
-    pub fn all(approx: &crate::RationalApprox) -> Vec<Pole> {
+    pub fn all(approx: &crate::poles::RationalApprox) -> Vec<Pole> {
         let mut poles: Vec<Pole> = approx
             .poles
             .iter()

@@ -11,17 +11,16 @@
 //!   `r_n(tM⁻¹L) F = c0 F + S Q(S) F = R(S) F` with `R(s) = r_n((1/s − 1)/γ)`;
 //! - the resolvent `Σ_j w_j Re(c_j (tL − z_jM)⁻¹ G) = Q(S) A⁻¹ G`.
 //!
-//! One Lanczos run per right-hand side ([`crate::lanczos_function`]) evaluates the sum in the
+//! One Lanczos run per right-hand side ([`crate::function::lanczos_function`]) evaluates the sum in the
 //! Galerkin sense of multi-shift FOM. Its tolerance controls the *sum* (what K_t f needs); the
 //! per-pole Galerkin residuals are reported, and the poles nearest the spectrum of S converge
 //! more slowly than the sum.
 
 use super::{Pole, PoleReport, PreparedBackend, ShiftedSolve, SolveMethod};
-use crate::function::{lanczos_function_many, LanczosOutcome};
+use crate::function::{lanczos_function_many, KrylovParams, LanczosOutcome};
 use crate::lanczos::tridiagonal_eigen;
-use crate::{KrylovParams, OperatorPair, SolveError, SpdFactor};
-use faer::c64;
-use faer::{Mat, MatRef};
+use crate::{OperatorPair, SolveError, SpdFactor};
+use faer::{c64, Mat, MatRef};
 use std::sync::Arc;
 
 /// Columns stepped together (one block solve per Lanczos step).

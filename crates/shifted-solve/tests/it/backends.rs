@@ -2,7 +2,12 @@
 use crate::common;
 
 use common::*;
+use faer::c64;
 use faer::Mat;
+use shifted_solve::backend::{Backend, BatchReport, SolveMethod};
+use shifted_solve::function::KrylovParams;
+use shifted_solve::iterative::{MinresParams, Preconditioner, PreconditionerShift};
+use shifted_solve::poles::{RationalApprox, DEFAULT_DEGREE};
 use shifted_solve::*;
 
 fn backends() -> Vec<(&'static str, Backend)> {

@@ -2,7 +2,11 @@
 use crate::common;
 
 use common::*;
+use faer::c64;
 use faer::{Mat, Side};
+use shifted_solve::backend::Backend;
+use shifted_solve::iterative::MinresParams;
+use shifted_solve::poles::RationalApprox;
 use shifted_solve::*;
 
 /// Dense κ₂(tL − zB) and κ(diag(P,P)⁻¹A₂), P = tL + sB.

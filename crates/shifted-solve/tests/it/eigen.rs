@@ -1,4 +1,4 @@
-//! Thick-restart block Lanczos ([`shifted_solve::largest_eigenpairs`]) on the shift-inverted
+//! Thick-restart block Lanczos ([`shifted_solve::eigen::largest_eigenpairs`]) on the shift-inverted
 //! 1-D finite-element pair, whose generalized spectrum is known in closed form, so the reference
 //! is independent of every eigensolver in the workspace.
 //!
@@ -8,9 +8,8 @@
 //! `λ_j = (6/h²)(1 − cos θ_j)/(2 + cos θ_j)`, θ_j = jπh, j = 1…N (all simple).
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, MatRef, Par};
-use shifted_solve::{
-    largest_eigenpairs, symmetric_block_mul, BlockLanczosOutcome, BlockLanczosParams, CholeskyPattern, SolveError,
-};
+use shifted_solve::eigen::{largest_eigenpairs, symmetric_block_mul, BlockLanczosOutcome, BlockLanczosParams};
+use shifted_solve::{CholeskyPattern, SolveError};
 
 fn fem_1d(nodes: usize) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
     let h = 1.0 / (nodes + 1) as f64;

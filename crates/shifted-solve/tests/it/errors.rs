@@ -4,6 +4,9 @@ use crate::common;
 use common::*;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
+use shifted_solve::backend::Backend;
+use shifted_solve::iterative::{MinresParams, Preconditioner, PreconditionerShift};
+use shifted_solve::poles::RationalApprox;
 use shifted_solve::*;
 
 fn path_laplacian() -> SparseColMat<usize, f64> {

@@ -4,6 +4,9 @@
 //! report it ([`SolveError::NoConvergence`] with the residual reached), never fall back to LU.
 use faer::sparse::SparseColMat;
 use faer::{c64, Mat};
+use shifted_solve::backend::{Backend, BatchReport, SolveMethod};
+use shifted_solve::iterative::{MinresParams, Preconditioner};
+use shifted_solve::poles::RationalApprox;
 use shifted_solve::*;
 
 use crate::common;

@@ -1,5 +1,7 @@
 //! The shipped rational approximations against e^{-x} itself (paper Eq. (10), docs/NUMERICS.md §2.2).
 #![allow(clippy::excessive_precision)] // published constants are quoted verbatim
+use faer::c64;
+use shifted_solve::poles::{RationalApprox, DEFAULT_DEGREE, PAPER_DEGREE};
 use shifted_solve::*;
 
 fn grid() -> Vec<f64> {

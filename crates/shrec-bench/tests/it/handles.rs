@@ -21,8 +21,8 @@ fn handles_raise_the_genus_by_one_each() {
         validate_output(&t, b.mesh.n_vertices(), b.diameter).unwrap();
         let pairs = t.params["handles"].as_array().unwrap();
         assert_eq!(pairs.len(), handle_count(s), "strength {s}");
-        let report = mesh_fem::validate(&t.mesh);
-        let stats = mesh_fem::stats(&t.mesh);
+        let report = mesh_fem::validate::validate(&t.mesh);
+        let stats = mesh_fem::stats::stats(&t.mesh);
         assert!(report.is_usable(), "strength {s}");
         assert_eq!(stats.n_boundary_loops, 0, "strength {s}: closed");
         assert_eq!(

@@ -3,8 +3,7 @@
 
 use super::Coefficients;
 use crate::basis::{canonical_basis, check_anchors};
-use crate::check;
-use crate::{HeatError, HeatKernel};
+use crate::{check, HeatError, HeatKernel};
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
@@ -86,7 +85,7 @@ pub fn fit_global_component(
     };
     // Every rule is homogeneous of degree 1 in f: work on f/2ᵉ with 2ᵉ ≈ max|f| (exact), so
     // that the M-products of a field of 1e308 do not overflow, and scale back.
-    let (down, up) = shifted_solve::pow2_scale(linf(f));
+    let (down, up) = shifted_solve::lanczos::pow2_scale(linf(f));
     if down != 1.0 {
         let scaled: Vec<f64> = f.iter().map(|x| x * down).collect();
         let mut g = fit.unit(&scaled)?;

@@ -8,7 +8,8 @@
 //! tens of per cent). Each component's own matrices are well scaled.
 
 use super::{spread_times, PreparedMethod, TimesResult};
-use crate::{HeatError, Method, Operators};
+use crate::method::Method;
+use crate::{HeatError, Operators};
 use faer::{Mat, MatRef};
 
 /// Components beyond this count are solved jointly (debris of thousands of pieces would

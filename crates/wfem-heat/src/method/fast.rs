@@ -9,7 +9,7 @@
 //! `K_t f = g(S) f`, with `g(s) = exp(−(1/s − 1)/γ)`,
 //!
 //! and the kernel matrix `K̃_t = K_t M⁻¹ = g(S) S⁻¹ A⁻¹ = (g(s)/s)(S) A⁻¹` needs no solve with
-//! M. m steps of Lanczos in the M-inner product ([`shifted_solve::lanczos_function`]) give
+//! M. m steps of Lanczos in the M-inner product ([`shifted_solve::function::lanczos_function`]) give
 //! `K_t f ≈ ‖f‖_M V_m g(T_m) e₁`. Because g is smooth on (0, 1] and its poles are all at
 //! s = 0, the convergence does not depend on ‖tL‖ (mesh size or t), only on the accuracy
 //! wanted: a few tens of solves reach 1e−12.
@@ -17,10 +17,10 @@
 use super::{FactorCache, PreparedMethod, TimesResult};
 use crate::{HeatError, Operators};
 use faer::{Mat, MatMut, MatRef};
-use shifted_solve::{
+use shifted_solve::function::{
     lanczos_function, lanczos_function_many, lanczos_functions, lanczos_functions_many, KrylovParams, LanczosOutcome,
-    SolveError,
 };
+use shifted_solve::SolveError;
 
 /// Memory for the Krylov bases of the columns run in lockstep (doubles; 256 MB).
 const BASIS_BUDGET: usize = 32 << 20;

@@ -24,7 +24,9 @@ mod taylor;
 use crate::spectral::{EigenParams, Eigenbasis};
 use crate::{HeatError, Operators};
 use faer::{Mat, MatRef};
-use shifted_solve::{Backend, KrylovParams, SpdFactor};
+use shifted_solve::backend::Backend;
+use shifted_solve::function::KrylovParams;
+use shifted_solve::SpdFactor;
 use std::fmt::Debug;
 use std::sync::{Arc, Mutex};
 
@@ -34,7 +36,7 @@ use std::sync::{Arc, Mutex};
 pub enum Method {
     /// All n eigenpairs by a dense generalized eigendecomposition, `K_t f = X e^{−tΛ} XᵀMf`
     /// (Eq. (6)). Exact to rounding; O(n³) once, small meshes only
-    /// (n ≤ [`crate::DENSE_MAX_VERTICES`]).
+    /// (n ≤ [`crate::spectral::DENSE_MAX_VERTICES`]).
     Dense,
     /// The truncated spectral representation with the k smallest eigenpairs,
     /// `F_k = X_k e^{−tΛ_k} X_kᵀ M f` (Eq. (8)). Its error is the discarded tail, about
@@ -68,9 +70,9 @@ pub enum Method {
     /// E_degree‖f‖_M (Eq. (14); E_16 = 2.1e−16, floored by rounding at ≈2e−14).
     /// The backend is the direct complex-symmetric LDLᵀ (default), the pivoted complex LU,
     /// MINRES (the paper's choice), or the multi-shift Lanczos that solves every pole in one
-    /// Krylov space of (M + γtL)⁻¹M with a single real Cholesky; see [`shifted_solve::Backend`].
+    /// Krylov space of (M + γtL)⁻¹M with a single real Cholesky; see [`shifted_solve::backend::Backend`].
     Rational {
-        /// Degree n of r_n (see [`shifted_solve::SHIPPED_DEGREES`]); E_n ≈ 9.289⁻ⁿ.
+        /// Degree n of r_n (see [`shifted_solve::poles::SHIPPED_DEGREES`]); E_n ≈ 9.289⁻ⁿ.
         degree: usize,
         /// How each shifted system is solved.
         backend: Backend,
@@ -85,7 +87,7 @@ wfem_choice::registry! {
     Method as "heat method" {
         Method::Fast(_) = Method::fast() => "fast":
             "shift-and-invert rational Krylov with one real factorization per t (beyond the paper; exact to ≈1e−12 and the quickest: the default)",
-        Method::Rational { .. } = Method::rational(shifted_solve::DEFAULT_DEGREE) => "rational" ["chebyshev", "cram"]:
+        Method::Rational { .. } = Method::rational(shifted_solve::poles::DEFAULT_DEGREE) => "rational" ["chebyshev", "cram"]:
             "the paper's rational Chebyshev approximation, r shifted sparse solves (Eq. (11)–(13))",
         Method::Spectral { .. } = Method::spectral(DEFAULT_SPECTRAL_EIGENPAIRS) => "spectral" ["truncated"]:
             "the truncated spectral sum of the k smallest eigenpairs (Eq. (8)); inaccurate at small t",
@@ -133,10 +135,16 @@ impl Method {
         };
         let rational = !matches!(self, Method::Rational { .. });
         if options.degree.is_some() && rational {
-            return Err(misplaced("degree", Method::rational(shifted_solve::DEFAULT_DEGREE)));
+            return Err(misplaced(
+                "degree",
+                Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
+            ));
         }
         if options.backend.is_some() && rational {
-            return Err(misplaced("backend", Method::rational(shifted_solve::DEFAULT_DEGREE)));
+            return Err(misplaced(
+                "backend",
+                Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
+            ));
         }
         if options.eigenpairs.is_some() && !matches!(self, Method::Spectral { .. }) {
             return Err(misplaced("eigenpairs", Method::spectral(DEFAULT_SPECTRAL_EIGENPAIRS)));
@@ -299,7 +307,7 @@ pub(crate) trait PreparedMethod: Send + Sync + Debug {
         _ops: &Operators,
         _f: &[f64],
         _t: f64,
-    ) -> Option<Result<(Vec<f64>, shifted_solve::LanczosOutcome), HeatError>> {
+    ) -> Option<Result<(Vec<f64>, shifted_solve::function::LanczosOutcome), HeatError>> {
         None
     }
 }
@@ -311,7 +319,7 @@ pub(crate) fn fast_report(
     ops: &Operators,
     f: &[f64],
     t: f64,
-) -> Result<(Vec<f64>, shifted_solve::LanczosOutcome), HeatError> {
+) -> Result<(Vec<f64>, shifted_solve::function::LanczosOutcome), HeatError> {
     match prepared.fast_report(ops, f, t) {
         Some(result) => result,
         None => fast::Fast::new(ops, KrylovParams::default())?.apply_with_outcome(ops, f, t),

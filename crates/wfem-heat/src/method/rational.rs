@@ -1,11 +1,13 @@
 //! [`super::Method::Rational`], the paper's generalized Chebyshev method (Eq. (11)–(13)):
 //! `K_t F ≈ c0 F + 2 Re Σ_j c_j (tL − z_j M)⁻¹ M F` with the poles of the best rational
-//! approximation of e^{−x} on [0, ∞), solved by a [`shifted_solve::Backend`].
+//! approximation of e^{−x} on [0, ∞), solved by a [`shifted_solve::backend::Backend`].
 
 use super::PreparedMethod;
 use crate::{HeatError, Operators};
 use faer::{Mat, MatRef};
-use shifted_solve::{Backend, RationalApprox, RationalFactors, ShiftedSolver};
+use shifted_solve::backend::Backend;
+use shifted_solve::poles::RationalApprox;
+use shifted_solve::{RationalFactors, ShiftedSolver};
 use std::sync::{Arc, Mutex};
 
 /// The backend prepared on the context's pair, the approximant, and the factors of the last t.

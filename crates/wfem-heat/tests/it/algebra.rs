@@ -4,15 +4,17 @@
 
 use crate::common;
 
-use common::wfem;
-use common::{dot, matvec, ops_of, unit};
+use common::{dot, matvec, ops_of, unit, wfem};
 use faer::Mat;
+use mesh_fem::Mass;
 use mesh_fem::{generate, FemOperators};
+use wfem_heat::method::Method;
 use wfem_heat::rkhs::{
     diffusion_embeddings, heat_inner_product, inverse_cg, inverse_spectral, reproducing_embedding,
     reproducing_kernel_apply, InverseParams,
 };
-use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, Mass, Method};
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::{HeatError, HeatKernel, HeatParams};
 
 /// Small meshes (area 4π): the brief's icosphere(2), irregular_sphere(2, 5.6), grid(15, 15).
 fn small_meshes() -> Vec<(&'static str, FemOperators)> {
@@ -27,7 +29,7 @@ fn rational(ops: &FemOperators) -> HeatKernel {
     HeatKernel::new(
         ops,
         HeatParams {
-            method: Method::rational(shifted_solve::DEFAULT_DEGREE),
+            method: Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
             ..Default::default()
         },
     )

@@ -3,15 +3,16 @@
 //! sampling, the anchor ranking and the warning.
 use crate::common;
 use common::*;
-use mesh_fem::Mass;
-use mesh_fem::{generate, morse};
+use mesh_fem::{generate, morse, Mass};
 use nalgebra::{DMatrix, DVector};
 use wfem_heat::approx::{
     feature_approximation, fit_global_component, geometric_times, multiscale_times, persistent_extremum_count,
     ranked_anchors, ApproxHint, ApproxParams, Coefficients, Persistence, ScaleSampling, RESOLVED_OVERLAP,
     WARN_RELATIVE_ERROR,
 };
-use wfem_heat::{Eigenbasis, HeatKernel, HeatParams, Method};
+use wfem_heat::method::Method;
+use wfem_heat::spectral::Eigenbasis;
+use wfem_heat::{HeatKernel, HeatParams};
 
 fn kernel(ops: &mesh_fem::FemOperators, method: Method) -> HeatKernel {
     HeatKernel::new(
@@ -69,7 +70,7 @@ fn smooth_field(mesh: &mesh_fem::TriMesh) -> Vec<f64> {
 fn anchored_matches_the_dense_reference_and_keeps_the_anchor_values() {
     let (mesh, ops) = ops_of(&generate::irregular_sphere(2, 5.6));
     let n = mesh.n_vertices();
-    let k = kernel(&ops, Method::rational(shifted_solve::DEFAULT_DEGREE));
+    let k = kernel(&ops, Method::rational(shifted_solve::poles::DEFAULT_DEGREE));
     let f = smooth_field(&mesh);
     let diagram = morse::persistence(&mesh, &f).unwrap();
     let anchors = ranked_anchors(&diagram, 0.0).vertices;
@@ -141,7 +142,7 @@ fn anchored_matches_the_dense_reference_and_keeps_the_anchor_values() {
 fn anchored_resolution_keeps_the_interpolant_within_the_data() {
     let (mesh, ops) = ops_of(&generate::icosphere(3));
     let k = kernel(&ops, Method::fast());
-    let mut rng = wfem_heat::rng::SplitMix64::new(3);
+    let mut rng = shifted_solve::rng::SplitMix64::new(3);
     let f: Vec<f64> = smooth_field(&mesh)
         .iter()
         .map(|v| v + 0.2 * rng.next_normal())
@@ -309,7 +310,7 @@ fn warning_names_the_option_to_change() {
         .message(&|p, v| format!("{p}={v:?}"))
         .contains("sampling=Some(\"geometric\")"));
     let range = 2.0;
-    let mut rng = wfem_heat::rng::SplitMix64::new(24);
+    let mut rng = shifted_solve::rng::SplitMix64::new(24);
     let noisy: Vec<f64> = f.iter().map(|v| v + 0.1 * range * rng.next_normal()).collect();
     let a = feature_approximation(
         &mesh,

@@ -3,13 +3,16 @@
 use crate::common;
 use common::*;
 use faer::Mat;
+use mesh_fem::Mass;
 use mesh_fem::{generate, morse};
 use wfem_heat::approx::{
     eigenfunction_features, extrema, feature_approximation, global_component, multiscale_times, ApproxParams,
     Coefficients, Persistence, ScaleSampling,
 };
 use wfem_heat::basis::{canonical_basis, canonical_limit};
-use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, Mass, Method};
+use wfem_heat::method::Method;
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::{HeatError, HeatKernel, HeatParams};
 
 fn kernel(ops: &mesh_fem::FemOperators, kind: Mass, method: Method) -> HeatKernel {
     HeatKernel::new(ops, HeatParams { mass: kind, method }).unwrap()
@@ -26,7 +29,11 @@ fn canonical_basis_matches_dense_reference() {
     for (name, _, ops) in meshes() {
         let n = ops.stiffness.nrows();
         let anchors = [0u32, (n / 3) as u32, (n - 1) as u32];
-        let rational = kernel(&ops, Mass::Consistent, Method::rational(shifted_solve::DEFAULT_DEGREE));
+        let rational = kernel(
+            &ops,
+            Mass::Consistent,
+            Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
+        );
         let dense = kernel(&ops, Mass::Consistent, Method::Dense);
         for t in [1e-3, 0.05, 1.0] {
             let block = canonical_basis(&rational, &anchors, t).unwrap();
@@ -53,7 +60,7 @@ fn canonical_basis_converges_to_the_b_mean() {
     for (name, _, ops) in meshes() {
         let n = ops.stiffness.nrows();
         for kind in [Mass::Consistent, Mass::Lumped(Default::default())] {
-            let k = kernel(&ops, kind, Method::rational(shifted_solve::DEFAULT_DEGREE));
+            let k = kernel(&ops, kind, Method::rational(shifted_solve::poles::DEFAULT_DEGREE));
             let anchors = [1u32, (n / 2) as u32];
             let limits = canonical_limit(&k, &anchors).unwrap();
             let dense = Eigenbasis::dense(&ops.stiffness, k.mass()).unwrap();
@@ -92,7 +99,11 @@ fn canonical_basis_converges_to_the_b_mean() {
 #[test]
 fn canonical_basis_rejects_bad_anchors() {
     let (_, ops) = ops_of(&generate::icosphere(1));
-    let k = kernel(&ops, Mass::Consistent, Method::rational(shifted_solve::DEFAULT_DEGREE));
+    let k = kernel(
+        &ops,
+        Mass::Consistent,
+        Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
+    );
     assert!(matches!(
         canonical_basis(&k, &[0, 42], 0.1),
         Err(HeatError::InvalidParameter { name: "anchors", .. })
@@ -132,7 +143,7 @@ fn kernel_diagonals_match_the_spectral_sums() {
         let n = ops.stiffness.nrows();
         let all: Vec<u32> = (0..n as u32).collect();
         for kind in [Mass::Consistent, Mass::Lumped(Default::default())] {
-            let k = kernel(&ops, kind, Method::rational(shifted_solve::DEFAULT_DEGREE));
+            let k = kernel(&ops, kind, Method::rational(shifted_solve::poles::DEFAULT_DEGREE));
             let dense = Eigenbasis::dense(&ops.stiffness, k.mass()).unwrap();
             let t = 0.02;
             let diag = spectral_diag(&dense, Some(k.mass()), t);
@@ -231,7 +242,11 @@ fn noisy_field(mesh: &mesh_fem::TriMesh, amplitude: f64) -> (Vec<f64>, Vec<f64>)
 fn global_component_is_linear_and_matches_columns() {
     let (mesh, ops) = ops_of(&generate::irregular_sphere(3, 5.6));
     let n = mesh.n_vertices();
-    let k = kernel(&ops, Mass::Consistent, Method::rational(shifted_solve::DEFAULT_DEGREE));
+    let k = kernel(
+        &ops,
+        Mass::Consistent,
+        Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
+    );
     let (f, g) = noisy_field(&mesh, 0.3);
     let anchors: Vec<u32> = vec![3, 17, 200, 411, 600];
     let t = 0.05;
@@ -291,7 +306,11 @@ fn global_component_is_linear_and_matches_columns() {
 #[test]
 fn feature_approximation_separates_noise() {
     let (mesh, ops) = ops_of(&generate::icosphere(3));
-    let k = kernel(&ops, Mass::Consistent, Method::rational(shifted_solve::DEFAULT_DEGREE));
+    let k = kernel(
+        &ops,
+        Mass::Consistent,
+        Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
+    );
     let amplitude = 0.3;
     let (smooth, noise) = noisy_field(&mesh, amplitude);
     let f: Vec<f64> = smooth.iter().zip(&noise).map(|(a, b)| a + b).collect();
@@ -393,7 +412,11 @@ fn auto_diffusion_features_are_strict_extrema() {
 #[test]
 fn feature_approximation_rejects_bad_parameters() {
     let (mesh, ops) = ops_of(&generate::icosphere(2));
-    let k = kernel(&ops, Mass::Consistent, Method::rational(shifted_solve::DEFAULT_DEGREE));
+    let k = kernel(
+        &ops,
+        Mass::Consistent,
+        Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
+    );
     let f = x_coordinate(&mesh);
     let bad = |p: ApproxParams| feature_approximation(&mesh, &k, &f, &p);
     for (params, name) in [

@@ -8,11 +8,9 @@
 //!   kernel that is never negative, on the real non-manifold meshes where the cotangent L
 //!   gives negative heat (beetle, camel gallop).
 
+use mesh_fem::cloud::{assemble_cloud, CloudParams, PointCloud};
 use mesh_fem::io::{load, LoadOptions};
-use mesh_fem::Mass;
-use mesh_fem::{
-    assemble, assemble_cloud, generate, AssemblyParams, CloudParams, Laplacian, PointCloud, RobustParams, TriMesh,
-};
+use mesh_fem::{assemble, generate, AssemblyParams, Laplacian, Mass, RobustParams, TriMesh};
 use wfem_heat::spectral::{EigenParams, Eigenbasis};
 use wfem_heat::{HeatKernel, HeatParams, Operators};
 

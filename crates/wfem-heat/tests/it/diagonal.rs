@@ -2,9 +2,10 @@
 //! for all times, against the dense diagonal, at times where 300 eigenpairs are far off.
 use crate::common;
 use common::*;
-use mesh_fem::generate;
+use mesh_fem::{generate, Mass};
 use wfem_heat::diagonal::DiagonalMethod;
-use wfem_heat::{DiagonalParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KernelDiagonal, Mass, Operators};
+use wfem_heat::spectral::Eigenbasis;
+use wfem_heat::{DiagonalParams, HeatError, HeatKernel, HeatParams, KernelDiagonal, Operators};
 
 #[test]
 fn probed_diagonal_matches_dense_where_truncation_fails() {
@@ -247,15 +248,15 @@ fn selected_inversion_diagonal_is_scale_covariant() {
 /// `SolveError::Interrupted`, and the same calls succeed without the raised interrupt.
 #[test]
 fn a_raised_interrupt_stops_every_long_path() {
-    use wfem_heat::shifted_solve::interrupt::Interrupt;
-    use wfem_heat::shifted_solve::SolveError;
+    use shifted_solve::interrupt::Interrupt;
+    use shifted_solve::SolveError;
     let (_, ops) = ops_of(&generate::icosphere(3));
     let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
     let rational = HeatKernel::new(
         &ops,
         HeatParams {
-            method: wfem_heat::Method::Rational {
-                degree: wfem_heat::shifted_solve::DEFAULT_DEGREE,
+            method: wfem_heat::method::Method::Rational {
+                degree: shifted_solve::poles::DEFAULT_DEGREE,
                 backend: Default::default(),
             },
             ..Default::default()

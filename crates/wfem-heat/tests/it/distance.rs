@@ -6,17 +6,18 @@ use crate::common;
 
 use common::{matvec, ops_of, wfem};
 use mesh_fem::{generate, FemOperators};
+use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
+use wfem_heat::method::Method;
 use wfem_heat::rkhs::diffusion_embeddings;
-use wfem_heat::{
-    DiffusionDistance, DistanceKind, DistanceParams, Eigenbasis, HeatError, HeatKernel, HeatParams, Method,
-};
+use wfem_heat::spectral::Eigenbasis;
+use wfem_heat::{HeatError, HeatKernel, HeatParams};
 
 /// The paper's rational method (the distances' original method).
 fn rational(ops: &FemOperators) -> HeatKernel {
     HeatKernel::new(
         ops,
         HeatParams {
-            method: Method::rational(shifted_solve::DEFAULT_DEGREE),
+            method: Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
             ..Default::default()
         },
     )

@@ -13,9 +13,12 @@
 use crate::common;
 use common::{dot, matvec, rel_err, unit};
 use faer::sparse::SparseColMat;
-use mesh_fem::{assemble, generate, AssemblyParams, FemOperators, TriMesh};
+use mesh_fem::{assemble, generate, AssemblyParams, FemOperators, Mass, TriMesh};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
-use wfem_heat::{EigenParams, Eigenbasis, HeatKernel, HeatParams, KrylovParams, Mass, Method};
+use shifted_solve::function::KrylovParams;
+use wfem_heat::method::Method;
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::{HeatKernel, HeatParams};
 
 const REL_TOL: f64 = 1e-10;
 const ABS_FLOOR: f64 = 1e-12;
@@ -182,7 +185,7 @@ fn ops(mesh: &TriMesh) -> FemOperators {
 /// generalized eigendecomposition (the crate's own reference) against nalgebra's.
 fn methods(n: usize) -> Vec<(&'static str, Method)> {
     vec![
-        ("rational16", Method::rational(shifted_solve::DEFAULT_DEGREE)),
+        ("rational16", Method::rational(shifted_solve::poles::DEFAULT_DEGREE)),
         ("fast", Method::Fast(KrylovParams::default())),
         ("spectral", Method::spectral(n.min(60))),
         ("dense", Method::Dense),
@@ -274,7 +277,7 @@ fn extreme_scales_match_reference_and_are_covariant() {
         eprintln!("scale α = {alpha:e}: worst error/bound {worst:.2e}");
         for kind in KINDS {
             for method in [
-                Method::rational(shifted_solve::DEFAULT_DEGREE),
+                Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
                 Method::Fast(KrylovParams::default()),
             ] {
                 let params = HeatParams {
@@ -437,7 +440,7 @@ fn several_connected_components_stay_block_diagonal() {
     let f = test_function(n);
     for kind in KINDS {
         for method in [
-            Method::rational(shifted_solve::DEFAULT_DEGREE),
+            Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
             Method::Fast(KrylovParams::default()),
         ] {
             let params = HeatParams {
@@ -501,7 +504,7 @@ fn open_boundaries_conserve_mass() {
         for kind in KINDS {
             let mass = mass_of(&ops, kind);
             for method in [
-                Method::rational(shifted_solve::DEFAULT_DEGREE),
+                Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
                 Method::Fast(KrylovParams::default()),
             ] {
                 let kernel = HeatKernel::new(
@@ -585,7 +588,7 @@ fn issue_16_tiny_disjoint_component() {
     let tiny_mean = f[nb..].iter().zip(&tiny_mass).map(|(a, b)| a * b).sum::<f64>() / tiny_mass.iter().sum::<f64>();
     for (name, method) in [
         ("fast", Method::fast()),
-        ("rational", Method::rational(shifted_solve::DEFAULT_DEGREE)),
+        ("rational", Method::rational(shifted_solve::poles::DEFAULT_DEGREE)),
         ("rational r=7", Method::rational(7)),
         ("dense", Method::Dense),
         ("spectral", Method::spectral(60)),
@@ -693,13 +696,13 @@ fn issue_16_scaled_meshes_for_every_backend() {
         let mesh = base.scaled(alpha).unwrap();
         let ops = assemble(&mesh, &AssemblyParams::default()).unwrap();
         let t = t0 * alpha * alpha;
-        let mut methods: Vec<(String, Method)> = <shifted_solve::Backend as wfem_choice::Choice>::names()
+        let mut methods: Vec<(String, Method)> = <shifted_solve::backend::Backend as wfem_choice::Choice>::names()
             .map(|name| {
                 (
                     format!("rational/{name}"),
                     Method::Rational {
                         degree: 16,
-                        backend: <shifted_solve::Backend as wfem_choice::Choice>::parse(name).unwrap(),
+                        backend: <shifted_solve::backend::Backend as wfem_choice::Choice>::parse(name).unwrap(),
                     },
                 )
             })

@@ -6,7 +6,8 @@
 use crate::common;
 use common::*;
 use mesh_fem::{assemble, generate, AssemblyParams, FemOperators, TriMesh};
-use wfem_heat::{EigenParams, Eigenbasis, HeatError};
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::HeatError;
 
 fn ops_raw(mesh: &TriMesh) -> FemOperators {
     assemble(mesh, &AssemblyParams::default()).expect("assembly")

@@ -2,7 +2,10 @@
 use crate::common;
 use common::*;
 use mesh_fem::generate;
-use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KrylovParams, Method};
+use shifted_solve::function::KrylovParams;
+use wfem_heat::method::Method;
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::{HeatError, HeatKernel, HeatParams};
 
 fn small() -> mesh_fem::FemOperators {
     ops_of(&generate::icosphere(2)).1

@@ -4,9 +4,14 @@
 //! operators (NaN entries, a zero row in the mass matrix) never produce NaN output.
 use crate::common;
 use common::*;
-use mesh_fem::{generate, FemOperators};
-use shifted_solve::{Backend, MinresParams, Preconditioner, SolveError};
-use wfem_heat::{EigenParams, Eigenbasis, HeatError, HeatKernel, HeatParams, KrylovParams, Mass, Method};
+use mesh_fem::{generate, FemOperators, Mass};
+use shifted_solve::backend::Backend;
+use shifted_solve::function::KrylovParams;
+use shifted_solve::iterative::{MinresParams, Preconditioner};
+use shifted_solve::SolveError;
+use wfem_heat::method::Method;
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::{HeatError, HeatKernel, HeatParams};
 
 fn small() -> FemOperators {
     ops_of(&generate::icosphere(2)).1
@@ -14,7 +19,7 @@ fn small() -> FemOperators {
 
 fn all_methods() -> Vec<Method> {
     vec![
-        Method::rational(shifted_solve::DEFAULT_DEGREE),
+        Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
         Method::Rational {
             degree: 16,
             backend: Backend::Minres(MinresParams::default()),

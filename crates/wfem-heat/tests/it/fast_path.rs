@@ -5,7 +5,9 @@
 //! t ∈ {1e−4, …, 10}: ‖K_t f(fast) − K_t f(dense)‖ ≤ 1e−10‖K_t f‖ + 1e−12‖f‖.
 use crate::common;
 use common::*;
-use wfem_heat::{HeatKernel, HeatParams, Mass, Method};
+use mesh_fem::Mass;
+use wfem_heat::method::Method;
+use wfem_heat::{HeatKernel, HeatParams};
 
 const TIMES: [f64; 6] = [1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0];
 
@@ -116,7 +118,7 @@ fn many_times_from_one_factorization_match_dense() {
         let rational = HeatKernel::new(
             &ops,
             HeatParams {
-                method: Method::rational(shifted_solve::DEFAULT_DEGREE),
+                method: Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
                 ..Default::default()
             },
         )

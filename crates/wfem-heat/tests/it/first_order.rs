@@ -3,8 +3,9 @@
 //! error by ≈4 once tλ is small on the spectral support of f.
 use crate::common;
 use common::*;
-use mesh_fem::generate;
-use wfem_heat::{HeatKernel, HeatParams, Mass, Method};
+use mesh_fem::{generate, Mass};
+use wfem_heat::method::Method;
+use wfem_heat::{HeatKernel, HeatParams};
 
 #[test]
 fn taylor_and_backward_euler_local_error_is_second_order() {

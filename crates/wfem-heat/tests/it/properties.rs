@@ -2,7 +2,9 @@
 //! reference and on the fast path, plus the real-mesh check.
 use crate::common;
 use common::*;
-use wfem_heat::{HeatKernel, HeatParams, Mass, Method};
+use mesh_fem::Mass;
+use wfem_heat::method::Method;
+use wfem_heat::{HeatKernel, HeatParams};
 
 fn kernels(ops: &mesh_fem::FemOperators, kind: Mass) -> Vec<(&'static str, HeatKernel)> {
     vec![
@@ -23,7 +25,7 @@ fn kernels(ops: &mesh_fem::FemOperators, kind: Mass) -> Vec<(&'static str, HeatK
                 ops,
                 HeatParams {
                     mass: kind,
-                    method: Method::rational(shifted_solve::DEFAULT_DEGREE),
+                    method: Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
                 },
             )
             .unwrap(),
@@ -175,7 +177,7 @@ fn apply_many_matches_apply_for_every_method() {
         },
         Method::Taylor,
         Method::BackwardEuler,
-        Method::rational(shifted_solve::DEFAULT_DEGREE),
+        Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
     ];
     for method in methods {
         let k = HeatKernel::new(
@@ -201,7 +203,10 @@ fn apply_many_matches_apply_for_every_method() {
 fn factor_cache_follows_t() {
     let (_, mesh, ops) = meshes().remove(0);
     let f = x_coordinate(&mesh);
-    for method in [Method::BackwardEuler, Method::rational(shifted_solve::DEFAULT_DEGREE)] {
+    for method in [
+        Method::BackwardEuler,
+        Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
+    ] {
         let params = HeatParams {
             mass: Mass::Consistent,
             method,

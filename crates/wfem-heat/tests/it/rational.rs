@@ -8,9 +8,12 @@
 //! at t = 10 decays to e^{−20}‖f‖, far below any rational floor).
 
 use faer::Mat;
-use mesh_fem::{assemble, generate, AssemblyParams, FemOperators, TriMesh};
-use shifted_solve::{Backend, KrylovParams, MinresParams};
-use wfem_heat::{HeatKernel, HeatParams, Mass, Method};
+use mesh_fem::{assemble, generate, AssemblyParams, FemOperators, Mass, TriMesh};
+use shifted_solve::backend::Backend;
+use shifted_solve::function::KrylovParams;
+use shifted_solve::iterative::MinresParams;
+use wfem_heat::method::Method;
+use wfem_heat::{HeatKernel, HeatParams};
 
 const TIMES: [f64; 6] = [1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0];
 const KERNELS: [Mass; 3] = [
@@ -147,7 +150,7 @@ fn lower_degrees_reach_their_documented_error() {
         (0..n).map(|i| v[i] * bm[(i, 0)]).sum::<f64>().sqrt()
     };
     for degree in [5usize, 7, 8, 10, 12] {
-        let approx = shifted_solve::RationalApprox::cram(degree).unwrap();
+        let approx = shifted_solve::poles::RationalApprox::cram(degree).unwrap();
         let k = HeatKernel::new(
             &ops,
             HeatParams {
@@ -190,7 +193,7 @@ fn fast_is_the_default_and_rational_conserves_mass() {
     let kernel = HeatKernel::new(
         &ops,
         HeatParams {
-            method: Method::rational(shifted_solve::DEFAULT_DEGREE),
+            method: Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
             ..Default::default()
         },
     )

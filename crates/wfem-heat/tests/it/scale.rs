@@ -2,9 +2,11 @@
 //! largest eigenvalue λ_n against the dense generalized eigendecomposition.
 use crate::common;
 use common::*;
-use mesh_fem::{assemble, generate, AssemblyParams};
+use mesh_fem::{assemble, generate, AssemblyParams, Mass};
+use wfem_heat::method::Method;
 use wfem_heat::scale::{largest_eigenvalue, LargestEigenParams, Normalization, NormalizedHeatKernel};
-use wfem_heat::{Eigenbasis, HeatError, HeatKernel, HeatParams, Mass, Method, Operators};
+use wfem_heat::spectral::Eigenbasis;
+use wfem_heat::{HeatError, HeatKernel, HeatParams, Operators};
 
 fn mass_of(ops: &mesh_fem::FemOperators, kind: Mass) -> faer::sparse::SparseColMat<usize, f64> {
     match kind {
@@ -25,7 +27,7 @@ fn scale_covariance_without_normalisation() {
     let n = mesh.n_vertices();
     let f: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 / 101.0 - 0.5).collect();
     let e = unit(n, 17);
-    for method in [Method::rational(shifted_solve::DEFAULT_DEGREE), Method::Dense] {
+    for method in [Method::rational(shifted_solve::poles::DEFAULT_DEGREE), Method::Dense] {
         let params = HeatParams {
             mass: Mass::Consistent,
             method: method.clone(),

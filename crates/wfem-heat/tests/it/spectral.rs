@@ -2,8 +2,10 @@
 //! dense generalized eigendecomposition (Eq. (4)–(6)).
 use crate::common;
 use common::*;
-use mesh_fem::generate;
-use wfem_heat::{EigenParams, Eigenbasis, HeatKernel, HeatParams, Mass, Method};
+use mesh_fem::{generate, Mass};
+use wfem_heat::method::Method;
+use wfem_heat::spectral::{EigenParams, Eigenbasis};
+use wfem_heat::{HeatKernel, HeatParams};
 
 fn mass_of(ops: &mesh_fem::FemOperators, kind: Mass) -> faer::sparse::SparseColMat<usize, f64> {
     match kind {

@@ -2,9 +2,10 @@
 //! generalized eigendecomposition and against the kernel itself: a time called "past the time
 //! at infinity" gives a constant K_t e_i, a "negligible" one gives back e_i.
 use crate::common::*;
-use mesh_fem::{assemble, generate, AssemblyParams, TriMesh};
+use mesh_fem::{assemble, generate, AssemblyParams, Mass, TriMesh};
+use wfem_heat::spectral::Eigenbasis;
 use wfem_heat::times::{TimeScales, TimeWarning, SETTLED};
-use wfem_heat::{Eigenbasis, HeatError, HeatKernel, HeatParams, Mass, Operators};
+use wfem_heat::{HeatError, HeatKernel, HeatParams, Operators};
 
 fn context(mesh: &TriMesh) -> Operators {
     let fem = assemble(mesh, &AssemblyParams::default()).unwrap();

@@ -3,8 +3,9 @@
 //! with arbitrary signs, and every error variant of [`Splats`].
 
 use crate::render::{best_t, count_red, front_params, luminance};
+use mesh_fem::cloud::{assemble_cloud, CloudParams, PointCloud};
 use mesh_fem::generate::icosphere;
-use mesh_fem::{assemble_cloud, AssemblyParams, CloudParams, PointCloud};
+use mesh_fem::AssemblyParams;
 use wfem_render::{
     render_rgb, render_splats_png, render_splats_rgb, Colormap, RenderError, RenderParams, RgbImage, Splats, View,
 };

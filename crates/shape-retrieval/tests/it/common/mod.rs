@@ -85,8 +85,8 @@ pub fn small_collection() -> Vec<(String, TriMesh)> {
 }
 
 /// Settings for fast tests: k = 30 eigenpairs, 6 words, otherwise the defaults.
-pub fn small_settings() -> shape_retrieval::RetrievalSettings {
-    let mut s = shape_retrieval::RetrievalSettings::default();
+pub fn small_settings() -> shape_retrieval::model::RetrievalSettings {
+    let mut s = shape_retrieval::model::RetrievalSettings::default();
     s.descriptor.eigenpairs = 30;
     s.training.words = 6;
     s

@@ -145,8 +145,8 @@ pub fn from_dense(rows: &[&[f64]]) -> SparseColMat<usize, f64> {
 }
 
 /// The one-term "approximation" 1/(x − z) (+ its conjugate): solves a single shifted system.
-pub fn single_pole(z: c64) -> shifted_solve::RationalApprox {
-    shifted_solve::RationalApprox {
+pub fn single_pole(z: c64) -> shifted_solve::poles::RationalApprox {
+    shifted_solve::poles::RationalApprox {
         degree: 2,
         c0: 0.0,
         poles: Box::leak(vec![z].into_boxed_slice()),

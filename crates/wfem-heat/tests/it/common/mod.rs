@@ -46,7 +46,7 @@ pub fn rel_err(a: &[f64], b: &[f64]) -> f64 {
 
 /// The wFEM operator context of assembled operators (L, B).
 pub fn wfem(fem: &FemOperators) -> wfem_heat::Operators {
-    wfem_heat::Operators::new(fem, wfem_heat::Mass::Consistent).expect("valid operators")
+    wfem_heat::Operators::new(fem, mesh_fem::Mass::Consistent).expect("valid operators")
 }
 
 pub fn matvec(a: impl wfem_heat::AsSparse, x: &[f64]) -> Vec<f64> {
