@@ -59,3 +59,4 @@ pub use error::MeshError;
 pub use laplacian::{Laplacian, RobustParams};
 pub use mesh::TriMesh;
 pub use operators::{AssemblyParams, FemOperators, Lumping, Mass};
+pub use topology::VertexNeighbours;

@@ -162,7 +162,7 @@ pub struct PersistenceDiagram {
 pub fn critical_points(mesh: &TriMesh, f: &[f64]) -> Result<Vec<CriticalPoint>, MeshError> {
     check_field(mesh, f)?;
     let rank = ranks(f);
-    let incidence = VertexFaces::new(mesh);
+    let incidence = crate::topology::VertexFaces::new(mesh.faces(), mesh.n_vertices());
     let faces = mesh.faces();
     let kinds: Vec<Option<CriticalKind>> = (0..mesh.n_vertices())
         .into_par_iter()
@@ -212,7 +212,7 @@ pub fn critical_points(mesh: &TriMesh, f: &[f64]) -> Result<Vec<CriticalPoint>, 
 pub fn persistence(mesh: &TriMesh, f: &[f64]) -> Result<PersistenceDiagram, MeshError> {
     check_field(mesh, f)?;
     let order = sorted_order(f);
-    let adjacency = Adjacency::new(mesh);
+    let adjacency = crate::VertexNeighbours::new(mesh.n_vertices(), mesh.faces());
     let n = f.len();
     let mut rank = vec![0u32; n];
     for (r, &v) in order.iter().enumerate() {
@@ -361,73 +361,6 @@ fn ranks(f: &[f64]) -> Vec<u32> {
 // ---------------------------------------------------------------------------------------------
 // Connectivity: vertex → triangles and vertex → neighbours, both in CSR form.
 
-/// Triangles incident to each vertex (CSR), built by counting sort in O(n + F).
-struct VertexFaces {
-    offsets: Vec<usize>,
-    faces: Vec<u32>,
-}
-
-impl VertexFaces {
-    fn new(mesh: &TriMesh) -> Self {
-        let n = mesh.n_vertices();
-        let offsets = crate::topology::corner_offsets(mesh.faces(), n);
-        let mut next = offsets.clone();
-        let mut faces = vec![0u32; offsets[n]];
-        for (fi, face) in mesh.faces().iter().enumerate() {
-            for &v in face {
-                // A face that repeats v is listed twice; classify_vertex rejects it anyway.
-                faces[next[v as usize]] = fi as u32;
-                next[v as usize] += 1;
-            }
-        }
-        Self { offsets, faces }
-    }
-
-    fn of(&self, v: u32) -> &[u32] {
-        &self.faces[self.offsets[v as usize]..self.offsets[v as usize + 1]]
-    }
-}
-
-/// The edge graph of the mesh (CSR, sorted neighbour lists, no self loops), gathered from the
-/// triangles around each vertex in parallel: O(F + Σ_v deg(v) log deg(v)).
-struct Adjacency {
-    offsets: Vec<usize>,
-    neighbours: Vec<u32>,
-}
-
-impl Adjacency {
-    fn new(mesh: &TriMesh) -> Self {
-        let incidence = VertexFaces::new(mesh);
-        let faces = mesh.faces();
-        let lists: Vec<Vec<u32>> = (0..mesh.n_vertices() as u32)
-            .into_par_iter()
-            .map(|v| {
-                let incident = incidence.of(v);
-                let mut list = Vec::with_capacity(2 * incident.len());
-                for &fi in incident {
-                    list.extend(faces[fi as usize].iter().copied().filter(|&w| w != v));
-                }
-                list.sort_unstable();
-                list.dedup();
-                list
-            })
-            .collect();
-        let mut offsets = Vec::with_capacity(lists.len() + 1);
-        offsets.push(0);
-        for list in &lists {
-            offsets.push(offsets[offsets.len() - 1] + list.len());
-        }
-        Self {
-            offsets,
-            neighbours: lists.concat(),
-        }
-    }
-
-    fn neighbours(&self, v: u32) -> &[u32] {
-        &self.neighbours[self.offsets[v as usize]..self.offsets[v as usize + 1]]
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Link rule.
 
@@ -447,7 +380,7 @@ struct LinkScratch {
 /// whose two ends lie on different sides of v.
 fn classify_vertex(
     v: u32,
-    incidence: &VertexFaces,
+    incidence: &crate::topology::VertexFaces,
     faces: &[[u32; 3]],
     rank: &[u32],
     scratch: &mut LinkScratch,
@@ -542,7 +475,7 @@ fn classify_vertex(
 /// [`critical_points`]): extrema by their neighbours, saddles by the components that die at
 /// them in the persistence sweeps.
 fn classify_on_the_graph(mesh: &TriMesh, f: &[f64], rank: &[u32]) -> Result<Vec<CriticalKind>, MeshError> {
-    let adjacency = Adjacency::new(mesh);
+    let adjacency = crate::VertexNeighbours::new(mesh.n_vertices(), mesh.faces());
     let diagram = persistence(mesh, f)?;
     let mut deaths = [vec![0usize; f.len()], vec![0usize; f.len()]];
     for (counts, pairs) in deaths.iter_mut().zip([&diagram.minima, &diagram.maxima]) {
@@ -553,7 +486,7 @@ fn classify_on_the_graph(mesh: &TriMesh, f: &[f64], rank: &[u32]) -> Result<Vec<
     Ok((0..f.len())
         .map(|v| {
             let rv = rank[v];
-            let neighbours = adjacency.neighbours(v as u32);
+            let neighbours = adjacency.of(v as u32);
             if neighbours.iter().all(|&w| rank[w as usize] > rv) {
                 CriticalKind::Minimum
             } else if neighbours.iter().all(|&w| rank[w as usize] < rv) {
@@ -590,7 +523,7 @@ enum Direction {
 fn sweep(
     order: impl Iterator<Item = u32>,
     rank: &[u32],
-    adjacency: &Adjacency,
+    adjacency: &crate::VertexNeighbours,
     f: &[f64],
     direction: Direction,
 ) -> Vec<PersistencePair> {
@@ -620,7 +553,7 @@ fn sweep(
 
     for v in order {
         roots.clear();
-        for &w in adjacency.neighbours(v) {
+        for &w in adjacency.of(v) {
             if parent[w as usize] != UNSEEN {
                 roots.push(root(&mut parent, w));
             }

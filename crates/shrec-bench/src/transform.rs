@@ -109,29 +109,14 @@ impl EdgeGraph {
     /// Builds the edge graph of `mesh` in O(#faces log) time. Isolated vertices have no
     /// neighbours.
     pub fn new(mesh: &TriMesh) -> Self {
-        let n = mesh.n_vertices();
-        let mut half: Vec<(u32, u32)> = Vec::with_capacity(6 * mesh.n_faces());
-        for &[a, b, c] in mesh.faces() {
-            for (i, j) in [(a, b), (b, c), (c, a)] {
-                half.push((i, j));
-                half.push((j, i));
-            }
-        }
-        half.sort_unstable();
-        half.dedup();
-        let mut offsets = vec![0usize; n + 1];
-        for &(i, _) in &half {
-            offsets[i as usize + 1] += 1;
-        }
-        for i in 0..n {
-            offsets[i + 1] += offsets[i];
-        }
+        let graph = mesh_fem::VertexNeighbours::new(mesh.n_vertices(), mesh.faces());
         let p = mesh.positions();
-        let neighbors: Vec<u32> = half.iter().map(|&(_, j)| j).collect();
-        let lengths = half
-            .iter()
-            .map(|&(i, j)| norm(sub(p[i as usize], p[j as usize])))
+        let lengths = (0..mesh.n_vertices() as u32)
+            .flat_map(|i| graph.of(i).iter().map(move |&j| (i, j)))
+            .map(|(i, j)| norm(sub(p[i as usize], p[j as usize])))
             .collect();
+        let offsets = graph.offsets().to_vec();
+        let neighbors = graph.indices().to_vec();
         Self {
             offsets,
             neighbors,

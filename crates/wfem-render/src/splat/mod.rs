@@ -73,43 +73,7 @@ pub struct Splats {
     radii: Vec<f64>,
     /// The neighbours of every point along the triangles' edges, when built from triangles
     /// (for the linear splats of the module documentation).
-    neighbours: Option<Neighbours>,
-}
-
-/// Adjacency in compressed rows: the neighbours of point i are
-/// `indices[offsets[i]..offsets[i + 1]]`.
-#[derive(Clone, Debug, PartialEq)]
-struct Neighbours {
-    offsets: Vec<usize>,
-    indices: Vec<u32>,
-}
-
-impl Neighbours {
-    /// The distinct other corners of the triangles at each of n points.
-    fn of_triangles(n: usize, triangles: &[[u32; 3]]) -> Self {
-        let mut edges: Vec<(u32, u32)> = triangles
-            .iter()
-            .flat_map(|&[a, b, c]| [(a, b), (b, a), (b, c), (c, b), (c, a), (a, c)])
-            .filter(|(a, b)| a != b)
-            .collect();
-        edges.sort_unstable();
-        edges.dedup();
-        let mut offsets = vec![0usize; n + 1];
-        for &(a, _) in &edges {
-            offsets[a as usize + 1] += 1;
-        }
-        for i in 0..n {
-            offsets[i + 1] += offsets[i];
-        }
-        Self {
-            offsets,
-            indices: edges.into_iter().map(|(_, b)| b).collect(),
-        }
-    }
-
-    fn of(&self, i: usize) -> &[u32] {
-        &self.indices[self.offsets[i]..self.offsets[i + 1]]
-    }
+    neighbours: Option<mesh_fem::VertexNeighbours>,
 }
 
 /// A splat's field: fᵢ(x) = value + gradient·(x − pᵢ), clamped to [lo, hi].
@@ -207,7 +171,7 @@ impl Splats {
             let (p, q) = (positions[a as usize], positions[b as usize]);
             ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
         };
-        let neighbours = Neighbours::of_triangles(n, triangles);
+        let neighbours = mesh_fem::VertexNeighbours::new(n, triangles);
         // The largest covering radius of the triangles at each point.
         let mut cover = vec![0.0f64; n];
         for &[a, b, c] in triangles {
@@ -232,7 +196,7 @@ impl Splats {
         let mut lengths = Vec::new();
         for (i, &cover) in cover.iter().enumerate() {
             lengths.clear();
-            lengths.extend(neighbours.of(i).iter().map(|&j| dist(i as u32, j)));
+            lengths.extend(neighbours.of(i as u32).iter().map(|&j| dist(i as u32, j)));
             if lengths.is_empty() {
                 return Err(RenderError::InvalidSplat {
                     point: i,
@@ -279,7 +243,7 @@ impl Splats {
                 let t2 = cross(n, t1);
                 let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
                 let (mut lo, mut hi) = (f, f);
-                for &j in neighbours.of(i) {
+                for &j in neighbours.of(i as u32) {
                     let q = self.positions[j as usize];
                     let d = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
                     let w = 1.0 / dot(d, d);
@@ -388,7 +352,7 @@ mod tests {
             let around = splats
                 .neighbours
                 .as_ref()
-                .map(|nb| nb.of(i).to_vec())
+                .map(|nb| nb.of(i as u32).to_vec())
                 .unwrap_or_default();
             assert!(!around.is_empty());
             let values = around.iter().map(|&j| field[j as usize]).chain([field[i]]);
@@ -440,7 +404,7 @@ mod tests {
             let mut lengths: Vec<f64> = capped
                 .neighbours
                 .as_ref()
-                .map(|nb| nb.of(i).iter().map(|&j| dist(far[i], far[j as usize])).collect())
+                .map(|nb| nb.of(i as u32).iter().map(|&j| dist(far[i], far[j as usize])).collect())
                 .unwrap_or_default();
             lengths.sort_by(f64::total_cmp);
             assert!(capped.radii[i] <= 3.0 * lengths[lengths.len() / 2] + 1e-12, "point {i}");
@@ -450,7 +414,11 @@ mod tests {
         for (i, nb) in (0..points.len()).map(|i| {
             (
                 i,
-                splats.neighbours.as_ref().map(|n| n.of(i).to_vec()).unwrap_or_default(),
+                splats
+                    .neighbours
+                    .as_ref()
+                    .map(|n| n.of(i as u32).to_vec())
+                    .unwrap_or_default(),
             )
         }) {
             let nearest = nb
