@@ -185,28 +185,6 @@ fn file_identity(path: &Path) -> Option<(u64, u64)> {
     }
 }
 
-/// What kind of file system object `meta` is, for errors ("a directory", "a FIFO", …).
-fn kind_of(meta: &std::fs::Metadata) -> &'static str {
-    let t = meta.file_type();
-    if t.is_dir() {
-        return "a directory";
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if t.is_fifo() {
-            return "a FIFO";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-        if t.is_block_device() || t.is_char_device() {
-            return "a device";
-        }
-    }
-    "not a regular file"
-}
-
 /// `path` must be absent (Ok(false)) or a regular file (Ok(true)); a directory, FIFO, socket
 /// or device is refused ([`StoreError::NotAFile`]).
 pub(crate) fn regular_or_absent(path: &Path) -> Result<bool, StoreError> {
@@ -214,7 +192,7 @@ pub(crate) fn regular_or_absent(path: &Path) -> Result<bool, StoreError> {
         Ok(m) if m.is_file() => Ok(true),
         Ok(m) => Err(StoreError::NotAFile {
             path: path.to_path_buf(),
-            kind: kind_of(&m),
+            kind: mesh_fem::io::file_kind(&m.file_type()),
         }),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(false),
         Err(source) => Err(StoreError::Io {

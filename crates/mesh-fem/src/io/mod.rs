@@ -183,8 +183,10 @@ pub fn open_regular_file(path: &Path) -> Result<std::fs::File, MeshError> {
     std::fs::File::open(path).map_err(|e| io_error(path, e))
 }
 
-/// "a directory", "a FIFO (named pipe)", … for error messages.
-fn file_kind(t: &std::fs::FileType) -> &'static str {
+/// What a file that is not a regular file is, for error messages: "a directory", "a FIFO
+/// (named pipe)", "a socket", "a device" or "a special file" (mesh readers and the retrieval
+/// store name the culprit with it).
+pub fn file_kind(t: &std::fs::FileType) -> &'static str {
     #[cfg(unix)]
     {
         use std::os::unix::fs::FileTypeExt;

@@ -169,7 +169,16 @@ fn directories_and_fifos_are_named_as_such() {
         let status = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
         assert!(status.success());
         let err = Store::open(&fifo).unwrap_err();
-        assert!(matches!(err, StoreError::NotAFile { kind: "a FIFO", .. }), "{err}");
+        assert!(
+            matches!(
+                err,
+                StoreError::NotAFile {
+                    kind: "a FIFO (named pipe)",
+                    ..
+                }
+            ),
+            "{err}"
+        );
         let err = Store::create(&fifo, &StoreParams::new(3), true).unwrap_err();
         assert!(matches!(err, StoreError::NotAFile { .. }), "{err}");
         use std::os::unix::fs::FileTypeExt;
