@@ -24,10 +24,9 @@
 //! smooth patches that are not themselves described, thin handles (cycles up to 0.35√A) cut
 //! (clean, closed shapes of genus 0 are left as they are), then SI-HKS with times `t = A·2^τ`,
 //! τ ∈ [−12, 1] (A = surface area; exactly scale invariant), 5 Fourier magnitudes, k = 100,
-//! z-scored, 96 words, soft assignment, vertex areas capped at 3 medians, spatially sensitive
-//! bags (heat flow between words at t = A/256), χ² distance. SHREC'11 (600 shapes, 30 classes,
-//! `cargo xtask real-eval`, docs/RETRIEVAL-RESULTS.md): mAP 0.986 against 0.980 for Shape-DNA;
-//! TOSCA-76 0.996. Everything is recorded in
+//! z-scored, 512 words, soft assignment, vertex areas capped at 3 medians, χ² distance.
+//! SHREC'11 (600 shapes, 30 classes, `cargo xtask real-eval`, docs/RETRIEVAL-RESULTS.md): mAP
+//! 0.990 against 0.980 for Shape-DNA; TOSCA-76 0.997. Everything is recorded in
 //! the vocabulary and index files (JSON, see [`shape_retrieval::store`]).
 
 use super::choice::choice;
@@ -333,6 +332,27 @@ pub struct DescriptorArgs {
     pub denoise: Option<String>,
 }
 
+/// `--spatial`: `C` (a positive time factor), `C:G` (and G ≥ 1 groups of words), or `off`.
+fn spatial_bag(text: &str) -> Result<Option<SpatialBag>, CliError> {
+    let (time, groups) = match text.split_once(':') {
+        Some((time, groups)) => (time, Some(groups)),
+        None => (text, None),
+    };
+    let Some(time) = number_or_off("--spatial", &Some(time.to_string()))? else {
+        return Ok(None);
+    };
+    let bad = || CliError::Usage(format!("--spatial takes C, C:G (G a whole number ≥ 1) or `off`, got {text:?}"));
+    let groups = match groups {
+        None => None,
+        Some(g) => Some(g.trim().parse::<usize>().ok().filter(|&g| g >= 1).ok_or_else(bad)?),
+    };
+    match time {
+        None if groups.is_some() => Err(bad()),
+        None => Ok(None),
+        Some(time) => Ok(Some(SpatialBag { time, groups })),
+    }
+}
+
 /// `--despike`/`--fill-holes`/`--denoise`/`--area-cap`: a positive number, or `off`.
 fn number_or_off(flag: &str, text: &Option<String>) -> Result<Option<Option<f64>>, CliError> {
     let Some(text) = text else { return Ok(None) };
@@ -371,9 +391,11 @@ pub struct BagArgs {
     /// inflated vertex areas (spikes, slivers) cannot dominate a bag; `off` for plain areas.
     #[arg(long, value_name = "C|off")]
     pub area_cap: Option<String>,
-    /// Spatially sensitive bags (Shape Google Sect. 4.2): the bag also holds the heat that
-    /// flows between words in time t = C·A (default 2⁻⁸ = 0.00390625); `off` for plain bags.
-    #[arg(long, value_name = "C|off")]
+    /// Spatially sensitive bags (Shape Google Sect. 4.2; off by default): the bag also holds
+    /// the heat that flows between words in time t = C·A (e.g. 2⁻⁸ = 0.00390625), or with `C:G`
+    /// between G groups of similar words (G(G+1)/2 bins instead of V(V+1)/2); `off` for plain
+    /// bags.
+    #[arg(long, value_name = "C|C:G|off")]
     pub spatial: Option<String>,
     /// Fuse with a global spectral signature of M eigenvalues at weight W: `M:W` (e.g. `40:0.3`).
     #[arg(long)]
@@ -462,8 +484,8 @@ impl BagArgs {
         if let Some(v) = number_or_off("--area-cap", &self.area_cap)? {
             settings.bags.weights = v.map_or(VertexWeights::Area, |factor| VertexWeights::CappedArea { factor });
         }
-        if let Some(v) = number_or_off("--spatial", &self.spatial)? {
-            settings.bags.spatial = v.map(|time| SpatialBag { time });
+        if let Some(text) = &self.spatial {
+            settings.bags.spatial = spatial_bag(text)?;
         }
         settings.bags.global = match &self.fusion {
             None => None,

@@ -418,15 +418,15 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     // `vocab` and `build` with no option write the documented defaults (issue #13): SI-HKS of the
     // wFEM kernel, area time unit, τ ∈ [−12, 1] step 1/8, α = 2, K = 5, k = 100, the cotangent
     // Laplacian, isolated spikes put back (threshold 3), rough and incoherent shapes denoised to roughness 0.1,
-    // holes up to 3√A closed, handles up to 0.35√A cut, z-scored, 96 words, soft assignment,
-    // areas capped at 3 medians, spatially sensitive bags at t = A/256, χ², no fusion; `build
-    // --vocab` reuses the vocabulary as it was written.
+    // holes up to 3√A closed, handles up to 0.35√A cut, z-scored, 512 words, soft assignment,
+    // areas capped at 3 medians, plain bags, χ², no fusion; `build --vocab` reuses the
+    // vocabulary as it was written. (Shapes large enough for 512 words: 2,000 descriptors.)
     let dir = tempfile::tempdir().unwrap();
     let mut files = Vec::new();
     for (name, mesh) in [
-        ("bumpy.off", mesh_fem::generate::bumpy(2)),
-        ("sphere.off", mesh_fem::generate::icosphere(2)),
-        ("torus.off", mesh_fem::generate::torus(1.0, 0.4, 20, 10)),
+        ("bumpy.off", mesh_fem::generate::bumpy(3)),
+        ("sphere.off", mesh_fem::generate::icosphere(3)),
+        ("torus.off", mesh_fem::generate::torus(1.0, 0.4, 40, 20)),
     ] {
         let p = dir.path().join(name);
         mesh_fem::io::write_mesh(&p, &mesh).unwrap();
@@ -456,9 +456,9 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
             "topology_repair": {"max_handle": 0.35}
         })
     );
-    assert_eq!(v["training"]["words"], 96);
+    assert_eq!(v["training"]["words"], 512);
     assert_eq!(v["training"]["standardize"], true);
-    assert_eq!(v["words"].as_array().unwrap().len(), 96);
+    assert_eq!(v["words"].as_array().unwrap().len(), 512);
     assert!(v["words"]
         .as_array()
         .unwrap()
@@ -482,7 +482,7 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
     assert_eq!(
         i["bags"],
         serde_json::json!({"weights": {"kind": "capped-area", "factor": 3.0}, "assignment": "normalized",
-                           "distance": "chi-squared", "global": null, "spatial": {"time": 0.00390625}})
+                           "distance": "chi-squared", "global": null})
     );
     assert_eq!(i["entries"].as_array().unwrap().len(), 3);
     for e in i["entries"].as_array().unwrap() {
@@ -492,8 +492,8 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
             .iter()
             .map(|x| x.as_f64().unwrap())
             .collect();
-        // 96 words and the 96·97/2 pairs of the spatial histogram.
-        assert_eq!(bag.len(), 96 + 96 * 97 / 2);
+        // 512 words, no spatial histogram.
+        assert_eq!(bag.len(), 512);
         assert!((bag.iter().sum::<f64>() - 1.0).abs() < 1e-12);
     }
     // `--area-cap off`: plain vertex areas; a cap that is not a positive number is refused.
@@ -516,6 +516,33 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
             None => {
                 assert!(!o.status.success());
                 assert!(stderr(&o).contains("positive number or `off`"), "{}", stderr(&o));
+            }
+        }
+    }
+
+    // `--spatial C:G`: spatially sensitive bags between G groups of words (512 + G(G+1)/2 bins);
+    // groups without a time, or not a whole number ≥ 1, are refused.
+    for (spatial, expected) in [
+        ("0.01:8", Some(serde_json::json!({"time": 0.01, "groups": 8}))),
+        ("off:3", None),
+        ("0.01:0", None),
+        ("0.01:x", None),
+    ] {
+        let out = dir.path().join("spatial.json");
+        let mut args = vec!["retrieval", "build"];
+        args.extend(files.iter().map(|s| s.as_str()));
+        args.extend(["--out", out.to_str().unwrap(), "--spatial", spatial, "--force"]);
+        let o = wfem(&args);
+        match expected {
+            Some(bag) => {
+                assert!(o.status.success(), "{}", stderr(&o));
+                let i = read(&out);
+                assert_eq!(i["bags"]["spatial"], bag);
+                assert_eq!(i["entries"][0]["bag"].as_array().unwrap().len(), 512 + 8 * 9 / 2);
+            }
+            None => {
+                assert!(!o.status.success());
+                assert!(stderr(&o).contains("--spatial takes"), "{}", stderr(&o));
             }
         }
     }

@@ -19,6 +19,13 @@
 //! same χ² or L1: since both are homogeneous of degree one, the distance is the mean of the two
 //! parts' distances — a fusion without a weight to tune. A query still costs one description
 //! (the eigenpairs are those of the descriptor) and an O(N) scan.
+//!
+//! **Groups of words** ([`SpatialBag::groups`]): V(V+1)/2 bins grow fast (131,328 for 512
+//! words). With G groups — the k-means clusters of the word centres ([`word_groups`]) — the
+//! flow is measured between groups: `F_G = Mᵀ F M` (M the V × G membership matrix), computed as
+//! the flow of the grouped assignment `Θ M` ([`grouped`]), G(G+1)/2 bins. Measured on the dev
+//! sets (docs/RETRIEVAL-RESULTS.md): 512 words with 48 groups tie with plain bags of 512 words
+//! (the default), so spatial bags are an option, not the default.
 
 use crate::check;
 use crate::RetrievalError;
@@ -36,12 +43,19 @@ pub const DEFAULT_SPATIAL_TIME: f64 = 1.0 / 256.0;
 pub struct SpatialBag {
     /// c in `t = c·A` (> 0).
     pub time: f64,
+    /// Measure the heat flow between G groups of words instead of between the words
+    /// themselves ([`word_groups`]): G(G+1)/2 bins instead of V(V+1)/2, so a large vocabulary
+    /// keeps a small spatial histogram. `None` (what files written before the option existed
+    /// hold) or G ≥ V: the words.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub groups: Option<usize>,
 }
 
 impl Default for SpatialBag {
     fn default() -> Self {
         Self {
             time: DEFAULT_SPATIAL_TIME,
+            groups: None,
         }
     }
 }
@@ -52,12 +66,21 @@ impl SpatialBag {
     /// # Errors
     /// [`RetrievalError::InvalidParameter`] for c ≤ 0.
     pub fn validate(&self) -> Result<(), RetrievalError> {
+        if let Some(g) = self.groups {
+            check::at_least_one("spatial bag groups", g)?;
+        }
         check::positive("spatial bag time", self.time)
     }
 
-    /// The number of bins of the spatial histogram for V words: V(V+1)/2.
-    pub fn bins(words: usize) -> usize {
-        words * (words + 1) / 2
+    /// The number of bins of the spatial histogram for G classes of assignment: G(G+1)/2.
+    pub fn bins(classes: usize) -> usize {
+        classes * (classes + 1) / 2
+    }
+
+    /// The number of classes the heat flow is measured between, for V words: min(G, V), or V
+    /// without groups.
+    pub fn classes(&self, words: usize) -> usize {
+        self.groups.map_or(words, |g| g.min(words))
     }
 
     /// The normalised spatial histogram of one shape (see the module docs): `theta` is Θ
@@ -104,6 +127,46 @@ impl SpatialBag {
         }
         check::unit_sum("spatial bag", "the heat flow between words sums", out)
     }
+}
+
+/// The groups of [`SpatialBag::groups`]: k-means (seed 0, up to 300 iterations) of the V
+/// words' centres (V × d, the space they were trained in) into G clusters; entry a is the
+/// group of word a. A pure function of the words, so a stored vocabulary gives the same groups
+/// at every query. G ≥ V gives every word its own group.
+///
+/// # Errors
+/// Those of [`crate::kmeans::kmeans`] (non-finite words), and
+/// [`RetrievalError::InvalidParameter`] for G = 0.
+pub fn word_groups(words: MatRef<'_, f64>, groups: usize) -> Result<Vec<u32>, RetrievalError> {
+    check::at_least_one("spatial bag groups", groups)?;
+    if groups >= words.nrows() {
+        return Ok((0..words.nrows() as u32).collect());
+    }
+    let report = crate::kmeans::kmeans(
+        words,
+        &crate::kmeans::KmeansParams {
+            k: groups,
+            max_iter: 300,
+            seed: 0,
+        },
+    )?;
+    Ok(report.assignment)
+}
+
+/// The assignment to groups: `Θ_g[i, c] = Σ_{a: group(a) = c} Θ[i, a]` (rows still sum to 1).
+///
+/// # Errors
+/// [`RetrievalError::DimensionMismatch`] if `group` does not have one entry per column of Θ.
+pub fn grouped(theta: MatRef<'_, f64>, group: &[u32], classes: usize) -> Result<Mat<f64>, RetrievalError> {
+    check::same("spatial bag: word groups vs assignment columns", theta.ncols(), group.len())?;
+    let mut out = Mat::<f64>::zeros(theta.nrows(), classes);
+    for (a, &c) in group.iter().enumerate() {
+        let c = c as usize;
+        for i in 0..theta.nrows() {
+            out[(i, c)] += theta[(i, a)];
+        }
+    }
+    Ok(out)
 }
 
 /// The eigenpairs a spatial bag needs: the k smallest of (L, B), the eigenvectors' rows of the

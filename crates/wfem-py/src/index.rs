@@ -111,8 +111,8 @@ fn open(path: &PathBuf) -> Result<RetrievalIndex, Error> {
 #[pymethods]
 impl PyRetrievalIndex {
     /// Indexes mesh and point-cloud files with the default recipe (spikes put back, rough and incoherent shapes
-    /// denoised, holes closed, thin handles cut, SI-HKS in area units, z-scored, 96 words, soft
-    /// assignment, capped area weights, spatially sensitive bags, χ²) into a new SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
+    /// denoised, holes closed, thin handles cut, SI-HKS in area units, z-scored, 512 words, soft
+    /// assignment, capped area weights, χ²) into a new SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
     /// of training on these shapes (its descriptor settings, cleaning included, are used);
     /// `despike` / `fill_holes` / `denoise`: the spike threshold, the largest hole perimeter
     /// (in √area) and the target roughness, `None` for off; `overwrite`: replace an existing
@@ -124,8 +124,8 @@ impl PyRetrievalIndex {
         despike=Some(mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD),
         fill_holes=Some(mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER),
         denoise=Some(shape_retrieval::model::DEFAULT_TARGET_ROUGHNESS), overwrite=false,
-        spatial=Some(shape_retrieval::spatial::DEFAULT_SPATIAL_TIME), strict=false, progress=None,
-        laplacian=None))]
+        spatial=shape_retrieval::model::BagSettings::default().spatial.map(|s| s.time), strict=false, progress=None,
+        laplacian=None, spatial_groups=None))]
     #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
@@ -142,6 +142,7 @@ impl PyRetrievalIndex {
         strict: bool,
         progress: Option<Py<PyAny>>,
         laplacian: Option<&str>,
+        spatial_groups: Option<usize>,
     ) -> PyResult<(Self, Refused)> {
         let path = out.clone();
         let asked = laplacian_arg(py, laplacian)?;
@@ -160,7 +161,18 @@ impl PyRetrievalIndex {
                 roughness,
                 ..Default::default()
             });
-            settings.bags.spatial = spatial.map(|time| shape_retrieval::spatial::SpatialBag { time });
+            if spatial.is_none() && spatial_groups.is_some() {
+                return Err(shape_retrieval::RetrievalError::InvalidParameter {
+                    name: "spatial_groups",
+                    value: spatial_groups.unwrap_or(0) as f64,
+                    reason: "needs spatially sensitive bags (spatial=…)",
+                }
+                .into());
+            }
+            settings.bags.spatial = spatial.map(|time| shape_retrieval::spatial::SpatialBag {
+                time,
+                groups: spatial_groups,
+            });
             settings.descriptor.laplacian = asked.unwrap_or_default();
             let vocabulary = vocabulary.map(|v| JsonFile::new(v).load_vocabulary()).transpose()?;
             if let Some(v) = &vocabulary {

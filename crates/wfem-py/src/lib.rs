@@ -35,6 +35,12 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
         shape_retrieval::model::DEFAULT_TARGET_ROUGHNESS,
     )?;
     m.add("DEFAULT_SPATIAL_TIME", shape_retrieval::spatial::DEFAULT_SPATIAL_TIME)?;
+    // The library's default bags: the spatial time when they are on by default, else None.
+    m.add(
+        "DEFAULT_SPATIAL",
+        shape_retrieval::model::BagSettings::default().spatial.map(|s| s.time),
+    )?;
+    m.add("DEFAULT_WORDS", shape_retrieval::model::DEFAULT_WORDS)?;
     m.add("SHIPPED_DEGREES", shifted_solve::poles::SHIPPED_DEGREES.to_vec())?;
     m.add(
         "PAPER_DESCRIPTORS",

@@ -154,7 +154,15 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
     assert descriptor["topology_repair"] == {"max_handle": 0.35}
     assert descriptor["hole_filling"] == {"max_perimeter": wfem._wfem.DEFAULT_MAX_HOLE_PERIMETER} == {"max_perimeter": 3.0}
     assert default.settings["bags"]["weights"] == {"kind": "capped-area", "factor": 3.0}
-    assert default.settings["bags"]["spatial"] == {"time": wfem._wfem.DEFAULT_SPATIAL_TIME} == {"time": 2.0**-8}
+    # Plain bags by default (the library's default, exported once).
+    assert "spatial" not in default.settings["bags"] and wfem._wfem.DEFAULT_SPATIAL is None
+    assert default.settings["vocabulary"]["training"]["words"] == 4
+    spatial = wfem.RetrievalIndex.build(
+        paths, tmp_path / "s.sqlite", words=4, spatial=wfem._wfem.DEFAULT_SPATIAL_TIME, spatial_groups=2
+    )
+    assert spatial.settings["bags"]["spatial"] == {"time": 2.0**-8, "groups": 2}
+    V, F = wfem.read_mesh(paths[0])
+    assert spatial.query_mesh(V, F, k=1)[0] == (str(paths[0]), pytest.approx(0.0, abs=1e-6))
     off = wfem.RetrievalIndex.build(
         paths, tmp_path / "b.sqlite", words=4, despike=None, fill_holes=None, denoise=0.2, spatial=None
     )
@@ -170,10 +178,12 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
         {"fill_holes": 0.0},
         {"fill_holes": float("inf")},
         {"spatial": 0.0},
+        {"spatial": 0.01, "spatial_groups": 0},
+        {"spatial": None, "spatial_groups": 3},
     ):
         with pytest.raises(
             wfem.InvalidInputError,
-            match="spike threshold|target roughness|largest hole perimeter|spatial bag time",
+            match="spike threshold|target roughness|largest hole perimeter|spatial bag time|spatial(_| bag )groups",
         ):
             wfem.RetrievalIndex.build(paths, tmp_path / "c.sqlite", words=4, **bad)
     assert not (tmp_path / "c.sqlite").exists()

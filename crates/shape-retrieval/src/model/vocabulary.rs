@@ -146,6 +146,9 @@ pub struct VocabularyModel {
     standardizer: Option<Standardizer>,
     vocabulary: Vocabulary,
     info: TrainingInfo,
+    /// The word groups of spatial bags ([`crate::spatial::word_groups`]) for the last G asked
+    /// for: a pure function of the words, computed once per model instead of once per shape.
+    groups: std::sync::OnceLock<(usize, Vec<u32>)>,
 }
 
 impl VocabularyModel {
@@ -204,6 +207,7 @@ impl VocabularyModel {
                 shapes: shapes.iter().map(|s| s.name.clone()).collect(),
                 descriptors: rows.min(params.max_training_points),
             },
+            groups: std::sync::OnceLock::new(),
         })
     }
 
@@ -253,6 +257,7 @@ impl VocabularyModel {
             standardizer,
             vocabulary,
             info,
+            groups: std::sync::OnceLock::new(),
         })
     }
 
@@ -336,8 +341,28 @@ impl VocabularyModel {
                 features.name
             ),
         })?;
-        let flow = spatial.histogram(theta.as_ref(), &features.weights, spectrum)?;
+        let classes = spatial.classes(self.vocabulary.size());
+        let flow = if classes < self.vocabulary.size() {
+            let theta = crate::spatial::grouped(theta.as_ref(), &self.word_groups(classes)?, classes)?;
+            spatial.histogram(theta.as_ref(), &features.weights, spectrum)?
+        } else {
+            spatial.histogram(theta.as_ref(), &features.weights, spectrum)?
+        };
         Ok(bag.iter().chain(&flow).map(|x| 0.5 * x).collect())
+    }
+
+    /// The G word groups of spatial bags ([`crate::spatial::word_groups`]), computed once.
+    fn word_groups(&self, classes: usize) -> Result<std::borrow::Cow<'_, [u32]>, RetrievalError> {
+        if let Some((g, groups)) = self.groups.get() {
+            if *g == classes {
+                return Ok(std::borrow::Cow::Borrowed(groups));
+            }
+        }
+        let groups = crate::spatial::word_groups(self.vocabulary.words(), classes)?;
+        // The first G asked for is kept (a model serves one index, with one G); another G is
+        // computed on every call.
+        let _ = self.groups.set((classes, groups.clone()));
+        Ok(std::borrow::Cow::Owned(groups))
     }
 
     /// `Θᵀw / 1ᵀΘᵀw`.

@@ -325,9 +325,9 @@ class RetrievalIndex:
     built by ``wfem retrieval build`` opens here.
 
     The default recipe (paper Sect. 5, beyond Shape Google): SI-HKS of the wFEM kernel with
-    times in units of the surface area (exactly scale invariant), z-scored dimensions, 96 words,
-    soft assignment, bags weighted by vertex areas capped at 3 medians and spatially sensitive
-    (the heat flow between words at time area/256), χ² distance, after spikes are put back,
+    times in units of the surface area (exactly scale invariant), z-scored dimensions, 512
+    words, soft assignment, bags weighted by vertex areas capped at 3 medians, χ² distance
+    (SHREC'11 mAP 0.990, TOSCA-76 0.997: docs/RETRIEVAL-RESULTS.md), after spikes are put back,
     noisy shapes denoised, holes closed and thin handles cut, in that order (see ``build``).
     Training the vocabulary on the indexed shapes themselves is optimistic when the same shapes
     are then used to measure retrieval (:meth:`evaluate` says so): train one on other shapes
@@ -354,7 +354,8 @@ class RetrievalIndex:
         fill_holes: float | None = _wfem.DEFAULT_MAX_HOLE_PERIMETER,
         denoise: float | None = _wfem.DEFAULT_TARGET_ROUGHNESS,
         overwrite: bool = False,
-        spatial: float | None = _wfem.DEFAULT_SPATIAL_TIME,
+        spatial: float | None = _wfem.DEFAULT_SPATIAL,
+        spatial_groups: int | None = None,
         strict: bool = False,
         progress: ProgressArg = None,
         laplacian: str | None = None,
@@ -381,9 +382,12 @@ class RetrievalIndex:
         used instead. Point clouds are despiked only: denoising, hole filling and the repair of
         pinches and handles are repairs of a triangulation, which a cloud does not have.
 
-        ``spatial``: spatially sensitive bags (Shape Google Sect. 4.2), the bag also holding the
-        heat that flows between words in time ``spatial · area``; ``None`` for plain bags.
-        ``words`` defaults to 96.
+        ``spatial``: spatially sensitive bags (Shape Google Sect. 4.2; off by default), the bag
+        also holding the heat that flows between words in time ``spatial · area`` (e.g.
+        ``wfem._wfem.DEFAULT_SPATIAL_TIME`` = 2⁻⁸); ``spatial_groups``: measure that flow between
+        so many groups of similar words instead (G(G+1)/2 numbers per shape instead of
+        V(V+1)/2); ``None`` for plain bags. ``words`` defaults to 512
+        (``wfem._wfem.DEFAULT_WORDS``).
 
         A file that cannot be read or described is left out: the index holds every usable
         shape, a :class:`RefusedShapesWarning` names each refused file with its reason, and
@@ -399,7 +403,7 @@ class RetrievalIndex:
         with reporter(progress, len(ps), "describing shapes") as step:
             inner, refused = _wfem.RetrievalIndex.build(
                 ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise, overwrite, spatial, strict, step,
-                laplacian,
+                laplacian, spatial_groups,
             )
         index = cls(inner)
         index.refused = _report_refused(refused, "left out of the index")

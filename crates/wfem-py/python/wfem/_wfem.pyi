@@ -22,6 +22,8 @@ DEFAULT_SPIKE_THRESHOLD: float
 DEFAULT_MAX_HOLE_PERIMETER: float
 DEFAULT_TARGET_ROUGHNESS: float
 DEFAULT_SPATIAL_TIME: float
+DEFAULT_SPATIAL: float | None
+DEFAULT_WORDS: int
 SHIPPED_DEGREES: list[int]
 PAPER_DESCRIPTORS: list[str]
 DEFAULT_NUM_TIMES: int
@@ -350,6 +352,7 @@ class RetrievalIndex:
         strict: bool = False,
         progress: Callable[[str], object] | None = None,
         laplacian: str | None = None,
+        spatial_groups: int | None = None,
     ) -> tuple[RetrievalIndex, list[tuple[str, str]]]: ...
     @staticmethod
     def open(path: str) -> RetrievalIndex: ...
