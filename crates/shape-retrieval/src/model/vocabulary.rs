@@ -341,13 +341,14 @@ impl VocabularyModel {
                 features.name
             ),
         })?;
+        // Between groups of words when asked for (spatial::grouped), else between the words.
         let classes = spatial.classes(self.vocabulary.size());
-        let flow = if classes < self.vocabulary.size() {
-            let theta = crate::spatial::grouped(theta.as_ref(), &self.word_groups(classes)?, classes)?;
-            spatial.histogram(theta.as_ref(), &features.weights, spectrum)?
+        let theta = if classes < self.vocabulary.size() {
+            crate::spatial::grouped(theta.as_ref(), &self.word_groups(classes)?, classes)?
         } else {
-            spatial.histogram(theta.as_ref(), &features.weights, spectrum)?
+            theta
         };
+        let flow = spatial.histogram(theta.as_ref(), &features.weights, spectrum)?;
         Ok(bag.iter().chain(&flow).map(|x| 0.5 * x).collect())
     }
 
