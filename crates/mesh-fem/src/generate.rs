@@ -13,33 +13,6 @@
 //! from +z (the grid).
 
 use crate::TriMesh;
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
-/// A fast hasher for the `(u32, u32)` edge keys of [`icosphere`] (the default SipHash made
-/// generation of a 655K-vertex sphere several times slower than assembling its operators).
-/// Keys are vertex indices, not attacker-controlled, so a multiplicative hash is enough.
-#[derive(Default)]
-struct EdgeHasher(u64);
-
-impl Hasher for EdgeHasher {
-    fn finish(&self) -> u64 {
-        // hashbrown takes the bucket from the low bits: fold the well-mixed high half in.
-        self.0 ^ (self.0 >> 32)
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-    fn write_u32(&mut self, v: u32) {
-        self.write_u64(v as u64);
-    }
-    fn write_u64(&mut self, v: u64) {
-        // Fibonacci hashing, mixed so that both key halves reach the high bits.
-        self.0 = (self.0.rotate_left(29) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    }
-}
 
 fn normalize(p: [f64; 3]) -> [f64; 3] {
     let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
@@ -97,24 +70,9 @@ pub fn icosphere(level: u32) -> TriMesh {
         [9, 8, 1],
     ];
     for _ in 0..level {
-        let mut midpoint: HashMap<(u32, u32), u32, BuildHasherDefault<EdgeHasher>> =
-            HashMap::with_capacity_and_hasher(faces.len() * 3 / 2, Default::default());
-        let mut mid = |a: u32, b: u32, positions: &mut Vec<[f64; 3]>| -> u32 {
-            let key = if a < b { (a, b) } else { (b, a) };
-            *midpoint.entry(key).or_insert_with(|| {
-                let (pa, pb) = (positions[a as usize], positions[b as usize]);
-                positions.push(normalize([pa[0] + pb[0], pa[1] + pb[1], pa[2] + pb[2]]));
-                (positions.len() - 1) as u32
-            })
-        };
-        let mut next = Vec::with_capacity(faces.len() * 4);
-        for &[a, b, c] in &faces {
-            let ab = mid(a, b, &mut positions);
-            let bc = mid(b, c, &mut positions);
-            let ca = mid(c, a, &mut positions);
-            next.extend_from_slice(&[[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        faces = next;
+        faces = crate::refine::split_with(&mut positions, &faces, |pa, pb| {
+            normalize([pa[0] + pb[0], pa[1] + pb[1], pa[2] + pb[2]])
+        });
     }
     build(positions, faces)
 }

@@ -12,6 +12,7 @@
 //! * [`filter`]: geometric filters (removal of isolated spikes).
 //! * [`handles`]: thin handles (short non-separating cycles) found and cut.
 //! * [`holes`]: boundary loops and hole filling (smooth patches of new vertices).
+//! * [`refine`]: every triangle split into four at its edge midpoints (same surface, finer FEM).
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
 //! * [`assemble`] with [`AssemblyParams`]: [`FemOperators`], the cotangent stiffness L, the
 //!   consistent mass B and the lumped mass D of the paper's Eq. (3) and Eq. (7) ([`Mass`],
@@ -48,6 +49,7 @@ pub mod intrinsic;
 pub mod io;
 pub mod morse;
 pub mod mtx;
+pub mod refine;
 pub mod stats;
 pub mod validate;
 pub mod vec3;

@@ -16,6 +16,7 @@ mod io_writers;
 mod morse;
 mod mtx;
 mod operators;
+mod refine;
 mod robust;
 mod stats;
 mod validate;
