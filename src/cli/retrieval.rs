@@ -40,7 +40,7 @@ use shape_retrieval::distance::BagDistance;
 use shape_retrieval::eval::ClassRule;
 use shape_retrieval::global::GlobalKind;
 use shape_retrieval::model::{
-    Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, RetrievalIndex, RetrievalSettings,
+    Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, Refinement, RetrievalIndex, RetrievalSettings,
     ShapeFeatures, Smoothing, VertexWeights, VocabularyModel,
 };
 use shape_retrieval::spatial::SpatialBag;
@@ -167,7 +167,7 @@ pub struct VocabArg {
     /// recommended: trained on other shapes). Without it, the vocabulary is trained on the given
     /// meshes themselves, which is optimistic when those same meshes are then used to measure
     /// retrieval.
-    #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "words", "seed", "no_zscore", "laplacian"])]
+    #[arg(long, conflicts_with_all = ["descriptor", "eigs", "tau_min", "tau_max", "tau_step", "frequencies", "times", "smoothing", "despike", "fill_holes", "denoise", "refine", "words", "seed", "no_zscore", "laplacian"])]
     pub vocab: Option<PathBuf>,
 }
 
@@ -330,6 +330,11 @@ pub struct DescriptorArgs {
     /// they are not (default 0.1; `off` to keep every shape as it is).
     #[arg(long, value_name = "R|off")]
     pub denoise: Option<String>,
+    /// Refinement: a mesh with fewer than V·eigs vertices has every triangle split into four
+    /// (same surface) until it has that many, so its eigenbasis is accurate; the shape is still
+    /// described at its own vertices (default 20; `off` to compute on the mesh as it is).
+    #[arg(long, value_name = "V|off")]
+    pub refine: Option<String>,
 }
 
 /// `--spatial`: `C` (a positive time factor), `C:G` (and G ≥ 1 groups of words), or `off`.
@@ -341,7 +346,11 @@ fn spatial_bag(text: &str) -> Result<Option<SpatialBag>, CliError> {
     let Some(time) = number_or_off("--spatial", &Some(time.to_string()))? else {
         return Ok(None);
     };
-    let bad = || CliError::Usage(format!("--spatial takes C, C:G (G a whole number ≥ 1) or `off`, got {text:?}"));
+    let bad = || {
+        CliError::Usage(format!(
+            "--spatial takes C, C:G (G a whole number ≥ 1) or `off`, got {text:?}"
+        ))
+    };
     let groups = match groups {
         None => None,
         Some(g) => Some(g.trim().parse::<usize>().ok().filter(|&g| g >= 1).ok_or_else(bad)?),
@@ -353,7 +362,7 @@ fn spatial_bag(text: &str) -> Result<Option<SpatialBag>, CliError> {
     }
 }
 
-/// `--despike`/`--fill-holes`/`--denoise`/`--area-cap`: a positive number, or `off`.
+/// `--despike`/`--fill-holes`/`--denoise`/`--refine`/`--area-cap`: a positive number, or `off`.
 fn number_or_off(flag: &str, text: &Option<String>) -> Result<Option<Option<f64>>, CliError> {
     let Some(text) = text else { return Ok(None) };
     if text == "off" {
@@ -422,6 +431,9 @@ impl DescriptorArgs {
         }
         if let Some(v) = number_or_off("--fill-holes", &self.fill_holes)? {
             settings.descriptor.hole_filling = v.map(|max_perimeter| HoleFilling { max_perimeter });
+        }
+        if let Some(v) = number_or_off("--refine", &self.refine)? {
+            settings.descriptor.refinement = v.map(|vertices_per_eigenpair| Refinement { vertices_per_eigenpair });
         }
         if let Some(v) = number_or_off("--denoise", &self.denoise)? {
             settings.descriptor.denoising = v.map(|roughness| Denoising {

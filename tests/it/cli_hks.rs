@@ -453,7 +453,8 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
             "despiking": {"threshold": 3.0},
             "denoising": {"roughness": 0.1, "max_coherence": 0.1},
             "hole_filling": {"max_perimeter": 3.0},
-            "topology_repair": {"max_handle": 0.35}
+            "topology_repair": {"max_handle": 0.35},
+            "refinement": {"vertices_per_eigenpair": 20.0}
         })
     );
     assert_eq!(v["training"]["words"], 512);
@@ -495,6 +496,30 @@ fn retrieval_defaults_are_recorded_in_the_vocabulary_and_the_index() {
         // 512 words, no spatial histogram.
         assert_eq!(bag.len(), 512);
         assert!((bag.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+    // `--refine`: the factor or `off` is recorded; a factor that is not a positive number, or
+    // above the library's bound, is refused.
+    for (refine, expected) in [
+        ("off", Ok(serde_json::Value::Null)),
+        ("40", Ok(serde_json::json!({"vertices_per_eigenpair": 40.0}))),
+        ("0", Err("positive number or `off`")),
+        ("5000", Err("vertices per eigenpair")),
+    ] {
+        let out = dir.path().join(format!("refined-{refine}.json"));
+        let mut args = vec!["retrieval", "vocab"];
+        args.extend(files.iter().map(|s| s.as_str()));
+        args.extend(["--out", out.to_str().unwrap(), "--refine", refine, "--words", "8"]);
+        let o = wfem(&args);
+        match expected {
+            Ok(recorded) => {
+                assert!(o.status.success(), "{}", stderr(&o));
+                assert_eq!(read(&out)["descriptor"]["refinement"], recorded);
+            }
+            Err(message) => {
+                assert!(!o.status.success());
+                assert!(stderr(&o).contains(message), "{}", stderr(&o));
+            }
+        }
     }
     // `--area-cap off`: plain vertex areas; a cap that is not a positive number is refused.
     for (cap, expected) in [

@@ -75,7 +75,9 @@ pub enum RetrievalError {
         value: f64,
     },
     /// Fewer descriptors (points) than requested clusters / words.
-    #[error("{n_points} descriptors are too few for {k} clusters (words): train on more shapes or ask for fewer words")]
+    #[error(
+        "{n_points} descriptors are too few for {k} clusters (words): train on more shapes or ask for fewer words"
+    )]
     TooFewDescriptors {
         /// Number of descriptors given.
         n_points: usize,

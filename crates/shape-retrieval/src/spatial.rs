@@ -158,7 +158,11 @@ pub fn word_groups(words: MatRef<'_, f64>, groups: usize) -> Result<Vec<u32>, Re
 /// # Errors
 /// [`RetrievalError::DimensionMismatch`] if `group` does not have one entry per column of Θ.
 pub fn grouped(theta: MatRef<'_, f64>, group: &[u32], classes: usize) -> Result<Mat<f64>, RetrievalError> {
-    check::same("spatial bag: word groups vs assignment columns", theta.ncols(), group.len())?;
+    check::same(
+        "spatial bag: word groups vs assignment columns",
+        theta.ncols(),
+        group.len(),
+    )?;
     let mut out = Mat::<f64>::zeros(theta.nrows(), classes);
     for (a, &c) in group.iter().enumerate() {
         let c = c as usize;

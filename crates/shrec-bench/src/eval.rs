@@ -182,6 +182,7 @@ pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
                 denoising: None,
                 hole_filling: None,
                 topology_repair: None,
+                refinement: None,
             },
             // Shape Google: 48 words, raw descriptors, plain area-weighted bags, L1.
             training: TrainingParams {

@@ -114,8 +114,9 @@ impl PyRetrievalIndex {
     /// denoised, holes closed, thin handles cut, SI-HKS in area units, z-scored, 512 words, soft
     /// assignment, capped area weights, χ²) into a new SQLite file; `vocabulary`: a vocabulary file of `wfem retrieval vocab` to reuse instead
     /// of training on these shapes (its descriptor settings, cleaning included, are used);
-    /// `despike` / `fill_holes` / `denoise`: the spike threshold, the largest hole perimeter
-    /// (in √area) and the target roughness, `None` for off; `overwrite`: replace an existing
+    /// `despike` / `fill_holes` / `denoise` / `refine`: the spike threshold, the largest hole
+    /// perimeter (in √area), the target roughness and the vertices per eigenpair below which
+    /// a mesh is refined, `None` for off; `overwrite`: replace an existing
     /// `out` (never an input); `laplacian`: the Laplacian of the meshes (a name of
     /// `mesh_fem::Laplacian`, default cotan; point clouds always use the robust one), recorded
     /// in the index, which must be the vocabulary's when one is given.
@@ -125,7 +126,8 @@ impl PyRetrievalIndex {
         fill_holes=Some(mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER),
         denoise=Some(shape_retrieval::model::DEFAULT_TARGET_ROUGHNESS), overwrite=false,
         spatial=shape_retrieval::model::BagSettings::default().spatial.map(|s| s.time), strict=false, progress=None,
-        laplacian=None, spatial_groups=None))]
+        laplacian=None, spatial_groups=None,
+        refine=Some(shape_retrieval::model::DEFAULT_VERTICES_PER_EIGENPAIR)))]
     #[allow(clippy::too_many_arguments)]
     fn build(
         py: Python<'_>,
@@ -143,6 +145,7 @@ impl PyRetrievalIndex {
         progress: Option<Py<PyAny>>,
         laplacian: Option<&str>,
         spatial_groups: Option<usize>,
+        refine: Option<f64>,
     ) -> PyResult<(Self, Refused)> {
         let path = out.clone();
         let asked = laplacian_arg(py, laplacian)?;
@@ -157,6 +160,8 @@ impl PyRetrievalIndex {
             settings.descriptor.despiking = despike.map(|threshold| shape_retrieval::model::Despiking { threshold });
             settings.descriptor.hole_filling =
                 fill_holes.map(|max_perimeter| shape_retrieval::model::HoleFilling { max_perimeter });
+            settings.descriptor.refinement =
+                refine.map(|vertices_per_eigenpair| shape_retrieval::model::Refinement { vertices_per_eigenpair });
             settings.descriptor.denoising = denoise.map(|roughness| shape_retrieval::model::Denoising {
                 roughness,
                 ..Default::default()

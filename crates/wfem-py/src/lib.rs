@@ -34,6 +34,10 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "DEFAULT_TARGET_ROUGHNESS",
         shape_retrieval::model::DEFAULT_TARGET_ROUGHNESS,
     )?;
+    m.add(
+        "DEFAULT_VERTICES_PER_EIGENPAIR",
+        shape_retrieval::model::DEFAULT_VERTICES_PER_EIGENPAIR,
+    )?;
     m.add("DEFAULT_SPATIAL_TIME", shape_retrieval::spatial::DEFAULT_SPATIAL_TIME)?;
     // The library's default bags: the spatial time when they are on by default, else None.
     m.add(

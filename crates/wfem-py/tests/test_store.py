@@ -153,6 +153,9 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
     assert descriptor["denoising"] == {"roughness": 0.1, "max_coherence": 0.1}
     assert descriptor["topology_repair"] == {"max_handle": 0.35}
     assert descriptor["hole_filling"] == {"max_perimeter": wfem._wfem.DEFAULT_MAX_HOLE_PERIMETER} == {"max_perimeter": 3.0}
+    assert descriptor["refinement"] == {"vertices_per_eigenpair": wfem._wfem.DEFAULT_VERTICES_PER_EIGENPAIR} == {
+        "vertices_per_eigenpair": 20.0
+    }
     assert default.settings["bags"]["weights"] == {"kind": "capped-area", "factor": 3.0}
     # Plain bags by default (the library's default, exported once).
     assert "spatial" not in default.settings["bags"] and wfem._wfem.DEFAULT_SPATIAL is None
@@ -164,12 +167,15 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
     V, F = wfem.read_mesh(paths[0])
     assert spatial.query_mesh(V, F, k=1)[0] == (str(paths[0]), pytest.approx(0.0, abs=1e-6))
     off = wfem.RetrievalIndex.build(
-        paths, tmp_path / "b.sqlite", words=4, despike=None, fill_holes=None, denoise=0.2, spatial=None
+        paths, tmp_path / "b.sqlite", words=4, despike=None, fill_holes=None, denoise=0.2, spatial=None, refine=None
     )
     descriptor = off.settings["vocabulary"]["descriptor"]
     assert descriptor["despiking"] is None and descriptor["denoising"] == {"roughness": 0.2, "max_coherence": 0.1}
     assert "spatial" not in off.settings["bags"]
     assert descriptor["hole_filling"] is None
+    assert "refinement" not in descriptor
+    finer = wfem.RetrievalIndex.build(paths, tmp_path / "r.sqlite", words=4, refine=40.0)
+    assert finer.settings["vocabulary"]["descriptor"]["refinement"] == {"vertices_per_eigenpair": 40.0}
     for bad in (
         {"despike": -1.0},
         {"despike": float("nan")},
@@ -180,10 +186,14 @@ def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
         {"spatial": 0.0},
         {"spatial": 0.01, "spatial_groups": 0},
         {"spatial": None, "spatial_groups": 3},
+        {"refine": 0.0},
+        {"refine": 5000.0},
+        {"refine": float("nan")},
     ):
         with pytest.raises(
             wfem.InvalidInputError,
-            match="spike threshold|target roughness|largest hole perimeter|spatial bag time|spatial(_| bag )groups",
+            match="spike threshold|target roughness|largest hole perimeter|spatial bag time|spatial(_| bag )groups"
+            "|vertices per eigenpair",
         ):
             wfem.RetrievalIndex.build(paths, tmp_path / "c.sqlite", words=4, **bad)
     assert not (tmp_path / "c.sqlite").exists()

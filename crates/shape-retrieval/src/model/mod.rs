@@ -30,7 +30,7 @@
 //! One file per part, every type re-exported here: `shape` (what is described: a mesh or a
 //! point cloud, [`ShapeRef`], [`AsShape`]), `spec` ([`DescriptorSpec`]), `cleaning`
 //! (the steps before a shape is described: [`Despiking`], [`Denoising`], [`HoleFilling`],
-//! [`TopologyRepair`], [`Smoothing`]), `weights` ([`VertexWeights`]), `global_signature`
+//! [`TopologyRepair`], [`Smoothing`], [`Refinement`]), `weights` ([`VertexWeights`]), `global_signature`
 //! ([`GlobalSignature`]), `settings` ([`DescriptorSettings`] — which also prepares a shape —,
 //! [`BagSettings`], [`TrainingParams`], [`RetrievalSettings`]), `vocabulary` ([`ShapeFeatures`],
 //! [`VocabularyModel`]) and `index` ([`RetrievalIndex`] and its entries).
@@ -45,7 +45,8 @@ mod vocabulary;
 mod weights;
 
 pub use cleaning::{
-    Denoising, Despiking, HoleFilling, Smoothing, TopologyRepair, DEFAULT_MAX_COHERENCE, DEFAULT_TARGET_ROUGHNESS,
+    Denoising, Despiking, HoleFilling, Refinement, Smoothing, TopologyRepair, DEFAULT_MAX_COHERENCE,
+    DEFAULT_TARGET_ROUGHNESS, DEFAULT_VERTICES_PER_EIGENPAIR,
 };
 pub use global_signature::GlobalSignature;
 pub use index::{IndexEntry, Ranked, RetrievalIndex, ShapeSignature};

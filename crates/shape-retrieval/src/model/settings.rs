@@ -2,8 +2,8 @@
 //! [`BagSettings`], [`TrainingParams`] and all of them together, [`RetrievalSettings`].
 
 use super::{
-    AsShape, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, ShapeRef, Smoothing, TopologyRepair,
-    VertexWeights, DEFAULT_AREA_CAP,
+    AsShape, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, Refinement, ShapeRef, Smoothing,
+    TopologyRepair, VertexWeights, DEFAULT_AREA_CAP,
 };
 use crate::bof::Assignment;
 use crate::descriptor::{DescriptorParams, ShapeDescriptors};
@@ -65,6 +65,11 @@ pub struct DescriptorSettings {
     /// unchanged.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub topology_repair: Option<TopologyRepair>,
+    /// Refinement of coarse meshes, the last step (default: on, 20 vertices per eigenpair;
+    /// `null` turns it off). **A missing field reads as off**, as for `hole_filling`: files
+    /// written before it existed were described without it. Point clouds are not refined.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refinement: Option<Refinement>,
 }
 
 impl Default for DescriptorSettings {
@@ -78,6 +83,7 @@ impl Default for DescriptorSettings {
             denoising: Some(Denoising::default()),
             hole_filling: Some(HoleFilling::default()),
             topology_repair: Some(TopologyRepair::default()),
+            refinement: Some(Refinement::default()),
         }
     }
 }
@@ -110,6 +116,9 @@ impl DescriptorSettings {
         }
         if let Some(t) = &self.topology_repair {
             check::positive("longest handle cycle", t.max_handle)?;
+        }
+        if let Some(r) = &self.refinement {
+            r.validate()?;
         }
         self.descriptor.validate()
     }
@@ -171,6 +180,15 @@ impl DescriptorSettings {
         }
         if let Some(s) = &self.smoothing {
             mesh = std::borrow::Cow::Owned(s.apply_with(&mesh, self.laplacian)?);
+        }
+        // The midpoints are appended: the described vertices stay the first ones.
+        if let Some(fine) = self
+            .refinement
+            .map(|r| r.apply(&mesh, self.eigenpairs))
+            .transpose()?
+            .flatten()
+        {
+            mesh = std::borrow::Cow::Owned(fine);
         }
         ShapeDescriptors::with_laplacian(&mesh, self.laplacian, &self.params())?.described_only(described)
     }

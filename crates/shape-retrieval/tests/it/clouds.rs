@@ -163,6 +163,7 @@ fn the_laplacian_of_the_settings_assembles_the_meshes() {
             denoising: None,
             hole_filling: None,
             topology_repair: None,
+            refinement: None,
             ..Default::default()
         };
         let shape = settings.shape(&mesh).unwrap();

@@ -132,8 +132,10 @@ fn z_scoring_statistics_are_those_of_the_pooled_training_descriptors() {
 
 #[test]
 fn capped_and_boundary_weights_match_their_definitions() {
+    // The definitions on the meshes as given (a refined mesh has other areas).
     let settings = DescriptorSettings {
         eigenpairs: 10,
+        refinement: None,
         ..Default::default()
     };
     // Capped: min(a_i, c·median(a)) computed independently.
@@ -589,6 +591,7 @@ fn features_from_parts_keep_the_own_vertices_and_check_sizes() {
     let mesh = mesh_fem::generate::bumpy(2);
     let settings = DescriptorSettings {
         eigenpairs: 10,
+        refinement: None,
         ..Default::default()
     };
     let shape = settings.shape(&mesh).unwrap().described_only(5).unwrap();
@@ -645,4 +648,71 @@ fn snapshot_of_default_descriptors_on_a_holed_shape() {
         out += &format!("v{i:03}: {} | w {}\n", row.join(" "), sig(f.weights[i], 3));
     }
     insta::assert_snapshot!("default_descriptor_holed_bumpy2_k30", out);
+}
+
+#[test]
+fn refinement_describes_a_coarse_mesh_at_its_own_vertices_on_a_converged_eigenbasis() {
+    use shape_retrieval::model::Refinement;
+    let coarse = mesh_fem::generate::bumpy(2);
+    let n = coarse.n_vertices();
+    let refined = DescriptorSettings {
+        eigenpairs: 30,
+        ..Default::default()
+    };
+    assert_eq!(refined.refinement, Some(Refinement::default()), "on by default");
+    let plain = DescriptorSettings {
+        refinement: None,
+        ..refined.clone()
+    };
+    // 162 < 20 · 30 vertices: split once (642 ≥ 600); the own vertices first and described.
+    let shape = refined.shape(&coarse).unwrap();
+    assert_eq!((shape.mesh().n_vertices(), shape.described_vertices()), (642, n));
+    assert_eq!(&shape.mesh().positions()[..n], coarse.positions());
+    // A mesh with enough vertices is left as it is.
+    let fine = mesh_fem::refine::split_faces(&coarse);
+    assert_eq!(refined.shape(&fine).unwrap().mesh().n_vertices(), fine.n_vertices());
+    // The reference: the same surface split twice, described without refinement, at the
+    // coarse mesh's vertices (the first n).
+    let bags = shape_retrieval::model::BagSettings::default();
+    let finest = mesh_fem::refine::split_faces(&fine);
+    let reference = ShapeFeatures::compute("finest", &finest, &plain, &bags).unwrap();
+    let error = |f: &ShapeFeatures| -> f64 {
+        assert_eq!(f.descriptors.nrows(), n);
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..n {
+            for j in 0..f.descriptors.ncols() {
+                num += (f.descriptors[(i, j)] - reference.descriptors[(i, j)]).powi(2);
+                den += reference.descriptors[(i, j)].powi(2);
+            }
+        }
+        (num / den).sqrt()
+    };
+    let with = ShapeFeatures::compute("coarse", &coarse, &refined, &bags).unwrap();
+    let without = ShapeFeatures::compute("coarse", &coarse, &plain, &bags).unwrap();
+    let (e_with, e_without) = (error(&with), error(&without));
+    // Measured: 0.035 refined against 0.131 as it is.
+    assert!(e_with < 0.5 * e_without, "refined {e_with} vs as it is {e_without}");
+    for bad in [0.0, -1.0, f64::NAN, 1001.0] {
+        let settings = DescriptorSettings {
+            refinement: Some(Refinement {
+                vertices_per_eigenpair: bad,
+            }),
+            ..refined.clone()
+        };
+        assert!(matches!(
+            ShapeFeatures::compute("x", &coarse, &settings, &bags),
+            Err(RetrievalError::InvalidParameter {
+                name: "vertices per eigenpair",
+                ..
+            })
+        ));
+    }
+    // Files written before refinement existed read as off; new ones record it.
+    let old: DescriptorSettings = serde_json::from_str(r#"{"eigenpairs": 50}"#).unwrap();
+    assert_eq!(old.refinement, None);
+    let written = serde_json::to_value(DescriptorSettings::default()).unwrap();
+    assert_eq!(
+        written["refinement"],
+        serde_json::json!({"vertices_per_eigenpair": 20.0})
+    );
 }

@@ -69,7 +69,7 @@ fn spatial_histogram_is_the_heat_flow_between_words() {
         groups: None,
     }
     .histogram(theta.as_ref(), &weights, &spectrum)
-        .unwrap_err();
+    .unwrap_err();
     assert!(matches!(e, RetrievalError::InvalidParameter { .. }), "{e}");
 }
 
@@ -126,7 +126,14 @@ fn grouped_flow_is_the_word_flow_summed_over_groups() {
 #[test]
 fn word_groups_are_the_clusters_of_the_words() {
     // Two tight clusters of three words each, far apart: two groups split them exactly.
-    let centres = [[0.0, 0.0], [0.1, 0.0], [0.0, 0.1], [10.0, 10.0], [10.1, 10.0], [10.0, 9.9]];
+    let centres = [
+        [0.0, 0.0],
+        [0.1, 0.0],
+        [0.0, 0.1],
+        [10.0, 10.0],
+        [10.1, 10.0],
+        [10.0, 9.9],
+    ];
     let words = Mat::from_fn(6, 2, |i, j| centres[i][j]);
     let g = word_groups(words.as_ref(), 2).unwrap();
     assert_eq!(g[0], g[1]);
@@ -268,8 +275,10 @@ fn spatial_indexes_round_trip_and_plain_files_stay_plain() {
 #[test]
 fn weyl_shape_dna_matches_the_dense_spectrum() {
     let mesh = bumpy(2);
+    // The spectrum of the mesh as given (refined, it would be another discretisation).
     let settings = DescriptorSettings {
         eigenpairs: 12,
+        refinement: None,
         ..Default::default()
     };
     let g = GlobalSignature {

@@ -359,6 +359,7 @@ class RetrievalIndex:
         strict: bool = False,
         progress: ProgressArg = None,
         laplacian: str | None = None,
+        refine: float | None = _wfem.DEFAULT_VERTICES_PER_EIGENPAIR,
     ) -> "RetrievalIndex":
         """Indexes mesh and point-cloud files with the default recipe into a new file ``out``.
 
@@ -377,7 +378,10 @@ class RetrievalIndex:
         is at most ``fill_holes`` times the square root of the area is closed by a smooth
         patch (which is not itself described), and a shape rougher
         than ``denoise`` edge lengths is smoothed by the heat kernel until it is not (clean
-        shapes are left as they are); ``None`` turns a step off. All three are recorded in the
+        shapes are left as they are); last, a mesh with fewer than ``refine`` vertices per
+        eigenpair (default 20, i.e. 2,000) has every triangle split into four (the same
+        surface) until it has that many, so its eigenbasis is accurate while the shape is still
+        described at its own vertices. ``None`` turns a step off. All are recorded in the
         index, so queries are cleaned the same way. With ``vocabulary``, its own settings are
         used instead. Point clouds are despiked only: denoising, hole filling and the repair of
         pinches and handles are repairs of a triangulation, which a cloud does not have.
@@ -403,7 +407,7 @@ class RetrievalIndex:
         with reporter(progress, len(ps), "describing shapes") as step:
             inner, refused = _wfem.RetrievalIndex.build(
                 ps, os.fspath(out), voc, words, seed, despike, fill_holes, denoise, overwrite, spatial, strict, step,
-                laplacian, spatial_groups,
+                laplacian, spatial_groups, refine,
             )
         index = cls(inner)
         index.refused = _report_refused(refused, "left out of the index")

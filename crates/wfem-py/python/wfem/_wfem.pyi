@@ -21,6 +21,7 @@ DEFAULT_DEGREE: int
 DEFAULT_SPIKE_THRESHOLD: float
 DEFAULT_MAX_HOLE_PERIMETER: float
 DEFAULT_TARGET_ROUGHNESS: float
+DEFAULT_VERTICES_PER_EIGENPAIR: float
 DEFAULT_SPATIAL_TIME: float
 DEFAULT_SPATIAL: float | None
 DEFAULT_WORDS: int
@@ -353,6 +354,7 @@ class RetrievalIndex:
         progress: Callable[[str], object] | None = None,
         laplacian: str | None = None,
         spatial_groups: int | None = None,
+        refine: float | None = ...,
     ) -> tuple[RetrievalIndex, list[tuple[str, str]]]: ...
     @staticmethod
     def open(path: str) -> RetrievalIndex: ...
