@@ -544,6 +544,7 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
         smoothing: None,
         hole_filling: None,
         topology_repair: None,
+        refinement: None,
         ..Default::default()
     };
     let mut shapes = protocol::load_shapes(files.clone(), &plain, &opts.cache)?;
@@ -612,6 +613,7 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
         smoothing: m.settings.descriptor.smoothing,
         hole_filling: m.settings.descriptor.hole_filling,
         topology_repair: m.settings.descriptor.topology_repair,
+        refinement: m.settings.descriptor.refinement,
         ..plain.clone()
     };
     let mut groups: Vec<DescriptorSettings> = vec![plain.clone()];
