@@ -26,7 +26,9 @@
 //! tube's mouth onto the surface it is glued to. The tube is deleted with the faces touching it and the two
 //! openings are closed by [`crate::holes::fill_holes`]: what is left is the surface without
 //! the handle, not two stubs. Should the tube not separate cleanly (the result must be closed,
-//! manifold and of genus one less), the surface is cut across the cycle instead — every vertex
+//! manifold and of genus one less), or should the level sets keep their length for longer than
+//! the cycle (a tube that ends on an arm as thin as itself: removing "the tube" would take the
+//! arm), the surface is cut across the cycle instead — every vertex
 //! of the cycle split in two, the faces on its left taking new copies — and the two rims
 //! closed. Only closed, manifold, consistently oriented meshes are touched; anything else comes
 //! back unchanged. Each loop costs one Dijkstra and one sort, O(n log n); delimiting a tube of
@@ -330,7 +332,8 @@ pub fn cut_handles(mesh: &TriMesh, max_length: f64) -> Result<CutHandles, MeshEr
 /// left): on each side, the level sets of the distance from the rim run around the tube,
 /// about as long as the cycle, until they reach the surface the tube is glued to and grow;
 /// the vertices closer to the rim than where the growth exceeds `TUBE_GROWTH` per unit of
-/// distance are the tube's. Both halves are deleted with the faces touching them and the openings
+/// distance are the tube's. `None` if no growth is met within the cycle's length of a rim
+/// (or 0.5 √A): the tube ends on a part as thin as itself, which is not removed. Both halves are deleted with the faces touching them and the openings
 /// closed. `Some` only if the result is closed, manifold, connected as before and of genus one
 /// less; with, for its old vertices (first), their indices in `opened`.
 fn remove_tube(opened: &TriMesh, cycle: &[u32], first_copy: u32, genus_before: i64) -> Option<(TriMesh, Vec<u32>)> {
@@ -338,7 +341,16 @@ fn remove_tube(opened: &TriMesh, cycle: &[u32], first_copy: u32, genus_before: i
     let topology = Topology::new(n, opened.faces());
     let graph = Graph::new(opened, &topology);
     let h = graph.length.iter().sum::<f64>() / graph.length.len().max(1) as f64;
-    let limit = 0.5 * opened.area().sqrt();
+    let around: f64 = (0..cycle.len())
+        .map(|i| {
+            let (a, b) = (cycle[i] as usize, cycle[(i + 1) % cycle.len()] as usize);
+            norm(sub(opened.positions()[a], opened.positions()[b]))
+        })
+        .sum();
+    // A tube is at most as long as it is around (on each side of the cut): past that the level
+    // sets run along a part of the shape as thin as the tube (an arm the tube ends on), which
+    // is not the tube's to remove; the cycle is then cut across instead.
+    let limit = (0.5 * opened.area().sqrt()).min(around);
     let mut drop = vec![false; n];
     let copies: Vec<u32> = (first_copy..first_copy + cycle.len() as u32).collect();
     for rim in [cycle, &copies[..]] {
