@@ -281,7 +281,8 @@ impl Default for TopologyRepair {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Refinement {
-    /// The fewest vertices per eigenpair the eigenbasis is computed with (in (0, 1000]).
+    /// The fewest vertices per eigenpair the eigenbasis is computed with (in (0, 100]: with the
+    /// largest eigenpair count, 1,000, a mesh is refined to at most 400,000 vertices).
     pub vertices_per_eigenpair: f64,
 }
 
@@ -303,7 +304,7 @@ impl Refinement {
     /// own vertices first and unchanged), or `None` if it already has them.
     ///
     /// # Errors
-    /// [`RetrievalError::InvalidParameter`] for a factor outside (0, 1000].
+    /// [`RetrievalError::InvalidParameter`] for a factor outside (0, 100].
     pub fn apply(&self, mesh: &TriMesh, eigenpairs: usize) -> Result<Option<TriMesh>, RetrievalError> {
         self.validate()?;
         let wanted = self.vertices_per_eigenpair * eigenpairs as f64;
@@ -320,16 +321,16 @@ impl Refinement {
     /// Checks the factor.
     ///
     /// # Errors
-    /// [`RetrievalError::InvalidParameter`] for a factor outside (0, 1000].
+    /// [`RetrievalError::InvalidParameter`] for a factor outside (0, 100].
     pub fn validate(&self) -> Result<(), RetrievalError> {
         let v = self.vertices_per_eigenpair;
-        if v > 0.0 && v <= 1000.0 {
+        if v > 0.0 && v <= 100.0 {
             Ok(())
         } else {
             Err(RetrievalError::InvalidParameter {
                 name: "vertices per eigenpair",
                 value: v,
-                reason: "must be in (0, 1000]",
+                reason: "must be in (0, 100]",
             })
         }
     }
