@@ -23,14 +23,13 @@
 //! **Removal.** The surface is cut along the cycle and the handle's tube delimited from the
 //! two rims: the level sets of the distance from a rim run around the tube with about the
 //! rim's length, and start to grow (like circles, 2π per unit of distance) where they pass the
-//! tube's mouth onto the surface it is glued to. The tube is deleted with the faces touching it and the two
-//! openings are closed by [`crate::holes::fill_holes`]: what is left is the surface without
-//! the handle, not two stubs. Should the tube not separate cleanly (the result must be closed,
-//! manifold and of genus one less), or should the level sets keep their length for longer than
-//! the cycle (a tube that ends on an arm as thin as itself: removing "the tube" would take the
-//! arm), the surface is cut across the cycle instead — every vertex
-//! of the cycle split in two, the faces on its left taking new copies — and the two rims
-//! closed. Only closed, manifold, consistently oriented meshes are touched; anything else comes
+//! tube's mouth onto the surface it is glued to. The tube is deleted with the faces touching it
+//! and the two openings are closed by [`crate::holes::fill_holes`]: what is left is the surface
+//! without the handle, not two stubs. Should the tube not separate cleanly (the result must be
+//! closed, manifold and of genus one less), or should the level sets keep their length for
+//! longer than the cycle (a tube that ends on an arm as thin as itself: removing "the tube"
+//! would take the arm), the surface is cut across the cycle instead — every vertex of the cycle
+//! split in two, the faces on its left taking new copies — and the two rims closed. Only closed, manifold, consistently oriented meshes are touched; anything else comes
 //! back unchanged. Each loop costs one Dijkstra and one sort, O(n log n); delimiting a tube of
 //! m vertices costs m + (its neighbours) loops.
 
@@ -294,7 +293,7 @@ pub fn cut_handles(mesh: &TriMesh, max_length: f64) -> Result<CutHandles, MeshEr
         let first_copy = current.n_vertices() as u32;
         let mut opened_origin = origin.clone();
         opened_origin.resize(opened.n_vertices(), None);
-        let (next, next_origin) = match remove_tube(&opened, &best.cycle, first_copy, genus_before) {
+        let (next, next_origin) = match remove_tube(&opened, &best.cycle, best.length, first_copy, genus_before) {
             Some((m, kept)) => {
                 let mut o: Vec<Option<u32>> = kept.iter().map(|&v| opened_origin[v as usize]).collect();
                 o.resize(m.n_vertices(), None);
@@ -332,21 +331,22 @@ pub fn cut_handles(mesh: &TriMesh, max_length: f64) -> Result<CutHandles, MeshEr
 /// left): on each side, the level sets of the distance from the rim run around the tube,
 /// about as long as the cycle, until they reach the surface the tube is glued to and grow;
 /// the vertices closer to the rim than where the growth exceeds `TUBE_GROWTH` per unit of
-/// distance are the tube's. `None` if no growth is met within the cycle's length of a rim
-/// (or 0.5 √A): the tube ends on a part as thin as itself, which is not removed. Both halves are deleted with the faces touching them and the openings
+/// distance are the tube's. `None` if no growth is met within the cycle's length `around` of
+/// a rim (or 0.5 √A): the tube ends on a part as thin as itself, which is not removed. Both
+/// halves are deleted with the faces touching them and the openings
 /// closed. `Some` only if the result is closed, manifold, connected as before and of genus one
 /// less; with, for its old vertices (first), their indices in `opened`.
-fn remove_tube(opened: &TriMesh, cycle: &[u32], first_copy: u32, genus_before: i64) -> Option<(TriMesh, Vec<u32>)> {
+fn remove_tube(
+    opened: &TriMesh,
+    cycle: &[u32],
+    around: f64,
+    first_copy: u32,
+    genus_before: i64,
+) -> Option<(TriMesh, Vec<u32>)> {
     let n = opened.n_vertices();
     let topology = Topology::new(n, opened.faces());
     let graph = Graph::new(opened, &topology);
     let h = graph.length.iter().sum::<f64>() / graph.length.len().max(1) as f64;
-    let around: f64 = (0..cycle.len())
-        .map(|i| {
-            let (a, b) = (cycle[i] as usize, cycle[(i + 1) % cycle.len()] as usize);
-            norm(sub(opened.positions()[a], opened.positions()[b]))
-        })
-        .sum();
     // A tube is at most as long as it is around (on each side of the cut): past that the level
     // sets run along a part of the shape as thin as the tube (an arm the tube ends on), which
     // is not the tube's to remove; the cycle is then cut across instead.
