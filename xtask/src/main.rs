@@ -8,6 +8,18 @@ use std::path::PathBuf;
 enum Cmd {
     /// Print the version of the workspace.
     Version,
+    /// Write procedural creatures (`shrec_bench::creatures`) as OFF files.
+    Creatures {
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Number of creatures (seeds 0..count).
+        #[arg(long, default_value_t = 48)]
+        count: u64,
+        /// Icosphere level (10·4^level + 2 vertices).
+        #[arg(long, default_value_t = 5)]
+        level: u32,
+    },
     /// Generate the synthetic SHREC'10-style benchmark (see docs/SHREC.md).
     Shrec {
         /// Mesh corpus folder (default: $WFEM_MESHES or the shared corpus).
@@ -105,6 +117,10 @@ enum Cmd {
         /// Also evaluate with a vocabulary trained on shapes outside the collection.
         #[arg(long)]
         outside: bool,
+        /// Also evaluate with a vocabulary trained on this many procedural creatures
+        /// (`cargo xtask creatures`; written to the system's temporary folder).
+        #[arg(long, default_value_t = 0)]
+        creatures: u64,
         /// Report file whose generated part is rewritten (default: print only).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -201,6 +217,13 @@ fn emit(text: &str, out: Option<PathBuf>) -> Result<(), Box<dyn std::error::Erro
 fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
     match cmd {
         Cmd::Version => println!("wfem xtask {}", env!("CARGO_PKG_VERSION")),
+        Cmd::Creatures { out, count, level } => {
+            std::fs::create_dir_all(&out)?;
+            for seed in 0..count {
+                let mesh = shrec_bench::creatures::creature(seed, level)?;
+                mesh_fem::io::write_mesh(&out.join(format!("creature{seed:03}.off")), &mesh)?;
+            }
+        }
         Cmd::Shrec {
             meshes,
             out,
@@ -299,6 +322,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             variants,
             collections,
             outside,
+            creatures,
             out,
         } => {
             use xtask::real_eval::{self, Collection, RealEvalOptions};
@@ -324,6 +348,8 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 variants: &variants,
                 collections: &collections,
                 outside,
+                creatures,
+                creatures_dir: &std::env::temp_dir().join("wfem-creatures"),
             })?;
             let text = real_eval::markdown(&results);
             match out {

@@ -108,13 +108,20 @@ impl Collection {
     /// The shapes an honest vocabulary for this collection is trained on (none of them in it).
     fn outside(self, meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
         let all = protocol::outside_files(meshes_dir)?;
-        Ok(match self {
+        Ok(self.alike(match self {
             // The four-legged animals are in the collection itself.
             Collection::Shrec11Fourleg => all
                 .into_iter()
                 .filter(|f| !f.name.starts_with("shrec07-fourleg"))
                 .collect(),
-            // Clouds are trained on clouds, a mixed collection on both.
+            _ => all,
+        }))
+    }
+
+    /// Training shapes described as this collection's are: clouds are trained on clouds, a
+    /// mixed collection on both.
+    fn alike(self, all: Vec<ShapeFile>) -> Vec<ShapeFile> {
+        match self {
             Collection::Tosca76Clouds => Self::clouds(all),
             Collection::Tosca76Mixed => {
                 let mut f = all.clone();
@@ -122,7 +129,7 @@ impl Collection {
                 f
             }
             _ => all,
-        })
+        }
     }
 }
 
@@ -157,6 +164,11 @@ pub struct RealEvalOptions<'a> {
     pub collections: &'a [Collection],
     /// Also evaluate with a vocabulary trained outside the collection.
     pub outside: bool,
+    /// Also evaluate with a vocabulary trained on this many procedural creatures
+    /// ([`shrec_bench::creatures`], written to `creatures_dir`); 0: not.
+    pub creatures: u64,
+    /// Where the creatures' OFF files are kept.
+    pub creatures_dir: &'a Path,
 }
 
 /// In a collection holding meshes and the clouds sampled from them (`NAME` and `NAME-cloud`):
@@ -230,6 +242,15 @@ pub fn run(opts: &RealEvalOptions<'_>) -> Result<Vec<CollectionResult>, BenchErr
                 let outside = real::describe(collection.outside(opts.meshes_dir)?, settings, opts.cache)?;
                 let vocabulary = protocol::train(settings, &outside.features)?;
                 vocabularies.push((format!("{} outside shapes", outside.files.len()), Some(vocabulary)));
+            }
+            if opts.creatures > 0 {
+                let files = collection.alike(shrec_bench::creatures::creature_files(
+                    opts.creatures_dir,
+                    opts.creatures,
+                )?);
+                let creatures = real::describe(files, settings, opts.cache)?;
+                let vocabulary = protocol::train(settings, &creatures.features)?;
+                vocabularies.push((format!("{} creatures", opts.creatures), Some(vocabulary)));
             }
             for (label, vocabulary) in vocabularies {
                 let note = if vocabulary.is_some() {

@@ -21,6 +21,7 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 pub mod approx_eval;
+pub mod creatures;
 mod error;
 pub mod eval;
 pub mod handles;
