@@ -12,7 +12,9 @@
 //!   (`cargo xtask shrec-eval`, `cargo xtask tosca-eval`, docs/SHREC-RESULTS.md);
 //! * [`approx_eval`]: the feature-driven approximation f = f_glob + f_loc (Sect. 4.2,
 //!   Fig. 12–13) on real meshes, smooth and noisy (`cargo xtask approx-eval`,
-//!   docs/APPROX-RESULTS.md).
+//!   docs/APPROX-RESULTS.md);
+//! * [`creatures`]: procedural bodies with limbs, training shapes outside every evaluation set
+//!   (`cargo xtask creatures`, `cargo xtask real-eval --creatures N`).
 //!
 //! `xtask` is a thin command line over this crate. All randomness comes from the one seeded
 //! generator [`shifted_solve::rng::SplitMix64`].
