@@ -18,11 +18,11 @@
 //! `query` describe their shapes with the recorded one (`query --laplacian` naming another is
 //! refused).
 //!
-//! The defaults are [`shape_retrieval::model::RetrievalSettings::default`]: pinched vertices split,
-//! isolated spikes put back, rough and incoherent (noisy, not merely coarse) shapes smoothed by
-//! the heat kernel down to a roughness of 0.1 edge lengths, holes with rims up to 3√A closed by
-//! smooth patches that are not themselves described, thin handles (cycles up to 0.35√A) cut
-//! (clean, closed shapes of genus 0 are left as they are), then SI-HKS with times `t = A·2^τ`,
+//! The defaults are [`shape_retrieval::model::RetrievalSettings::default`]: isolated spikes put
+//! back, rough and incoherent (noisy, not merely coarse) shapes smoothed by the heat kernel down
+//! to a roughness of 0.1 edge lengths, holes with rims up to 3√A closed by smooth patches that
+//! are not themselves described, pinched vertices split and thin handles (cycles up to 0.35√A)
+//! cut (clean, closed shapes of genus 0 are left as they are), coarse meshes refined, then SI-HKS with times `t = A·2^τ`,
 //! τ ∈ [−12, 1] (A = surface area; exactly scale invariant), 5 Fourier magnitudes, k = 100,
 //! z-scored, 512 words, soft assignment, vertex areas capped at 3 medians, χ² distance.
 //! SHREC'11 (600 shapes, 30 classes, `cargo xtask real-eval`, docs/RETRIEVAL-RESULTS.md): mAP

@@ -132,6 +132,35 @@ pub fn run_variant(
                         f3(r.cumulative(|q| q.family == f))
                     );
                 }
+                // Strength-5 queries against the whole database of strength ≤ 5, family × class.
+                let transforms = r.transforms();
+                println!(
+                    "[{name}]   s5 AP     {}",
+                    transforms
+                        .iter()
+                        .map(|t| format!("{:>6.6}", t.name()))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                );
+                for f in r.families() {
+                    let cells: Vec<String> = transforms
+                        .iter()
+                        .map(|&t| {
+                            let aps: Vec<f64> = r
+                                .queries
+                                .iter()
+                                .filter(|q| q.family == f && q.transform == t && q.strength == 5)
+                                .filter_map(|q| q.ap_cumulative[4])
+                                .collect();
+                            if aps.is_empty() {
+                                format!("{:>6}", "–")
+                            } else {
+                                format!("{:>6.3}", aps.iter().sum::<f64>() / aps.len() as f64)
+                            }
+                        })
+                        .collect();
+                    println!("[{name}]   {f:<9} {}", cells.join(" "));
+                }
             }
         }
     }

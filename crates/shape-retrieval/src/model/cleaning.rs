@@ -239,16 +239,19 @@ impl Default for HoleFilling {
     }
 }
 
-/// Repair of topological noise (beyond the paper), in two places of the cleaning: first,
-/// every pinched vertex — where two parts were welded at a point or along an edge — is split
-/// into one vertex per sheet ([`mesh_fem::handles::unweld`]); then, once holes are filled, on a
-/// closed shape of genus > 0 every thin handle — a non-separating cycle of length at most
+/// Repair of topological noise (beyond the paper), once holes are filled: first every pinched
+/// vertex — where two parts were welded at a point or along an edge — is split into one
+/// vertex per sheet ([`mesh_fem::handles::unweld`]); then, on a closed shape of genus > 0,
+/// every thin handle — a non-separating cycle of length at most
 /// `max_handle · √A` — is removed with its tube and the openings closed
 /// ([`mesh_fem::handles::cut_handles`]), shortest first. A tube glued between two parts that
 /// touch (scans and simplifications leave them; the synthetic `handles` class makes them)
 /// then no longer carries heat between them. Copies, patches and the removed tubes are not
 /// described. Manifold shapes of genus 0 (nearly all) are left as they are; real handles are
-/// longer than the bound (a torus 0.50 √A).
+/// longer than the bound (a torus 0.50 √A). Pinches are split after the holes are filled
+/// because holes touching at a vertex are closed one by one as the simple loops of their
+/// common rim, whereas splitting the vertex first joins them into one rim around both (a chain
+/// of touching micro holes becomes a rim too long to close).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TopologyRepair {

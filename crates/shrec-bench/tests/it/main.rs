@@ -2,6 +2,7 @@
 //! file; see README, "Running the tests"). Each module is one former `tests/<name>.rs`.
 
 mod approx_eval;
+mod cleaning;
 mod eval;
 mod handles;
 mod synth;
