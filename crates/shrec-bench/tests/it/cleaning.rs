@@ -10,11 +10,7 @@ fn touching_micro_holes_are_all_closed_and_the_shape_stays_one_piece() {
     // pinches before the holes are filled joined each chain into one rim (one of 310 edges,
     // too long to close); filled first, every hole closes as the simple loops of its rim.
     // (Islands ringed by touching holes stay as a few tiny closed pieces.)
-    let dir = wfem_corpus::meshes_dir()
-        .unwrap()
-        .join("tosca-bcicp-5k/TOSCA_Isometric");
-    let (mesh, _) = mesh_fem::io::load(&dir.join("cat0.off"), &Default::default()).unwrap();
-    let b = BaseShape::new("cat0", mesh).unwrap();
+    let b = crate::tosca_base("cat0");
     let t = transform(&b, Class::MicroHoles, 5, 2010).unwrap();
     let before = mesh_fem::stats::stats(&t.mesh);
     assert!(

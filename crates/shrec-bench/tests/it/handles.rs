@@ -5,11 +5,7 @@ use shrec_bench::handles::{handle_count, HANDLE_MAX_DISTANCE, HANDLE_MIN_GRAPH_D
 use shrec_bench::synth::*;
 
 fn david() -> BaseShape {
-    let dir = wfem_corpus::meshes_dir()
-        .unwrap()
-        .join("tosca-bcicp-5k/TOSCA_Isometric");
-    let (mesh, _) = mesh_fem::io::load(&dir.join("david0.off"), &Default::default()).unwrap();
-    BaseShape::new("david0", mesh).unwrap()
+    crate::tosca_base("david0")
 }
 
 #[test]
@@ -74,11 +70,7 @@ fn handles_raise_the_genus_by_one_each() {
 fn cutting_the_handles_removes_the_tubes_and_keeps_the_shape() {
     // The tubes of the xtask data end on victoria's thin arms, where the level sets that
     // delimit a tube do not grow: the repair must not run on along the arm.
-    let dir = wfem_corpus::meshes_dir()
-        .unwrap()
-        .join("tosca-bcicp-5k/TOSCA_Isometric");
-    let (mesh, _) = mesh_fem::io::load(&dir.join("victoria0.off"), &Default::default()).unwrap();
-    let b = BaseShape::new("victoria0", mesh).unwrap();
+    let b = crate::tosca_base("victoria0");
     for s in 1..=3u8 {
         let t = transform(&b, Class::Handles, s, 2010).unwrap();
         let cut = mesh_fem::handles::cut_handles(&t.mesh, mesh_fem::handles::DEFAULT_MAX_HANDLE_LENGTH).unwrap();
@@ -100,11 +92,7 @@ fn the_cut_goes_around_the_tube_not_around_a_leg_as_thin() {
     // handle between two legs can run around a leg: cutting there removed 354 of the dog's own
     // vertices and none of the tube's at strength 1. Of the short cycles around the handle the
     // repair now takes the one whose tube removal takes the least area: the tube's.
-    let dir = wfem_corpus::meshes_dir()
-        .unwrap()
-        .join("tosca-bcicp-5k/TOSCA_Isometric");
-    let (mesh, _) = mesh_fem::io::load(&dir.join("dog0.off"), &Default::default()).unwrap();
-    let b = BaseShape::new("dog0", mesh).unwrap();
+    let b = crate::tosca_base("dog0");
     for s in 1..=2u8 {
         let t = transform(&b, Class::Handles, s, 2010).unwrap();
         let cut = mesh_fem::handles::cut_handles(&t.mesh, mesh_fem::handles::DEFAULT_MAX_HANDLE_LENGTH).unwrap();

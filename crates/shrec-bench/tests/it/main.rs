@@ -7,3 +7,10 @@ mod eval;
 mod handles;
 mod synth;
 mod transform;
+
+/// A TOSCA null shape of the corpus (`cat0`, `david0`, …) as the generator's base shape.
+fn tosca_base(name: &str) -> shrec_bench::synth::BaseShape {
+    let file = wfem_corpus::mesh_path(&format!("tosca-bcicp-5k/TOSCA_Isometric/{name}.off")).unwrap();
+    let (mesh, _) = mesh_fem::io::load(&file, &Default::default()).unwrap();
+    shrec_bench::synth::BaseShape::new(name, mesh).unwrap()
+}
