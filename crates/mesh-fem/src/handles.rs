@@ -378,7 +378,7 @@ pub fn cut_handles(mesh: &TriMesh, max_length: f64) -> Result<CutHandles, MeshEr
 /// a rim (or 0.5 √A): the tube ends on a part as thin as itself, which is not removed. Both
 /// halves are deleted with the faces touching them and the openings
 /// closed. `Some` only if the result is closed, manifold, connected as before and of genus one
-/// less; with, for its old vertices (first), their indices in `opened`.
+/// less; with, for its old vertices (first), their indices in `opened`, and the area removed.
 fn remove_tube(
     opened: &TriMesh,
     cycle: &[u32],

@@ -4,18 +4,22 @@
 //! A creature is an icosphere deformed in three steps, all randomness from one seeded
 //! [`SplitMix64`] stream:
 //!
-//! 1. **body**: the unit sphere scaled to an ellipsoid with axes 1 × a × b, a ∈ [0.45, 1],
-//!    b ∈ [0.3, 1];
-//! 2. **limbs** (0–8): a limb is a direction d on the sphere, a length ℓ ∈ [0.3, 2.5], an
-//!    angular width w ∈ [0.1, 0.4] rad, a profile exponent p ∈ {2, 4} (tapered or blunt) and a
-//!    bend β ∈ [0, 1.2] rad towards a random perpendicular t; a point u of the sphere at angle θ
-//!    from d moves by ℓ φ (cos(βφ) d + sin(βφ) t) with φ = exp(−(θ/w)^p), so the cap around d
-//!    is carried out as a whole and the ring around it becomes the limb's side;
+//! 1. **body**: the unit sphere scaled to an ellipsoid;
+//! 2. **limbs**: a limb is a centre d on the sphere, an axis it grows along (d itself unless
+//!    aimed), a length ℓ, an angular width w, a profile exponent p ∈ {2, 4} (tapered or blunt)
+//!    and a bend β towards a perpendicular t of the axis; a point u of the sphere at angle θ
+//!    from d moves by ℓ φ (cos(βφ) axis + sin(βφ) t) with φ = exp(−(θ/w)^p), so the cap around
+//!    d is carried out as a whole and the ring around it becomes the limb's side. **Sub-limbs**
+//!    (fingers, toes, ears: 2–5 on a limb) are centred on the parent's cap and grow from its
+//!    tip, tilted 0.3–1 rad away;
 //! 3. **bumps** (0–6): the same displacement with a small length (0.05–0.2) and no bend.
 //!
-//! Limb directions are at least their widths plus 0.25 rad apart, so limbs do not merge. The
-//! surfaces may self-intersect where two bent limbs cross in space; the intrinsic geometry the
-//! descriptors see is unaffected.
+//! The seed chooses the plan (seed mod 3): **random bodies** (axes 1 × [0.45, 1] × [0.3, 1],
+//! 2–8 limbs of length 0.3–2.5 and width 0.1–0.4 rad in random directions at least their
+//! widths plus 0.25 rad apart, half of them with sub-limbs), **bipeds** (upright; a head, two
+//! arms, two legs; hands and ears sometimes) and **quadrupeds** (four legs, a neck and head,
+//! a tail). The surfaces may self-intersect where two bent limbs cross in space; the intrinsic
+//! geometry the descriptors see is unaffected.
 
 use crate::protocol::ShapeFile;
 use crate::BenchError;
