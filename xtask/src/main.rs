@@ -118,7 +118,8 @@ enum Cmd {
         #[arg(long)]
         outside: bool,
         /// Also evaluate with a vocabulary trained on this many procedural creatures
-        /// (`cargo xtask creatures`; written to the system's temporary folder).
+        /// (`cargo xtask creatures`; written to the system's temporary folder, `wfem-creatures`,
+        /// where files already there are reused: delete it after changing the generator).
         #[arg(long, default_value_t = 0)]
         creatures: u64,
         /// Report file whose generated part is rewritten (default: print only).

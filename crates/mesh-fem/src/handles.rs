@@ -78,7 +78,9 @@ pub struct CutHandles {
     pub original_vertices: usize,
     /// The old vertices removed with the handles' tubes, increasing.
     pub removed: Vec<u32>,
-    /// The length of every cycle cut, in units of √A, in the order they were cut.
+    /// For every handle removed, in order, the length of the shortest non-separating cycle
+    /// found at that step (the one `max_length` bounds; the tube may have been delimited from
+    /// another short cycle, see the module docs), in units of √A.
     pub cut: Vec<f64>,
 }
 

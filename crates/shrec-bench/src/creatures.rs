@@ -112,7 +112,9 @@ pub fn creature(seed: u64, level: u32) -> Result<TriMesh, MeshError> {
 /// The icosphere level of [`creature_files`]: 10,242 vertices, finer than any refinement needs.
 pub const CREATURE_LEVEL: u32 = 5;
 
-/// Creatures 0..count as OFF files in `dir` (written where missing), family `creature`.
+/// Creatures 0..count as OFF files in `dir` (written where missing: a file is named by its
+/// seed only, so a folder written by an older generator must be emptied first), family
+/// `creature`.
 ///
 /// # Errors
 /// [`BenchError::Data`] if the folder or a file cannot be written.
@@ -187,6 +189,14 @@ fn add_sub_limbs(rng: &mut SplitMix64, parent: Limb, limbs: &mut Vec<Limb>) {
     }
 }
 
+/// Pushes `limb` and, with probability `p`, its sub-limbs ([`add_sub_limbs`]).
+fn push_limb(rng: &mut SplitMix64, limb: Limb, p: f64, limbs: &mut Vec<Limb>) {
+    limbs.push(limb);
+    if rng.next_f64() < p {
+        add_sub_limbs(rng, limb, limbs);
+    }
+}
+
 /// Any body with 2–8 limbs in random directions, half of them with sub-limbs.
 fn random_plan(rng: &mut SplitMix64) -> Plan {
     let axes = [1.0, uniform(rng, (0.45, 1.0)), uniform(rng, (0.3, 1.0))];
@@ -217,17 +227,11 @@ fn biped(rng: &mut SplitMix64) -> Plan {
     let axes = [uniform(rng, (0.45, 0.65)), uniform(rng, (0.28, 0.42)), 1.0];
     let mut limbs = Vec::new();
     let head = aimed(rng, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], (0.35, 0.7), (0.25, 0.35), 0.3);
-    limbs.push(head);
-    if rng.next_f64() < 0.3 {
-        add_sub_limbs(rng, head, &mut limbs);
-    }
+    push_limb(rng, head, 0.3, &mut limbs);
     for side in [-1.0, 1.0] {
         let down = uniform(rng, (-0.9, 0.4));
         let arm = aimed(rng, [side, 0.0, 0.6], [side, 0.0, down], (1.2, 2.2), (0.13, 0.22), 0.9);
-        limbs.push(arm);
-        if rng.next_f64() < 0.6 {
-            add_sub_limbs(rng, arm, &mut limbs);
-        }
+        push_limb(rng, arm, 0.6, &mut limbs);
         let leg = aimed(
             rng,
             [0.35 * side, 0.0, -1.0],
@@ -236,10 +240,7 @@ fn biped(rng: &mut SplitMix64) -> Plan {
             (0.2, 0.3),
             0.5,
         );
-        limbs.push(leg);
-        if rng.next_f64() < 0.4 {
-            add_sub_limbs(rng, leg, &mut limbs);
-        }
+        push_limb(rng, leg, 0.4, &mut limbs);
     }
     (axes, limbs)
 }
@@ -257,17 +258,11 @@ fn quadruped(rng: &mut SplitMix64) -> Plan {
             (0.12, 0.2),
             0.6,
         );
-        limbs.push(leg);
-        if rng.next_f64() < 0.3 {
-            add_sub_limbs(rng, leg, &mut limbs);
-        }
+        push_limb(rng, leg, 0.3, &mut limbs);
     }
     let lift = uniform(rng, (0.0, 1.2));
     let head = aimed(rng, [1.0, 0.0, 0.5], [1.0, 0.0, lift], (0.6, 1.3), (0.18, 0.3), 1.0);
-    limbs.push(head);
-    if rng.next_f64() < 0.6 {
-        add_sub_limbs(rng, head, &mut limbs);
-    }
+    push_limb(rng, head, 0.6, &mut limbs);
     let mut tail = aimed(rng, [-1.0, 0.0, 0.2], [-1.0, 0.0, 0.3], (0.4, 1.8), (0.06, 0.12), 1.2);
     tail.exponent = 2;
     limbs.push(tail);
