@@ -1,6 +1,7 @@
-//! The `wfem` command-line tool. Without a subcommand it runs `wfem demo`
-//! (what `cargo run --release` does). The CLI is private to this binary (module `cli`), so a
-//! library user of the `wfem` package never compiles clap, indicatif or the renderer.
+//! The `wfem` command-line tool (package `wfem-cli`). Without a subcommand it runs `wfem demo`
+//! (what `cargo run --release` does). The CLI is private to this binary (module `cli`); the
+//! library crates and the facade `wfem` know nothing of it, so a library user never compiles
+//! clap, indicatif or the renderer.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

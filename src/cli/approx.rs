@@ -8,7 +8,7 @@ use clap::Args;
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_heat::approx::{
     feature_approximation, ApproxParams, Coefficients, FeatureApproximation, Persistence, ScaleSampling,
 };

@@ -1,4 +1,4 @@
-//! Command-line values of the library's registries ([`wfem_choice::Choice`]): the names,
+//! Command-line values of the library's registries ([`wfem_base::Choice`]): the names,
 //! aliases, help and default of every choice (backend, heat method, mass, descriptor, …) come
 //! from the library type, so the CLI keeps no copy of a name.
 //!
@@ -11,7 +11,7 @@ use clap::builder::{PossibleValue, TypedValueParser};
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use std::ffi::OsStr;
 use std::marker::PhantomData;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 /// A `clap` value parser for the registry `T`: accepts its names and aliases (any case, `_`
 /// for `-`), lists its names with their help in `--help`, and names the valid ones when a

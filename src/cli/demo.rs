@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_heat::method::Method;
 use wfem_heat::HeatParams;
 use wfem_render::{render_png, Frame, View};

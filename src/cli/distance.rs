@@ -7,7 +7,7 @@ use super::{limits, progress, read_usable, CliError, MeshArgs, Output};
 use clap::Args;
 use serde_json::json;
 use std::io::Write;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
 use wfem_heat::method::Method;
 use wfem_heat::HeatParams;

@@ -8,7 +8,7 @@ use mesh_fem::FemOperators;
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_heat::method::{Method, MethodOptions};
 use wfem_heat::{HeatKernel, HeatParams};
 

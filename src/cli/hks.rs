@@ -10,7 +10,7 @@ use shape_retrieval::hks::{TimeSampling, DEFAULT_NUM_TIMES};
 use shape_retrieval::mesh_hks::{operators_hks, HksStep, MeshHksParams};
 use shape_retrieval::RetrievalError;
 use std::io::Write;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_heat::diagonal::DiagonalMethod;
 
 /// Arguments of `wfem hks`.

@@ -8,7 +8,7 @@ use mesh_fem::io::{load_shape, read_field, LoadOptions, LoadReport, MeshFormat, 
 use mesh_fem::validate::{repair, RepairOptions, RepairReport, RepairStep};
 use mesh_fem::{assemble, AssemblyParams, FemOperators, Laplacian, Lumping, MeshError, TriMesh};
 use std::path::{Path, PathBuf};
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_render::Splats;
 
 /// The mesh argument shared by every subcommand that reads a mesh.

@@ -34,7 +34,7 @@ use clap::Args;
 use mesh_fem::{Lumping, Mass, MeshError};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_render::RenderError;
 
 /// Failures of the CLI: printed as one line `wfem: error: …`.

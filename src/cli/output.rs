@@ -8,7 +8,7 @@ use mesh_fem::io::{stage_field, AtomicSet, FieldFormat};
 use mesh_fem::TriMesh;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_render::{render_png, render_splats_png, symmetric_range, Colormap, Frame, RenderParams, Splats, Up, View};
 
 /// The format of an output file, from its extension: a per-vertex field file or a rendered

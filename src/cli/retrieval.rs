@@ -47,7 +47,7 @@ use shape_retrieval::spatial::SpatialBag;
 use shape_retrieval::store::{IndexStore, JsonFile, VocabularyStore};
 use std::io::Write;
 use std::path::PathBuf;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 /// Arguments of `wfem retrieval`.
 #[derive(Args, Clone, Debug)]

@@ -8,7 +8,7 @@ use clap::Args;
 use mesh_fem::TriMesh;
 use serde_json::json;
 use shape_retrieval::sihks::{MeshLengths, TimeUnit};
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_heat::times::TimeScales;
 use wfem_heat::Operators;
 

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 use std::process::Command;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 fn wfem(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_wfem"))

@@ -136,7 +136,7 @@ fn laplacian_flag_takes_the_library_names_and_non_manifold_meshes_are_warned() {
     let o = run(None);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("--laplacian robust"), "{}", stderr(&o));
-    for name in <mesh_fem::Laplacian as wfem_choice::Choice>::names() {
+    for name in <mesh_fem::Laplacian as wfem_base::Choice>::names() {
         let o = run(Some(name));
         assert!(o.status.success(), "{name}: {}", stderr(&o));
     }
@@ -297,7 +297,7 @@ fn write_xyz(path: &std::path::Path, points: &[[f64; 3]]) {
 
 /// n points uniform on a mesh's surface (the workspace's seeded generator).
 fn sample(mesh: &mesh_fem::TriMesh, n: usize, seed: u64) -> Vec<[f64; 3]> {
-    let mut rng = shifted_solve::rng::SplitMix64::new(seed);
+    let mut rng = wfem_base::rng::SplitMix64::new(seed);
     mesh_fem::cloud::sample_surface(mesh, n, &mut || rng.next_f64())
         .unwrap()
         .positions()

@@ -1,6 +1,7 @@
 //! The integration tests of this package, in one test binary (one link instead of one per
 //! file; see README, "Running the tests"). Each module is one former `tests/<name>.rs`.
 
+mod architecture;
 mod bad_input;
 mod cli;
 mod cli_approx;
@@ -19,4 +20,5 @@ mod hostile;
 mod module_cycles;
 mod no_unwrap;
 mod registry;
+mod size_budget;
 mod thin_library;

@@ -3,7 +3,7 @@
 //! is accepted, and an unknown name is refused with the list of valid ones.
 
 use super::common::wfem;
-use wfem_choice::{check_entries, Choice};
+use wfem_base::{check_entries, Choice};
 
 /// A flag of a subcommand and the names its registry holds.
 struct Flag {
@@ -147,7 +147,7 @@ fn all_spellings() -> Vec<&'static str> {
     of::<shape_retrieval::descriptor::Descriptor>(&mut out);
     of::<shape_retrieval::descriptor::FeatureDetector>(&mut out);
     of::<shape_retrieval::distance::BagDistance>(&mut out);
-    of::<retrieval_store::Metric>(&mut out);
+    of::<retrieval_store::metric::StandardMetric>(&mut out);
     of::<Up>(&mut out);
     out
 }

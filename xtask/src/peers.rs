@@ -162,9 +162,9 @@ fn peers_python(root: &Path) -> (PathBuf, Result<(), String>) {
 /// Builds the `wfem` binary in the release profile (the one `cargo xtask` runs in).
 fn build_wfem(root: &Path) -> Result<PathBuf, String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    eprintln!("==> cargo build --release --bin wfem --features cli");
+    eprintln!("==> cargo build --release --bin wfem");
     let status = Command::new(cargo)
-        .args(["build", "--release", "--bin", "wfem", "--features", "cli"])
+        .args(["build", "--release", "--bin", "wfem"])
         .current_dir(root)
         .status()
         .map_err(|e| format!("cannot run cargo: {e}"))?;

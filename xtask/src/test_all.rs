@@ -1,6 +1,11 @@
 //! `cargo test-all`: the whole test suite — Rust and Python — on a fresh machine.
 //!
-//! 1. `cargo test --workspace --locked`;
+//! 1. `cargo test --workspace --locked --features mesh-fem/nalgebra` (every optional feature of
+//!    a library crate that the workspace does not already turn on);
+//! 1b. every library crate checked **alone** (`cargo check -p X --lib` with only its own default
+//!    features, warnings refused): a crate that compiles only thanks to a feature another crate
+//!    turns on, or has code dead without it, fails here (ARCHITECTURE.md, "each crate usable
+//!    alone");
 //! 2. a virtual environment under the target directory (`$CARGO_TARGET_DIR` or `target/`,
 //!    `python-venv/`), created with `python3 -m venv` (or `$WFEM_PYTHON -m venv`); a missing
 //!    `venv` module stops with the command that installs it;
@@ -267,6 +272,83 @@ fn pip_install(python: &Path) -> Command {
 /// Runs the suites; prints the time of each phase.
 ///
 /// # Errors
+/// Features of library crates that no other workspace crate turns on, enabled for the test run
+/// so that their code is tested too.
+pub const RUST_FEATURES: &str = "mesh-fem/nalgebra";
+
+/// The workspace's library packages (every member with a `lib`, `cdylib` or `rlib` target),
+/// from `cargo metadata`.
+pub fn library_packages(cargo: &str, root: &Path) -> Result<Vec<String>, StepError> {
+    let out = Command::new(cargo)
+        .args([
+            "metadata",
+            "--no-deps",
+            "--format-version",
+            "1",
+            "--offline",
+            "--locked",
+        ])
+        .current_dir(root)
+        .output()
+        .map_err(|e| StepError(format!("cargo metadata could not start: {e}")))?;
+    if !out.status.success() {
+        return fail(format!(
+            "cargo metadata failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    let meta: serde_json::Value =
+        serde_json::from_slice(&out.stdout).map_err(|e| StepError(format!("cargo metadata: {e}")))?;
+    let mut names = Vec::new();
+    for package in meta["packages"].as_array().into_iter().flatten() {
+        let is_library = package["targets"].as_array().into_iter().flatten().any(|t| {
+            t["kind"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .any(|k| matches!(k.as_str(), Some("lib" | "cdylib" | "rlib")))
+        });
+        if let (true, Some(name)) = (is_library, package["name"].as_str()) {
+            names.push(name.to_string());
+        }
+    }
+    names.sort();
+    Ok(names)
+}
+
+/// `cargo check -p X --lib` for every library package, one at a time, so that each is compiled
+/// with its own features only; any warning fails the step.
+fn crates_alone(cargo: &str, root: &Path) -> Result<(), StepError> {
+    let packages = library_packages(cargo, root)?;
+    if packages.len() < 8 {
+        return fail(format!("cargo metadata lists only {packages:?} as library packages"));
+    }
+    for package in &packages {
+        eprintln!("==> cargo check -p {package} --lib (alone)");
+        let out = Command::new(cargo)
+            .args(["check", "--locked", "--lib", "--message-format", "short", "-p", package])
+            .current_dir(root)
+            .output()
+            .map_err(|e| StepError(format!("cargo check could not start: {e}")))?;
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let warnings: Vec<&str> = stderr
+            .lines()
+            .filter(|l| l.contains(": warning: ") || l.contains(": error"))
+            .collect();
+        if !out.status.success() || !warnings.is_empty() {
+            return fail(format!(
+                "library crate {package} does not compile cleanly alone (cargo check -p {package} --lib):\n{}",
+                if warnings.is_empty() {
+                    stderr.to_string()
+                } else {
+                    warnings.join("\n")
+                }
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The first failing step, with what to do about it.
 pub fn run(opts: &TestAllOptions) -> Result<(), StepError> {
     let root = workspace_root();
@@ -278,10 +360,13 @@ pub fn run(opts: &TestAllOptions) -> Result<(), StepError> {
         run_step(
             "Rust suite",
             Command::new(&cargo)
-                .args(["test", "--workspace", "--locked"])
+                .args(["test", "--workspace", "--locked", "--features", RUST_FEATURES])
                 .current_dir(&root),
         )?;
         times.push(("Rust suite (cargo test --workspace --locked)", t.elapsed()));
+        let t = Instant::now();
+        crates_alone(&cargo, &root)?;
+        times.push(("library crates checked alone", t.elapsed()));
     }
     if !opts.rust_only {
         let t = Instant::now();

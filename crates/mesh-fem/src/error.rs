@@ -269,6 +269,16 @@ pub enum MeshError {
         n_neighbours: usize,
     },
     // ---- end of the robust Laplacian and point-cloud block ----
+    /// A vertex given by the caller (a source, a query vertex) is not a vertex of the mesh.
+    #[error("{what} {index} is out of range: the mesh has {n_vertices} vertices (0 to {last})", last = n_vertices.saturating_sub(1))]
+    VertexOutOfRange {
+        /// What the vertex was given as ("source", "vertex").
+        what: &'static str,
+        /// The index given.
+        index: u64,
+        /// Number of vertices of the mesh.
+        n_vertices: usize,
+    },
 }
 
 /// An I/O error as its operating-system error number (`None` when it has none): the field

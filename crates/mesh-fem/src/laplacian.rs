@@ -75,7 +75,7 @@ pub enum Laplacian {
     Robust(RobustParams),
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     Laplacian as "Laplacian" {
         Laplacian::Cotan = Laplacian::Cotan => "cotan" ["cotangent"]:
             "cotangent L of the mesh (paper Eq. (3), = libigl); the default",
@@ -90,8 +90,8 @@ mod tests {
 
     #[test]
     fn names_round_trip() {
-        use wfem_choice::Choice;
-        wfem_choice::check_registry::<Laplacian>().unwrap();
+        use wfem_base::Choice;
+        wfem_base::check_registry::<Laplacian>().unwrap();
         assert_eq!(
             Laplacian::parse("robust").unwrap(),
             Laplacian::Robust(RobustParams::default())

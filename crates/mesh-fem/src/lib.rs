@@ -7,11 +7,11 @@
 //! * [`validate`](mod@validate): a [`validate::ValidationReport`] naming every problem, and explicit repairs.
 //! * [`vec3`]: the 3-vector helpers and bounding box every crate uses.
 //! * [`stats`](mod@stats): counts, topology (Euler characteristic, genus, boundary loops) and geometry.
-//! * [`mtx`]: Matrix Market reading and writing (atomic, shortest round-trip decimals) and `nalgebra-sparse`
-//!   conversions.
-//! * [`filter`]: geometric filters (removal of isolated spikes).
-//! * [`handles`]: thin handles (short non-separating cycles) found and cut.
-//! * [`holes`]: boundary loops and hole filling (smooth patches of new vertices).
+//! * [`mtx`]: Matrix Market reading and writing (atomic, shortest round-trip decimals) and, with
+//!   the feature `nalgebra`, `nalgebra-sparse` conversions.
+//! * [`topology`] and [`graph`]: the connectivity of a mesh (edges, fans, boundary loops,
+//!   components, orientation), its vertex adjacency, edge graph with shortest paths, and
+//!   disjoint sets — public, so that the repairs of `mesh-repair` and the benchmark reuse them.
 //! * [`refine`]: every triangle split into four at its edge midpoints (same surface, finer FEM).
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
 //! * [`assemble`] with [`AssemblyParams`]: [`FemOperators`], the cotangent stiffness L, the
@@ -38,19 +38,17 @@ mod error;
 mod laplacian;
 mod mesh;
 mod operators;
-mod topology;
 
 pub mod cloud;
-pub mod filter;
 pub mod generate;
-pub mod handles;
-pub mod holes;
+pub mod graph;
 pub mod intrinsic;
 pub mod io;
 pub mod morse;
 pub mod mtx;
 pub mod refine;
 pub mod stats;
+pub mod topology;
 pub mod validate;
 pub mod vec3;
 
@@ -61,4 +59,3 @@ pub use error::MeshError;
 pub use laplacian::{Laplacian, RobustParams};
 pub use mesh::TriMesh;
 pub use operators::{AssemblyParams, FemOperators, Lumping, Mass};
-pub use topology::VertexNeighbours;

@@ -162,7 +162,7 @@ pub struct PersistenceDiagram {
 pub fn critical_points(mesh: &TriMesh, f: &[f64]) -> Result<Vec<CriticalPoint>, MeshError> {
     check_field(mesh, f)?;
     let rank = ranks(f);
-    let incidence = crate::topology::VertexFaces::new(mesh.faces(), mesh.n_vertices());
+    let incidence = crate::graph::VertexFaces::new(mesh.faces(), mesh.n_vertices());
     let faces = mesh.faces();
     let kinds: Vec<Option<CriticalKind>> = (0..mesh.n_vertices())
         .into_par_iter()
@@ -212,7 +212,7 @@ pub fn critical_points(mesh: &TriMesh, f: &[f64]) -> Result<Vec<CriticalPoint>, 
 pub fn persistence(mesh: &TriMesh, f: &[f64]) -> Result<PersistenceDiagram, MeshError> {
     check_field(mesh, f)?;
     let order = sorted_order(f);
-    let adjacency = crate::VertexNeighbours::new(mesh.n_vertices(), mesh.faces());
+    let adjacency = crate::graph::VertexNeighbours::new(mesh.n_vertices(), mesh.faces());
     let n = f.len();
     let mut rank = vec![0u32; n];
     for (r, &v) in order.iter().enumerate() {
@@ -369,7 +369,7 @@ fn ranks(f: &[f64]) -> Vec<u32> {
 struct LinkScratch {
     edges: Vec<(u32, u32)>,
     vertices: Vec<u32>,
-    parent: Vec<usize>,
+    links: crate::graph::UnionFind,
 }
 
 /// Classifies v by the number of sign changes along its link (see [`critical_points`]).
@@ -380,7 +380,7 @@ struct LinkScratch {
 /// whose two ends lie on different sides of v.
 fn classify_vertex(
     v: u32,
-    incidence: &crate::topology::VertexFaces,
+    incidence: &crate::graph::VertexFaces,
     faces: &[[u32; 3]],
     rank: &[u32],
     scratch: &mut LinkScratch,
@@ -432,16 +432,13 @@ fn classify_vertex(
 
     // Connectivity of the link graph by union–find on local indices.
     let m = scratch.vertices.len();
-    scratch.parent.clear();
-    scratch.parent.extend(0..m);
+    scratch.links.reset(m);
     let mut components = m;
     for &(a, b) in &scratch.edges {
         // Both ends are in `vertices` by construction.
         let ia = scratch.vertices.binary_search(&a).unwrap_or(0);
         let ib = scratch.vertices.binary_search(&b).unwrap_or(0);
-        let (ra, rb) = (find(&mut scratch.parent, ia), find(&mut scratch.parent, ib));
-        if ra != rb {
-            scratch.parent[ra] = rb;
+        if scratch.links.union(ia as u32, ib as u32) {
             components -= 1;
         }
     }
@@ -475,7 +472,7 @@ fn classify_vertex(
 /// [`critical_points`]): extrema by their neighbours, saddles by the components that die at
 /// them in the persistence sweeps.
 fn classify_on_the_graph(mesh: &TriMesh, f: &[f64], rank: &[u32]) -> Result<Vec<CriticalKind>, MeshError> {
-    let adjacency = crate::VertexNeighbours::new(mesh.n_vertices(), mesh.faces());
+    let adjacency = crate::graph::VertexNeighbours::new(mesh.n_vertices(), mesh.faces());
     let diagram = persistence(mesh, f)?;
     let mut deaths = [vec![0usize; f.len()], vec![0usize; f.len()]];
     for (counts, pairs) in deaths.iter_mut().zip([&diagram.minima, &diagram.maxima]) {
@@ -501,15 +498,6 @@ fn classify_on_the_graph(mesh: &TriMesh, f: &[f64], rank: &[u32]) -> Result<Vec<
         .collect())
 }
 
-/// Union–find root with path halving.
-fn find(parent: &mut [usize], mut i: usize) -> usize {
-    while parent[i] != i {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    i
-}
-
 // ---------------------------------------------------------------------------------------------
 // Persistence sweep.
 
@@ -523,7 +511,7 @@ enum Direction {
 fn sweep(
     order: impl Iterator<Item = u32>,
     rank: &[u32],
-    adjacency: &crate::VertexNeighbours,
+    adjacency: &crate::graph::VertexNeighbours,
     f: &[f64],
     direction: Direction,
 ) -> Vec<PersistencePair> {

@@ -1,4 +1,5 @@
-//! Matrix Market I/O for sparse matrices, and conversions to and from `nalgebra-sparse`.
+//! Matrix Market I/O for sparse matrices, and (feature `nalgebra`) conversions to and from
+//! `nalgebra-sparse`.
 //!
 //! * [`write_matrix_market`]: `coordinate real general` (every stored entry) or
 //!   `coordinate real symmetric` (the lower triangle, after checking symmetry), values with 17
@@ -25,7 +26,9 @@
 
 use crate::io::AtomicSet;
 use crate::{FemOperators, MeshError};
-use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
+#[cfg(feature = "nalgebra")]
+use faer::sparse::SymbolicSparseColMat;
+use faer::sparse::{SparseColMat, Triplet};
 use rayon::prelude::*;
 use std::io::Write;
 use std::path::Path;
@@ -403,7 +406,8 @@ pub fn write_operators(dir: impl AsRef<Path>, ops: &FemOperators) -> Result<(), 
 }
 
 /// Converts a faer sparse matrix to `nalgebra_sparse::CscMatrix` (same entries; row indices
-/// sorted and duplicates summed, as nalgebra requires).
+/// sorted and duplicates summed, as nalgebra requires). Feature `nalgebra`.
+#[cfg(feature = "nalgebra")]
 #[allow(clippy::expect_used)]
 pub fn to_nalgebra_csc(matrix: &SparseColMat<usize, f64>) -> nalgebra_sparse::CscMatrix<f64> {
     let entries = sorted_entries(matrix);
@@ -421,12 +425,15 @@ pub fn to_nalgebra_csc(matrix: &SparseColMat<usize, f64>) -> nalgebra_sparse::Cs
         .expect("sorted, deduplicated, in-range CSC data is valid")
 }
 
-/// Converts a faer sparse matrix to `nalgebra_sparse::CsrMatrix`.
+/// Converts a faer sparse matrix to `nalgebra_sparse::CsrMatrix`. Feature `nalgebra`.
+#[cfg(feature = "nalgebra")]
 pub fn to_nalgebra_csr(matrix: &SparseColMat<usize, f64>) -> nalgebra_sparse::CsrMatrix<f64> {
     nalgebra_sparse::CsrMatrix::from(&to_nalgebra_csc(matrix))
 }
 
-/// Converts an `nalgebra_sparse::CscMatrix` to a faer sparse matrix (same entries).
+/// Converts an `nalgebra_sparse::CscMatrix` to a faer sparse matrix (same entries). Feature
+/// `nalgebra`.
+#[cfg(feature = "nalgebra")]
 pub fn from_nalgebra_csc(matrix: &nalgebra_sparse::CscMatrix<f64>) -> SparseColMat<usize, f64> {
     let (col_offsets, row_indices, values) = matrix.csc_data();
     // nalgebra guarantees sorted, unique, in-range row indices per column, which is exactly

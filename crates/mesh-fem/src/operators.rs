@@ -37,7 +37,7 @@ pub enum Lumping {
     Voronoi,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     Lumping as "lumped mass" {
         Lumping::Barycentric = Lumping::Barycentric => "barycentric":
             "one third of the incident triangle areas, the row sums of B: the paper's Eq. (7) (default)",
@@ -63,7 +63,7 @@ pub enum Mass {
     Identity,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     Mass as "mass" {
         Mass::Consistent = Mass::Consistent => "consistent" ["wfem", "full", "fem"]:
             "the consistent FEM mass B: the paper's wFEM kernel, Eq. (6) (default)",
@@ -268,7 +268,7 @@ pub(crate) fn assemble_cotan(mesh: &TriMesh, params: &AssemblyParams) -> Result<
     }
 
     // 2. The faces around each vertex: around[first[j]..first[j + 1]] for vertex j.
-    let first = crate::topology::corner_offsets(faces, n);
+    let first = crate::graph::corner_offsets(faces, n);
     if let Some(v) = (0..n).find(|&j| first[j + 1] == first[j]) {
         return Err(MeshError::UnreferencedVertex { vertex: v });
     }

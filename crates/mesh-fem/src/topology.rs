@@ -1,5 +1,5 @@
-//! Combinatorial topology of a triangle mesh, shared by [`crate::validate`] and
-//! [`crate::stats`] (internal).
+//! Combinatorial topology of a triangle mesh, shared by [`crate::validate`], [`crate::stats`]
+//! and the repairs of the `mesh-repair` crate.
 //!
 //! One pass builds everything both modules need, in O(F log F) time for F faces:
 //!
@@ -18,151 +18,11 @@
 //!
 //! Self-loop half-edges (from faces that repeat a vertex) are left out of the edge map.
 
+use crate::graph::UnionFind;
 use rayon::prelude::*;
 
 /// Marker for "no index".
 pub(crate) const NONE: u32 = u32::MAX;
-
-/// The first slot of each vertex when the 3F corners are sorted by vertex (counting sort):
-/// vertex v owns `offsets[v]..offsets[v + 1]`, one slot per corner at v (a face that repeats v
-/// counts twice); `offsets[n]` is the number of corners. Shared by every per-vertex CSR of the
-/// crate (assembly, spike removal, Morse analysis).
-pub(crate) fn corner_offsets(faces: &[[u32; 3]], n: usize) -> Vec<usize> {
-    let mut offsets = vec![0usize; n + 1];
-    for face in faces {
-        for &v in face {
-            offsets[v as usize + 1] += 1;
-        }
-    }
-    for i in 0..n {
-        offsets[i + 1] += offsets[i];
-    }
-    offsets
-}
-
-/// The faces at each vertex in compressed rows ([`corner_offsets`]; a face that repeats a
-/// vertex is listed twice there).
-pub(crate) struct VertexFaces {
-    offsets: Vec<usize>,
-    faces: Vec<u32>,
-}
-
-impl VertexFaces {
-    pub(crate) fn new(triangles: &[[u32; 3]], n: usize) -> Self {
-        let offsets = corner_offsets(triangles, n);
-        let mut next = offsets.clone();
-        let mut faces = vec![0u32; offsets[n]];
-        for (fi, face) in triangles.iter().enumerate() {
-            for &v in face {
-                faces[next[v as usize]] = fi as u32;
-                next[v as usize] += 1;
-            }
-        }
-        Self { offsets, faces }
-    }
-
-    pub(crate) fn of(&self, v: u32) -> &[u32] {
-        &self.faces[self.offsets[v as usize]..self.offsets[v as usize + 1]]
-    }
-}
-
-/// The edge graph of triangles on n vertices in compressed rows: the sorted distinct other
-/// corners of the triangles at each vertex (no self loops; an isolated vertex has none).
-/// Gathered from the triangles around each vertex ([`corner_offsets`]) in parallel:
-/// O(F + Σ_v deg(v) log deg(v)). The one adjacency of the workspace (Morse analysis, the
-/// benchmark's edge graph, splat rendering).
-#[derive(Clone, Debug, PartialEq)]
-pub struct VertexNeighbours {
-    offsets: Vec<usize>,
-    indices: Vec<u32>,
-}
-
-impl VertexNeighbours {
-    /// The edge graph of `triangles`, whose indices must be below `n` (as in a [`crate::TriMesh`]).
-    pub fn new(n: usize, triangles: &[[u32; 3]]) -> Self {
-        let incidence = VertexFaces::new(triangles, n);
-        let lists: Vec<Vec<u32>> = (0..n)
-            .into_par_iter()
-            .map(|v| {
-                let around = incidence.of(v as u32);
-                let mut list = Vec::with_capacity(2 * around.len());
-                for &fi in around {
-                    list.extend(triangles[fi as usize].iter().copied().filter(|&w| w as usize != v));
-                }
-                list.sort_unstable();
-                list.dedup();
-                list
-            })
-            .collect();
-        let mut offsets = Vec::with_capacity(n + 1);
-        offsets.push(0);
-        for list in &lists {
-            offsets.push(offsets[offsets.len() - 1] + list.len());
-        }
-        Self {
-            offsets,
-            indices: lists.concat(),
-        }
-    }
-
-    /// Number of vertices n.
-    pub fn n_vertices(&self) -> usize {
-        self.offsets.len() - 1
-    }
-
-    /// The neighbours of vertex `v`, sorted by index. Panics if `v` is out of range.
-    pub fn of(&self, v: u32) -> &[u32] {
-        &self.indices[self.offsets[v as usize]..self.offsets[v as usize + 1]]
-    }
-
-    /// Row offsets: vertex v's neighbours are `indices()[offsets()[v]..offsets()[v + 1]]`.
-    pub fn offsets(&self) -> &[usize] {
-        &self.offsets
-    }
-
-    /// All neighbour lists, one after the other.
-    pub fn indices(&self) -> &[u32] {
-        &self.indices
-    }
-}
-
-/// Disjoint sets with union by size and path halving.
-pub(crate) struct UnionFind {
-    parent: Vec<u32>,
-    size: Vec<u32>,
-}
-
-impl UnionFind {
-    pub(crate) fn new(n: usize) -> Self {
-        Self {
-            parent: (0..n as u32).collect(),
-            size: vec![1; n],
-        }
-    }
-
-    pub(crate) fn find(&mut self, mut x: u32) -> u32 {
-        while self.parent[x as usize] != x {
-            let p = self.parent[x as usize];
-            self.parent[x as usize] = self.parent[p as usize];
-            x = self.parent[x as usize];
-        }
-        x
-    }
-
-    /// Joins the sets of `a` and `b`; returns `true` if they were different.
-    pub(crate) fn union(&mut self, a: u32, b: u32) -> bool {
-        let (mut ra, mut rb) = (self.find(a), self.find(b));
-        if ra == rb {
-            return false;
-        }
-        if self.size[ra as usize] < self.size[rb as usize] {
-            std::mem::swap(&mut ra, &mut rb);
-        }
-        self.parent[rb as usize] = ra;
-        self.size[ra as usize] += self.size[rb as usize];
-        true
-    }
-}
 
 /// Disjoint sets where each element carries a parity (0/1) relative to its root, used to
 /// decide whether faces can be oriented consistently.
@@ -225,7 +85,7 @@ impl ParityUnionFind {
 }
 
 /// Everything validation and statistics need about the connectivity of a mesh.
-pub(crate) struct Topology {
+pub struct Topology {
     /// Unique undirected edges `[a, b]` with `a < b`, sorted.
     pub edges: Vec<[u32; 2]>,
     /// CSR offsets: edge `e` has `edge_ptr[e + 1] − edge_ptr[e]` faces.
@@ -255,17 +115,17 @@ pub(crate) struct Topology {
 
 impl Topology {
     /// Number of faces on edge `e`.
-    pub(crate) fn edge_face_count(&self, e: usize) -> usize {
+    pub fn edge_face_count(&self, e: usize) -> usize {
         self.edge_ptr[e + 1] - self.edge_ptr[e]
     }
 
     /// Number of referenced vertices.
-    pub(crate) fn n_referenced(&self) -> usize {
+    pub fn n_referenced(&self) -> usize {
         self.vertex_valence.iter().filter(|&&d| d > 0).count()
     }
 
     /// Builds the topology of `faces` on `n_vertices` vertices (indices must be in range).
-    pub(crate) fn new(n_vertices: usize, faces: &[[u32; 3]]) -> Self {
+    pub fn new(n_vertices: usize, faces: &[[u32; 3]]) -> Self {
         let n_faces = faces.len();
 
         // Edge map: sort the half-edges by their undirected edge key.
@@ -449,6 +309,7 @@ impl Topology {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::graph::VertexNeighbours;
 
     #[test]
     fn parity_union_find_detects_odd_cycle() {

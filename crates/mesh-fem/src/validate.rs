@@ -581,7 +581,7 @@ pub enum RepairStep {
     All,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     RepairStep as "repair" {
         RepairStep::Unreferenced = RepairStep::Unreferenced => "unreferenced":
             "drop vertices that belong to no face (the original Stanford bunny has 1,113)",

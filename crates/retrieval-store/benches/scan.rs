@@ -6,7 +6,8 @@
 //! * `open_readonly` + `search_metric(k = 10)`: what `wfem retrieval query` pays per call;
 //! * `search_metric` on an open store: what a long-lived process (Python) pays per query.
 use criterion::{criterion_group, criterion_main, Criterion};
-use retrieval_store::{Entry, Metric, Store, StoreParams};
+use retrieval_store::metric::StandardMetric;
+use retrieval_store::{Entry, Store, StoreParams};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -14,7 +15,7 @@ const WORDS: usize = 48;
 
 fn histogram(seed: u64) -> Vec<f64> {
     // The workspace's one seeded generator.
-    let mut rng = shifted_solve::rng::SplitMix64::new(seed);
+    let mut rng = wfem_base::rng::SplitMix64::new(seed);
     let mut v: Vec<f64> = (0..WORDS).map(|_| rng.next_f64().powi(3)).collect();
     let total: f64 = v.iter().sum();
     v.iter_mut().for_each(|x| *x /= total);
@@ -60,7 +61,7 @@ fn scan(c: &mut Criterion) {
     let query = histogram(u64::MAX);
     let mut group = c.benchmark_group(format!("retrieval_store_top10_{shapes}"));
     group.sample_size(10);
-    for (name, metric) in [("l1", Metric::L1), ("chi2", Metric::ChiSquared)] {
+    for (name, metric) in [("l1", &StandardMetric::L1), ("chi2", &StandardMetric::ChiSquared)] {
         group.bench_function(format!("open_and_query_{name}"), |b| {
             b.iter(|| {
                 let store = Store::open_readonly(&path).unwrap();

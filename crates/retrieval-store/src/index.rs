@@ -284,3 +284,19 @@ impl IndexStore for SqliteIndex {
         Ok(())
     }
 }
+
+/// shape-retrieval's bag distances as scan metrics (the one formula, `BagDistance::of_pairs`).
+impl crate::metric::Metric for shape_retrieval::distance::BagDistance {
+    #[inline]
+    fn eval(&self, query: &[f64], row: &[f32]) -> f64 {
+        self.of_pairs(query.iter().zip(row).map(|(&a, &b)| (a, f64::from(b))))
+    }
+
+    fn checks_values(&self) -> bool {
+        *self == shape_retrieval::distance::BagDistance::ChiSquared
+    }
+
+    fn refuse(&self, value: f64) -> Option<&'static str> {
+        (self.checks_values() && value < 0.0).then_some("is negative; chi-squared compares histograms")
+    }
+}

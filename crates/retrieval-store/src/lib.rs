@@ -26,11 +26,14 @@
 //! see only committed shapes; since shapes are only appended, a scan planned on a snapshot
 //! reads the same rows from any connection.
 //!
-//! [`index::SqliteIndex`] stores shape-retrieval's `RetrievalIndex` this way (its
+//! The store knows no model: a scan takes any [`metric::Metric`] (or a closure, [`Store::search`]).
+//! With the feature **`index`** (off by default, so that a store user compiles no heat
+//! stack), `index::SqliteIndex` stores shape-retrieval's `RetrievalIndex` this way (its
 //! `IndexStore` for SQLite): the default index file of `wfem retrieval`.
 //!
 //! ```
-//! use retrieval_store::{Entry, Metric, Store, StoreParams};
+//! use retrieval_store::metric::StandardMetric;
+//! use retrieval_store::{Entry, Store, StoreParams};
 //! let dir = tempfile::tempdir()?;
 //! let mut store = Store::create(&dir.path().join("index.sqlite"), &StoreParams::new(3), false)?;
 //! store.set_meta("settings", br#"{"words": 3}"#)?;
@@ -38,7 +41,7 @@
 //!     Entry::new("a", "", &[1.0, 0.0, 0.0]),
 //!     Entry::new("b", "", &[0.0, 1.0, 0.0]),
 //! ])?;
-//! let hits = store.search_metric(&[0.9, 0.1, 0.0], 1, Metric::L1)?;
+//! let hits = store.search_metric(&[0.9, 0.1, 0.0], 1, &StandardMetric::L1)?;
 //! assert_eq!(hits[0].name, "a");
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -47,11 +50,13 @@
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
 mod error;
+#[cfg(feature = "index")]
 pub mod index;
+pub mod metric;
 mod store;
 
 pub use error::StoreError;
 pub use store::{
-    Entry, Hit, Metric, ShapeRow, Store, StoreParams, DEFAULT_CHUNK_ROWS, FORMAT, FORMAT_VERSION, MAX_CHUNK_BYTES,
+    Entry, Hit, ShapeRow, Store, StoreParams, DEFAULT_CHUNK_ROWS, FORMAT, FORMAT_VERSION, MAX_CHUNK_BYTES,
     MAX_DIMENSION,
 };

@@ -1,9 +1,9 @@
 //! The store: schema, creation, appends, reads and the parallel scan.
 
+use crate::metric::Metric;
 use crate::StoreError;
 use rayon::prelude::*;
 use rusqlite::{params, Connection, OpenFlags, OptionalExtension, TransactionBehavior, MAIN_DB};
-use shape_retrieval::distance::BagDistance;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -115,44 +115,11 @@ pub struct Hit {
     pub distance: f64,
 }
 
-/// Built-in distances of [`Store::search_metric`], on vectors read as `f32` and accumulated in
-/// `f64`. The definitions are those of the retrieval model (shape-retrieval's bag distances).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Metric {
-    /// `Σ |a_i − b_i|`.
-    #[default]
-    L1,
-    /// `½ Σ (a_i − b_i)²/(a_i + b_i)` over the bins with `a_i + b_i > 0` (histograms).
-    ChiSquared,
-    /// `(Σ (a_i − b_i)²)^½`.
-    Euclidean,
-}
-
-wfem_choice::registry! {
-    Metric as "metric" {
-        Metric::L1 = Metric::L1 => "l1" ["manhattan"]: "Σ |a_i − b_i| (default)",
-        Metric::ChiSquared = Metric::ChiSquared => "chi-squared" ["chi2", "chi-square"]:
-            "½ Σ (a_i − b_i)²/(a_i + b_i), for histograms",
-        Metric::Euclidean = Metric::Euclidean => "euclidean" ["l2"]: "(Σ (a_i − b_i)²)^½",
-    }
-}
-
-impl Metric {
-    /// The distance between a query (f64) and a stored row (f32).
-    #[inline]
-    pub fn eval(self, query: &[f64], row: &[f32]) -> f64 {
-        let pairs = query.iter().zip(row).map(|(&a, &b)| (a, f64::from(b)));
-        match self {
-            Metric::L1 => BagDistance::L1.of_pairs(pairs),
-            Metric::ChiSquared => BagDistance::ChiSquared.of_pairs(pairs),
-            Metric::Euclidean => pairs.map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt(),
-        }
-    }
-}
-
 /// The write lock of a store being replaced ([`Store::lock_for_replace`]); released on drop.
+#[cfg(feature = "index")]
 pub(crate) struct ReplaceLock(Connection);
 
+#[cfg(feature = "index")]
 impl Drop for ReplaceLock {
     fn drop(&mut self) {
         let _ = self.0.execute_batch("ROLLBACK");
@@ -192,7 +159,7 @@ pub(crate) fn regular_or_absent(path: &Path) -> Result<bool, StoreError> {
         Ok(m) if m.is_file() => Ok(true),
         Ok(m) => Err(StoreError::NotAFile {
             path: path.to_path_buf(),
-            kind: mesh_fem::io::file_kind(&m.file_type()),
+            kind: wfem_base::fs::file_kind(&m.file_type()),
         }),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(false),
         Err(source) => Err(StoreError::Io {
@@ -527,6 +494,7 @@ impl Store {
     /// Holds the write lock of the store at `path` (if it is one) while the caller replaces the
     /// file: a writer that opened the old file then fails with [`StoreError::Replaced`]. None
     /// when there is no store there (absent, or another kind of file).
+    #[cfg(feature = "index")]
     pub(crate) fn lock_for_replace(path: &Path) -> Result<Option<ReplaceLock>, StoreError> {
         if !regular_or_absent(path)? {
             return Ok(None);
@@ -831,7 +799,12 @@ impl Store {
     /// # Errors
     /// [`StoreError::Dimension`] / [`StoreError::NonFinite`] for a bad query; as
     /// [`Store::search`].
-    pub fn search_metric(&self, query: &[f64], k: usize, metric: Metric) -> Result<Vec<Hit>, StoreError> {
+    pub fn search_metric<M: Metric + ?Sized>(
+        &self,
+        query: &[f64],
+        k: usize,
+        metric: &M,
+    ) -> Result<Vec<Hit>, StoreError> {
         if query.len() != self.dimension {
             return Err(StoreError::Dimension {
                 name: "query".into(),
@@ -846,25 +819,29 @@ impl Store {
                 value: query[index],
             });
         }
-        if metric == Metric::ChiSquared {
-            if let Some(index) = query.iter().position(|&x| x < 0.0) {
-                return Err(StoreError::InvalidParameter {
-                    name: "query",
-                    reason: format!(
-                        "value {} at index {index} is negative; chi-squared compares histograms",
-                        query[index]
-                    ),
-                });
-            }
-            return self.search_checked(k, |row| match row.iter().position(|&x| x < 0.0) {
-                Some(i) => Err(format!(
-                    "value {} at index {i} is negative; chi-squared compares histograms",
-                    row[i]
-                )),
-                None => Ok(metric.eval(query, row)),
+        if !metric.checks_values() {
+            return self.search(k, |row| metric.eval(query, row));
+        }
+        if let Some((index, reason)) = query
+            .iter()
+            .enumerate()
+            .find_map(|(i, &x)| metric.refuse(x).map(|r| (i, r)))
+        {
+            return Err(StoreError::InvalidParameter {
+                name: "query",
+                reason: format!("value {} at index {index} {reason}", query[index]),
             });
         }
-        self.search(k, |row| metric.eval(query, row))
+        self.search_checked(k, |row| {
+            match row
+                .iter()
+                .enumerate()
+                .find_map(|(i, &x)| metric.refuse(f64::from(x)).map(|r| (i, r)))
+            {
+                Some((i, reason)) => Err(format!("value {} at index {i} {reason}", row[i])),
+                None => Ok(metric.eval(query, row)),
+            }
+        })
     }
 
     /// The `k` stored shapes with the smallest `distance(vector)`, nearest first, ties broken

@@ -20,7 +20,7 @@ use faer::sparse::linalg::matmul::sparse_dense_matmul;
 use faer::sparse::SparseColMatRef;
 use faer::{Accum, Mat, MatRef, Par};
 use rayon::prelude::*;
-use shifted_solve::rng::SplitMix64;
+use wfem_base::rng::SplitMix64;
 
 /// Options of [`Vocabulary::train`].
 #[derive(Clone, Copy, Debug, PartialEq)]

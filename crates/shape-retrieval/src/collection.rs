@@ -13,7 +13,8 @@ use crate::model::{
 };
 use crate::RetrievalError;
 use rayon::prelude::*;
-use shifted_solve::{interrupt, SolveError};
+use shifted_solve::SolveError;
+use wfem_base::interrupt;
 use wfem_heat::HeatError;
 
 /// What a collection does with a shape that cannot be described.

@@ -67,7 +67,7 @@ pub enum Descriptor {
     Dhk3,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     Descriptor as "descriptor" {
         Descriptor::SiHks = Descriptor::SiHks => "si-hks" ["sihks"]:
             "scale-invariant HKS of the wFEM kernel, times in units of the surface area (default)",
@@ -114,7 +114,7 @@ pub enum FeatureDetector {
     Shk2,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     FeatureDetector as "feature detector" {
         FeatureDetector::Shk1 = FeatureDetector::Shk1 => "shk1":
             "local maxima of the wFEM HKS at a large time (default)",

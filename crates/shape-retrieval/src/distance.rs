@@ -29,7 +29,7 @@ pub enum BagDistance {
     ChiSquared,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     BagDistance as "bag distance" {
         BagDistance::L1 = BagDistance::L1 => "l1" ["manhattan"]:
             "Σ |a_i − b_i| (Shape Google)",

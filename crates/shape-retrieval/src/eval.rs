@@ -36,7 +36,7 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
-use wfem_choice::Choice as _;
+use wfem_base::Choice as _;
 
 /// The E-measure looks at this many retrieved shapes (PSB, SHREC).
 pub const E_MEASURE_CUTOFF: usize = 32;
@@ -437,7 +437,7 @@ pub enum ClassRule {
     Stem,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     ClassRule as "class rule" {
         ClassRule::Folder = ClassRule::Folder => "folder" ["parent"]:
             "the folder holding the file (default)",

@@ -50,7 +50,7 @@ impl Default for HksMethod {
     }
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     HksMethod as "HKS method" {
         HksMethod::Auto { .. } = HksMethod::default() => "auto":
             "per time, the truncated spectral sum where its estimated error is below 1e−3, the exact diagonal elsewhere (default)",

@@ -41,7 +41,7 @@ pub enum GlobalKind {
     Biharmonic,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     GlobalKind as "global signature" {
         GlobalKind::LogShapeDna = GlobalKind::LogShapeDna => "log-shape-dna":
             "ln(λ_i·A), i = 1…m, mean absolute difference",

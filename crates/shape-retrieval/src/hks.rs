@@ -225,7 +225,7 @@ pub enum SpectrumNormalization {
     },
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     SpectrumNormalization as "spectrum normalization" {
         SpectrumNormalization::None = SpectrumNormalization::None => "none":
             "the spectrum as given: a scale-covariant descriptor (default)",

@@ -1,13 +1,13 @@
 //! Seeded k-means: k-means++ initialisation (Arthur & Vassilvitskii 2007) and Lloyd iterations.
 //!
 //! Minimises the inertia `Σ_x min_c ‖p(x) − m_c‖²` over k centres. Points are the rows of an
-//! n × d matrix. Fully deterministic for a given seed ([`shifted_solve::rng::SplitMix64`] (the `shifted_solve` one); the parallel
+//! n × d matrix. Fully deterministic for a given seed ([`wfem_base::rng::SplitMix64`] (the `shifted_solve` one); the parallel
 //! assignment step does not change the result).
 
 use crate::{check, RetrievalError};
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
-use shifted_solve::rng::SplitMix64;
+use wfem_base::rng::SplitMix64;
 
 /// Options of [`kmeans`].
 #[derive(Clone, Copy, Debug, PartialEq)]

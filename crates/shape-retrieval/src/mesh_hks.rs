@@ -14,7 +14,7 @@ use crate::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalizati
 use crate::RetrievalError;
 use faer::Mat;
 use mesh_fem::{assemble, AssemblyParams, FemOperators, Laplacian, Mass, TriMesh};
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_heat::method::Method;
 use wfem_heat::spectral::{EigenParams, Eigenbasis};
 use wfem_heat::{DiagonalParams, HeatKernel, HeatParams, KernelDiagonal, Operators};

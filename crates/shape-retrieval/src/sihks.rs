@@ -97,7 +97,7 @@ impl Default for TimeUnit {
     }
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     TimeUnit as "time unit" {
         TimeUnit::Absolute(_) = TimeUnit::Absolute(1.0) => "absolute":
             "times in the mesh's squared length units, as given (default)",

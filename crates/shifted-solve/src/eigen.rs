@@ -41,8 +41,8 @@ use rayon::prelude::*;
 
 use crate::blocks::{project_out, row_blocks, split_rows, ROTATION_ROWS};
 use crate::lanczos::symmetric_eigen;
-use crate::rng::SplitMix64;
 use crate::SolveError;
+use wfem_base::rng::SplitMix64;
 
 /// Options of [`largest_eigenpairs`].
 #[derive(Clone, Debug, PartialEq)]
@@ -203,7 +203,7 @@ impl Lanczos<'_, '_> {
         // Rayleigh–Ritz checks between restarts: a few per cycle (each is O(m³) dense work).
         let mut next_check = self.check_stride();
         loop {
-            crate::interrupt::checkpoint()?;
+            wfem_base::interrupt::checkpoint()?;
             let (j0, dim) = (self.j0, self.dim);
             let mut w = (self.apply)(self.v.as_ref().get(.., j0..dim), self.mq.as_ref())?;
             self.applications += dim - j0;

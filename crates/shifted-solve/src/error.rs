@@ -7,9 +7,9 @@ use faer::c64;
 #[derive(Debug, Clone, thiserror::Error, serde::Serialize)]
 #[non_exhaustive]
 pub enum SolveError {
-    /// The computation was interrupted by its caller ([`crate::interrupt`]).
+    /// The computation was interrupted by its caller ([`wfem_base::interrupt`]).
     #[error(transparent)]
-    Interrupted(#[from] crate::interrupt::Interrupted),
+    Interrupted(#[from] wfem_base::interrupt::Interrupted),
     /// Matrix or vector dimensions do not agree.
     #[error("dimension mismatch: {what} (expected {expected}, got {got})")]
     DimensionMismatch {

@@ -373,7 +373,7 @@ pub fn lanczos_functions(
         if steps >= params.max_iter.min(n) {
             return Err(functions.failure());
         }
-        crate::interrupt::checkpoint()?;
+        wfem_base::interrupt::checkpoint()?;
         steps += 1;
         let b_j = process.step()?;
         functions.advance(&process, b_j, h, params.tol)?;
@@ -498,7 +498,7 @@ impl Lockstep<'_> {
             if step >= params.max_iter.min(n) {
                 return Err(functions[active[0]].failure());
             }
-            crate::interrupt::checkpoint()?;
+            wfem_base::interrupt::checkpoint()?;
             step += 1;
             let mut rhs = Mat::<f64>::from_fn(n, active.len(), |i, c| processes[active[c]].next_mass_vector()[i]);
             solve_block(rhs.as_mut());

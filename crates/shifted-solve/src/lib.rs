@@ -36,9 +36,6 @@
 //!   dense symmetric eigensolver of the Lanczos methods and of wfem-heat's dense reference.
 //! * [`CholeskyPattern`], [`SpdFactor`]: the real sparse Cholesky (symbolic once, numeric per
 //!   shift) with its tree-parallel solve.
-//! * [`rng`]: the workspace's one seeded generator.
-//! * [`interrupt`]: cooperative interruption of long computations (checkpoints between poles,
-//!   restarts, times and blocks).
 //! * [`ConditionReport`]: 2-norm condition numbers of tL − zB and of the preconditioned
 //!   operator (paper Fig. 2c,d).
 
@@ -54,13 +51,11 @@ pub mod eigen;
 mod error;
 mod factor;
 pub mod function;
-pub mod interrupt;
 pub mod iterative;
 pub mod lanczos;
 mod ldlt;
 mod operators;
 pub mod poles;
-pub mod rng;
 mod selected;
 mod solver;
 mod trisolve;

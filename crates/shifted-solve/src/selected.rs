@@ -75,16 +75,16 @@ impl SelectedInversion {
     pub fn resolvent_on_pattern(&self, approx: &RationalApprox, t: f64) -> Result<Vec<f64>, SolveError> {
         check_time(t)?;
         let pair = &*self.pair;
-        let interrupt = crate::interrupt::current();
+        let interrupt = wfem_base::interrupt::current();
         let parts = Pole::all(approx)
             .into_par_iter()
             .map(|pole| -> Result<Vec<f64>, SolveError> {
-                crate::interrupt::within(interrupt.as_ref(), crate::interrupt::checkpoint)?;
+                wfem_base::interrupt::within(interrupt.as_ref(), wfem_base::interrupt::checkpoint)?;
                 // Factor c·(tL − zM) (c a power of two, exact): its inverse is Z/c.
                 let scale = shift_scale(pair, t, pole.z);
                 let values: Vec<_> = pair.shifted_values(t, pole.z).into_iter().map(|v| v * scale).collect();
                 let factor = LdltFactor::new(&self.symbolic, &values).map_err(|_| pole.singular(t))?;
-                crate::interrupt::within(interrupt.as_ref(), crate::interrupt::checkpoint)?;
+                wfem_base::interrupt::within(interrupt.as_ref(), wfem_base::interrupt::checkpoint)?;
                 let z = factor.selected_inverse();
                 let w = pole.weight() * scale;
                 let out: Vec<f64> = self.positions.iter().map(|&p| w * (pole.c * z[p]).re).collect();

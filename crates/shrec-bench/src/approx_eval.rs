@@ -9,7 +9,7 @@
 //!   scale (the paper's claim: below 2 %), at the coarsest, the largest scale still within
 //!   2 %, the error at the anchors and the persistent extrema of f_glob against f's;
 //! * **noisy**: the map plus Gaussian noise of standard deviation [`NOISE_FRACTION`] of its
-//!   range (seed [`NOISE_SEED`], [`shifted_solve::rng::SplitMix64`]), decomposed with the anchors
+//!   range (seed [`NOISE_SEED`], [`wfem_base::rng::SplitMix64`]), decomposed with the anchors
 //!   of every persistence of [`PERSISTENCE_SWEEP`] (Fig. 13: simplified from 40 % to 10 %):
 //!   the distance of f_glob to the **clean** map at the best scale, the correlation of f_loc
 //!   with the noise there, and the critical points of f_glob per persistence (Fig. 13(d));
@@ -20,8 +20,8 @@
 
 use crate::BenchError;
 use mesh_fem::{assemble, morse, AssemblyParams, TriMesh};
-use shifted_solve::rng::SplitMix64;
 use std::path::Path;
+use wfem_base::rng::SplitMix64;
 use wfem_heat::approx::{
     feature_approximation, fit_global_component, persistent_extremum_count, ranked_anchors, ApproxParams, Coefficients,
     FeatureApproximation, Persistence, ScaleSampling,

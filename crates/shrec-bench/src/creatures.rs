@@ -26,8 +26,8 @@ use crate::BenchError;
 use mesh_fem::generate::icosphere;
 use mesh_fem::vec3::{add, cross, dot, norm};
 use mesh_fem::{MeshError, TriMesh};
-use shifted_solve::rng::SplitMix64;
 use std::path::Path;
+use wfem_base::rng::SplitMix64;
 
 fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
     a.map(|c| c * s)

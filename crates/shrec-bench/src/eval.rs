@@ -7,7 +7,7 @@
 //!    repeatability `(rep(Y, X) + rep(X, Y))/2` within R = 5 % of the diameter of X
 //!    ([`shape_retrieval::features::repeatability`]).
 //!    *Approximation:* geodesic distances are edge-graph (Dijkstra) distances
-//!    ([`crate::transform::EdgeGraph::distances`]), which overestimate surface geodesics by a
+//!    ([`mesh_fem::graph::EdgeGraph::distances`]), which overestimate surface geodesics by a
 //!    few per cent, and the diameter is the double-sweep lower bound of the edge-graph diameter
 //!    (farthest vertex from vertex 0, then farthest from that one). The X → Y map is the inverse
 //!    of the ground truth (null vertices without a preimage, e.g. removed by sampling, are
@@ -30,9 +30,9 @@ use crate::protocol::{
     self, leave_one_out, shrec_protocol, EigenCache, LooReport, ShapeFile, ShrecReport, PAPER_TABLE5,
 };
 use crate::synth::{generate, Class, GenerateOptions, Manifest};
-use crate::transform::EdgeGraph;
 use crate::BenchError;
 use faer::Mat;
+use mesh_fem::graph::EdgeGraph;
 use rayon::prelude::*;
 use shape_retrieval::bof::Assignment;
 use shape_retrieval::descriptor::FeatureDetector;

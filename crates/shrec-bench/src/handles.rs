@@ -16,12 +16,13 @@
 //! (`n_a·u > 0` and `n_b·u < 0`, u = b − a normalised), so that the tube runs through the
 //! air between them; the balls of all handles stay at least four hops apart.
 
-use crate::transform::{submesh, vertex_normals, EdgeGraph, Transformed};
+use crate::transform::{submesh, vertex_normals, Transformed};
 use crate::BenchError;
+use mesh_fem::graph::EdgeGraph;
 use mesh_fem::vec3::{dot, lerp, norm, sub};
 use mesh_fem::TriMesh;
 use serde_json::json;
-use shifted_solve::rng::SplitMix64;
+use wfem_base::rng::SplitMix64;
 
 /// Largest Euclidean distance between the endpoints of a handle, as a fraction of D.
 pub const HANDLE_MAX_DISTANCE: f64 = 0.15;
@@ -221,7 +222,7 @@ pub fn add_handles(
     let mut positions = cut.mesh.positions().to_vec();
     let mut faces = cut.mesh.faces().to_vec();
     let mut ground_truth: Vec<i64> = cut.source_vertex.iter().map(|&v| v as i64).collect();
-    let rims = mesh_fem::holes::boundary_loops(&cut.mesh);
+    let rims = mesh_repair::holes::boundary_loops(&cut.mesh);
     // Each rim belongs to the endpoint within HANDLE_BALL_HOPS + 1 hops of its vertices.
     let rim_of = |end: u32| -> Result<Vec<u32>, BenchError> {
         let near = graph.hops(&[end], HANDLE_BALL_HOPS + 1)?;

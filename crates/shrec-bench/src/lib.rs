@@ -17,7 +17,7 @@
 //!   (`cargo xtask creatures`, `cargo xtask real-eval --creatures N`).
 //!
 //! `xtask` is a thin command line over this crate. All randomness comes from the one seeded
-//! generator [`shifted_solve::rng::SplitMix64`].
+//! generator [`wfem_base::rng::SplitMix64`].
 
 #![warn(missing_docs)]
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]

@@ -26,9 +26,9 @@ use shape_retrieval::model::{
     DescriptorSettings, DescriptorSpec, RetrievalIndex, RetrievalSettings, ShapeFeatures, VocabularyModel,
 };
 use shape_retrieval::retrieval::average_precision;
-use shifted_solve::rng::SplitMix64;
 use std::io::Read;
 use std::path::{Path, PathBuf};
+use wfem_base::rng::SplitMix64;
 use wfem_heat::spectral::Eigenbasis;
 
 /// The paper's Table 5 (mAP in %, strength ≤ 1 … ≤ 5): method, description, values.

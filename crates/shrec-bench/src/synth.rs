@@ -5,7 +5,7 @@
 //! the real-pose class `pose`, × 5 strengths,
 //! each with a ground-truth map from every new vertex to a base vertex.
 //!
-//! All randomness comes from [`shifted_solve::rng::SplitMix64`], seeded from (seed, shape, class) — **not** from
+//! All randomness comes from [`wfem_base::rng::SplitMix64`], seeded from (seed, shape, class) — **not** from
 //! the strength — so that the five strengths of a class share their random choices (the
 //! same joint, the same hole centres in the same order, the same noise vector, …) and the
 //! amount of change grows monotonically with the strength.
@@ -29,16 +29,17 @@
 
 use crate::transform::{
     bounding_box_diagonal, close_pairs, largest_component, submesh, vertex_normals, weld_vertices, DerivedMesh,
-    EdgeGraph, QemDecimator, QemParams, Transformed,
+    QemDecimator, QemParams, Transformed,
 };
 use crate::BenchError;
+use mesh_fem::graph::EdgeGraph;
 use mesh_fem::vec3::{cross, dot, norm, sub};
 use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
-use shifted_solve::rng::SplitMix64;
 use std::path::{Path, PathBuf};
+use wfem_base::rng::SplitMix64;
 
 /// The seed of the random stream of one (shape, class): FNV-1a of the names mixed into the
 /// global seed. The strength is deliberately left out (see the module documentation).

@@ -4,7 +4,7 @@
 //! These are the building blocks of the SHREC'10-style benchmark generator ([`crate::synth`],
 //! `cargo xtask shrec`, paper Sect. 5):
 //!
-//! * [`EdgeGraph`]: the edge graph of a mesh with Euclidean edge lengths; multi-source
+//! * mesh-fem's [`EdgeGraph`]: the edge graph of a mesh with Euclidean edge lengths; multi-source
 //!   Dijkstra ([`EdgeGraph::distances`]) gives graph geodesics d_g, which overestimate the
 //!   surface geodesic by a few percent; [`EdgeGraph::hops`] counts edges (BFS).
 //! * [`submesh`]: the faces whose three corners a vertex mask keeps, reindexed.
@@ -17,6 +17,7 @@
 //! every new vertex, the index of the input vertex it comes from (a ground-truth map).
 
 use crate::BenchError;
+use mesh_fem::graph::{EdgeGraph, UnionFind};
 use mesh_fem::vec3::{cross, dot, norm, sub};
 use mesh_fem::TriMesh;
 use std::cmp::Reverse;
@@ -96,153 +97,6 @@ pub fn vertex_normals(mesh: &TriMesh) -> Vec<[f64; 3]> {
     normals
 }
 
-/// The undirected edge graph of a triangle mesh with Euclidean edge lengths ‖x_i − x_j‖, in
-/// compressed adjacency form (each vertex's neighbours sorted by index).
-#[derive(Clone, Debug)]
-pub struct EdgeGraph {
-    offsets: Vec<usize>,
-    neighbors: Vec<u32>,
-    lengths: Vec<f64>,
-}
-
-impl EdgeGraph {
-    /// Builds the edge graph of `mesh` in O(#faces log) time. Isolated vertices have no
-    /// neighbours.
-    pub fn new(mesh: &TriMesh) -> Self {
-        let graph = mesh_fem::VertexNeighbours::new(mesh.n_vertices(), mesh.faces());
-        let p = mesh.positions();
-        let lengths = (0..mesh.n_vertices() as u32)
-            .flat_map(|i| graph.of(i).iter().map(move |&j| (i, j)))
-            .map(|(i, j)| norm(sub(p[i as usize], p[j as usize])))
-            .collect();
-        let offsets = graph.offsets().to_vec();
-        let neighbors = graph.indices().to_vec();
-        Self {
-            offsets,
-            neighbors,
-            lengths,
-        }
-    }
-
-    /// Number of vertices.
-    pub fn n_vertices(&self) -> usize {
-        self.offsets.len() - 1
-    }
-
-    /// Number of undirected edges.
-    pub fn n_edges(&self) -> usize {
-        self.neighbors.len() / 2
-    }
-
-    /// The neighbours of vertex `v`, sorted by index. Panics if `v` is out of range.
-    pub fn neighbors(&self, v: u32) -> &[u32] {
-        &self.neighbors[self.offsets[v as usize]..self.offsets[v as usize + 1]]
-    }
-
-    /// Mean length of the undirected edges (0 for a graph without edges).
-    pub fn mean_edge_length(&self) -> f64 {
-        if self.lengths.is_empty() {
-            0.0
-        } else {
-            self.lengths.iter().sum::<f64>() / self.lengths.len() as f64
-        }
-    }
-
-    /// Multi-source Dijkstra: d(v) = min over sources s of the shortest edge path length
-    /// from s to v. Vertices farther than `cutoff` (or unreachable) get `f64::INFINITY`;
-    /// pass `f64::INFINITY` for no cutoff. Runs in O((V + E) log V) over the visited part.
-    ///
-    /// # Errors
-    /// [`BenchError::VertexIndex`] if a source is out of range.
-    pub fn distances(&self, sources: &[u32], cutoff: f64) -> Result<Vec<f64>, BenchError> {
-        let n = self.n_vertices();
-        let mut dist = vec![f64::INFINITY; n];
-        let mut heap = BinaryHeap::new();
-        for &s in sources {
-            check_vertex(s, n)?;
-            dist[s as usize] = 0.0;
-            heap.push(Reverse((0.0f64.to_bits(), s)));
-        }
-        // Non-negative floats order like their bit patterns.
-        while let Some(Reverse((bits, v))) = heap.pop() {
-            let d = f64::from_bits(bits);
-            if d > dist[v as usize] {
-                continue;
-            }
-            let range = self.offsets[v as usize]..self.offsets[v as usize + 1];
-            for (&w, &l) in self.neighbors[range.clone()].iter().zip(&self.lengths[range]) {
-                let nd = d + l;
-                if nd < dist[w as usize] && nd <= cutoff {
-                    dist[w as usize] = nd;
-                    heap.push(Reverse((nd.to_bits(), w)));
-                }
-            }
-        }
-        Ok(dist)
-    }
-
-    /// Breadth-first hop counts from the sources, up to `max_hops`; vertices farther away get
-    /// `u32::MAX`.
-    ///
-    /// # Errors
-    /// [`BenchError::VertexIndex`] if a source is out of range.
-    pub fn hops(&self, sources: &[u32], max_hops: u32) -> Result<Vec<u32>, BenchError> {
-        let n = self.n_vertices();
-        let mut hop = vec![u32::MAX; n];
-        let mut frontier = Vec::new();
-        for &s in sources {
-            check_vertex(s, n)?;
-            if hop[s as usize] != 0 {
-                hop[s as usize] = 0;
-                frontier.push(s);
-            }
-        }
-        let mut level = 0;
-        while !frontier.is_empty() && level < max_hops {
-            level += 1;
-            let mut next = Vec::new();
-            for &v in &frontier {
-                for &w in self.neighbors(v) {
-                    if hop[w as usize] == u32::MAX {
-                        hop[w as usize] = level;
-                        next.push(w);
-                    }
-                }
-            }
-            frontier = next;
-        }
-        Ok(hop)
-    }
-}
-
-struct UnionFind {
-    parent: Vec<u32>,
-}
-
-impl UnionFind {
-    fn new(n: usize) -> Self {
-        Self {
-            parent: (0..n as u32).collect(),
-        }
-    }
-    fn find(&mut self, mut v: u32) -> u32 {
-        while self.parent[v as usize] != v {
-            let g = self.parent[self.parent[v as usize] as usize];
-            self.parent[v as usize] = g;
-            v = g;
-        }
-        v
-    }
-    /// Union keeping the smaller index as the root.
-    fn union(&mut self, a: u32, b: u32) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            let (lo, hi) = (ra.min(rb), ra.max(rb));
-            self.parent[hi as usize] = lo;
-        }
-    }
-}
-
 /// Compacts `faces` (indices into `positions`): keeps the vertices some face uses, in
 /// increasing index order, and reindexes.
 fn compact(positions: &[[f64; 3]], faces: Vec<[u32; 3]>) -> Result<DerivedMesh, BenchError> {
@@ -301,8 +155,8 @@ pub fn largest_component(mesh: &TriMesh) -> Result<DerivedMesh, BenchError> {
     let n = mesh.n_vertices();
     let mut uf = UnionFind::new(n);
     for &[a, b, c] in mesh.faces() {
-        uf.union(a, b);
-        uf.union(a, c);
+        uf.union_min(a, b);
+        uf.union_min(a, c);
     }
     let mut count = vec![0usize; n];
     let mut referenced = vec![false; n];
@@ -337,7 +191,7 @@ pub fn weld_vertices(mesh: &TriMesh, pairs: &[[u32; 2]]) -> Result<DerivedMesh, 
     for &[a, b] in pairs {
         check_vertex(a, n)?;
         check_vertex(b, n)?;
-        uf.union(a, b);
+        uf.union_min(a, b);
     }
     let mut seen = HashSet::new();
     let mut faces = Vec::with_capacity(mesh.n_faces());

@@ -55,7 +55,7 @@ impl Default for DiagonalMethod {
     }
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     DiagonalMethod as "diagonal method" {
         DiagonalMethod::SelectedInversion = DiagonalMethod::SelectedInversion => "selected-inversion" ["selinv"]:
             "selected inversion of the rational method's factors: exact at every t, no eigenpairs (default)",

@@ -49,7 +49,7 @@ pub enum DistanceKind {
     MassWeighted,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     DistanceKind as "distance" {
         DistanceKind::Diffusion = DistanceKind::Diffusion => "diffusion" ["linear"]:
             "the diffusion distance Σ e^{−2λt}(x(i) − x(j))², the paper's linear FEM distance (default)",

@@ -9,7 +9,7 @@ use faer::sparse::SparseColMatRef;
 use faer::{Mat, MatRef};
 use mesh_fem::{FemOperators, Mass};
 use std::sync::Arc;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 /// Kernels whose operators alone make K_t uncertain by more than this (relative) are refused
 /// ([`crate::Conditioning`], [`HeatError::IllConditionedMesh`]).
@@ -208,7 +208,7 @@ pub enum KernelDiagonal {
     OperatorDiagonal,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     KernelDiagonal as "HKS convention" {
         KernelDiagonal::KernelValue = KernelDiagonal::KernelValue => "kernel-value":
             "the kernel's value k_t(x, x) = Σ e^{−λt} φ(x)², the diagonal of X D_t Xᵀ (Sun et al., pyFM; default)",

@@ -5,7 +5,7 @@ use crate::{check, HeatError, HeatKernel, HeatParams, Operators};
 use faer::Mat;
 use mesh_fem::FemOperators;
 use shifted_solve::lanczos::largest_ritz_value;
-use shifted_solve::rng::SplitMix64;
+use wfem_base::rng::SplitMix64;
 
 /// Options of [`largest_eigenvalue`] (Lanczos on M⁻¹L).
 #[derive(Clone, Debug, PartialEq)]

@@ -1,4 +1,4 @@
-//! Python strings to the library's registries ([`wfem_choice::Choice`]): the one module where
+//! Python strings to the library's registries ([`wfem_base::Choice`]): the one module where
 //! the bindings parse a choice (a mass, a method, a backend, a descriptor, …). The names,
 //! aliases, help and defaults come from the library types; `wfem._wfem.choices()` hands them
 //! to the Python layer, which keeps no copy either.
@@ -6,7 +6,7 @@
 use crate::errors::invalid_param;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 /// The value of `text` in the registry `T`, or its default for `None`; an unknown name is an
 /// `InvalidInputError` naming the parameter and listing the valid names.
@@ -77,7 +77,7 @@ registries! {
     "descriptor" => shape_retrieval::descriptor::Descriptor,
     "detector" => shape_retrieval::descriptor::FeatureDetector,
     "bag_distance" => shape_retrieval::distance::BagDistance,
-    "metric" => retrieval_store::Metric,
+    "metric" => retrieval_store::metric::StandardMetric,
     "time_unit" => shape_retrieval::sihks::TimeUnit,
     "class_from" => shape_retrieval::eval::ClassRule,
 }

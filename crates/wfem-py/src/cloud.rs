@@ -10,7 +10,7 @@ use mesh_fem::io::load_points;
 use mesh_fem::{AssemblyParams, Laplacian, Lumping, RobustParams};
 use numpy::{PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 /// The Laplacian of an optional `laplacian=` name (`None`: [`Laplacian::default`]) with the
 /// given mollification (robust only).

@@ -13,7 +13,7 @@ use pyo3::types::PyDict;
 use shape_retrieval::sihks::{MeshLengths, TimeUnit};
 use shifted_solve::backend::Backend;
 use std::sync::Arc;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
 use wfem_heat::method::{Method, MethodOptions};
 use wfem_heat::rkhs::{heat_inner_product, inverse_cg, InverseParams};

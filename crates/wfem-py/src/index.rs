@@ -16,7 +16,7 @@ use shape_retrieval::model::{RetrievalIndex, RetrievalSettings};
 use shape_retrieval::store::{IndexStore, JsonFile, VocabularyStore};
 use shape_retrieval::RetrievalError;
 use std::path::PathBuf;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 /// Rust side of `wfem.RetrievalIndex`.
 #[pyclass(name = "RetrievalIndex", module = "wfem._wfem", frozen)]
@@ -122,8 +122,8 @@ impl PyRetrievalIndex {
     /// in the index, which must be the vocabulary's when one is given.
     #[staticmethod]
     #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0,
-        despike=Some(mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD),
-        fill_holes=Some(mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER),
+        despike=Some(shape_retrieval::model::DEFAULT_SPIKE_THRESHOLD),
+        fill_holes=Some(shape_retrieval::model::DEFAULT_MAX_HOLE_PERIMETER),
         denoise=Some(shape_retrieval::model::DEFAULT_TARGET_ROUGHNESS), overwrite=false,
         spatial=shape_retrieval::model::BagSettings::default().spatial.map(|s| s.time), strict=false, progress=None,
         laplacian=None, spatial_groups=None,

@@ -25,10 +25,13 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("DENSE_MAX_VERTICES", wfem_heat::spectral::DENSE_MAX_VERTICES)?;
     m.add("DEFAULT_DEGREE", shifted_solve::poles::DEFAULT_DEGREE)?;
-    m.add("DEFAULT_SPIKE_THRESHOLD", mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD)?;
+    m.add(
+        "DEFAULT_SPIKE_THRESHOLD",
+        shape_retrieval::model::DEFAULT_SPIKE_THRESHOLD,
+    )?;
     m.add(
         "DEFAULT_MAX_HOLE_PERIMETER",
-        mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER,
+        shape_retrieval::model::DEFAULT_MAX_HOLE_PERIMETER,
     )?;
     m.add(
         "DEFAULT_TARGET_ROUGHNESS",
@@ -49,7 +52,7 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add(
         "PAPER_DESCRIPTORS",
         shape_retrieval::descriptor::Descriptor::PAPER
-            .map(|d| wfem_choice::Choice::name(&d))
+            .map(|d| wfem_base::Choice::name(&d))
             .to_vec(),
     )?;
     m.add("DEFAULT_NUM_TIMES", shape_retrieval::hks::DEFAULT_NUM_TIMES)?;

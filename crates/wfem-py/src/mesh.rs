@@ -110,9 +110,9 @@ pub fn repair_mesh<'py>(
 }
 
 /// `fill_holes(V, F, max_perimeter) -> (V', F', holes closed)`: the old vertices and faces
-/// first, unchanged, then the patches' (`mesh_fem::holes::fill_holes`).
+/// first, unchanged, then the patches' (`mesh_repair::holes::fill_holes`).
 #[pyfunction]
-#[pyo3(signature = (v, f, max_perimeter=mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER))]
+#[pyo3(signature = (v, f, max_perimeter=shape_retrieval::model::DEFAULT_MAX_HOLE_PERIMETER))]
 pub fn fill_holes<'py>(
     py: Python<'py>,
     v: PyReadonlyArray2<'py, f64>,
@@ -127,7 +127,7 @@ pub fn fill_holes<'py>(
                 format!("max_perimeter must be finite and positive, got {max_perimeter}"),
             ));
         }
-        mesh_fem::holes::fill_holes(&mesh, max_perimeter).map_err(Error::from)
+        mesh_repair::holes::fill_holes(&mesh, max_perimeter).map_err(Error::from)
     })?;
     Ok((mesh_out(py, &out.mesh), out.filled))
 }

@@ -6,17 +6,17 @@
 
 use crate::errors::Error;
 use pyo3::prelude::*;
-use shifted_solve::interrupt::Interrupt;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{channel, RecvTimeoutError, Sender};
 use std::time::Duration;
+use wfem_base::interrupt::Interrupt;
 
 /// Polling period for signals while the work runs.
 const POLL: Duration = Duration::from_millis(50);
 
 /// Set when the caller has given up (Ctrl-C, a raising progress callback): the library's
-/// interrupt ([`shifted_solve::interrupt`]), installed on the worker thread, so every
+/// interrupt ([`wfem_base::interrupt`]), installed on the worker thread, so every
 /// checkpoint of the library (between poles, Lanczos restarts, shapes) stops the work; the
 /// bindings check it too, between their own chunks and before writing a file.
 #[derive(Clone, Default)]

@@ -14,7 +14,7 @@ use pyo3::types::PyDict;
 use shape_retrieval::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalization, TimeSampling};
 use shape_retrieval::sihks::{scale_invariant_hks, SihksParams};
 use std::sync::Arc;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 use wfem_heat::rkhs::{inverse_spectral, reproducing_kernel_apply, TruncationReport};
 use wfem_heat::spectral::{EigenParams, Eigenbasis};
 use wfem_heat::{KernelDiagonal, Operators};

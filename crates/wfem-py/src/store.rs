@@ -7,7 +7,8 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
-use retrieval_store::{Entry, Metric, Store, StoreParams};
+use retrieval_store::metric::StandardMetric;
+use retrieval_store::{Entry, Store, StoreParams};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
@@ -135,9 +136,9 @@ impl PyIndexStore {
         metric: Option<&str>,
     ) -> PyResult<Vec<HitTuple>> {
         let q = vec_in(&query);
-        let metric: Metric = crate::choices::parse(py, "metric", metric)?;
+        let metric: StandardMetric = crate::choices::parse(py, "metric", metric)?;
         self.with(py, move |s| {
-            Ok(s.search_metric(&q, k, metric)?
+            Ok(s.search_metric(&q, k, &metric)?
                 .into_iter()
                 .map(|h| (h.id, h.name, h.info, h.distance))
                 .collect())

@@ -43,7 +43,7 @@ pub enum Up {
     Axis(UpAxis),
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     Up as "up direction" {
         Up::Auto = Up::Auto => "auto":
             "from the extents of the mesh: +z for a person thin along y or a quadruped standing along y (TOSCA), +y otherwise (default)",

@@ -7,7 +7,7 @@ use crate::{MeshError, TriMesh};
 /// with probability proportional to its area, then a point of it with uniform barycentric
 /// coordinates (u, v drawn in the unit square and reflected into the triangle when
 /// u + v > 1). `uniform` yields numbers in [0, 1) — pass the workspace's one seeded generator,
-/// `|| rng.next_f64()` with `shifted_solve::rng::SplitMix64` — so a seed gives the same cloud
+/// `|| rng.next_f64()` with `wfem_base::rng::SplitMix64` — so a seed gives the same cloud
 /// on every platform; mesh-fem itself draws nothing. Three numbers are drawn per point.
 ///
 /// Used to turn meshes into the point clouds of the retrieval evaluation (issue #27:

@@ -96,7 +96,7 @@ pub(crate) fn assemble(tri: &IntrinsicTriangulation, weight: f64, lumped: Lumpin
     if !total_area.is_finite() {
         return Err(MeshError::DegenerateMesh { area: total_area });
     }
-    let first = crate::topology::corner_offsets(triangles, n);
+    let first = crate::graph::corner_offsets(triangles, n);
     if let Some(vertex) = (0..n).find(|&j| first[j + 1] == first[j]) {
         return Err(MeshError::UnreferencedVertex { vertex });
     }

@@ -85,7 +85,7 @@ pub enum FieldFormat {
     Csv,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     FieldFormat as "field format" {
         FieldFormat::Ply = FieldFormat::Ply => "ply":
             "binary PLY: the mesh with one double vertex property per field (MeshLab, Polyscope)",
@@ -102,7 +102,7 @@ impl FieldFormat {
 
     /// The extensions [`read_field`] reads, as a message lists them (`.npy, .csv`).
     pub fn readable_extensions() -> String {
-        <Self as wfem_choice::Choice>::entries()
+        <Self as wfem_base::Choice>::entries()
             .iter()
             .filter(|e| Self::from_extension(e.name).is_some_and(Self::readable))
             .map(|e| format!(".{}", e.name))
@@ -112,7 +112,7 @@ impl FieldFormat {
 
     /// The extensions, as a message lists them (`.ply, .npy, .csv`).
     pub fn extensions() -> String {
-        <Self as wfem_choice::Choice>::names()
+        <Self as wfem_base::Choice>::names()
             .map(|n| format!(".{n}"))
             .collect::<Vec<_>>()
             .join(", ")
@@ -121,7 +121,7 @@ impl FieldFormat {
     /// The format named by a file extension (its registry name; case-insensitive, without the
     /// dot), if any.
     pub fn from_extension(extension: &str) -> Option<Self> {
-        <Self as wfem_choice::Choice>::parse(extension).ok()
+        <Self as wfem_base::Choice>::parse(extension).ok()
     }
 
     /// The format of a path, judged by its extension.

@@ -58,7 +58,7 @@ pub enum MeshFormat {
     Stl,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     MeshFormat as "mesh format" {
         MeshFormat::Obj = MeshFormat::Obj => "obj": "Wavefront OBJ (v and f records)",
         MeshFormat::Ply = MeshFormat::Ply => "ply": "Stanford PLY, ASCII or binary",
@@ -71,7 +71,7 @@ impl MeshFormat {
     /// The format named by a file extension (its registry name; case-insensitive, without the
     /// dot), if any.
     pub fn from_extension(extension: &str) -> Option<Self> {
-        <Self as wfem_choice::Choice>::parse(extension).ok()
+        <Self as wfem_base::Choice>::parse(extension).ok()
     }
 
     /// The format of a path, judged by its extension.
@@ -175,36 +175,12 @@ pub fn open_regular_file(path: &Path) -> Result<std::fs::File, MeshError> {
                 std::io::ErrorKind::InvalidInput,
                 format!(
                     "{} is not a regular file; only regular files are read",
-                    file_kind(&meta.file_type())
+                    wfem_base::fs::file_kind(&meta.file_type())
                 ),
             ),
         ));
     }
     std::fs::File::open(path).map_err(|e| io_error(path, e))
-}
-
-/// What a file that is not a regular file is, for error messages: "a directory", "a FIFO
-/// (named pipe)", "a socket", "a device" or "a special file" (mesh readers and the retrieval
-/// store name the culprit with it).
-pub fn file_kind(t: &std::fs::FileType) -> &'static str {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if t.is_fifo() {
-            return "a FIFO (named pipe)";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-        if t.is_char_device() || t.is_block_device() {
-            return "a device";
-        }
-    }
-    if t.is_dir() {
-        "a directory"
-    } else {
-        "a special file"
-    }
 }
 
 /// Reads a mesh of the given format from memory. `name` is only used in error messages.

@@ -5,9 +5,7 @@ mod minimal_reader;
 
 mod cloud;
 mod corpus;
-mod filter;
 mod generate;
-mod handles;
 mod io_obj_oracle;
 mod io_points;
 mod io_readers;

@@ -5,9 +5,9 @@ use crate::minimal_reader;
 
 use faer::sparse::{SparseColMat, Triplet};
 use mesh_fem::generate::{bumpy, icosphere};
-use mesh_fem::mtx::{
-    from_nalgebra_csc, read_matrix_market, to_nalgebra_csc, to_nalgebra_csr, write_matrix_market, write_operators,
-};
+#[cfg(feature = "nalgebra")]
+use mesh_fem::mtx::{from_nalgebra_csc, to_nalgebra_csc, to_nalgebra_csr};
+use mesh_fem::mtx::{read_matrix_market, write_matrix_market, write_operators};
 use mesh_fem::stats::stats;
 use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
 use std::collections::BTreeMap;
@@ -260,6 +260,7 @@ fn malformed_files_name_the_line() {
     assert!(e.to_string().contains("/nonexistent/file.mtx"));
 }
 
+#[cfg(feature = "nalgebra")]
 #[test]
 fn nalgebra_conversions_round_trip_and_agree_on_products() {
     let ops = assemble(&icosphere(2), &AssemblyParams::default()).unwrap();

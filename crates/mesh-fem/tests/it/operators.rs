@@ -846,8 +846,8 @@ fn unreferenced_vertex_is_a_typed_error() {
 #[test]
 fn mass_registry_is_consistent_and_names_libigls_matrices() {
     use mesh_fem::Mass;
-    use wfem_choice::Choice;
-    wfem_choice::check_registry::<Mass>().unwrap();
+    use wfem_base::Choice;
+    wfem_base::check_registry::<Mass>().unwrap();
     assert_eq!(Mass::default(), Mass::Consistent);
     assert_eq!(Mass::parse("wfem").unwrap(), Mass::Consistent);
     assert_eq!(Mass::parse("lumped").unwrap(), Mass::Lumped(Lumping::Barycentric));

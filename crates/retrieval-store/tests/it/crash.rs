@@ -6,7 +6,8 @@
 //! each on stdout, then starts a batch large enough to take seconds; the parent kills it
 //! (SIGKILL) while that transaction is open, reopens the file and checks its contents.
 
-use retrieval_store::{Entry, Metric, Store, StoreParams};
+use retrieval_store::metric::StandardMetric;
+use retrieval_store::{Entry, Store, StoreParams};
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
@@ -101,7 +102,7 @@ fn killed_writer_loses_nothing_committed() {
     }
     assert!(store.find(&format!("shape-{n}")).unwrap().is_none());
     let hits = store
-        .search_metric(&crate::store::vector(5, DIM), 1, Metric::L1)
+        .search_metric(&crate::store::vector(5, DIM), 1, &StandardMetric::L1)
         .unwrap();
     assert_eq!(hits[0].id, 5);
     // The store keeps working after recovery.

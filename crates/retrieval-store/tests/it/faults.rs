@@ -2,7 +2,8 @@
 //! culprit, never a panic, an abort or a silently wrong answer.
 
 use super::store::vector;
-use retrieval_store::{Entry, Metric, Store, StoreError, StoreParams, MAX_DIMENSION};
+use retrieval_store::metric::StandardMetric;
+use retrieval_store::{Entry, Store, StoreError, StoreParams, MAX_DIMENSION};
 use std::path::{Path, PathBuf};
 
 fn filled(dir: &Path, dim: usize, chunk_rows: usize, n: usize) -> PathBuf {
@@ -40,7 +41,9 @@ fn a_huge_k_returns_every_shape_instead_of_overflowing() {
     let dir = tempfile::tempdir().unwrap();
     let path = filled(dir.path(), 4, 3, 7);
     let store = Store::open_readonly(&path).unwrap();
-    let hits = store.search_metric(&vector(0, 4), 1 << 62, Metric::L1).unwrap();
+    let hits = store
+        .search_metric(&vector(0, 4), 1 << 62, &StandardMetric::L1)
+        .unwrap();
     assert_eq!(hits.len(), 7);
     assert_eq!(hits[0].name, "s0");
 }
@@ -116,7 +119,10 @@ fn non_finite_stored_values_are_refused_by_reads_and_appends() {
     let mut store = Store::open(&path).unwrap();
     let err = store.vectors().unwrap_err().to_string();
     assert!(err.contains("shape 2 has the value NaN at index 1"), "{err}");
-    let err = store.search_metric(&[0.5, 0.5], 3, Metric::L1).unwrap_err().to_string();
+    let err = store
+        .search_metric(&[0.5, 0.5], 3, &StandardMetric::L1)
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("shape 2"), "{err}");
     let v = [0.5, 0.5];
     let err = store.add(&[Entry::new("new", "", &v)]).unwrap_err().to_string();
@@ -129,7 +135,9 @@ fn chi_squared_refuses_negative_bins_instead_of_returning_zero() {
     let dir = tempfile::tempdir().unwrap();
     let path = filled(dir.path(), 2, 4, 4);
     let store = Store::open_readonly(&path).unwrap();
-    let err = store.search_metric(&[-0.5, 1.5], 2, Metric::ChiSquared).unwrap_err();
+    let err = store
+        .search_metric(&[-0.5, 1.5], 2, &StandardMetric::ChiSquared)
+        .unwrap_err();
     assert!(
         matches!(err, StoreError::InvalidParameter { name: "query", .. }),
         "{err}"
@@ -141,10 +149,15 @@ fn chi_squared_refuses_negative_bins_instead_of_returning_zero() {
         Some(f32_bytes(&[0.5, 0.5, 0.5, 0.5, -1.0, 2.0, 0.5, 0.5])),
     );
     let store = Store::open_readonly(&path).unwrap();
-    let err = store.search_metric(&[0.5, 0.5], 2, Metric::ChiSquared).unwrap_err();
+    let err = store
+        .search_metric(&[0.5, 0.5], 2, &StandardMetric::ChiSquared)
+        .unwrap_err();
     assert!(matches!(err, StoreError::InvalidRow { id: 2, .. }), "{err}");
     // L1 has no such requirement.
-    assert_eq!(store.search_metric(&[0.5, 0.5], 4, Metric::L1).unwrap().len(), 4);
+    assert_eq!(
+        store.search_metric(&[0.5, 0.5], 4, &StandardMetric::L1).unwrap().len(),
+        4
+    );
 }
 
 #[test]
@@ -206,7 +219,10 @@ fn a_closed_reader_leaves_no_log_or_shared_memory_file() {
     assert_eq!(names(), ["index.sqlite"]);
     {
         let store = Store::open_readonly(&path).unwrap();
-        assert_eq!(store.search_metric(&vector(1, 3), 2, Metric::L1).unwrap()[0].id, 1);
+        assert_eq!(
+            store.search_metric(&vector(1, 3), 2, &StandardMetric::L1).unwrap()[0].id,
+            1
+        );
         assert_eq!(store.vectors().unwrap().len(), 15);
     }
     assert_eq!(names(), ["index.sqlite"]);

@@ -1,6 +1,7 @@
 //! Round trips, appends, search against brute force, errors, concurrent readers.
 
-use retrieval_store::{Entry, Metric, Store, StoreError, StoreParams};
+use retrieval_store::metric::{Metric, StandardMetric};
+use retrieval_store::{Entry, Store, StoreError, StoreParams};
 use std::path::Path;
 
 /// A deterministic histogram-like vector for shape i.
@@ -28,7 +29,7 @@ fn add_range(store: &mut Store, range: std::ops::Range<usize>) -> Vec<u64> {
     store.add(&entries).unwrap()
 }
 
-fn brute_force(n: usize, dim: usize, query: &[f64], k: usize, metric: Metric) -> Vec<(u64, f64)> {
+fn brute_force(n: usize, dim: usize, query: &[f64], k: usize, metric: StandardMetric) -> Vec<(u64, f64)> {
     let mut all: Vec<(u64, f64)> = (0..n)
         .map(|i| {
             let row: Vec<f32> = vector(i, dim).iter().map(|&x| x as f32).collect();
@@ -97,10 +98,14 @@ fn appends_fill_chunks_without_rewriting_and_search_matches_brute_force() {
         assert_eq!(ids, (n as u64..(n + size) as u64).collect::<Vec<_>>());
         n += size;
         assert_eq!(store.len().unwrap(), n);
-        for metric in [Metric::L1, Metric::ChiSquared, Metric::Euclidean] {
+        for metric in [
+            StandardMetric::L1,
+            StandardMetric::ChiSquared,
+            StandardMetric::Euclidean,
+        ] {
             let query = vector(1000 + n, dim);
             for k in [1, 3, n, n + 5] {
-                let hits = store.search_metric(&query, k, metric).unwrap();
+                let hits = store.search_metric(&query, k, &metric).unwrap();
                 let expect = brute_force(n, dim, &query, k, metric);
                 assert_eq!(hits.len(), expect.len());
                 for (h, (id, d)) in hits.iter().zip(&expect) {
@@ -116,7 +121,10 @@ fn appends_fill_chunks_without_rewriting_and_search_matches_brute_force() {
     drop(store);
     let store = Store::open(&path).unwrap();
     assert_eq!(store.len().unwrap(), n);
-    assert!(store.search_metric(&vector(0, dim), 0, Metric::L1).unwrap().is_empty());
+    assert!(store
+        .search_metric(&vector(0, dim), 0, &StandardMetric::L1)
+        .unwrap()
+        .is_empty());
 }
 
 #[test]
@@ -132,7 +140,7 @@ fn ties_are_broken_by_id_whatever_the_thread_count() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let hits = pool.install(|| {
             let reader = Store::open_readonly(&path).unwrap();
-            reader.search_metric(&[0.5, 0.5], 4, Metric::L1).unwrap()
+            reader.search_metric(&[0.5, 0.5], 4, &StandardMetric::L1).unwrap()
         });
         assert_eq!(hits.iter().map(|h| h.id).collect::<Vec<_>>(), vec![0, 1, 2, 3]);
     }
@@ -195,11 +203,11 @@ fn every_error_names_its_culprit() {
         Err(StoreError::InvalidParameter { name: "key", .. })
     ));
     assert!(matches!(
-        store.search_metric(&[1.0], 1, Metric::L1),
+        store.search_metric(&[1.0], 1, &StandardMetric::L1),
         Err(StoreError::Dimension { .. })
     ));
     assert!(matches!(
-        store.search_metric(&[1.0, f64::INFINITY], 1, Metric::L1),
+        store.search_metric(&[1.0, f64::INFINITY], 1, &StandardMetric::L1),
         Err(StoreError::NonFinite { index: 1, .. })
     ));
     assert!(matches!(
@@ -295,7 +303,7 @@ fn concurrent_readers_see_whole_committed_batches() {
                         let all = store.vectors().unwrap();
                         assert!(all.len() >= n * dim);
                         assert_eq!(all.len() % (batch * dim), 0);
-                        let hits = store.search_metric(&vector(7, dim), 3, Metric::L1).unwrap();
+                        let hits = store.search_metric(&vector(7, dim), 3, &StandardMetric::L1).unwrap();
                         if n > 7 {
                             assert_eq!(hits[0].id, 7);
                             assert!(hits[0].distance < 1e-6);

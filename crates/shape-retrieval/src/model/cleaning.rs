@@ -7,6 +7,34 @@ use faer::Mat;
 use mesh_fem::{AssemblyParams, FemOperators, Laplacian, TriMesh};
 use serde::{Deserialize, Serialize};
 
+// The tuned defaults of the retrieval cleaning policy (measured on the dev sets; the repairs of
+// mesh-repair take every bound explicitly).
+
+/// Default largest perimeter of a hole that [`mesh_repair::holes::fill_holes`] closes, in units of `√A` (A the
+/// area of the mesh). A hole left by the loss of one vertex and its ring on a mesh of n
+/// vertices has a perimeter of about `8√(A/n)`, 0.1 `√A` at 5K vertices. On the data of
+/// `cargo xtask shrec` every hole is closed at this bound and none more at 20 `√A`: cuts
+/// through TOSCA limbs and torsos (the `holes` class) have rims of 0.2–3.1 `√A`, clusters of
+/// touching micro holes up to 3.8 `√A`, and the rims above 3 pass through a vertex twice, so
+/// they are closed as their shorter simple loops. A flat open patch never qualifies: by the
+/// isoperimetric inequality its rim is at least `2√π ≈ 3.54` `√A`.
+pub const DEFAULT_MAX_HOLE_PERIMETER: f64 = 3.0;
+
+/// Default threshold of [`mesh_repair::filter::despike`]: a vertex is a spike when it lies more than this many local
+/// edge lengths away from the centroid of its neighbours. On smooth surfaces the distance is a
+/// small fraction of an edge (about κh²/2 for curvature κ and edge length h). On the 71 TOSCA
+/// shapes (5K vertices) at most 3 vertices of a shape exceed 3 (the sharpest single-vertex
+/// tips), while 86–100 % of the spikes of the synthetic shot noise (±5 mean edge lengths
+/// along the normal) do.
+pub const DEFAULT_SPIKE_THRESHOLD: f64 = 3.0;
+
+/// Default bound of [`mesh_repair::handles::cut_handles`]: cycles up to `0.35 √A` are cut. Measured with
+/// [`mesh_repair::handles::short_handle_cycle`]: the tubes of the synthetic handles class (shrec-bench, 5K-vertex
+/// TOSCA shapes, 1–5 tubes) are 0.07–0.32 √A around (one of 120 at 0.39); the bridges that
+/// simplification left on 12 of the 600 SHREC'11 500-face shapes 0.03–0.27 √A; real handles
+/// are longer: a torus (odedstein `torus.obj`) 0.50 √A, the CAD rocker arm 0.64 √A.
+pub const DEFAULT_MAX_HANDLE_LENGTH: f64 = 0.35;
+
 /// Heat-kernel smoothing of the embedding before anything is computed (beyond the paper): the
 /// vertex positions are replaced by `K_t x`, the wFEM heat kernel (Eq. (6)) applied to the three
 /// coordinate functions, with `t = c·A` (A = 1ᵀB1, so the smoothing is scale invariant and does
@@ -99,7 +127,7 @@ impl EmbeddingFlow {
 
 /// Removal of isolated spikes (shot noise) before anything is computed (beyond the paper): a
 /// vertex farther than `threshold` local edge lengths from the centroid of its neighbours is put
-/// back as the harmonic fill of its neighbours ([`mesh_fem::filter::despike`]). A spike changes
+/// back as the harmonic fill of its neighbours ([`mesh_repair::filter::despike`]). A spike changes
 /// the heat kernel around it at every small time and adds a few very large vertex areas, so a
 /// handful of spikes moves a shape's bag towards every other spiky shape; a mesh without
 /// spikes is left unchanged.
@@ -113,14 +141,14 @@ pub struct Despiking {
 impl Default for Despiking {
     fn default() -> Self {
         Self {
-            threshold: mesh_fem::filter::DEFAULT_SPIKE_THRESHOLD,
+            threshold: DEFAULT_SPIKE_THRESHOLD,
         }
     }
 }
 
 /// Denoising by the heat kernel, as much as the shape needs (beyond the paper): a shape whose
-/// [`mesh_fem::filter::roughness`] is above `roughness` **and** whose height coherence
-/// ([`mesh_fem::filter::surface_noise`]) is below `max_coherence` has its positions replaced by
+/// [`mesh_repair::filter::roughness`] is above `roughness` **and** whose height coherence
+/// ([`mesh_repair::filter::surface_noise`]) is below `max_coherence` has its positions replaced by
 /// `K_t x` (as [`Smoothing`]) with the smallest `t = c·A` on a doubling ladder (c = 10⁻⁶,
 /// 2·10⁻⁶, …, at most 10⁻²) that brings the roughness down to `roughness`; any other shape is
 /// left unchanged. Additive noise raises the roughness of every vertex and makes the heights of
@@ -167,7 +195,7 @@ impl Default for Denoising {
 impl Denoising {
     /// Whether a mesh is denoised: rough and (with a gate) incoherent.
     pub fn applies_to(&self, mesh: &TriMesh) -> bool {
-        let noise = mesh_fem::filter::surface_noise(mesh);
+        let noise = mesh_repair::filter::surface_noise(mesh);
         noise.roughness > self.roughness && self.max_coherence.is_none_or(|c| noise.coherence < c)
     }
 
@@ -191,7 +219,7 @@ impl Denoising {
         let mut c = DENOISING_FIRST_TIME;
         loop {
             let smoothed = flow.mesh_at(mesh, c)?;
-            if c >= DENOISING_LAST_TIME || mesh_fem::filter::roughness(&smoothed) <= self.roughness {
+            if c >= DENOISING_LAST_TIME || mesh_repair::filter::roughness(&smoothed) <= self.roughness {
                 return Ok(smoothed);
             }
             c *= 2.0;
@@ -216,7 +244,7 @@ impl Denoising {
 }
 
 /// Hole filling (beyond the paper): every hole whose rim is at most `max_perimeter · √A` long
-/// is closed by a smooth patch ([`mesh_fem::holes::fill_holes`]; rims of touching holes are
+/// is closed by a smooth patch ([`mesh_repair::holes::fill_holes`]; rims of touching holes are
 /// split and closed one by one) before the shape is described. The patch changes the
 /// operators — the heat no longer reflects at the rim of a hole the intact shape does not
 /// have — but its vertices are not described: descriptors, weights and the cap of
@@ -234,17 +262,17 @@ pub struct HoleFilling {
 impl Default for HoleFilling {
     fn default() -> Self {
         Self {
-            max_perimeter: mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER,
+            max_perimeter: DEFAULT_MAX_HOLE_PERIMETER,
         }
     }
 }
 
 /// Repair of topological noise (beyond the paper), once holes are filled: first every pinched
 /// vertex — where two parts were welded at a point or along an edge — is split into one
-/// vertex per sheet ([`mesh_fem::handles::unweld`]); then, on a closed shape of genus > 0,
+/// vertex per sheet ([`mesh_repair::handles::unweld`]); then, on a closed shape of genus > 0,
 /// every thin handle — a non-separating cycle of length at most
 /// `max_handle · √A` — is removed with its tube and the openings closed
-/// ([`mesh_fem::handles::cut_handles`]), shortest first. A tube glued between two parts that
+/// ([`mesh_repair::handles::cut_handles`]), shortest first. A tube glued between two parts that
 /// touch (scans and simplifications leave them; the synthetic `handles` class makes them)
 /// then no longer carries heat between them. Copies, patches and the removed tubes are not
 /// described. Manifold shapes of genus 0 (nearly all) are left as they are; real handles are
@@ -262,7 +290,7 @@ pub struct TopologyRepair {
 impl Default for TopologyRepair {
     fn default() -> Self {
         Self {
-            max_handle: mesh_fem::handles::DEFAULT_MAX_HANDLE_LENGTH,
+            max_handle: DEFAULT_MAX_HANDLE_LENGTH,
         }
     }
 }

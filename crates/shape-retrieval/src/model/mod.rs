@@ -46,7 +46,8 @@ mod weights;
 
 pub use cleaning::{
     Denoising, Despiking, HoleFilling, Refinement, Smoothing, TopologyRepair, DEFAULT_MAX_COHERENCE,
-    DEFAULT_TARGET_ROUGHNESS, DEFAULT_VERTICES_PER_EIGENPAIR,
+    DEFAULT_MAX_HANDLE_LENGTH, DEFAULT_MAX_HOLE_PERIMETER, DEFAULT_SPIKE_THRESHOLD, DEFAULT_TARGET_ROUGHNESS,
+    DEFAULT_VERTICES_PER_EIGENPAIR,
 };
 pub use global_signature::GlobalSignature;
 pub use index::{IndexEntry, Ranked, RetrievalIndex, ShapeSignature};

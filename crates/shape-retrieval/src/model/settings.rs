@@ -37,7 +37,7 @@ pub struct DescriptorSettings {
     /// non-manifold or badly triangulated collections; either way L is symmetric positive
     /// semidefinite. A missing field reads as the cotangent L (what files written before the
     /// choice existed were computed with). Point clouds always use the robust construction.
-    #[serde(with = "wfem_choice::serde_name")]
+    #[serde(with = "wfem_base::serde_name")]
     pub laplacian: Laplacian,
     /// The descriptor (default SI-HKS, area time unit).
     pub descriptor: DescriptorSpec,
@@ -153,7 +153,7 @@ impl DescriptorSettings {
         let mut mesh = std::borrow::Cow::Borrowed(mesh);
         let mut described = mesh.n_vertices();
         if let Some(d) = &self.despiking {
-            mesh = std::borrow::Cow::Owned(mesh_fem::filter::despike(&mesh, d.threshold)?.mesh);
+            mesh = std::borrow::Cow::Owned(mesh_repair::filter::despike(&mesh, d.threshold)?.mesh);
         }
         // Denoising measures the roughness of the shape itself, so it comes before the
         // patches (smooth by construction) could dilute it.
@@ -161,7 +161,7 @@ impl DescriptorSettings {
             mesh = std::borrow::Cow::Owned(d.apply_with(&mesh, self.laplacian)?);
         }
         if let Some(h) = &self.hole_filling {
-            mesh = std::borrow::Cow::Owned(mesh_fem::holes::fill_holes(&mesh, h.max_perimeter)?.mesh);
+            mesh = std::borrow::Cow::Owned(mesh_repair::holes::fill_holes(&mesh, h.max_perimeter)?.mesh);
         }
         // Pinches are split once holes are filled: holes touching at a vertex are closed one
         // by one as the simple loops of their common rim, while splitting that vertex first
@@ -169,11 +169,11 @@ impl DescriptorSettings {
         // rim too long to close (a cat with 160 of them kept a 310-edge hole and 8 islands).
         // Handles are found on closed shapes, so after the holes are filled too.
         if let Some(t) = &self.topology_repair {
-            let unwelded = mesh_fem::handles::unweld(&mesh);
+            let unwelded = mesh_repair::handles::unweld(&mesh);
             if !unwelded.copies.is_empty() {
                 mesh = std::borrow::Cow::Owned(unwelded.mesh);
             }
-            let cut = mesh_fem::handles::cut_handles(&mesh, t.max_handle)?;
+            let cut = mesh_repair::handles::cut_handles(&mesh, t.max_handle)?;
             if !cut.cut.is_empty() {
                 // The tubes' vertices are gone: the shape's own vertices are the kept ones.
                 described -= cut.removed.iter().filter(|&&v| (v as usize) < described).count();
@@ -201,7 +201,7 @@ impl DescriptorSettings {
         let params = self.params();
         let mut shape = ShapeDescriptors::from_cloud(cloud, &params)?;
         if let Some(d) = &self.despiking {
-            let despiked = mesh_fem::filter::despike(shape.mesh(), d.threshold)?;
+            let despiked = mesh_repair::filter::despike(shape.mesh(), d.threshold)?;
             if !despiked.moved.is_empty() {
                 // The given normals stay (a spike's own normal was as wrong as its position).
                 let moved = PointCloud::new(despiked.mesh.positions().to_vec(), cloud.normals().map(<[_]>::to_vec))?;

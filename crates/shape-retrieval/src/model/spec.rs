@@ -34,7 +34,7 @@ pub enum DescriptorSpec {
         #[serde(default = "area_unit", skip_serializing_if = "is_area_unit")]
         time_unit: TimeUnit,
         /// Which diagonal of the kernel is sampled (absent in files: the kernel value).
-        #[serde(default, skip_serializing_if = "is_kernel_value", with = "wfem_choice::serde_name")]
+        #[serde(default, skip_serializing_if = "is_kernel_value", with = "wfem_base::serde_name")]
         convention: KernelDiagonal,
     },
     /// Log-HKS of the wFEM kernel on the shape rescaled to unit area, `ln(A·h(x, A·τ_j))` at the

@@ -11,7 +11,7 @@ use shape_retrieval::model::{
     DescriptorSettings, RetrievalIndex, RetrievalSettings, ShapeFeatures, ShapeRef, Smoothing,
 };
 use shape_retrieval::RetrievalError;
-use shifted_solve::rng::SplitMix64;
+use wfem_base::rng::SplitMix64;
 
 /// n points uniform on the mesh's surface, seeded (the workspace's one generator).
 fn cloud_of(mesh: &TriMesh, n: usize, seed: u64) -> PointCloud {
@@ -104,7 +104,7 @@ fn a_cloud_is_described_by_its_robust_operators_and_skips_the_mesh_repairs() {
     )
     .unwrap();
     // A clean cloud has no spike (despiking is on and would have moved the point).
-    assert!(mesh_fem::filter::despike(&reference.neighbourhood, 3.0)
+    assert!(mesh_repair::filter::despike(&reference.neighbourhood, 3.0)
         .unwrap()
         .moved
         .is_empty());

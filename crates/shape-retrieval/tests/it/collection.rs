@@ -7,9 +7,9 @@ use mesh_fem::TriMesh;
 use shape_retrieval::collection::{build_index, describe_collection, Tolerance};
 use shape_retrieval::model::RetrievalIndex;
 use shape_retrieval::RetrievalError;
-use shifted_solve::interrupt::Interrupt;
 use shifted_solve::SolveError;
 use std::sync::Mutex;
+use wfem_base::interrupt::Interrupt;
 use wfem_heat::HeatError;
 
 /// A mesh that reads but cannot be described: one of its two faces has zero area.

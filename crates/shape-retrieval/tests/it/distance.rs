@@ -2,7 +2,7 @@
 
 use shape_retrieval::distance::{chi_squared_distance, l1_distance, pairwise_distances, BagDistance};
 use shape_retrieval::RetrievalError;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 #[test]
 fn chi_squared_matches_a_hand_computation() {

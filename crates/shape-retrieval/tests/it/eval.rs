@@ -10,7 +10,7 @@ use shape_retrieval::eval::{
 use shape_retrieval::model::{RetrievalIndex, ShapeFeatures, VocabularyModel};
 use shape_retrieval::RetrievalError;
 use std::path::Path;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 fn strings(v: &[&str]) -> Vec<String> {
     v.iter().map(|s| s.to_string()).collect()

@@ -135,7 +135,7 @@ fn auto_takes_the_spectral_sum_only_where_its_bound_holds() {
                 assert!(e < 1e-8, "t = {t}: exact column off by {e:e}");
             }
         }
-        kinds.push(wfem_choice::Choice::name(&sources[j].method()));
+        kinds.push(wfem_base::Choice::name(&sources[j].method()));
     }
     assert_eq!(kinds, ["exact", "exact", "spectral", "spectral"]);
 

@@ -283,7 +283,7 @@ fn smoothing_is_the_heat_kernel_applied_to_the_coordinates() {
 
 /// The mesh with every vertex moved by N(0, σ²I₃) (deterministic).
 fn noisy(mesh: &TriMesh, sigma: f64) -> TriMesh {
-    let mut rng = shifted_solve::rng::SplitMix64::new(11);
+    let mut rng = wfem_base::rng::SplitMix64::new(11);
     let p = mesh
         .positions()
         .iter()
@@ -294,7 +294,7 @@ fn noisy(mesh: &TriMesh, sigma: f64) -> TriMesh {
 
 #[test]
 fn denoising_leaves_smooth_shapes_alone_and_smooths_noisy_ones_back() {
-    use mesh_fem::filter::roughness;
+    use mesh_repair::filter::roughness;
     let sphere = icosphere(4);
     let target = Denoising::default();
     // A smooth shape (roughness ≈ 0: a sphere's heights are the same at every vertex) is
@@ -632,7 +632,7 @@ fn snapshot_of_default_descriptors_on_a_holed_shape() {
     // patches not described): a change of the hole-filling default shows up in review.
     let (holed, _) = punched(&mesh_fem::generate::bumpy(2), &[3, 50, 90, 140]);
     let settings = small_settings();
-    let filled = mesh_fem::holes::fill_holes(&holed, mesh_fem::holes::DEFAULT_MAX_HOLE_PERIMETER).unwrap();
+    let filled = mesh_repair::holes::fill_holes(&holed, shape_retrieval::model::DEFAULT_MAX_HOLE_PERIMETER).unwrap();
     let f = ShapeFeatures::compute("holed", &holed, &settings.descriptor, &settings.bags).unwrap();
     let mut out = format!(
         "{} holes closed, {} patch vertices; {} × {}\n",

@@ -285,7 +285,7 @@ fn snapshot_sihks_area_unit_on_bumpy() {
 #[test]
 fn time_units_on_a_mesh() {
     use shape_retrieval::sihks::MeshLengths;
-    use wfem_choice::Choice;
+    use wfem_base::Choice;
     let mesh =
         mesh_fem::TriMesh::new(vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();
     let lengths = MeshLengths::of(&mesh);

@@ -9,7 +9,7 @@ use shape_retrieval::model::{DescriptorSettings, GlobalSignature, RetrievalIndex
 use shape_retrieval::spatial::{grouped, word_groups, ShapeSpectrum, SpatialBag};
 use shape_retrieval::store::{IndexStore, JsonFile};
 use shape_retrieval::RetrievalError;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 /// A fixed assignment Θ (n × V, rows summing to 1) from a smooth function of the position.
 fn assignment(mesh: &mesh_fem::TriMesh, v: usize) -> Mat<f64> {
@@ -379,7 +379,7 @@ fn repair_damped_weights_fade_next_to_added_vertices() {
     let damped = VertexWeights::RepairDamped { factor: 3.0, hops: 3 }
         .compute(&shape)
         .unwrap();
-    let rim: Vec<usize> = mesh_fem::holes::boundary_loops(&holed)
+    let rim: Vec<usize> = mesh_repair::holes::boundary_loops(&holed)
         .into_iter()
         .flat_map(|l| l.vertices)
         .map(|v| v as usize)

@@ -13,7 +13,7 @@
 //! in `Backend::prepare`, the registry line with its names and help, and the [`SolveMethod`] of
 //! its reports). **Adding a backend** = a new module here + a `Backend` variant with its line in
 //! the `registry!` below and its arm in `Backend::prepare`; the command line and the Python
-//! package read the names and help from the registry ([`wfem_choice::Choice`]).
+//! package read the names and help from the registry ([`wfem_base::Choice`]).
 
 pub(crate) mod direct;
 pub mod ldlt;
@@ -52,7 +52,7 @@ impl Default for Backend {
     }
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     Backend as "rational backend" {
         Backend::DirectLdlt = Backend::DirectLdlt => "ldlt" ["direct-ldlt"]:
             "complex-symmetric sparse LDLᵀ, one factorization per pole (default)",
@@ -236,12 +236,12 @@ pub(crate) fn sum_over_poles<T: Sync>(
     term: impl Fn(&T) -> Result<(Mat<f64>, PoleReport), SolveError> + Sync,
 ) -> Result<(Mat<f64>, Vec<PoleReport>), SolveError> {
     use rayon::prelude::*;
-    let interrupt = crate::interrupt::current();
+    let interrupt = wfem_base::interrupt::current();
     let parts: Vec<(Mat<f64>, PoleReport)> = terms
         .par_iter()
         .map(|t| {
-            crate::interrupt::within(interrupt.as_ref(), || {
-                crate::interrupt::checkpoint()?;
+            wfem_base::interrupt::within(interrupt.as_ref(), || {
+                wfem_base::interrupt::checkpoint()?;
                 term(t)
             })
         })

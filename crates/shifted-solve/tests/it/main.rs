@@ -7,6 +7,5 @@ mod backends;
 mod condition;
 mod eigen;
 mod errors;
-mod rng;
 mod singular;
 mod tables;

@@ -73,7 +73,8 @@ fn cutting_the_handles_removes_the_tubes_and_keeps_the_shape() {
     let b = crate::tosca_base("victoria0");
     for s in 1..=3u8 {
         let t = transform(&b, Class::Handles, s, 2010).unwrap();
-        let cut = mesh_fem::handles::cut_handles(&t.mesh, mesh_fem::handles::DEFAULT_MAX_HANDLE_LENGTH).unwrap();
+        let cut =
+            mesh_repair::handles::cut_handles(&t.mesh, shape_retrieval::model::DEFAULT_MAX_HANDLE_LENGTH).unwrap();
         let stats = mesh_fem::stats::stats(&cut.mesh);
         assert_eq!(stats.genus, Some(0), "strength {s}");
         // Of the shape's own vertices (those with ground truth) at most 3 % go with the tubes.
@@ -95,7 +96,8 @@ fn the_cut_goes_around_the_tube_not_around_a_leg_as_thin() {
     let b = crate::tosca_base("dog0");
     for s in 1..=2u8 {
         let t = transform(&b, Class::Handles, s, 2010).unwrap();
-        let cut = mesh_fem::handles::cut_handles(&t.mesh, mesh_fem::handles::DEFAULT_MAX_HANDLE_LENGTH).unwrap();
+        let cut =
+            mesh_repair::handles::cut_handles(&t.mesh, shape_retrieval::model::DEFAULT_MAX_HANDLE_LENGTH).unwrap();
         assert_eq!(mesh_fem::stats::stats(&cut.mesh).genus, Some(0), "strength {s}");
         let own_removed = cut.removed.iter().filter(|&&v| t.ground_truth[v as usize] >= 0).count();
         let tube = t.ground_truth.iter().filter(|&&g| g < 0).count();

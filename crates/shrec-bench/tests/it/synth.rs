@@ -3,10 +3,11 @@
 //! real TOSCA shape.
 
 use mesh_fem::generate::bumpy;
+use mesh_fem::graph::EdgeGraph;
 use mesh_fem::TriMesh;
-use shifted_solve::rng::SplitMix64;
 use shrec_bench::synth::*;
-use shrec_bench::transform::{EdgeGraph, Transformed};
+use shrec_bench::transform::Transformed;
+use wfem_base::rng::SplitMix64;
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()

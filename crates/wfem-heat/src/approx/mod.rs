@@ -38,10 +38,10 @@ use crate::{HeatError, HeatKernel};
 use global::linf;
 use mesh_fem::morse;
 use mesh_fem::TriMesh;
-use wfem_choice::Choice;
+use wfem_base::Choice;
 
 /// How the coefficients of the global component are chosen (a registry,
-/// [`wfem_choice::Choice`]: the command line and the Python package read its names and help).
+/// [`wfem_base::Choice`]: the command line and the Python package read its names and help).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Coefficients {
     /// The default: the smooth approximation plus the persistent features,
@@ -88,7 +88,7 @@ pub enum Coefficients {
     Smooth,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     Coefficients as "coefficients" {
         Coefficients::Anchored = Coefficients::Anchored => "anchored":
             "K_t f plus the basis functions K_t e_i of the persistent critical points, keeping f's values there (default)",
@@ -137,7 +137,7 @@ pub enum ScaleSampling {
     Paper,
 }
 
-wfem_choice::registry! {
+wfem_base::registry! {
     ScaleSampling as "scale sampling" {
         ScaleSampling::Geometric = ScaleSampling::Geometric => "geometric":
             "geometric from 1/λ_max (the mesh's resolution) to 1/λ_k (default)",

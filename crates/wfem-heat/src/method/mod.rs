@@ -83,7 +83,7 @@ pub enum Method {
 /// min(this, n)).
 pub const DEFAULT_SPECTRAL_EIGENPAIRS: usize = 200;
 
-wfem_choice::registry! {
+wfem_base::registry! {
     Method as "heat method" {
         Method::Fast(_) = Method::fast() => "fast":
             "shift-and-invert rational Krylov with one real factorization per t (beyond the paper; exact to ≈1e−12 and the quickest: the default)",
@@ -130,8 +130,8 @@ impl Method {
     pub fn with_options(self, options: &MethodOptions) -> Result<Self, HeatError> {
         let misplaced = |option: &'static str, owner: Method| HeatError::MisplacedOption {
             option,
-            method: wfem_choice::Choice::name(&self),
-            owner: wfem_choice::Choice::name(&owner),
+            method: wfem_base::Choice::name(&self),
+            owner: wfem_base::Choice::name(&owner),
         };
         let rational = !matches!(self, Method::Rational { .. });
         if options.degree.is_some() && rational {

@@ -142,7 +142,7 @@ fn anchored_matches_the_dense_reference_and_keeps_the_anchor_values() {
 fn anchored_resolution_keeps_the_interpolant_within_the_data() {
     let (mesh, ops) = ops_of(&generate::icosphere(3));
     let k = kernel(&ops, Method::fast());
-    let mut rng = shifted_solve::rng::SplitMix64::new(3);
+    let mut rng = wfem_base::rng::SplitMix64::new(3);
     let f: Vec<f64> = smooth_field(&mesh)
         .iter()
         .map(|v| v + 0.2 * rng.next_normal())
@@ -189,9 +189,9 @@ fn ranked_anchors_are_the_persistent_critical_points_by_persistence() {
 /// Names, aliases and defaults of the two registries.
 #[test]
 fn registries_round_trip_their_names() {
-    use wfem_choice::Choice;
-    wfem_choice::check_registry::<Coefficients>().unwrap();
-    wfem_choice::check_registry::<ScaleSampling>().unwrap();
+    use wfem_base::Choice;
+    wfem_base::check_registry::<Coefficients>().unwrap();
+    wfem_base::check_registry::<ScaleSampling>().unwrap();
     assert_eq!(Coefficients::default(), Coefficients::Anchored);
     assert_eq!(Coefficients::default_name(), "anchored");
     for entry in Coefficients::entries() {
@@ -310,7 +310,7 @@ fn warning_names_the_option_to_change() {
         .message(&|p, v| format!("{p}={v:?}"))
         .contains("sampling=Some(\"geometric\")"));
     let range = 2.0;
-    let mut rng = shifted_solve::rng::SplitMix64::new(24);
+    let mut rng = wfem_base::rng::SplitMix64::new(24);
     let noisy: Vec<f64> = f.iter().map(|v| v + 0.1 * range * rng.next_normal()).collect();
     let a = feature_approximation(
         &mesh,

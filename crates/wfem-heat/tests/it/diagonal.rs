@@ -248,8 +248,8 @@ fn selected_inversion_diagonal_is_scale_covariant() {
 /// `SolveError::Interrupted`, and the same calls succeed without the raised interrupt.
 #[test]
 fn a_raised_interrupt_stops_every_long_path() {
-    use shifted_solve::interrupt::Interrupt;
     use shifted_solve::SolveError;
+    use wfem_base::interrupt::Interrupt;
     let (_, ops) = ops_of(&generate::icosphere(3));
     let kernel = HeatKernel::new(&ops, HeatParams::default()).unwrap();
     let rational = HeatKernel::new(

@@ -696,13 +696,13 @@ fn issue_16_scaled_meshes_for_every_backend() {
         let mesh = base.scaled(alpha).unwrap();
         let ops = assemble(&mesh, &AssemblyParams::default()).unwrap();
         let t = t0 * alpha * alpha;
-        let mut methods: Vec<(String, Method)> = <shifted_solve::backend::Backend as wfem_choice::Choice>::names()
+        let mut methods: Vec<(String, Method)> = <shifted_solve::backend::Backend as wfem_base::Choice>::names()
             .map(|name| {
                 (
                     format!("rational/{name}"),
                     Method::Rational {
                         degree: 16,
-                        backend: <shifted_solve::backend::Backend as wfem_choice::Choice>::parse(name).unwrap(),
+                        backend: <shifted_solve::backend::Backend as wfem_base::Choice>::parse(name).unwrap(),
                     },
                 )
             })

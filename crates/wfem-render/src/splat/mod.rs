@@ -73,7 +73,7 @@ pub struct Splats {
     radii: Vec<f64>,
     /// The neighbours of every point along the triangles' edges, when built from triangles
     /// (for the linear splats of the module documentation).
-    neighbours: Option<mesh_fem::VertexNeighbours>,
+    neighbours: Option<mesh_fem::graph::VertexNeighbours>,
 }
 
 /// A splat's field: fᵢ(x) = value + gradient·(x − pᵢ), clamped to [lo, hi].
@@ -171,7 +171,7 @@ impl Splats {
             let (p, q) = (positions[a as usize], positions[b as usize]);
             ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
         };
-        let neighbours = mesh_fem::VertexNeighbours::new(n, triangles);
+        let neighbours = mesh_fem::graph::VertexNeighbours::new(n, triangles);
         // The largest covering radius of the triangles at each point.
         let mut cover = vec![0.0f64; n];
         for &[a, b, c] in triangles {

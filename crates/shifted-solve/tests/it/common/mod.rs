@@ -5,7 +5,7 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::{c64, Mat, Side};
 
 /// The workspace generator (deterministic, dependency-free).
-pub use shifted_solve::rng::SplitMix64 as Rng;
+pub use wfem_base::rng::SplitMix64 as Rng;
 
 /// A random weighted graph Laplacian L (symmetric PSD, L·1 = 0, a ring plus random chords)
 /// and a random SPD B (diagonally dominant, ring pattern) — different sparsity patterns.

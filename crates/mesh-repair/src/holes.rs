@@ -9,19 +9,9 @@
 //! the shape has none: the heat kernel of the filled surface is close to that of the intact
 //! one, while that of the holed surface sees every rim.
 
-use crate::vec3::{add, cross, lerp, norm, sub};
-use crate::{MeshError, TriMesh};
+use mesh_fem::vec3::{add, cross, lerp, norm, sub};
+use mesh_fem::{MeshError, TriMesh};
 use std::collections::HashMap;
-
-/// Default largest perimeter of a hole that [`fill_holes`] closes, in units of `√A` (A the
-/// area of the mesh). A hole left by the loss of one vertex and its ring on a mesh of n
-/// vertices has a perimeter of about `8√(A/n)`, 0.1 `√A` at 5K vertices. On the data of
-/// `cargo xtask shrec` every hole is closed at this bound and none more at 20 `√A`: cuts
-/// through TOSCA limbs and torsos (the `holes` class) have rims of 0.2–3.1 `√A`, clusters of
-/// touching micro holes up to 3.8 `√A`, and the rims above 3 pass through a vertex twice, so
-/// they are closed as their shorter simple loops. A flat open patch never qualifies: by the
-/// isoperimetric inequality its rim is at least `2√π ≈ 3.54` `√A`.
-pub const DEFAULT_MAX_HOLE_PERIMETER: f64 = 3.0;
 
 /// Gauss–Seidel sweeps per ring of the harmonic placement of a patch's inner vertices.
 const SWEEPS_PER_RING: usize = 40;
@@ -156,7 +146,7 @@ pub fn fill_holes(mesh: &TriMesh, max_perimeter: f64) -> Result<FilledHoles, Mes
     // The connectivity alone (not a whole validation), and only once something was filled:
     // retrieval calls this on every shape, most of them closed.
     let non_manifold = |m: &TriMesh| {
-        let t = crate::topology::Topology::new(m.n_vertices(), m.faces());
+        let t = mesh_fem::topology::Topology::new(m.n_vertices(), m.faces());
         t.non_manifold_edges.len() + t.non_manifold_vertices.len()
     };
     let filled = fill(mesh, &holes, limit)?;
@@ -346,7 +336,10 @@ fn zip(outer: &[u32], inner: &[u32], faces: &mut Vec<[u32; 3]>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::generate;
+
+    /// The retrieval policy's bound (shape-retrieval's `DEFAULT_MAX_HOLE_PERIMETER`).
+    const PERIMETER: f64 = 3.0;
+    use mesh_fem::generate;
 
     fn is_closed(mesh: &TriMesh) -> bool {
         boundary_loops(mesh).is_empty()
@@ -355,11 +348,11 @@ mod tests {
     /// The mesh of the faces that `keep` accepts, without unreferenced vertices.
     fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> TriMesh {
         let faces = mesh.faces().iter().copied().filter(|f| keep(f)).collect();
-        let opts = crate::validate::RepairOptions {
+        let opts = mesh_fem::validate::RepairOptions {
             drop_unreferenced_vertices: true,
             ..Default::default()
         };
-        crate::validate::repair(&TriMesh::new(mesh.positions().to_vec(), faces).unwrap(), &opts)
+        mesh_fem::validate::repair(&TriMesh::new(mesh.positions().to_vec(), faces).unwrap(), &opts)
             .unwrap()
             .0
     }
@@ -399,12 +392,12 @@ mod tests {
         assert!(boundary_loops(&mesh).iter().any(|l| !l.is_simple()) || boundary_loops(&mesh).len() == 2);
         let shared = boundary_loops(&mesh).iter().map(|l| l.vertices.len()).sum::<usize>();
         assert_eq!(shared, 12, "two 6-vertex rims");
-        let out = fill_holes(&mesh, DEFAULT_MAX_HOLE_PERIMETER).unwrap();
+        let out = fill_holes(&mesh, PERIMETER).unwrap();
         assert_eq!(out.filled, 2);
-        let report = crate::validate::validate(&out.mesh);
+        let report = mesh_fem::validate::validate(&out.mesh);
         assert!(report.is_usable(), "{report:?}");
         assert!(is_closed(&out.mesh), "{:?}", boundary_loops(&out.mesh));
-        assert_eq!(crate::stats::stats(&out.mesh).genus, Some(0));
+        assert_eq!(mesh_fem::stats::stats(&out.mesh).genus, Some(0));
     }
 
     #[test]
@@ -420,8 +413,8 @@ mod tests {
         faces[f].swap(0, 1);
         let flipped = TriMesh::new(mesh.positions().to_vec(), faces).unwrap();
         assert!(boundary_loops(&flipped).iter().any(|l| !l.closed));
-        let out = fill_holes(&flipped, DEFAULT_MAX_HOLE_PERIMETER).unwrap();
-        let count = |m: &TriMesh| crate::validate::validate(m).counts.non_manifold_edges;
+        let out = fill_holes(&flipped, PERIMETER).unwrap();
+        let count = |m: &TriMesh| mesh_fem::validate::validate(m).counts.non_manifold_edges;
         assert!(count(&out.mesh) <= count(&flipped));
         assert_eq!(&out.mesh.faces()[..flipped.n_faces()], flipped.faces());
     }
@@ -441,16 +434,16 @@ mod tests {
     #[test]
     fn filling_closes_the_holes_and_keeps_the_old_mesh() {
         let mesh = punched(&[0, 40, 100]);
-        let out = fill_holes(&mesh, DEFAULT_MAX_HOLE_PERIMETER).unwrap();
+        let out = fill_holes(&mesh, PERIMETER).unwrap();
         assert_eq!(out.filled, 3);
         assert_eq!(out.original_vertices, mesh.n_vertices());
         assert!(is_closed(&out.mesh));
         assert_eq!(&out.mesh.positions()[..mesh.n_vertices()], mesh.positions());
         assert_eq!(&out.mesh.faces()[..mesh.n_faces()], mesh.faces());
-        let report = crate::validate::validate(&out.mesh);
+        let report = mesh_fem::validate::validate(&out.mesh);
         assert!(report.is_usable(), "{report:?}");
         // Euler characteristic 2 again: a closed orientable sphere.
-        let stats = crate::stats::stats(&out.mesh);
+        let stats = mesh_fem::stats::stats(&out.mesh);
         assert_eq!(stats.n_boundary_loops, 0);
         assert_eq!(stats.genus, Some(0));
         // The area comes back to within the curvature of the missing caps.
@@ -475,7 +468,7 @@ mod tests {
         assert_eq!(out.filled, 1);
         assert!(is_closed(&out.mesh));
         assert!(out.mesh.n_vertices() - mesh.n_vertices() > loops[0].vertices.len());
-        let r = crate::validate::validate(&out.mesh);
+        let r = mesh_fem::validate::validate(&out.mesh);
         assert!(r.is_usable(), "{r:?}");
         // Harmonic cap of a planar-ish loop: the new vertices stay near the plane z ≈ 0.7.
         for x in &out.mesh.positions()[mesh.n_vertices()..] {

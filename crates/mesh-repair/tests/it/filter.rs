@@ -1,6 +1,9 @@
-//! `mesh_fem::filter::despike` against planted spikes and clean meshes.
+//! `mesh_repair::filter::despike` against planted spikes and clean meshes.
 
-use mesh_fem::filter::{despike, DEFAULT_SPIKE_THRESHOLD};
+use mesh_repair::filter::despike;
+
+/// The retrieval policy's threshold (shape-retrieval's `DEFAULT_SPIKE_THRESHOLD`).
+const DEFAULT_SPIKE_THRESHOLD: f64 = 3.0;
 use mesh_fem::generate::{bumpy, grid, icosphere, irregular_sphere};
 use mesh_fem::vec3::{norm, sub};
 use mesh_fem::{MeshError, TriMesh};
@@ -128,7 +131,7 @@ fn noisy(mesh: &TriMesh, sigma: f64) -> TriMesh {
 
 #[test]
 fn roughness_ignores_curvature_and_resolution_and_grows_with_noise() {
-    use mesh_fem::filter::roughness;
+    use mesh_repair::filter::roughness;
     // Curvature and resolution do not count: spheres from 162 to 10K vertices, an irregular
     // sampling and a bumpy surface are all smooth.
     for (name, mesh) in [
@@ -158,8 +161,8 @@ fn roughness_ignores_curvature_and_resolution_and_grows_with_noise() {
 
 #[test]
 fn coherence_tells_noise_from_a_coarse_clean_mesh() {
-    use mesh_fem::filter::surface_noise;
     use mesh_fem::generate::torus;
+    use mesh_repair::filter::surface_noise;
     // Coarse clean meshes: the heights follow the curvature from vertex to vertex.
     for (name, mesh) in [
         ("bumpy(1)", bumpy(1)),
@@ -193,7 +196,7 @@ fn coherence_tells_noise_from_a_coarse_clean_mesh() {
     let (a, b) = (surface_noise(&rough), surface_noise(&rough.scaled(1e-4).unwrap()));
     assert!((-1.0..=1.0).contains(&a.coherence));
     assert!((a.coherence - b.coherence).abs() < 1e-9, "{a:?} vs {b:?}");
-    assert_eq!(a.roughness, mesh_fem::filter::roughness(&rough));
+    assert_eq!(a.roughness, mesh_repair::filter::roughness(&rough));
     let triangle = TriMesh::new(vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], vec![[0, 1, 2]]).unwrap();
     assert_eq!(surface_noise(&triangle).coherence, 0.0);
     // A round sphere: every height the same, so the correlation is undefined (0).

@@ -2,7 +2,10 @@
 //! polygon length), cutting it leaves a closed sphere, and genus-0, open or bad-bound inputs.
 
 use mesh_fem::generate::{grid, icosphere, torus};
-use mesh_fem::handles::{cut_handles, short_handle_cycle, DEFAULT_MAX_HANDLE_LENGTH};
+use mesh_repair::handles::{cut_handles, short_handle_cycle};
+
+/// The retrieval policy's bound (shape-retrieval's `DEFAULT_MAX_HANDLE_LENGTH`).
+const DEFAULT_MAX_HANDLE_LENGTH: f64 = 0.35;
 use mesh_fem::stats::stats;
 use mesh_fem::MeshError;
 

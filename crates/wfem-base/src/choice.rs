@@ -1,16 +1,8 @@
-//! # wfem-choice
-//!
-//! The registry of every user-visible choice of wfem — a rational backend, a heat method, a
-//! mass, a descriptor, a bag distance, an output format … — as one Rust type per choice that
-//! carries its names, aliases, help text and default.
-//!
-//! The library crates declare each registry once, next to the type, with [`registry!`]; the
-//! command-line tool builds its `clap` values from [`Choice::entries`] and the Python bindings
-//! parse strings with [`Choice::parse`]. Neither keeps a copy of a name, so adding a backend
-//! is its module plus one line in its registry.
+//! The registries: one Rust type per user-visible choice with its names, aliases, help and
+//! default ([`Choice`], declared with [`registry!`](crate::registry)).
 //!
 //! ```
-//! use wfem_choice::{registry, Choice};
+//! use wfem_base::{registry, Choice};
 //!
 //! /// How to greet.
 //! #[derive(Clone, Debug, Default, PartialEq)]
@@ -39,9 +31,6 @@
 //! **Names** are lowercase words joined by `-` (`backward-euler`, `si-hks`). Parsing is
 //! case-insensitive and reads `_` as `-`, so Python's `backward_euler` and a shouted `SI-HKS`
 //! name the same entry; aliases keep older spellings working.
-
-#![warn(missing_docs)]
-#![forbid(unsafe_code)]
 
 use std::fmt;
 
@@ -212,9 +201,8 @@ pub fn check_entries<T: Choice>() -> Result<(), String> {
     Ok(())
 }
 
-/// (De)serializes a choice as its canonical name, for `#[serde(with = "wfem_choice::serde_name")]`
+/// (De)serializes a choice as its canonical name, for `#[serde(with = "wfem_base::serde_name")]`
 /// (feature `serde`); reading accepts every alias.
-#[cfg(feature = "serde")]
 pub mod serde_name {
     use super::Choice;
     use serde::{Deserialize, Deserializer, Serializer};

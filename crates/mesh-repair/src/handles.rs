@@ -43,18 +43,10 @@
 //! six tube removals (measured: 0.2–0.4 s per handle on a 5,000-vertex shape).
 
 use crate::holes::fill_holes;
-use crate::topology::{Topology, UnionFind};
-use crate::vec3::{norm, sub};
-use crate::{MeshError, TriMesh};
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
-
-/// Default bound of [`cut_handles`]: cycles up to `0.35 √A` are cut. Measured with
-/// [`short_handle_cycle`]: the tubes of the synthetic handles class (shrec-bench, 5K-vertex
-/// TOSCA shapes, 1–5 tubes) are 0.07–0.32 √A around (one of 120 at 0.39); the bridges that
-/// simplification left on 12 of the 600 SHREC'11 500-face shapes 0.03–0.27 √A; real handles
-/// are longer: a torus (odedstein `torus.obj`) 0.50 √A, the CAD rocker arm 0.64 √A.
-pub const DEFAULT_MAX_HANDLE_LENGTH: f64 = 0.35;
+use mesh_fem::graph::{EdgeGraph, UnionFind, NO_PARENT};
+use mesh_fem::topology::Topology;
+use mesh_fem::vec3::{norm, sub};
+use mesh_fem::{MeshError, TriMesh};
 
 /// Seeds of the search.
 const SEEDS: usize = 4;
@@ -92,6 +84,10 @@ struct Graph {
     faces: Vec<[u32; 2]>,
     /// Per edge: its length.
     length: Vec<f64>,
+    /// Per edge: its ends, sorted (the topology's edge list).
+    ends: Vec<[u32; 2]>,
+    /// The same graph for the shortest paths (mesh-fem's one Dijkstra).
+    paths: EdgeGraph,
 }
 
 impl Graph {
@@ -120,6 +116,8 @@ impl Graph {
             adjacency,
             faces,
             length,
+            ends: topology.edges.clone(),
+            paths: EdgeGraph::new(mesh),
         }
     }
 
@@ -133,30 +131,24 @@ impl Graph {
         self.dijkstra_from(&[x])
     }
 
+    /// Shortest-path distances and, per vertex, the edge to its parent in the shortest-path
+    /// tree (`u32::MAX` for a source or an unreached vertex).
     fn dijkstra_from(&self, sources: &[u32]) -> (Vec<f64>, Vec<u32>) {
-        let n = self.adjacency.len();
-        let mut dist = vec![f64::INFINITY; n];
-        let mut parent = vec![u32::MAX; n];
-        let mut heap = BinaryHeap::new();
-        for &x in sources {
-            dist[x as usize] = 0.0;
-            heap.push(Reverse((0u64, x)));
-        }
-        while let Some(Reverse((d, v))) = heap.pop() {
-            let d = f64::from_bits(d);
-            if d > dist[v as usize] {
-                continue;
+        // invariant: every source is a vertex of the mesh the graph was built from.
+        let Ok((dist, parent)) = self.paths.shortest_paths(sources) else {
+            return (
+                vec![f64::INFINITY; self.adjacency.len()],
+                vec![u32::MAX; self.adjacency.len()],
+            );
+        };
+        let edge = |(w, &v): (usize, &u32)| {
+            if v == NO_PARENT {
+                return u32::MAX;
             }
-            for &(w, e) in &self.adjacency[v as usize] {
-                let nd = d + self.length[e as usize];
-                if nd < dist[w as usize] {
-                    dist[w as usize] = nd;
-                    parent[w as usize] = e;
-                    heap.push(Reverse((nd.to_bits(), w)));
-                }
-            }
-        }
-        (dist, parent)
+            let key = [v.min(w as u32), v.max(w as u32)];
+            self.ends.binary_search(&key).map_or(u32::MAX, |e| e as u32)
+        };
+        (dist, parent.iter().enumerate().map(edge).collect())
     }
 
     fn other(&self, e: u32, v: u32, edges: &[[u32; 2]]) -> u32 {
@@ -455,7 +447,7 @@ fn level_length(mesh: &TriMesh, d: &[f64], r: f64) -> f64 {
             let (da, db) = (d[a], d[b]);
             if (da < r) != (db < r) && da.is_finite() && db.is_finite() {
                 let s = (r - da) / (db - da);
-                points.push(crate::vec3::lerp(p[a], p[b], s));
+                points.push(mesh_fem::vec3::lerp(p[a], p[b], s));
             }
         }
         if points.len() == 2 {
@@ -491,7 +483,7 @@ pub fn unweld(mesh: &TriMesh) -> Unwelded {
             *edge_faces.entry((a.min(b), a.max(b))).or_insert(0) += 1;
         }
     }
-    let offsets = crate::topology::corner_offsets(faces, n);
+    let offsets = mesh_fem::graph::corner_offsets(faces, n);
     let mut at = vec![0u32; offsets[n]];
     let mut cursor = offsets.clone();
     for (fi, f) in faces.iter().enumerate() {

@@ -1,7 +1,7 @@
-//! `shifted_solve::rng::SplitMix64` against the published reference outputs and the moments of its
+//! `wfem_base::rng::SplitMix64` against the published reference outputs and the moments of its
 //! distributions.
 
-use shifted_solve::rng::SplitMix64;
+use wfem_base::rng::SplitMix64;
 
 #[test]
 fn splitmix64_reference_values_and_normals() {

@@ -10,7 +10,7 @@
 /// cryptography.
 ///
 /// ```
-/// use shifted_solve::rng::SplitMix64;
+/// use wfem_base::rng::SplitMix64;
 /// let mut a = SplitMix64::new(7);
 /// let mut b = SplitMix64::new(7);
 /// assert_eq!(a.next_u64(), b.next_u64()); // same seed, same stream

@@ -7,15 +7,7 @@
 //!   noise from a coarse clean mesh (together they decide whether shape retrieval denoises a
 //!   shape).
 
-use crate::{MeshError, TriMesh};
-
-/// Default threshold of [`despike`]: a vertex is a spike when it lies more than this many local
-/// edge lengths away from the centroid of its neighbours. On smooth surfaces the distance is a
-/// small fraction of an edge (about κh²/2 for curvature κ and edge length h). On the 71 TOSCA
-/// shapes (5K vertices) at most 3 vertices of a shape exceed 3 (the sharpest single-vertex
-/// tips), while 86–100 % of the spikes of the synthetic shot noise (±5 mean edge lengths
-/// along the normal) do.
-pub const DEFAULT_SPIKE_THRESHOLD: f64 = 3.0;
+use mesh_fem::{MeshError, TriMesh};
 
 /// Jacobi sweeps of the harmonic fill of the spikes.
 const FILL_SWEEPS: usize = 20;
@@ -62,7 +54,7 @@ pub fn despike(mesh: &TriMesh, threshold: f64) -> Result<Despiked, MeshError> {
         .map(|i| {
             let h = links.median_length(i, &positions);
             if links.is_interior(i) && h > 0.0 {
-                crate::vec3::norm(crate::vec3::sub(positions[i], links.centroid(i, &positions))) / h
+                mesh_fem::vec3::norm(mesh_fem::vec3::sub(positions[i], links.centroid(i, &positions))) / h
             } else {
                 0.0
             }
@@ -98,7 +90,7 @@ struct Links {
 
 impl Links {
     fn new(faces: &[[u32; 3]], n: usize) -> Self {
-        let first = crate::topology::corner_offsets(faces, n);
+        let first = mesh_fem::graph::corner_offsets(faces, n);
         let mut cursor = first.clone();
         let mut edges = vec![[0u32; 2]; first[n]];
         for face in faces {
@@ -158,7 +150,7 @@ impl Links {
         let mut l: Vec<f64> = self
             .of(i)
             .iter()
-            .map(|&[a, b]| crate::vec3::norm(crate::vec3::sub(positions[a as usize], positions[b as usize])))
+            .map(|&[a, b]| mesh_fem::vec3::norm(mesh_fem::vec3::sub(positions[a as usize], positions[b as usize])))
             .collect();
         if l.is_empty() {
             return 0.0;
@@ -213,7 +205,7 @@ pub fn surface_noise(mesh: &TriMesh) -> SurfaceNoise {
     for f in mesh.faces() {
         let [a, b, c] = f.map(|v| p[v as usize]);
         // |T|-weighted: the cross product is twice the area along the face normal.
-        let n = crate::vec3::cross(crate::vec3::sub(b, a), crate::vec3::sub(c, a));
+        let n = mesh_fem::vec3::cross(mesh_fem::vec3::sub(b, a), mesh_fem::vec3::sub(c, a));
         for &v in f {
             for (s, x) in normals[v as usize].iter_mut().zip(n) {
                 *s += x;
@@ -223,12 +215,12 @@ pub fn surface_noise(mesh: &TriMesh) -> SurfaceNoise {
     let heights: Vec<Option<f64>> = (0..links.n())
         .map(|i| {
             let h = links.median_length(i, p);
-            let length = crate::vec3::norm(normals[i]);
+            let length = mesh_fem::vec3::norm(normals[i]);
             if !(links.is_interior(i) && h > 0.0 && length > 0.0) {
                 return None;
             }
-            let d = crate::vec3::sub(p[i], links.centroid(i, p));
-            Some(crate::vec3::dot(d, normals[i]) / length / h).filter(|s| s.is_finite())
+            let d = mesh_fem::vec3::sub(p[i], links.centroid(i, p));
+            Some(mesh_fem::vec3::dot(d, normals[i]) / length / h).filter(|s| s.is_finite())
         })
         .collect();
     let pairs: Vec<(f64, f64)> = (0..links.n())

@@ -1,0 +1,4 @@
+//! The integration tests of mesh-repair, in one test binary.
+
+mod filter;
+mod handles;

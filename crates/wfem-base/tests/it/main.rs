@@ -1,0 +1,3 @@
+//! Integration tests of wfem-base.
+
+mod rng;
