@@ -269,6 +269,14 @@ pub enum MeshError {
         n_neighbours: usize,
     },
     // ---- end of the robust Laplacian and point-cloud block ----
+    /// A per-element field does not have one value per element.
+    #[error("the field has {found} vectors, but the mesh has {expected} elements")]
+    ElementFieldLength {
+        /// Vectors given.
+        found: usize,
+        /// Elements of the mesh.
+        expected: usize,
+    },
     /// A vertex given by the caller (a source, a query vertex) is not a vertex of the mesh.
     #[error("{what} {index} is out of range: the mesh has {n_vertices} vertices (0 to {last})", last = n_vertices.saturating_sub(1))]
     VertexOutOfRange {

@@ -29,6 +29,7 @@ pub fn corner_offsets(faces: &[[u32; 3]], n: usize) -> Vec<usize> {
 
 /// The faces at each vertex in compressed rows ([`corner_offsets`]; a face that repeats a
 /// vertex is listed twice there).
+#[derive(Clone, Debug, PartialEq)]
 pub struct VertexFaces {
     offsets: Vec<usize>,
     faces: Vec<u32>,
@@ -50,6 +51,7 @@ impl VertexFaces {
     }
 
     /// The faces at vertex `v`. Panics if `v` is out of range.
+    #[inline]
     pub fn of(&self, v: u32) -> &[u32] {
         &self.faces[self.offsets[v as usize]..self.offsets[v as usize + 1]]
     }
@@ -100,6 +102,7 @@ impl VertexNeighbours {
     }
 
     /// The neighbours of vertex `v`, sorted by index. Panics if `v` is out of range.
+    #[inline]
     pub fn of(&self, v: u32) -> &[u32] {
         &self.indices[self.offsets[v as usize]..self.offsets[v as usize + 1]]
     }

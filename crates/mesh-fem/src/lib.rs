@@ -12,6 +12,8 @@
 //! * [`topology`] and [`graph`]: the connectivity of a mesh (edges, fans, boundary loops,
 //!   components, orientation), its vertex adjacency, edge graph with shortest paths, and
 //!   disjoint sets — public, so that the repairs of `mesh-repair` and the benchmark reuse them.
+//! * [`gradient`]: per-element gradients of the hat functions and the integrated divergence
+//!   (`Gᵀ diag|T| G = L`), on meshes and intrinsic triangulations.
 //! * [`refine`]: every triangle split into four at its edge midpoints (same surface, finer FEM).
 //! * [`generate`]: icospheres, UV spheres, open grids, tori and an irregular "bumpy" sphere.
 //! * [`assemble`] with [`AssemblyParams`]: [`FemOperators`], the cotangent stiffness L, the
@@ -41,6 +43,7 @@ mod operators;
 
 pub mod cloud;
 pub mod generate;
+pub mod gradient;
 pub mod graph;
 pub mod intrinsic;
 pub mod io;

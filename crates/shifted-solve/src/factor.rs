@@ -188,6 +188,11 @@ impl SpdFactor {
         LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut buf));
     }
 
+    /// Number of stored scalars of the factor (its memory is 8 bytes each).
+    pub fn n_values(&self) -> usize {
+        self.values.len()
+    }
+
     /// `A⁻¹ b` for one vector.
     pub fn solve_vec(&self, b: &[f64]) -> Vec<f64> {
         let mut m = faer::Mat::<f64>::from_fn(b.len(), 1, |i, _| b[i]);

@@ -15,6 +15,9 @@
 //! * [`rkhs`] — the time-dependent scalar product (Eq. (16)), the inverse `K_{−t}`, the
 //!   reproducing kernel `H_t = X D_{−t} Xᵀ` and the embeddings (Prop. 3.1, Eq. (15)–(20)).
 //! * [`distance`] — [`distance::DiffusionDistance`] on any kernel (Eq. (18)).
+//! * [`geodesic`] — [`geodesic::GeodesicSolver`]: geodesic distances by the heat method (one
+//!   backward-Euler step, the normalised gradient, a pinned Poisson solve) refined by an eikonal
+//!   step, on meshes and point clouds, from vertices or points on faces.
 //! * [`basis`] — the canonical basis `K_t eᵢ` (Sect. 4.1, Eq. (21)).
 //! * [`approx`] — feature points and the feature-driven approximation f = f_glob + f_loc
 //!   (Sect. 4.2).
@@ -56,6 +59,7 @@ pub mod diagonal;
 pub mod distance;
 mod eigenbasis;
 mod error;
+pub mod geodesic;
 mod kernel;
 pub mod limits;
 pub mod method;

@@ -237,6 +237,39 @@ pub fn assemble_cloud(
     params: &CloudParams,
     assembly: &AssemblyParams,
 ) -> Result<CloudOperators, MeshError> {
+    let built = cloud_triangulation(cloud, params)?;
+    let operators = built
+        .triangulation
+        .operators(crate::intrinsic::ROBUST_WEIGHT, assembly)?;
+    Ok(CloudOperators {
+        operators,
+        normals: built.normals,
+        neighbourhood: built.neighbourhood,
+        report: built.report,
+    })
+}
+
+/// What [`assemble_cloud`] builds its operators on: the flipped tufted cover of the merged
+/// local triangulations, with the normals, the neighbourhood mesh and the report. For what needs
+/// the triangles themselves (gradients, distances on a cloud).
+#[derive(Clone, Debug)]
+pub struct CloudTriangulation {
+    /// The intrinsic Delaunay cover (operators with weight [`crate::intrinsic::ROBUST_WEIGHT`]).
+    pub triangulation: crate::intrinsic::IntrinsicTriangulation,
+    /// Unit normal per point (given or estimated).
+    pub normals: Vec<[f64; 3]>,
+    /// The merged local triangles as a mesh on the points.
+    pub neighbourhood: TriMesh,
+    /// What was built.
+    pub report: CloudReport,
+}
+
+/// The intrinsic triangulation of a point cloud (steps 1–5 of [`assemble_cloud`], without the
+/// operators).
+///
+/// # Errors
+/// As [`assemble_cloud`].
+pub fn cloud_triangulation(cloud: &PointCloud, params: &CloudParams) -> Result<CloudTriangulation, MeshError> {
     if params.n_neighbours < 2 {
         return Err(MeshError::InvalidParameter {
             name: "n_neighbours",
@@ -302,15 +335,13 @@ pub fn assemble_cloud(
     let normals: Vec<[f64; 3]> = per_point.iter().map(|p| p.0.unwrap_or([0.0, 0.0, 1.0])).collect();
     drop(per_point);
 
-    // 5. Tufted cover, flips, operators (½: the cover has every triangle twice).
+    // 5. Tufted cover and flips (its operators take ½: the cover has every triangle twice).
     let mut cover = tufted::tufted_cover(points, &faces, params.mollify_factor)?;
     let n_flips = cover.flip_to_delaunay(DELAUNAY_TOLERANCE)?;
-    let operators = cover.operators(0.5, assembly)?;
-    drop(cover);
     let n_triangles = faces.len();
     let neighbourhood = TriMesh::new(points.to_vec(), faces)?;
-    Ok(CloudOperators {
-        operators,
+    Ok(CloudTriangulation {
+        triangulation: cover,
         normals,
         neighbourhood,
         report: CloudReport {

@@ -326,10 +326,28 @@ pub fn assemble_robust(
     robust: &RobustParams,
     params: &AssemblyParams,
 ) -> Result<(FemOperators, usize), MeshError> {
+    let (cover, flips) = robust_triangulation(mesh, robust)?;
+    let ops = cover.operators(ROBUST_WEIGHT, params)?;
+    Ok((ops, flips))
+}
+
+/// The weight of every triangle of a tufted cover in its operators (each face is there twice).
+pub const ROBUST_WEIGHT: f64 = 0.5;
+
+/// The triangulation the robust Laplacian is assembled on: the mollified tufted cover of the
+/// mesh flipped to intrinsic Delaunay, and the number of flips. Its operators with
+/// [`ROBUST_WEIGHT`] are those of [`assemble_robust`]; what needs more than L, B and D (the
+/// gradients of [`crate::gradient`], the triangles of a distance computation) starts here.
+///
+/// # Errors
+/// As [`assemble_robust`].
+pub fn robust_triangulation(
+    mesh: &TriMesh,
+    robust: &RobustParams,
+) -> Result<(IntrinsicTriangulation, usize), MeshError> {
     let mut cover = IntrinsicTriangulation::tufted_cover(mesh, robust)?;
     let flips = cover.flip_to_delaunay(DELAUNAY_TOLERANCE)?;
-    let ops = cover.operators(0.5, params)?;
-    Ok((ops, flips))
+    Ok((cover, flips))
 }
 
 /// [`MeshError::RepeatedIndex`] for the first face that repeats a vertex.

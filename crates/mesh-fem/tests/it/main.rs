@@ -6,6 +6,7 @@ mod minimal_reader;
 mod cloud;
 mod corpus;
 mod generate;
+mod gradient;
 mod io_obj_oracle;
 mod io_points;
 mod io_readers;

@@ -15,6 +15,7 @@ mod errors;
 mod failure_paths;
 mod fast_path;
 mod first_order;
+mod geodesic;
 mod properties;
 mod rational;
 mod scale;
