@@ -35,6 +35,9 @@ enum Command {
     Approx(cli::ApproxArgs),
     /// Diffusion distances d_t(i, ·) from one vertex (--from) to every vertex.
     Distance(cli::DistanceArgs),
+    /// Geodesic distances from source vertices (--from): fast marching on the intrinsic
+    /// Delaunay triangulation, or the heat method (--method heat); --all-pairs for the matrix.
+    Geodesic(cli::GeodesicArgs),
     /// The demo: K_t e_i at four scales on a generated mesh, written to ./wfem-out/.
     Demo(cli::DemoArgs),
     /// Heat kernel signature h(i, t) (n × T) of the wFEM or a lumped kernel: exact at the given
@@ -59,6 +62,7 @@ fn main() -> ExitCode {
         Command::Operators(a) => cli::operators(&a, &mut stdout),
         Command::Heat(a) => cli::heat(&a, &mut stdout),
         Command::Distance(a) => cli::distance(&a, &mut stdout),
+        Command::Geodesic(a) => cli::geodesic(&a, &mut stdout),
         Command::Demo(a) => cli::demo(&a, &mut stdout),
         Command::Approx(a) => cli::approx(&a, &mut stdout),
         Command::Hks(a) => cli::hks::hks(&a, &mut stdout),

@@ -264,6 +264,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         splats: input.splats.as_ref(),
         highlight: &approx.anchors,
         meta,
+        allow_infinity: false,
     };
     // The files first, then the report: a reader that stops early (`| head`) loses
     // nothing but the report.

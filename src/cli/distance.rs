@@ -24,10 +24,15 @@ pub struct DistanceArgs {
     #[command(flatten)]
     #[allow(missing_docs)]
     pub time_unit: super::times::TimeUnitArgs,
-    /// The vertex i (numbered as in the file) whose distances d_t(i, ·) to every vertex are
-    /// computed.
-    #[arg(long, value_parser = super::input::vertex_index, allow_negative_numbers = true)]
-    pub from: u32,
+    /// The vertices i (numbered as in the file) whose distances d_t(i, ·) to every vertex are
+    /// computed: one field per vertex.
+    #[arg(long, num_args = 1.., value_parser = super::input::vertex_index, allow_negative_numbers = true, required_unless_present = "all_pairs")]
+    pub from: Vec<u32>,
+    /// The n × n matrix of distances between all vertices, row i from vertex i, streamed to
+    /// the -o .npy in blocks of rows (memory: the kernel and 64 MB of rows, whatever n); an
+    /// interrupted run leaves a partial file beside it that the same command resumes.
+    #[arg(long, conflicts_with = "from")]
+    pub all_pairs: bool,
     /// Which distance.
     #[arg(long, value_parser = choice::<DistanceKind>(), default_value = DistanceKind::default_name())]
     pub kind: DistanceKind,
@@ -52,10 +57,21 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
     let kind = args.kind;
     let name = kind.name().replace('-', "_");
     let suffix = format!("{}-distance-t{label}", kind.name());
+    let suffixes: Vec<String> = match &args.from[..] {
+        [_] | [] => vec![suffix.clone()],
+        many => many.iter().map(|v| format!("{suffix}-from{v}")).collect(),
+    };
+    if args.all_pairs {
+        args.output.require_matrix()?;
+    }
     args.output
-        .check(Some(std::slice::from_ref(&suffix)), 1, &[&args.input.mesh])?;
+        .check(Some(&suffixes), suffixes.len(), &[&args.input.mesh])?;
     let input = read_usable(&args.input)?;
-    let i = input.vertex("--from", args.from)?;
+    let sources: Vec<u32> = args
+        .from
+        .iter()
+        .map(|&v| input.vertex("--from", v))
+        .collect::<Result<_, _>>()?;
     let times = args.time_unit.resolve("--t", &input.mesh, &[args.t])?;
     let t = times.absolute[0];
     let ops = progress::run("assembling L, B, D", || input.assemble(Default::default()))?;
@@ -74,30 +90,54 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
     let dd = progress::run(format!("preparing the {} distance (t = {label})", kind.name()), || {
         DiffusionDistance::new(&kernel, kind, t, &DistanceParams::default())
     })?;
-    let row = progress::run(format!("distances from vertex {}", args.from), || dd.row(i as usize))?;
-    let column = Column {
-        name: format!("{name}_distance_t={label}"),
-        suffix,
-        title: format!(
-            "{}: {} distance from vertex {}, t = {label}{} ({})",
-            input.name,
-            kind.name(),
-            args.from,
-            times.suffix(),
-            match &method {
-                Method::Rational { degree, .. } => format!("{}, degree {degree}", method.name()),
-                m => m.name().to_string(),
-            }
-        ),
-        t: Some(t),
-        values: row,
-    };
     let mut meta = serde_json::Map::new();
     meta.insert("command".into(), json!("distance"));
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("kind".into(), json!(kind.name()));
-    meta.insert("from_vertex".into(), json!(args.from));
+    meta.insert("method".into(), super::heat::method_meta(&method));
     meta.insert("time_unit".into(), times.meta());
+    if args.all_pairs {
+        let key = format!(
+            "{}|{}|{t:e}|{:?}",
+            input.meta(&args.input.mesh),
+            kind.name(),
+            args.degree
+        );
+        let rows = |range: std::ops::Range<usize>| Ok(dd.rows(&range.collect::<Vec<usize>>())?.concat());
+        return super::output::write_all_pairs(&args.output, dd.n(), &key, rows, meta, out);
+    }
+    let list: Vec<usize> = sources.iter().map(|&v| v as usize).collect();
+    let rows = progress::run(format!("distances from {} vertices", list.len()), || dd.rows(&list))?;
+    let how_computed = match &method {
+        Method::Rational { degree, .. } => format!("{}, degree {degree}", method.name()),
+        m => m.name().to_string(),
+    };
+    let columns: Vec<Column> = rows
+        .into_iter()
+        .zip(&args.from)
+        .zip(&suffixes)
+        .map(|((values, v), suffix)| Column {
+            name: if args.from.len() == 1 {
+                format!("{name}_distance_t={label}")
+            } else {
+                format!("{name}_distance_t={label}_from{v}")
+            },
+            suffix: suffix.clone(),
+            title: format!(
+                "{}: {} distance from vertex {v}, t = {label}{} ({how_computed})",
+                input.name,
+                kind.name(),
+                times.suffix(),
+            ),
+            t: Some(t),
+            values,
+        })
+        .collect();
+    if let [v] = &args.from[..] {
+        meta.insert("from_vertex".into(), json!(v));
+    } else {
+        meta.insert("from_vertices".into(), json!(args.from));
+    }
     if let Some(info) = dd.diagonal_info() {
         meta.insert(
             "diagonal".into(),
@@ -108,14 +148,14 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
             },
         );
     }
-    meta.insert("method".into(), super::heat::method_meta(&method));
     let how = Writing {
         render: args.render,
         splats: input.splats.as_ref(),
-        highlight: &[i],
+        highlight: &sources,
         meta,
+        allow_infinity: false,
     };
-    for path in write_fields(&args.output, &input.mesh, &[column], how)? {
+    for path in write_fields(&args.output, &input.mesh, &columns, how)? {
         writeln!(out, "wrote {}", path.display())?;
     }
     Ok(())

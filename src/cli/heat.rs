@@ -342,6 +342,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         splats: input.splats.as_ref(),
         highlight: &highlight,
         meta,
+        allow_infinity: false,
     };
     let written = super::output::write_fields(&args.output, &input.mesh, &columns, how)?;
     for path in written {

@@ -221,6 +221,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         splats: input.splats.as_ref(),
         highlight: &[],
         meta,
+        allow_infinity: false,
     };
     for path in write_fields(&args.output, &input.mesh, &columns, how)? {
         writeln!(out, "wrote {}", path.display())?;

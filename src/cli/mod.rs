@@ -14,6 +14,7 @@ pub mod choice;
 mod demo;
 mod demo_approx;
 mod distance;
+mod geodesic;
 mod heat;
 mod input;
 pub mod limits;
@@ -21,6 +22,7 @@ pub mod output;
 pub mod progress;
 pub mod times;
 pub use distance::{distance, DistanceArgs};
+pub use geodesic::{geodesic, GeodesicArgs};
 pub mod hks;
 pub mod retrieval;
 

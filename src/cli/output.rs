@@ -4,7 +4,7 @@
 use super::progress;
 use super::CliError;
 use clap::Args;
-use mesh_fem::io::{stage_field, AtomicSet, FieldFormat};
+use mesh_fem::io::{stage_field_with, AtomicSet, FieldFormat};
 use mesh_fem::TriMesh;
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
@@ -85,6 +85,20 @@ impl Output {
         };
         targets.extend(self.sidecar());
         targets
+    }
+
+    /// `--all-pairs` writes a matrix: the output must be an `.npy`.
+    ///
+    /// # Errors
+    /// [`CliError::Usage`] for another format.
+    pub fn require_matrix(&self) -> Result<(), CliError> {
+        if self.format == OutputFormat::Field(FieldFormat::Npy) {
+            Ok(())
+        } else {
+            Err(CliError::Usage(
+                "--all-pairs writes an .npy matrix: give -o D.npy".into(),
+            ))
+        }
     }
 
     /// Checks, before any work, that the outputs for fields named by `suffixes` can be
@@ -373,6 +387,17 @@ pub fn colors_of(values: &[f64]) -> Vec<[u8; 3]> {
 // ---------------------------------------------------------------------------------------------
 // Writing
 
+/// The values with `+∞` replaced by the largest finite value (0 when none is finite), for colours.
+fn finite_for_figures(values: &[f64]) -> Vec<f64> {
+    let top = values
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(f64::NEG_INFINITY, f64::max);
+    let top = if top.is_finite() { top } else { 0.0 };
+    values.iter().map(|&v| if v.is_finite() { v } else { top }).collect()
+}
+
 /// One per-vertex output field.
 #[derive(Clone, Debug)]
 pub struct Column {
@@ -400,6 +425,9 @@ pub struct Writing<'a> {
     pub highlight: &'a [u32],
     /// Metadata of the run (command, mesh, method, kernel, …) for the sidecar.
     pub meta: Map<String, Value>,
+    /// `+∞` is a value (a distance no source reaches): written as ∞ (`inf` in CSV), drawn at
+    /// the largest finite value in figures. Otherwise every value must be finite.
+    pub allow_infinity: bool,
 }
 
 /// Writes per-vertex fields in the format of `output`, all-or-nothing: `.png` renders one
@@ -419,8 +447,9 @@ pub fn write_fields(
     if columns.is_empty() {
         return Err(CliError::Usage("nothing to write".into()));
     }
+    let bad = |v: f64| !(v.is_finite() || (how.allow_infinity && v == f64::INFINITY));
     for c in columns {
-        if let Some((vertex, &value)) = c.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        if let Some((vertex, &value)) = c.values.iter().enumerate().find(|(_, v)| bad(**v)) {
             return Err(CliError::NonFinite {
                 what: c.name.clone(),
                 vertex,
@@ -468,10 +497,11 @@ pub fn write_fields(
             let bar = progress::bar(columns.len(), "rendering figures");
             for (column, target) in columns.iter().zip(&targets) {
                 bar.set_detail(&column.suffix);
-                let params = figure_params(&column.title, &column.values, how.highlight, views.clone());
+                let values = finite_for_figures(&column.values);
+                let params = figure_params(&column.title, &values, how.highlight, views.clone());
                 let png = match how.splats {
-                    Some(splats) => render_splats_png(splats, &column.values, &params)?,
-                    None => render_png(mesh, &column.values, &params)?,
+                    Some(splats) => render_splats_png(splats, &values, &params)?,
+                    None => render_png(mesh, &values, &params)?,
                 };
                 set.stage(target, |w| w.write_all(&png))?;
                 bar.inc(&column.suffix);
@@ -481,8 +511,16 @@ pub fn write_fields(
         OutputFormat::Field(format) => {
             let step = progress::step(format!("writing {}", output.path.display()));
             let refs: Vec<(&str, &[f64])> = columns.iter().map(|c| (c.name.as_str(), c.values.as_slice())).collect();
-            let colors = (format == FieldFormat::Ply).then(|| colors_of(&columns[0].values));
-            stage_field(&mut set, &output.path, format, mesh, &refs, colors.as_deref())?;
+            let colors = (format == FieldFormat::Ply).then(|| colors_of(&finite_for_figures(&columns[0].values)));
+            stage_field_with(
+                &mut set,
+                &output.path,
+                format,
+                mesh,
+                &refs,
+                colors.as_deref(),
+                how.allow_infinity,
+            )?;
             if let Some(sidecar) = output.sidecar() {
                 let text = sidecar_json(output, mesh, columns, how.meta)?;
                 set.stage(&sidecar, |w| w.write_all(text.as_bytes()))?;
@@ -524,6 +562,46 @@ fn sidecar_json(
     }
     doc.extend(meta);
     serde_json::to_string_pretty(&Value::Object(doc)).map_err(|e| CliError::Usage(e.to_string()))
+}
+
+/// `--all-pairs` of `distance` and `geodesic`: the n × n matrix streamed to the `.npy` of
+/// `output` a block of rows at a time (resumable: `key` names the computation), with a bar, and
+/// its sidecar.
+///
+/// # Errors
+/// Those of [`wfem_heat::distance::write_rows`] and of writing the sidecar.
+pub fn write_all_pairs(
+    output: &Output,
+    n: usize,
+    key: &str,
+    compute: impl Fn(std::ops::Range<usize>) -> Result<Vec<f64>, wfem_heat::HeatError>,
+    mut meta: Map<String, Value>,
+    out: &mut dyn std::io::Write,
+) -> Result<(), CliError> {
+    output.require_matrix()?;
+    let bar = progress::bar(n, "all-pairs rows");
+    let mut last = 0;
+    let report = wfem_heat::distance::write_rows(&output.path, n, n, key, None, compute, &mut |done, _| {
+        bar.inc_by(done - last, &format!("{done}/{n} rows"));
+        last = done;
+    })?;
+    bar.done();
+    if report.resumed_from > 0 {
+        progress::note(&format!(
+            "resumed after the {} rows of an interrupted run",
+            report.resumed_from
+        ));
+    }
+    meta.insert("shape".into(), json!([n, n]));
+    meta.insert("dtype".into(), json!("float64"));
+    meta.insert("rows".into(), json!("row i holds the distances from vertex i"));
+    if let Some(sidecar) = output.sidecar() {
+        let text = serde_json::to_string_pretty(&Value::Object(meta)).map_err(|e| CliError::Usage(e.to_string()))?;
+        mesh_fem::io::write_atomic(&sidecar, |w| w.write_all(text.as_bytes()))?;
+        writeln!(out, "wrote {}", sidecar.display())?;
+    }
+    writeln!(out, "wrote {} ({n} × {n})", report.path.display())?;
+    Ok(())
 }
 
 #[cfg(test)]

@@ -161,6 +161,15 @@ impl Step {
         }
     }
 
+    /// Counts `k` units of a bar as done at once (one line for them off a terminal).
+    pub fn inc_by(&self, k: usize, detail: &str) {
+        match &self.bar {
+            Some(bar) => bar.inc(k as u64),
+            None if k > 0 => self.inc(detail),
+            None => {}
+        }
+    }
+
     /// Ends the step: the spinner disappears (leaving `label (time)` when it took a while),
     /// or one line `label … done` is written in `--progress always` mode off a terminal.
     pub fn done(mut self) {

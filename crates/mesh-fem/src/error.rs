@@ -277,6 +277,14 @@ pub enum MeshError {
         /// Elements of the mesh.
         expected: usize,
     },
+    /// A row-by-row matrix file ([`crate::io::rows`]) cannot take what it was given.
+    #[error("{path}: {reason}")]
+    RowFile {
+        /// The target file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
     /// A vertex given by the caller (a source, a query vertex) is not a vertex of the mesh.
     #[error("{what} {index} is out of range: the mesh has {n_vertices} vertices (0 to {last})", last = n_vertices.saturating_sub(1))]
     VertexOutOfRange {

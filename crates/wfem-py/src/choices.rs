@@ -70,6 +70,7 @@ registries! {
     "convention" => wfem_heat::KernelDiagonal,
     "diagonal" => wfem_heat::diagonal::DiagonalMethod,
     "distance" => wfem_heat::distance::DistanceKind,
+    "geodesic_method" => wfem_heat::geodesic::GeodesicMethod,
     "coefficients" => wfem_heat::approx::Coefficients,
     "sampling" => wfem_heat::approx::ScaleSampling,
     "hks_method" => shape_retrieval::exact::HksMethod,

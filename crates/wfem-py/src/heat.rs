@@ -663,6 +663,18 @@ impl PyDiffusionDistance {
         Ok(vec_out(py, out))
     }
 
+    /// The n × n matrix streamed to `out` (resumable); returns (path, resumed_from).
+    #[pyo3(signature = (out, progress=None, block_rows=None))]
+    fn all_pairs(
+        &self,
+        py: Python<'_>,
+        out: std::path::PathBuf,
+        progress: Option<Py<PyAny>>,
+        block_rows: Option<usize>,
+    ) -> PyResult<(std::path::PathBuf, usize)> {
+        crate::geodesic::diffusion_all_pairs(py, self.inner.clone(), out, progress, block_rows)
+    }
+
     /// The diagonal A_ii of the distance's Gram matrix.
     fn diagonal<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let inner = self.inner.clone();

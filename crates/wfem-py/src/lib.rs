@@ -8,6 +8,7 @@ mod choices;
 mod cloud;
 mod convert;
 mod errors;
+mod geodesic;
 mod heat;
 mod index;
 mod mesh;
@@ -60,6 +61,7 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     mesh::register(m)?;
     cloud::register(m)?;
     heat::register(m)?;
+    geodesic::register(m)?;
     spectral::register(m)?;
     retrieval::register(m)?;
     store::register(m)?;

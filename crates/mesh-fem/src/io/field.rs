@@ -26,6 +26,7 @@ fn check_fields(
     mesh: &TriMesh,
     fields: &[(&str, &[f64])],
     colors: Option<&[[u8; 3]]>,
+    allow_infinity: bool,
 ) -> Result<(), MeshError> {
     let n = mesh.n_vertices();
     for (name, values) in fields {
@@ -37,7 +38,8 @@ fn check_fields(
                 found: values.len(),
             });
         }
-        if let Some((vertex, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        let bad = |v: f64| !(v.is_finite() || (allow_infinity && v == f64::INFINITY));
+        if let Some((vertex, &value)) = values.iter().enumerate().find(|(_, v)| bad(**v)) {
             return Err(MeshError::NonFiniteValue {
                 path: path.to_path_buf(),
                 name: (*name).to_string(),
@@ -175,7 +177,24 @@ pub fn stage_field(
     fields: &[(&str, &[f64])],
     colors: Option<&[[u8; 3]]>,
 ) -> Result<(), MeshError> {
-    check_fields(path, mesh, fields, colors)?;
+    stage_field_with(set, path, format, mesh, fields, colors, false)
+}
+
+/// [`stage_field`] that also writes `+∞` (e.g. the distance to a vertex no source reaches:
+/// `inf` in CSV, IEEE ∞ in PLY and NPY) when `allow_infinity`; NaN and −∞ are always refused.
+///
+/// # Errors
+/// As [`stage_field`].
+pub fn stage_field_with(
+    set: &mut AtomicSet,
+    path: &Path,
+    format: FieldFormat,
+    mesh: &TriMesh,
+    fields: &[(&str, &[f64])],
+    colors: Option<&[[u8; 3]]>,
+    allow_infinity: bool,
+) -> Result<(), MeshError> {
+    check_fields(path, mesh, fields, colors, allow_infinity)?;
     match format {
         FieldFormat::Ply => {
             const RESERVED: [&str; 6] = ["x", "y", "z", "red", "green", "blue"];

@@ -38,11 +38,12 @@ mod obj;
 mod off;
 mod ply;
 mod points;
+pub mod rows;
 mod stl;
 mod text;
 
 pub use atomic::{write_atomic, AtomicSet};
-pub use field::{read_field, stage_field, write_field, write_mesh, FieldFormat};
+pub use field::{read_field, stage_field, stage_field_with, write_field, write_mesh, FieldFormat};
 pub use points::{load_points, load_shape, read_points, PointFormat, Shape};
 
 /// A supported mesh file format.

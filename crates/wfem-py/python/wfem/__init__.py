@@ -52,6 +52,7 @@ from ._heat import (
     DiffusionDistance,
     HeatKernel,
 )
+from ._geodesic import GEODESIC_METHODS, GeodesicSolver, GeodesicWarning, geodesic_distance
 from ._cloud import DEFAULT_NEIGHBORS, LAPLACIANS, cloud_operators, read_points
 from ._mesh import (
     RepairReport,
@@ -115,6 +116,11 @@ __all__ = [
     "APPROX_COEFFICIENTS",
     "APPROX_SAMPLINGS",
     "ApproximationWarning",
+    # geodesic distances
+    "GeodesicSolver",
+    "geodesic_distance",
+    "GEODESIC_METHODS",
+    "GeodesicWarning",
     # spectrum and signatures
     "Eigenbasis",
     "eigenbasis",

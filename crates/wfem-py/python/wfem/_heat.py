@@ -433,3 +433,14 @@ class DiffusionDistance:
     def diagonal(self) -> np.ndarray:
         """diag(A) of the distance's Gram matrix (n,)."""
         return np.asarray(self._d.diagonal())
+
+    def all_pairs(self, out: Any, progress: Any = None, block_rows: int | None = None) -> str:
+        """The n × n matrix ``d(i, j)`` (row i from vertex i) streamed to the ``.npy`` file
+        ``out`` in blocks of rows: memory holds the kernel and 64 MB of rows whatever n. The file
+        appears complete or not at all; an interrupted call leaves a partial file beside it that
+        the same call continues. ``progress("done/total")`` is called after each block;
+        ``block_rows`` rows are computed at a time (default: 64 MB of them). Returns the path."""
+        import os
+
+        path, _ = self._d.all_pairs(os.fspath(out), progress, block_rows)
+        return str(path)
