@@ -43,6 +43,9 @@ enum Command {
     /// Heat kernel signature h(i, t) (n × T) of the wFEM or a lumped kernel: exact at the given
     /// or automatic times (selected inversion), or the truncated spectral sum (--method).
     Hks(cli::hks::HksArgs),
+    /// Wave kernel signature WKS(i, e) (n × N) on the eigenpairs of the wFEM or a lumped
+    /// kernel, at pyFM's energies.
+    Wks(cli::wks::WksArgs),
     /// Shape retrieval with bags of features: `build` an index, `query` it with a mesh.
     Retrieval(cli::retrieval::RetrievalArgs),
 }
@@ -66,6 +69,7 @@ fn main() -> ExitCode {
         Command::Demo(a) => cli::demo(&a, &mut stdout),
         Command::Approx(a) => cli::approx(&a, &mut stdout),
         Command::Hks(a) => cli::hks::hks(&a, &mut stdout),
+        Command::Wks(a) => cli::wks::wks(&a, &mut stdout),
         Command::Retrieval(a) => cli::retrieval::run(&a, &mut stdout),
     };
     match result {

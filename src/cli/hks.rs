@@ -50,7 +50,8 @@ pub struct HksArgs {
     pub render: RenderArgs,
 }
 
-fn retrieval(e: RetrievalError) -> CliError {
+/// A retrieval error as the CLI says it (mesh and heat errors keep their flags).
+pub(super) fn retrieval(e: RetrievalError) -> CliError {
     match e {
         RetrievalError::Heat(h) => CliError::Heat(h),
         RetrievalError::Mesh(m) => CliError::Mesh(m),

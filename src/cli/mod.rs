@@ -25,6 +25,7 @@ pub use distance::{distance, DistanceArgs};
 pub use geodesic::{geodesic, GeodesicArgs};
 pub mod hks;
 pub mod retrieval;
+pub mod wks;
 
 pub use approx::{approx, ApproxArgs};
 pub use demo::{demo, DemoArgs};

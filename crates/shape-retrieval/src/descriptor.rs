@@ -65,6 +65,8 @@ pub enum Descriptor {
     Dhk2,
     /// Scale-invariant wFEM HKS: eigenvalues divided by λ_max ([`SpectrumNormalization::MaxEigenvalue`](crate::hks::SpectrumNormalization::MaxEigenvalue)).
     Dhk3,
+    /// The wave kernel signature on the wFEM spectrum ([`crate::wks`]), pyFM's energies.
+    Wks,
 }
 
 wfem_base::registry! {
@@ -79,6 +81,8 @@ wfem_base::registry! {
             "HKS of the wFEM kernel (Eq. (6)) at absolute times",
         Descriptor::Dhk3 = Descriptor::Dhk3 => "dhk3":
             "HKS of the wFEM kernel with eigenvalues divided by λ_max (the paper's scale-invariant DHK3)",
+        Descriptor::Wks = Descriptor::Wks => "wks" ["wave-kernel-signature"]:
+            "wave kernel signature (Aubry et al. 2011) of the wFEM spectrum, pyFM's energies",
     }
 }
 
@@ -94,6 +98,7 @@ impl Descriptor {
             Descriptor::Dhk3 => "DHK3",
             Descriptor::SiHks => "SI-HKS",
             Descriptor::AreaHks => "area-HKS",
+            Descriptor::Wks => "WKS",
         }
     }
 

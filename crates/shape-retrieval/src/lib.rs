@@ -52,6 +52,7 @@ pub mod sihks;
 pub mod spatial;
 pub mod standardize;
 pub mod store;
+pub mod wks;
 
 // The curated root (ARCHITECTURE.md, "Crate roots"): the error and the output check of an
 // index. Every other item — the index and its settings included, in `model` with the rest of

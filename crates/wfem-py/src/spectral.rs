@@ -253,6 +253,19 @@ impl PyEigenbasis {
         Ok((mat_out(py, sig.values.as_ref()), sig.times))
     }
 
+    /// The wave kernel signature (n, N) at pyFM's energies, the energies and σ.
+    #[pyo3(signature = (num_energies=shape_retrieval::wks::DEFAULT_ENERGIES))]
+    fn wks<'py>(&self, py: Python<'py>, num_energies: usize) -> PyResult<(Bound<'py, PyArray2<f64>>, Vec<f64>, f64)> {
+        let sig = self.on_spectrum(py, move |spectrum| {
+            shape_retrieval::wks::wave_kernel_signature(spectrum, num_energies)
+        })?;
+        Ok((
+            mat_out(py, sig.values.as_ref()),
+            sig.energies.energies,
+            sig.energies.sigma,
+        ))
+    }
+
     /// The scale-invariant HKS (n, K) of Bronstein & Kokkinos.
     #[pyo3(signature = (alpha=2.0, tau_min=1.0, tau_max=25.0, tau_step=0.0625, time_unit=1.0, num_frequencies=6, convention=None))]
     #[allow(clippy::too_many_arguments)]
@@ -336,6 +349,28 @@ fn check_finite(m: &Mat<f64>) -> Result<(), Error> {
         }
     }
     Ok(())
+}
+
+/// The wave kernel signature of given eigenpairs (values (k,), vectors (n, k), M-orthonormal):
+/// (values (n, N), energies, σ).
+#[pyfunction]
+#[pyo3(signature = (values, vectors, num_energies=shape_retrieval::wks::DEFAULT_ENERGIES))]
+pub fn eigenpairs_wks<'py>(
+    py: Python<'py>,
+    values: Vec<f64>,
+    vectors: numpy::PyReadonlyArray2<'py, f64>,
+    num_energies: usize,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Vec<f64>, f64)> {
+    let vectors = crate::convert::mat_in(&vectors);
+    let sig = run(py, move |_| {
+        let spectrum = Spectrum::new(&values, vectors.as_ref())?;
+        Ok(shape_retrieval::wks::wave_kernel_signature(&spectrum, num_energies)?)
+    })?;
+    Ok((
+        mat_out(py, sig.values.as_ref()),
+        sig.energies.energies,
+        sig.energies.sigma,
+    ))
 }
 
 /// Registers the classes of this module.
@@ -448,6 +483,8 @@ pub fn mesh_hks<'py>(
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(eigenpairs_wks, m)?)?;
+    m.add("DEFAULT_ENERGIES", shape_retrieval::wks::DEFAULT_ENERGIES)?;
     m.add_class::<PyEigenbasis>()?;
     m.add_function(wrap_pyfunction!(mesh_hks, m)?)?;
     Ok(())

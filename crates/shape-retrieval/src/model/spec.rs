@@ -60,6 +60,13 @@ pub enum DescriptorSpec {
         /// Times in units of 1/λ_max (or automatic per shape).
         times: TimeSampling,
     },
+    /// The wave kernel signature of the wFEM spectrum at N energies ([`crate::wks`]): the
+    /// energies of pyFM and geomfum, per shape from its own spectrum (scale invariant up to the
+    /// truncation: λ → λ/α² shifts every log-energy by the same amount).
+    Wks {
+        /// Number N of energies.
+        energies: usize,
+    },
 }
 
 fn area_unit() -> TimeUnit {
@@ -118,6 +125,7 @@ impl DescriptorSpec {
             DescriptorSpec::Dhk1 { .. } => Descriptor::Dhk1,
             DescriptorSpec::Dhk2 { .. } => Descriptor::Dhk2,
             DescriptorSpec::Dhk3 { .. } => Descriptor::Dhk3,
+            DescriptorSpec::Wks { .. } => Descriptor::Wks,
         }
     }
 
@@ -149,6 +157,14 @@ impl DescriptorSpec {
             Descriptor::Dhk1 => DescriptorSpec::Dhk1 { times },
             Descriptor::Dhk2 => DescriptorSpec::Dhk2 { times },
             Descriptor::Dhk3 => DescriptorSpec::Dhk3 { times },
+            Descriptor::Wks => Self::wks_default(),
+        }
+    }
+
+    /// The WKS at pyFM's N = [`crate::wks::DEFAULT_ENERGIES`] energies.
+    pub fn wks_default() -> Self {
+        DescriptorSpec::Wks {
+            energies: crate::wks::DEFAULT_ENERGIES,
         }
     }
 
@@ -158,15 +174,17 @@ impl DescriptorSpec {
         match descriptor {
             Descriptor::SiHks => Some(Self::default()),
             Descriptor::Dhk3 => Some(Self::dhk3_default()),
+            Descriptor::Wks => Some(Self::wks_default()),
             Descriptor::AreaHks | Descriptor::Dhk1 | Descriptor::Dhk2 => None,
         }
     }
 
-    /// A descriptor at explicit times (SI-HKS, which samples its own times, gets its
-    /// retrieval default).
+    /// A descriptor at explicit times (SI-HKS, which samples its own times, and the WKS, which
+    /// has energies, get their retrieval defaults).
     pub fn with_times(descriptor: Descriptor, times: Vec<f64>) -> Self {
         match descriptor {
             Descriptor::SiHks => Self::default(),
+            Descriptor::Wks => Self::wks_default(),
             Descriptor::AreaHks => DescriptorSpec::AreaHks { times },
             Descriptor::Dhk1 => DescriptorSpec::Dhk1 {
                 times: TimeSampling::Explicit(times),
@@ -221,6 +239,7 @@ impl DescriptorSpec {
         match self {
             DescriptorSpec::SiHks { frequencies, .. } => *frequencies,
             DescriptorSpec::AreaHks { times } => times.len(),
+            DescriptorSpec::Wks { energies } => *energies,
             DescriptorSpec::Dhk1 { times } | DescriptorSpec::Dhk2 { times } | DescriptorSpec::Dhk3 { times } => {
                 match times {
                     TimeSampling::Explicit(t) => t.len(),
@@ -253,6 +272,11 @@ impl DescriptorSpec {
                 Ok(())
             }
             DescriptorSpec::AreaHks { times } => explicit(times),
+            DescriptorSpec::Wks { energies } => {
+                check::non_empty("energies", *energies)?;
+                wfem_heat::limits::times("energies", *energies)?;
+                Ok(())
+            }
             DescriptorSpec::Dhk1 { times } | DescriptorSpec::Dhk2 { times } | DescriptorSpec::Dhk3 { times } => {
                 match times {
                     TimeSampling::Explicit(t) => explicit(t),
@@ -309,6 +333,7 @@ impl DescriptorSpec {
                 hks(times.clone(), SpectrumNormalization::None)
             }
             DescriptorSpec::Dhk3 { times } => hks(times.clone(), SpectrumNormalization::MaxEigenvalue),
+            DescriptorSpec::Wks { energies } => Ok(crate::wks::wave_kernel_signature(&spectrum, *energies)?.values),
         }
     }
 }

@@ -82,7 +82,7 @@ from ._retrieval import (
     pairwise_l1,
     sparse_features,
 )
-from ._spectral import HKS_CONVENTIONS, HKS_METHODS, Eigenbasis, eigenbasis, hks, sihks
+from ._spectral import HKS_CONVENTIONS, HKS_METHODS, Eigenbasis, eigenbasis, hks, sihks, wks
 from . import generate
 
 __version__: str = _wfem.__version__
@@ -126,6 +126,7 @@ __all__ = [
     "eigenbasis",
     "hks",
     "sihks",
+    "wks",
     "HKS_CONVENTIONS",
     "HKS_METHODS",
     # retrieval

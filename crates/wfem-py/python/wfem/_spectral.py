@@ -8,9 +8,9 @@ import numpy as np
 
 from . import _choices, _wfem
 from ._arrays import as_float_array, as_mesh, as_sparse, as_vector, points_of
-from ._errors import warn_user
+from ._errors import InvalidInputError, warn_user
 
-__all__ = ["Eigenbasis", "eigenbasis", "hks", "sihks", "HKS_CONVENTIONS", "HKS_METHODS"]
+__all__ = ["Eigenbasis", "eigenbasis", "hks", "sihks", "wks", "HKS_CONVENTIONS", "HKS_METHODS"]
 
 #: The two HKS conventions, named by what they are (see :func:`hks`).
 HKS_CONVENTIONS = _choices.names("convention")
@@ -112,6 +112,11 @@ class Eigenbasis:
         t = None if times is None else [float(x) for x in as_vector(np.atleast_1d(times), "times")]
         values, used = self._b.hks(t, num_times, convention, scaled, normalization)
         return np.asarray(values), np.asarray(used)
+
+    def wks(self, num_energies: int = _wfem.DEFAULT_ENERGIES) -> tuple[np.ndarray, np.ndarray]:
+        """WKS of this basis: ``(values (n, N), log-energies (N,))``; see :func:`wks`."""
+        values, energies, _ = self._b.wks(int(num_energies))
+        return np.asarray(values), np.asarray(energies)
 
     def sihks(
         self,
@@ -290,3 +295,52 @@ def sihks(
         num_frequencies=num_frequencies,
         convention=convention,
     )
+
+
+def wks(
+    V: Any = None,
+    F: Any = None,
+    *,
+    num_energies: int = _wfem.DEFAULT_ENERGIES,
+    k: int = 100,
+    mass: str | None = None,
+    basis: Any = None,
+    laplacian: str | None = None,
+    n_neighbors: int | None = None,
+    return_energies: bool = False,
+) -> Any:
+    """The wave kernel signature (Aubry, Schlickewei & Cremers 2011) at every vertex, (n, N):
+
+    ``WKS(x, e) = Σ_k C_k(e) φ_k(x)² / Σ_k C_k(e)``, ``C_k(e) = exp(−(e − log λ_k)²/2σ²)``
+
+    over the nonzero eigenvalues (above 1e−8·λ_max) with M-orthonormal eigenvectors, at the
+    energies of pyFM's ``auto_WKS`` and geomfum's ``WaveKernelSignature``: ``num_energies`` (N)
+    log-energies from log λ_first (the first nonzero eigenvalue) to log λ_max, σ = 7·range/N,
+    both ends trimmed by 2σ — the same values as ``pyFM.signatures.WKS_functions.mesh_WKS`` on
+    the same eigenpairs.
+
+    Args:
+        V, F: a mesh (or V alone a point cloud); its ``k`` eigenpairs of the kernel of ``mass``
+            (default ``"consistent"``, the wFEM kernel; ``"barycentric"`` is pyFM's spectrum).
+        basis: an :class:`Eigenbasis`, or a pair ``(eigenvalues (k,), eigenvectors (n, k))``
+            (e.g. pyFM's ``mesh.eigenvalues, mesh.eigenvectors``) instead of V, F.
+        return_energies: also return the log-energies.
+    """
+    if basis is None:
+        if V is None:
+            raise InvalidInputError("give a mesh (V, F), a point cloud or basis=", "Missing", name="V")
+        basis = eigenbasis(V, F, k, mass=mass, laplacian=laplacian, n_neighbors=n_neighbors)
+    if isinstance(basis, Eigenbasis):
+        values, energies = basis.wks(num_energies)
+    else:
+        try:
+            evals, evecs = basis
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                "basis must be an Eigenbasis or a pair (eigenvalues, eigenvectors)", "Invalid", name="basis"
+            ) from None
+        lam = [float(x) for x in as_vector(np.asarray(evals, dtype=float).ravel(), "eigenvalues")]
+        vec = np.ascontiguousarray(np.asarray(evecs, dtype=float))
+        v, e, _ = _wfem.eigenpairs_wks(lam, vec, int(num_energies))
+        values, energies = np.asarray(v), np.asarray(e)
+    return (values, energies) if return_energies else values

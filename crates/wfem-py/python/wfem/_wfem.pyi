@@ -227,6 +227,9 @@ class GeodesicSolver:
     def all_pairs(self, out: _Path, progress: Any = None, block_rows: int | None = None) -> tuple[str, int]: ...
 
 # spectrum and signatures
+DEFAULT_ENERGIES: int
+
+def eigenpairs_wks(values: list[float], vectors: _F64, num_energies: int = ...) -> tuple[_F64, list[float], float]: ...
 @final
 class Eigenbasis:
     @staticmethod
@@ -276,6 +279,7 @@ class Eigenbasis:
         scaled: bool = False,
         normalization: str | None = None,
     ) -> tuple[_F64, list[float]]: ...
+    def wks(self, num_energies: int = ...) -> tuple[_F64, list[float], float]: ...
     def sihks(
         self,
         alpha: float = 2.0,
