@@ -41,6 +41,8 @@ fn flags() -> Vec<Flag> {
         flag::<Mass>(&["hks"], "--mass"),
         flag::<HksMethod>(&["hks"], "--method"),
         flag::<DistanceKind>(&["distance"], "--kind"),
+        flag::<wfem_heat::geodesic::GeodesicMethod>(&["geodesic"], "--method"),
+        flag::<Mass>(&["wks"], "--mass"),
         flag::<Coefficients>(&["approx"], "--coefficients"),
         flag::<Mass>(&["approx"], "--mass"),
         flag::<mesh_fem::Lumping>(&["operators"], "--lumped"),
@@ -141,6 +143,12 @@ fn all_spellings() -> Vec<&'static str> {
     of::<wfem_heat::KernelDiagonal>(&mut out);
     of::<wfem_heat::diagonal::DiagonalMethod>(&mut out);
     of::<wfem_heat::distance::DistanceKind>(&mut out);
+    of::<wfem_heat::geodesic::GeodesicMethod>(&mut out);
+    of::<mesh_fem::Laplacian>(&mut out);
+    // (MeshFormat is left out: its "off" is also the word that turns a cleaning step off.)
+    of::<mesh_fem::io::volume::VolumeFormat>(&mut out);
+    of::<wfem_heat::approx::ScaleSampling>(&mut out);
+    of::<shape_retrieval::global::GlobalKind>(&mut out);
     of::<wfem_heat::approx::Coefficients>(&mut out);
     of::<shape_retrieval::exact::HksMethod>(&mut out);
     of::<shape_retrieval::hks::SpectrumNormalization>(&mut out);
@@ -177,9 +185,16 @@ fn literals(source: &str) -> Vec<(usize, String)> {
             };
             let after = code[end + 1..].trim_start();
             let key = (after.starts_with(':') && !after.starts_with("::"))
-                || ["set_item(", "insert(", "get_item(", "(py,", "py,"]
-                    .iter()
-                    .any(|k| before.ends_with(k));
+                || [
+                    "set_item(",
+                    "insert(",
+                    "get_item(",
+                    "(py,",
+                    "py,",
+                    "\"command\".into(), json!(",
+                ]
+                .iter()
+                .any(|k| before.ends_with(k));
             if !key {
                 out.push((i + 1, text.to_string()));
             }
