@@ -15,6 +15,7 @@ mod cli_issue16;
 mod cli_retrieval_eval;
 mod common;
 mod crate_roots;
+mod doc_paths;
 mod fuzz_regressions;
 mod hostile;
 mod module_cycles;
