@@ -17,61 +17,56 @@
 //! factorization.
 
 use mesh_fem::graph::VertexFaces;
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 
-/// One corner i of a triangle (i, j, k), unfolded.
+/// One triangle as the marching reads it: its corners, its edge lengths (entry k from corner k
+/// to corner k + 1) and each corner unfolded in the frame of the opposite edge — one 64-byte
+/// record, so that a vertex's triangles cost one cache line each.
 #[derive(Clone, Copy, Debug)]
-struct Corner {
-    /// ℓ_ij, ℓ_ik, ℓ_jk.
-    l_ij: f64,
-    l_ik: f64,
-    l_jk: f64,
-    /// i in the frame j = (0, 0), k = (ℓ_jk, 0), above the axis.
-    x: f64,
-    y: f64,
-}
-
-/// The usable triangles with their three unfolded corners, and the triangles at each vertex,
-/// on vertices renumbered in breadth-first order (neighbours near each other in memory: the
-/// marching is bound by the latency of its random reads).
-#[derive(Clone, Debug)]
-pub(crate) struct Eikonal {
-    n: usize,
-    /// The position of each vertex in the breadth-first numbering.
-    order: Vec<u32>,
-    triangles: Vec<[u32; 3]>,
-    /// Corner c of triangle t is `corners[3t + c]` (j, k the next two corners).
-    corners: Vec<Corner>,
+struct Triangle {
+    v: [u32; 3],
     /// The three corners are distinct vertices: the straight path through the triangle applies.
-    unfold: Vec<bool>,
-    incidence: VertexFaces,
+    unfold: bool,
+    l: [f64; 3],
+    /// Corner c at (x, y), y ≥ 0, in the frame corner c + 1 = (0, 0), corner c + 2 = (ℓ, 0).
+    xy: [[f32; 2]; 3],
 }
 
-impl Corner {
-    fn new(l_ij: f64, l_jk: f64, l_ik: f64) -> Self {
-        let x = (l_jk * l_jk + l_ij * l_ij - l_ik * l_ik) / (2.0 * l_jk);
-        let y = (l_ij * l_ij - x * x).max(0.0).sqrt();
-        Self { l_ij, l_ik, l_jk, x, y }
+impl Triangle {
+    fn new(v: [u32; 3], l: [f64; 3]) -> Self {
+        let mut xy = [[0.0f32; 2]; 3];
+        for (c, p) in xy.iter_mut().enumerate() {
+            // ℓ_ij = l[c], ℓ_jk = l[c + 1], ℓ_ik = l[c + 2].
+            let (l_ij, l_jk, l_ik) = (l[c], l[(c + 1) % 3], l[(c + 2) % 3]);
+            let x = (l_jk * l_jk + l_ij * l_ij - l_ik * l_ik) / (2.0 * l_jk);
+            let y = (l_ij * l_ij - x * x).max(0.0).sqrt();
+            *p = [x as f32, y as f32];
+        }
+        Self {
+            v,
+            unfold: v[0] != v[1] && v[1] != v[2] && v[2] != v[0],
+            l,
+            xy,
+        }
     }
 
-    /// The candidate distance of i from d_j and d_k (∞ when both are).
+    /// The candidate distance of corner c from the distances of the other two (∞ when both are).
     #[inline]
-    fn update(&self, dj: f64, dk: f64, unfold: bool) -> f64 {
-        let mut best = (dj + self.l_ij).min(dk + self.l_ik);
-        if unfold && dj.is_finite() && dk.is_finite() {
-            let sx = (dj * dj - dk * dk + self.l_jk * self.l_jk) / (2.0 * self.l_jk);
+    fn update(&self, c: usize, dj: f64, dk: f64) -> f64 {
+        let (l_ij, l_jk, l_ik) = (self.l[c], self.l[(c + 1) % 3], self.l[(c + 2) % 3]);
+        let mut best = (dj + l_ij).min(dk + l_ik);
+        if self.unfold && dj.is_finite() && dk.is_finite() {
+            let (x, y) = (f64::from(self.xy[c][0]), f64::from(self.xy[c][1]));
+            let sx = (dj * dj - dk * dk + l_jk * l_jk) * (0.5 / l_jk);
             let sy2 = dj * dj - sx * sx;
             if sy2 >= 0.0 {
                 let sy = sy2.sqrt();
-                let height = self.y + sy;
-                if height > 0.0 {
-                    // Where the segment from S = (sx, −sy) to i = (x, y) crosses the axis.
-                    let cross = sx + (self.x - sx) * sy / height;
-                    if (0.0..=self.l_jk).contains(&cross) {
-                        let dx = self.x - sx;
-                        best = best.min((dx * dx + height * height).sqrt());
-                    }
+                let height = y + sy;
+                // The segment from S = (sx, −sy) to i = (x, y) crosses the axis at
+                // sx + (x − sx)·sy/height; inside the edge [0, ℓ_jk] (without the division).
+                let cross = sx * height + (x - sx) * sy;
+                if height > 0.0 && cross >= 0.0 && cross <= l_jk * height {
+                    let dx = x - sx;
+                    best = best.min((dx * dx + height * height).sqrt());
                 }
             }
         }
@@ -79,56 +74,47 @@ impl Corner {
     }
 }
 
+/// The usable triangles and the triangles at each vertex, on vertices renumbered in
+/// breadth-first order and triangles sorted by their first vertex (the marching is bound by the
+/// latency of its reads: neighbours near each other in memory).
+#[derive(Clone, Debug)]
+pub(crate) struct Eikonal {
+    n: usize,
+    /// The position of each vertex in the breadth-first numbering.
+    order: Vec<u32>,
+    triangles: Vec<Triangle>,
+    incidence: VertexFaces,
+}
+
 impl Eikonal {
     /// The marching on `triangles` (vertex indices below `n`) with edge lengths `lengths(t)`
     /// (entry k from corner k to corner k + 1). A triangle with a non-positive or non-finite
     /// length takes no part; one that repeats a vertex gives its edges only.
     pub(crate) fn new(n: usize, triangles: &[[u32; 3]], lengths: impl Fn(usize) -> [f64; 3]) -> Self {
-        let mut kept = Vec::with_capacity(triangles.len());
-        let mut corners = Vec::with_capacity(3 * triangles.len());
-        let mut unfold = Vec::with_capacity(triangles.len());
-        for (t, &tri) in triangles.iter().enumerate() {
-            let l = lengths(t);
-            if !l.iter().all(|x| *x > 0.0 && x.is_finite()) {
-                continue;
-            }
-            kept.push(tri);
-            unfold.push(tri[0] != tri[1] && tri[1] != tri[2] && tri[2] != tri[0]);
-            // Corner c: ℓ_ij = l[c], ℓ_jk = l[c + 1], ℓ_ik = l[c + 2].
-            for c in 0..3 {
-                corners.push(Corner::new(l[c], l[(c + 1) % 3], l[(c + 2) % 3]));
-            }
-        }
-        let order = breadth_first(n, &kept);
-        for tri in &mut kept {
-            *tri = tri.map(|v| order[v as usize]);
-        }
-        // Triangles in the order of their first vertex too, so that the triangles and corners
-        // read around a vertex lie together in memory.
-        let mut by_vertex: Vec<usize> = (0..kept.len()).collect();
-        by_vertex.sort_by_key(|&t| *kept[t].iter().min().unwrap_or(&0));
-        let kept: Vec<[u32; 3]> = by_vertex.iter().map(|&t| kept[t]).collect();
-        let unfold: Vec<bool> = by_vertex.iter().map(|&t| unfold[t]).collect();
-        let corners: Vec<Corner> = by_vertex
-            .iter()
-            .flat_map(|&t| corners[3 * t..3 * t + 3].iter().copied())
+        let mut kept: Vec<([u32; 3], [f64; 3])> = (0..triangles.len())
+            .map(|t| (triangles[t], lengths(t)))
+            .filter(|(_, l)| l.iter().all(|x| *x > 0.0 && x.is_finite()))
             .collect();
-        let incidence = VertexFaces::new(&kept, n);
+        let plain: Vec<[u32; 3]> = kept.iter().map(|k| k.0).collect();
+        let order = breadth_first(n, &plain);
+        for k in &mut kept {
+            k.0 = k.0.map(|v| order[v as usize]);
+        }
+        kept.sort_by_key(|k| *k.0.iter().min().unwrap_or(&0));
+        let triangles: Vec<Triangle> = kept.into_iter().map(|(v, l)| Triangle::new(v, l)).collect();
+        let plain: Vec<[u32; 3]> = triangles.iter().map(|t| t.v).collect();
+        let incidence = VertexFaces::new(&plain, n);
         Self {
             n,
             order,
-            triangles: kept,
-            corners,
-            unfold,
+            triangles,
             incidence,
         }
     }
 
     /// Approximate memory in bytes.
     pub(crate) fn memory_bytes(&self) -> usize {
-        self.corners.len() * std::mem::size_of::<Corner>()
-            + self.triangles.len() * 13
-            + (2 * self.n + 3 * self.triangles.len()) * 8
+        self.triangles.len() * (std::mem::size_of::<Triangle>() + 12) + 2 * self.n * 8
     }
 
     /// Fast marching from the fixed values: `d` holds them where `fixed`; every other vertex gets
@@ -137,7 +123,7 @@ impl Eikonal {
     /// corners that are not accepted, from the accepted values only.
     pub(crate) fn march(&self, d: &mut [f64], fixed: &[bool]) {
         let n = self.n;
-        let mut heap: BinaryHeap<Reverse<(u64, u32)>> = BinaryHeap::new();
+        let mut heap = RadixHeap::default();
         // In the internal numbering: `best` the tentative values, `view` the accepted ones (∞
         // until accepted; the updates read only those), `frozen` the fixed vertices.
         let mut best = vec![f64::INFINITY; n];
@@ -148,28 +134,27 @@ impl Eikonal {
                 let v = self.order[i] as usize;
                 best[v] = d[i];
                 frozen[v] = true;
-                heap.push(Reverse((key(d[i]), v as u32)));
+                heap.push(key(d[i]), v as u32);
             }
         }
-        while let Some(Reverse((k, v))) = heap.pop() {
+        while let Some((k, v)) = heap.pop() {
             let v = v as usize;
-            if view[v].is_finite() || k != key(best[v]) {
+            if view[v].is_finite() || k != heap.clamped(key(best[v])) {
                 continue;
             }
             view[v] = best[v];
             for &t in self.incidence.of(v as u32) {
-                let t = t as usize;
-                let tri = self.triangles[t];
+                let tri = &self.triangles[t as usize];
                 for c in 0..3 {
-                    let w = tri[c] as usize;
+                    let w = tri.v[c] as usize;
                     if view[w].is_finite() || frozen[w] {
                         continue;
                     }
-                    let (j, k) = (tri[(c + 1) % 3] as usize, tri[(c + 2) % 3] as usize);
-                    let u = self.corners[3 * t + c].update(view[j], view[k], self.unfold[t]);
+                    let (dj, dk) = (view[tri.v[(c + 1) % 3] as usize], view[tri.v[(c + 2) % 3] as usize]);
+                    let u = tri.update(c, dj, dk);
                     if u < best[w] {
                         best[w] = u;
-                        heap.push(Reverse((key(u), w as u32)));
+                        heap.push(key(u), w as u32);
                     }
                 }
             }
@@ -205,6 +190,70 @@ fn breadth_first(n: usize, triangles: &[[u32; 3]]) -> Vec<u32> {
         }
     }
     order
+}
+
+/// A monotone radix heap on u64 keys (Ahuja et al. 1990): every key pushed is at least the last
+/// one popped — the order of fast marching, which accepts vertices in increasing distance (a
+/// key below the last popped one, from rounding, is taken as equal to it). Pushes and pops cost
+/// O(1) amortised, about three times less than a binary heap here.
+struct RadixHeap {
+    last: u64,
+    len: usize,
+    buckets: [Vec<(u64, u32)>; 65],
+}
+
+impl Default for RadixHeap {
+    fn default() -> Self {
+        Self {
+            last: 0,
+            len: 0,
+            buckets: std::array::from_fn(|_| Vec::new()),
+        }
+    }
+}
+
+impl RadixHeap {
+    #[inline]
+    fn bucket(&self, key: u64) -> usize {
+        (64 - (key ^ self.last).leading_zeros()) as usize
+    }
+
+    /// The key as stored: never below the last popped one.
+    #[inline]
+    fn clamped(&self, key: u64) -> u64 {
+        key.max(self.last)
+    }
+
+    #[inline]
+    fn push(&mut self, key: u64, value: u32) {
+        let key = self.clamped(key);
+        let b = self.bucket(key);
+        self.buckets[b].push((key, value));
+        self.len += 1;
+    }
+
+    fn pop(&mut self) -> Option<(u64, u32)> {
+        if self.len == 0 {
+            return None;
+        }
+        if self.buckets[0].is_empty() {
+            let i = (1..65).find(|&i| !self.buckets[i].is_empty())?;
+            let items = std::mem::take(&mut self.buckets[i]);
+            self.last = items.iter().map(|e| e.0).min().unwrap_or(self.last);
+            for e in &items {
+                let b = self.bucket(e.0);
+                self.buckets[b].push(*e);
+            }
+            // Keep the emptied bucket's allocation for later.
+            let mut items = items;
+            items.clear();
+            if self.buckets[i].is_empty() {
+                self.buckets[i] = items;
+            }
+        }
+        self.len -= 1;
+        self.buckets[0].pop()
+    }
 }
 
 /// A heap key that orders non-negative floats (and ∞) like their values.
