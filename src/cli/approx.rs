@@ -133,6 +133,12 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         args.output.check(Some(&[]), 1 + 2 * args.scales, &inputs)?;
     }
     let input = read_usable(&args.input)?;
+    if input.volume.is_some() {
+        return Err(CliError::Usage(format!(
+            "{}: approx takes its features on a surface; a tetrahedral mesh is not supported yet",
+            input.name
+        )));
+    }
     let n = input.mesh.n_vertices();
     let f = input.field(&args.field)?;
     // λ_1 = 0 on a connected mesh, so the time scale needs k ≥ 2.

@@ -32,10 +32,11 @@ pub struct GeodesicArgs {
     /// an interrupted run leaves a partial file beside it that the same command resumes.
     #[arg(long, conflicts_with_all = ["from", "each"])]
     pub all_pairs: bool,
-    /// How: fast-marching (the default, most accurate and fastest) or heat (Crane et al.'s
-    /// heat method, potpourri3d's numbers).
-    #[arg(long, value_parser = choice::<GeodesicMethod>(), default_value = GeodesicMethod::default_name())]
-    pub method: GeodesicMethod,
+    /// How: fast-marching (the default on surfaces and point clouds: most accurate and
+    /// fastest) or heat (Crane et al.'s heat method, potpourri3d's numbers; the only one, and
+    /// so the default, on a tetrahedral mesh).
+    #[arg(long, value_parser = choice::<GeodesicMethod>())]
+    pub method: Option<GeodesicMethod>,
     /// The heat method's time t = C·h² in units of the squared mean edge length h.
     #[arg(long, default_value_t = DEFAULT_T_COEF, allow_negative_numbers = true)]
     pub t_coef: f64,
@@ -83,11 +84,19 @@ pub fn geodesic(args: &GeodesicArgs, out: &mut dyn Write) -> Result<(), CliError
         .check(Some(&suffixes), suffixes.len(), &[&args.input.mesh])?;
     let mut mesh_args = args.input.clone();
     // The robust (intrinsic Delaunay) triangulation unless --laplacian says otherwise.
-    mesh_args.laplacian = Some(
-        args.input
-            .laplacian
-            .unwrap_or(Laplacian::Robust(RobustParams::default())),
-    );
+    let volume = super::volume::is_volume(&args.input);
+    if !volume {
+        mesh_args.laplacian = Some(
+            args.input
+                .laplacian
+                .unwrap_or(Laplacian::Robust(RobustParams::default())),
+        );
+    }
+    let method = args.method.unwrap_or(if volume {
+        GeodesicMethod::Heat
+    } else {
+        GeodesicMethod::default()
+    });
     let input = read_usable(&mesh_args)?;
     let sources: Vec<u32> = args
         .from
@@ -95,22 +104,23 @@ pub fn geodesic(args: &GeodesicArgs, out: &mut dyn Write) -> Result<(), CliError
         .map(|&v| input.vertex("--from", v))
         .collect::<Result<_, _>>()?;
     let params = GeodesicParams {
-        method: args.method,
+        method,
         t_coef: args.t_coef,
         laplacian: input.laplacian,
         refine: args.refine,
     };
     // Compute.
-    let solver = progress::run(format!("preparing {} geodesics", args.method.name()), || {
-        match &input.cloud {
-            Some(cloud) => GeodesicSolver::from_cloud(cloud, &params, &CloudParams::default()),
-            None => GeodesicSolver::new(&input.mesh, &params),
+    let solver = progress::run(format!("preparing {} geodesics", method.name()), || {
+        match (&input.cloud, &input.volume) {
+            (Some(cloud), _) => GeodesicSolver::from_cloud(cloud, &params, &CloudParams::default()),
+            (None, Some(v)) => GeodesicSolver::from_volume(&v.mesh, &params),
+            (None, None) => GeodesicSolver::new(&input.mesh, &params),
         }
     })?;
     let mut meta = serde_json::Map::new();
     meta.insert("command".into(), json!("geodesic"));
     meta.insert("input".into(), input.meta(&args.input.mesh));
-    meta.insert("method".into(), json!(args.method.name()));
+    meta.insert("method".into(), json!(method.name()));
     meta.insert("laplacian".into(), json!(input.laplacian.name()));
     meta.insert("refine".into(), json!(args.refine));
     meta.insert("mean_edge_length".into(), json!(solver.mean_edge_length()));
@@ -134,7 +144,7 @@ pub fn geodesic(args: &GeodesicArgs, out: &mut dyn Write) -> Result<(), CliError
         let columns = rows
             .into_iter()
             .zip(&args.from)
-            .map(|(values, v)| column(&input.name, args, format!("from{v}"), format!("vertex {v}"), values))
+            .map(|(values, v)| column(&input.name, method, format!("from{v}"), format!("vertex {v}"), values))
             .collect();
         (columns, None)
     } else {
@@ -145,7 +155,7 @@ pub fn geodesic(args: &GeodesicArgs, out: &mut dyn Write) -> Result<(), CliError
             many => format!("{} sources", many.len()),
         };
         (
-            vec![column(&input.name, args, "geodesic".into(), from, values)],
+            vec![column(&input.name, method, "geodesic".into(), from, values)],
             Some(report),
         )
     };
@@ -172,7 +182,7 @@ pub fn geodesic(args: &GeodesicArgs, out: &mut dyn Write) -> Result<(), CliError
     Ok(())
 }
 
-fn column(name: &str, args: &GeodesicArgs, suffix: String, from: String, values: Vec<f64>) -> Column {
+fn column(name: &str, method: GeodesicMethod, suffix: String, from: String, values: Vec<f64>) -> Column {
     Column {
         name: if suffix == "geodesic" {
             "geodesic_distance".into()
@@ -180,7 +190,7 @@ fn column(name: &str, args: &GeodesicArgs, suffix: String, from: String, values:
             format!("geodesic_distance_{suffix}")
         },
         suffix,
-        title: format!("{name}: geodesic distance from {from} ({})", args.method.name()),
+        title: format!("{name}: geodesic distance from {from} ({})", method.name()),
         t: None,
         values,
     }

@@ -138,9 +138,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     )?;
     let times = args.time_unit.resolve("--times", &input.mesh, &args.times)?;
     if !args.times.is_empty() {
-        let fem = progress::run("assembling L, B, D", || {
-            mesh_fem::assemble(&input.mesh, &mesh_fem::AssemblyParams::for_mass(mass))
-        })?;
+        let fem = progress::run("assembling L, B, D", || input.assemble(mass.lumping()))?;
         times.warn(&wfem_heat::Operators::new(&fem, mass)?, &input.mesh, 1.0)?;
     }
     let params = MeshHksParams {

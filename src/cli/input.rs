@@ -114,8 +114,8 @@ pub fn field_path(text: &str) -> Result<PathBuf, String> {
 pub struct Input {
     /// The mesh used (repaired if `--repair` changed it).
     pub mesh: TriMesh,
-    /// What was read.
-    pub load_report: LoadReport,
+    /// What was read (of a surface or point-cloud file; `None` for a volume).
+    pub load_report: Option<LoadReport>,
     /// The repair's report, if `--repair` was given.
     pub repair: Option<RepairReport>,
     /// Vertices in the file.
@@ -130,6 +130,9 @@ pub struct Input {
     pub splats: Option<Splats>,
     /// The Laplacian of `--laplacian`.
     pub laplacian: Laplacian,
+    /// The tetrahedra, when the file is a volume; `mesh` is then its boundary surface on all
+    /// the vertices (for figures and PLY outputs).
+    pub volume: Option<super::volume::Volume>,
 }
 
 impl Input {
@@ -142,9 +145,10 @@ impl Input {
             lumping,
             laplacian: self.laplacian,
         };
-        match &self.cloud {
-            Some(cloud) => Ok(assemble_cloud(cloud, &CloudParams::default(), &params)?.operators),
-            None => assemble(&self.mesh, &params),
+        match (&self.cloud, &self.volume) {
+            (Some(cloud), _) => Ok(assemble_cloud(cloud, &CloudParams::default(), &params)?.operators),
+            (None, Some(v)) => mesh_fem::volume::assemble_volume(&v.mesh, &params),
+            (None, None) => assemble(&self.mesh, &params),
         }
     }
 
@@ -242,6 +246,10 @@ impl Input {
         if let (Some(_), Some(obj)) = (&self.cloud, v.as_object_mut()) {
             obj.insert("point_cloud".into(), serde_json::Value::Bool(true));
         }
+        if let (Some(vol), Some(obj)) = (&self.volume, v.as_object_mut()) {
+            // A volume's n_faces are those of its boundary surface.
+            obj.insert("n_tets".into(), serde_json::json!(vol.mesh.n_tets()));
+        }
         if let (Some(r), Some(obj)) = (&self.repair, v.as_object_mut()) {
             obj.insert(
                 "repair".into(),
@@ -294,6 +302,9 @@ pub fn read_input(args: &MeshArgs) -> Result<Input, CliError> {
         .file_name()
         .map(|f| f.to_string_lossy().into_owned())
         .unwrap_or_else(|| args.mesh.display().to_string());
+    if super::volume::is_volume(args) {
+        return super::volume::read(args, name);
+    }
     let shape = progress::run(format!("reading {name}"), || {
         load_shape(&args.mesh, &LoadOptions::with_triangulation(args.triangulate))
     })?;
@@ -328,13 +339,14 @@ pub fn read_input(args: &MeshArgs) -> Result<Input, CliError> {
     let file_vertices = mesh.n_vertices();
     let mut input = Input {
         mesh,
-        load_report,
+        load_report: Some(load_report),
         repair: None,
         file_vertices,
         name,
         cloud,
         splats,
         laplacian,
+        volume: None,
     };
     if !args.repair.is_empty() {
         let (repaired, report) = progress::run("repairing", || repair(&input.mesh, &opts))?;
@@ -379,6 +391,10 @@ fn report_repair(args: &MeshArgs, before: &TriMesh, after: &TriMesh, report: &Re
 pub fn read_usable(args: &MeshArgs) -> Result<Input, CliError> {
     let input = read_input(args)?;
     if input.cloud.is_some() {
+        return Ok(input);
+    }
+    if let Some(volume) = &input.volume {
+        super::volume::check_usable(&input.name, volume)?;
         return Ok(input);
     }
     let report = progress::run("validating", || {

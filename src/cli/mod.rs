@@ -21,6 +21,7 @@ pub mod limits;
 pub mod output;
 pub mod progress;
 pub mod times;
+mod volume;
 pub use distance::{distance, DistanceArgs};
 pub use geodesic::{geodesic, GeodesicArgs};
 pub mod hks;
@@ -178,7 +179,11 @@ pub struct InfoArgs {
 /// then it shows what the repair leaves).
 pub fn info(args: &InfoArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let input = read_input(&args.input)?;
-    let (mesh, load_report) = (&input.mesh, &input.load_report);
+    let (mesh, load_report) = match (&input.volume, &input.load_report) {
+        (Some(v), _) => return volume::info(&args.input.mesh, v, args.json, out),
+        (None, Some(report)) => (&input.mesh, report),
+        (None, None) => return Err(CliError::Usage(format!("{}: nothing was read", input.name))),
+    };
     let stats = progress::run("statistics", || Ok::<_, CliError>(mesh_fem::stats::stats(mesh)))?;
     let report = progress::run("validating", || Ok::<_, CliError>(mesh_fem::validate::validate(mesh)))?;
     if args.json {

@@ -277,6 +277,37 @@ pub enum MeshError {
         /// Elements of the mesh.
         expected: usize,
     },
+    /// A tetrahedron names a vertex that does not exist.
+    #[error("tetrahedron {tet} uses vertex {index}, but the mesh has {n_vertices} vertices")]
+    TetIndexOutOfRange {
+        /// Tetrahedron index.
+        tet: usize,
+        /// The index found.
+        index: u32,
+        /// Number of vertices.
+        n_vertices: usize,
+    },
+    /// A tetrahedron of (numerically) zero volume: its gradients are undefined.
+    #[error("tetrahedron {tet} (vertices {vertices:?}) has zero volume ({volume:e}); --repair degenerate drops such tetrahedra")]
+    DegenerateTet {
+        /// Tetrahedron index.
+        tet: usize,
+        /// Its vertices.
+        vertices: [u32; 4],
+        /// Its signed volume.
+        volume: f64,
+    },
+    /// A volume mesh file could not be parsed.
+    #[error("{path}: line {line}: {message}")]
+    VolumeParse {
+        /// File read.
+        path: PathBuf,
+        /// 1-based line (0 for binary data).
+        line: usize,
+        /// What is wrong.
+        #[serde(rename = "reason")]
+        message: String,
+    },
     /// A row-by-row matrix file ([`crate::io::rows`]) cannot take what it was given.
     #[error("{path}: {reason}")]
     RowFile {

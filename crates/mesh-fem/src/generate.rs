@@ -218,3 +218,50 @@ pub fn bumpy(level: u32) -> TriMesh {
         .collect();
     build(positions, faces)
 }
+
+/// The unit cube \[0,1\]³ as a tetrahedral mesh: `n` cells per side, each split into six
+/// tetrahedra around its main diagonal (Kuhn), all positively oriented; (n + 1)³ vertices.
+///
+/// # Panics
+/// If `n` is 0.
+pub fn tet_cube(n: usize) -> crate::volume::TetMesh {
+    assert!(n >= 1, "tet_cube needs at least one cell per side");
+    let m = n + 1;
+    let id = |i: usize, j: usize, k: usize| ((k * m + j) * m + i) as u32;
+    let mut positions = Vec::with_capacity(m * m * m);
+    for k in 0..m {
+        for j in 0..m {
+            for i in 0..m {
+                positions.push([i as f64 / n as f64, j as f64 / n as f64, k as f64 / n as f64]);
+            }
+        }
+    }
+    let mut tets = Vec::with_capacity(6 * n * n * n);
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let c = |a: usize, b: usize, d: usize| id(i + a, j + b, k + d);
+                let (v0, v7) = (c(0, 0, 0), c(1, 1, 1));
+                // The six paths from corner 0 to corner 7 along the axes.
+                for (x, y) in [
+                    (c(1, 0, 0), c(1, 1, 0)),
+                    (c(1, 0, 0), c(1, 0, 1)),
+                    (c(0, 1, 0), c(1, 1, 0)),
+                    (c(0, 1, 0), c(0, 1, 1)),
+                    (c(0, 0, 1), c(1, 0, 1)),
+                    (c(0, 0, 1), c(0, 1, 1)),
+                ] {
+                    let mut t = [v0, x, y, v7];
+                    let p = t.map(|v| positions[v as usize]);
+                    if crate::volume::signed_volume(p) < 0.0 {
+                        t.swap(1, 2);
+                    }
+                    tets.push(t);
+                }
+            }
+        }
+    }
+    #[allow(clippy::expect_used)]
+    // invariant: finite positions, indices in range.
+    crate::volume::TetMesh::new(positions, tets).expect("a valid cube")
+}

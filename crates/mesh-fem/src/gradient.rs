@@ -123,6 +123,32 @@ impl ElementGradients {
         )
     }
 
+    /// The gradients of a tetrahedral mesh (in the ambient frame): `Gᵀ diag|T| G` is the L of
+    /// [`crate::volume::assemble_volume`].
+    ///
+    /// # Errors
+    /// [`MeshError::DegenerateTet`] for a flat tetrahedron.
+    pub fn of_volume(mesh: &crate::volume::TetMesh) -> Result<Self, MeshError> {
+        let mut basis = Vec::with_capacity(4 * mesh.n_tets());
+        let mut measure = Vec::with_capacity(mesh.n_tets());
+        for t in 0..mesh.n_tets() {
+            let e = crate::volume::tet_element(mesh.corners(t)).ok_or(MeshError::DegenerateTet {
+                tet: t,
+                vertices: mesh.tets()[t],
+                volume: mesh.signed_volume(t),
+            })?;
+            basis.extend_from_slice(&e.gradients);
+            measure.push(e.volume);
+        }
+        Ok(Self {
+            n_vertices: mesh.n_vertices(),
+            arity: 4,
+            corners: mesh.tets().iter().flatten().copied().collect(),
+            basis,
+            measure,
+        })
+    }
+
     /// Number of vertices.
     pub fn n_vertices(&self) -> usize {
         self.n_vertices

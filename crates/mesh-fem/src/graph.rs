@@ -14,7 +14,7 @@ use std::collections::BinaryHeap;
 /// vertex v owns `offsets[v]..offsets[v + 1]`, one slot per corner at v (a face that repeats v
 /// counts twice); `offsets[n]` is the number of corners. Shared by every per-vertex CSR of the
 /// workspace (assembly, spike removal, Morse analysis, hole filling).
-pub fn corner_offsets(faces: &[[u32; 3]], n: usize) -> Vec<usize> {
+pub fn corner_offsets<const N: usize>(faces: &[[u32; N]], n: usize) -> Vec<usize> {
     let mut offsets = vec![0usize; n + 1];
     for face in faces {
         for &v in face {

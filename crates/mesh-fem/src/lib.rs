@@ -22,6 +22,9 @@
 //! * [`Laplacian`]: the registry of Laplacians (`cotan`, the default, or `robust` with
 //!   [`RobustParams`]); [`intrinsic`]: the robust one, the intrinsic Delaunay Laplacian of the tufted
 //!   cover (Sharp & Crane 2020) with B and D on the intrinsic triangulation.
+//! * [`volume`]: tetrahedral meshes ([`volume::TetMesh`]): validation, repairs, the boundary
+//!   surface and the same L, B, D on tetrahedra ([`volume::assemble_volume`]); readers in
+//!   [`io::volume`] (MEDIT, Gmsh 2.2/4.1, VTK legacy, TetGen).
 //! * [`cloud`]: point clouds ([`PointCloud`](cloud::PointCloud)) and their robust L, B, D from local
 //!   triangulations of the k nearest neighbours ([`assemble_cloud`](cloud::assemble_cloud)).
 //!
@@ -54,6 +57,7 @@ pub mod stats;
 pub mod topology;
 pub mod validate;
 pub mod vec3;
+pub mod volume;
 
 // The curated root (ARCHITECTURE.md, "Crate roots"): the mesh, the operators and how they are
 // assembled, the error. Every other item is reached through its public module only.

@@ -338,7 +338,7 @@ fn face_elements(mesh: &TriMesh, voronoi: bool) -> Result<(Vec<FaceElement>, Vec
 /// `first[j]..first[j + 1]`, in face order, in parallel over vertex ranges of about equal
 /// corner counts (one per thread): each range scans all faces (cheap, sequential) and records
 /// the corners it owns, so every task writes only its own slice.
-pub(crate) fn faces_around_vertices(faces: &[[u32; 3]], first: &[usize]) -> Vec<u32> {
+pub(crate) fn faces_around_vertices<const N: usize>(faces: &[[u32; N]], first: &[usize]) -> Vec<u32> {
     let n = first.len() - 1;
     let n_corners = first[n];
     let n_ranges = rayon::current_num_threads().clamp(1, n);
@@ -525,10 +525,10 @@ pub(crate) fn write_columns(
 /// vertex–edge pattern plus diagonal: column j holds j and every other corner of the triangles
 /// `around[first[j]..first[j + 1]]` (each once). Shared by the cotangent and the intrinsic
 /// assembly.
-pub(crate) fn column_layout(
+pub(crate) fn column_layout<const N: usize>(
     around: &[u32],
     first: &[usize],
-    triangles: &[[u32; 3]],
+    triangles: &[[u32; N]],
 ) -> (Vec<(usize, usize)>, Vec<usize>) {
     let n = first.len() - 1;
     let chunks: Vec<(usize, usize)> = (0..n)

@@ -50,6 +50,44 @@ pub fn meshes_dir() -> Result<PathBuf, MeshError> {
     ))
 }
 
+/// The folder of real tetrahedral meshes: `$WFEM_VOLUMES`, otherwise `volumes` beside the
+/// mesh folder (`shared/data/volumes`).
+///
+/// # Errors
+/// As [`meshes_dir`], and [`MeshError::Io`] (kind `NotFound`) if the folder does not exist.
+pub fn volumes_dir() -> Result<PathBuf, MeshError> {
+    if let Some(dir) = std::env::var_os("WFEM_VOLUMES") {
+        let dir = PathBuf::from(dir);
+        return if dir.is_dir() {
+            Ok(dir)
+        } else {
+            Err(missing(dir, "WFEM_VOLUMES is set but does not name a directory"))
+        };
+    }
+    let dir = meshes_dir()?.join("..").join("volumes");
+    if dir.is_dir() {
+        Ok(dir.canonicalize().unwrap_or(dir))
+    } else {
+        Err(missing(
+            dir,
+            "no volumes folder beside the mesh folder; set WFEM_VOLUMES",
+        ))
+    }
+}
+
+/// The path of a volume file relative to [`volumes_dir`], e.g. `volume_path("lapy/cubeTetra.vtk")`.
+///
+/// # Errors
+/// As [`volumes_dir`]; [`MeshError::Io`] if the file does not exist.
+pub fn volume_path(rel: &str) -> Result<PathBuf, MeshError> {
+    let path = volumes_dir()?.join(rel);
+    if path.is_file() {
+        Ok(path)
+    } else {
+        Err(missing(path, "no such volume file in the corpus"))
+    }
+}
+
 /// The folder of reference values computed by other libraries (`shared/reference`, e.g.
 /// libigl's L, B, D as Matrix Market files), if present: `$WFEM_REFERENCE`, otherwise the
 /// first `../shared/reference` above this crate. It is optional: cross-checks against it run

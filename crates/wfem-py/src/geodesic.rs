@@ -62,6 +62,28 @@ impl PyGeodesicSolver {
         })
     }
 
+    /// The heat method through a tetrahedral mesh (the default and only method on a volume).
+    #[staticmethod]
+    #[pyo3(signature = (v, t, method=None, t_coef=wfem_heat::geodesic::DEFAULT_T_COEF))]
+    fn from_volume(
+        py: Python<'_>,
+        v: PyReadonlyArray2<'_, f64>,
+        t: PyReadonlyArray2<'_, i64>,
+        method: Option<&str>,
+        t_coef: f64,
+    ) -> PyResult<Self> {
+        let volume = crate::volume::volume_in(py, &v, &t)?;
+        let mut params = params(py, method, t_coef, false, 0)?;
+        if method.is_none() {
+            params.method = wfem_heat::geodesic::GeodesicMethod::Heat;
+        }
+        run(py, move |_| {
+            Ok(Self {
+                inner: Arc::new(GeodesicSolver::from_volume(&volume, &params)?),
+            })
+        })
+    }
+
     #[staticmethod]
     #[pyo3(signature = (p, method=None, t_coef=wfem_heat::geodesic::DEFAULT_T_COEF, n_neighbors=None))]
     fn from_cloud(

@@ -120,6 +120,35 @@ impl PyHeatKernel {
         })
     }
 
+    /// The kernel of a tetrahedral mesh V (n, 3), T (m, 4): the linear FEM operators of its
+    /// tetrahedra (issue #39); no mesh is kept (the feature-driven approximation needs a surface).
+    #[staticmethod]
+    #[pyo3(signature = (v, t, mass=None, method_name=None, degree=None, k=None, backend=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_volume(
+        py: Python<'_>,
+        v: PyReadonlyArray2<'_, f64>,
+        t: PyReadonlyArray2<'_, i64>,
+        mass: Option<&str>,
+        method_name: Option<&str>,
+        degree: Option<usize>,
+        k: Option<usize>,
+        backend: Option<&str>,
+    ) -> PyResult<Self> {
+        let volume = crate::volume::volume_in(py, &v, &t)?;
+        let mass: Mass = choices::parse(py, "mass", mass)?;
+        let method = method(py, method_name, degree, k, backend)?;
+        run(py, move |_| {
+            let fem = mesh_fem::volume::assemble_volume(&volume, &AssemblyParams::for_mass(mass))?;
+            let kernel = HeatKernel::new(&fem, HeatParams { mass, method })?;
+            Ok(Self {
+                kernel,
+                mesh: None,
+                scales: Default::default(),
+            })
+        })
+    }
+
     /// The kernel of a point cloud: its robust operators (`laplacian` may only name the robust
     /// Laplacian) and its neighbourhood mesh, which the feature-driven approximation and the
     /// edge time unit use as a mesh's edges.

@@ -17,6 +17,7 @@ mod retrieval;
 mod run;
 mod spectral;
 mod store;
+mod volume;
 
 use pyo3::prelude::*;
 
@@ -66,6 +67,7 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     retrieval::register(m)?;
     store::register(m)?;
     index::register(m)?;
+    volume::register(m)?;
     m.add_function(wrap_pyfunction!(run::_live_workers, m)?)?;
     Ok(())
 }

@@ -30,6 +30,24 @@ def corpus() -> Path:
     return d
 
 
+def volumes_dir() -> Path | None:
+    """The tetrahedral meshes: ``WFEM_VOLUMES``, else ``volumes`` beside the mesh corpus."""
+    env = os.environ.get("WFEM_VOLUMES")
+    if env:
+        return Path(env) if Path(env).is_dir() else None
+    meshes = corpus_dir()
+    d = (meshes / ".." / "volumes").resolve() if meshes else REPO.parent / "shared" / "data" / "volumes"
+    return d if d.is_dir() else None
+
+
+@pytest.fixture(scope="session")
+def volumes() -> Path:
+    d = volumes_dir()
+    if d is None:
+        pytest.skip("the volume corpus is absent (set WFEM_VOLUMES)")
+    return d
+
+
 def small_meshes() -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Closed, open, genus-1 and irregular meshes of 100–300 vertices."""
     return {

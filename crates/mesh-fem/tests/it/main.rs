@@ -19,3 +19,4 @@ mod refine;
 mod robust;
 mod stats;
 mod validate;
+mod volume;

@@ -162,10 +162,12 @@ impl std::fmt::Debug for GeodesicSolver {
     }
 }
 
-/// The triangulation a method works on: an intrinsic cover or the mesh's own triangles.
+/// The elements a method works on: an intrinsic cover, the mesh's own triangles, or the
+/// tetrahedra of a volume (the heat method only).
 enum Triangles<'a> {
     Intrinsic(&'a IntrinsicTriangulation),
     Mesh(&'a TriMesh),
+    Volume(&'a mesh_fem::volume::TetMesh),
 }
 
 impl Triangles<'_> {
@@ -173,6 +175,7 @@ impl Triangles<'_> {
         match self {
             Triangles::Intrinsic(t) => t.n_vertices(),
             Triangles::Mesh(m) => m.n_vertices(),
+            Triangles::Volume(v) => v.n_vertices(),
         }
     }
 
@@ -181,11 +184,26 @@ impl Triangles<'_> {
         match self {
             Triangles::Intrinsic(t) => mean_intrinsic_length(t),
             Triangles::Mesh(m) => mesh_fem::stats::mean_edge_length(m),
+            Triangles::Volume(v) => {
+                let mut edges: Vec<[u32; 2]> = v
+                    .tets()
+                    .iter()
+                    .flat_map(|t| (0..4).flat_map(move |a| (a + 1..4).map(move |b| [t[a].min(t[b]), t[a].max(t[b])])))
+                    .collect();
+                edges.sort_unstable();
+                edges.dedup();
+                let p = v.positions();
+                let total: f64 = edges
+                    .iter()
+                    .map(|&[a, b]| norm(sub(p[a as usize], p[b as usize])))
+                    .sum();
+                total / edges.len().max(1) as f64
+            }
         }
     }
 
-    fn eikonal(&self) -> Eikonal {
-        match self {
+    fn eikonal(&self) -> Result<Eikonal, HeatError> {
+        Ok(match self {
             Triangles::Intrinsic(tri) => {
                 let (t, l) = distinct_triangles(tri);
                 Eikonal::new(tri.n_vertices(), &t, |k| l[k])
@@ -194,7 +212,13 @@ impl Triangles<'_> {
                 let l = mesh_lengths(m);
                 Eikonal::new(m.n_vertices(), m.faces(), |k| l[k])
             }
-        }
+            Triangles::Volume(_) => {
+                return Err(HeatError::InvalidParameter {
+                    name: "method",
+                    reason: "fast marching is implemented on triangles; use the heat method on a volume".into(),
+                })
+            }
+        })
     }
 
     /// L and the lumped barycentric D, and the gradients of the same triangles.
@@ -213,6 +237,16 @@ impl Triangles<'_> {
                     },
                 )?,
                 ElementGradients::of_mesh(m),
+            ),
+            Triangles::Volume(v) => (
+                mesh_fem::volume::assemble_volume(
+                    v,
+                    &AssemblyParams {
+                        laplacian: Laplacian::Cotan,
+                        ..lumped()
+                    },
+                )?,
+                ElementGradients::of_volume(v)?,
             ),
         })
     }
@@ -337,7 +371,7 @@ fn prepare(triangles: &Triangles<'_>, params: &GeodesicParams) -> Result<(f64, P
                     },
                 )?;
             }
-            Prepared::FastMarching(triangles.eikonal())
+            Prepared::FastMarching(triangles.eikonal()?)
         }
         GeodesicMethod::Heat => Prepared::Heat(Box::new(prepare_heat(triangles, params.t_coef)?)),
     };
@@ -402,6 +436,27 @@ impl GeodesicSolver {
             cloud.n_points(),
             Vec::new(),
             built.neighbourhood,
+            h,
+            prepared,
+            *params,
+        ))
+    }
+
+    /// Prepares the heat method on a tetrahedral mesh (fast marching is implemented on
+    /// triangles: `params.method` must be `Heat`; `laplacian` and `refine` are not used):
+    /// geodesic distances through the solid, with the gradients of the tetrahedra.
+    ///
+    /// # Errors
+    /// [`HeatError::InvalidParameter`] for fast marching or a bad `t_coef`; [`HeatError::Mesh`]
+    /// from the assembly ([`mesh_fem::volume::assemble_volume`]).
+    pub fn from_volume(mesh: &mesh_fem::volume::TetMesh, params: &GeodesicParams) -> Result<Self, HeatError> {
+        check_params(params)?;
+        let (h, prepared) = prepare(&Triangles::Volume(mesh), params)?;
+        let surface = mesh.boundary_mesh()?;
+        Ok(Self::finish(
+            mesh.n_vertices(),
+            surface.faces().to_vec(),
+            surface,
             h,
             prepared,
             *params,

@@ -21,3 +21,4 @@ mod rational;
 mod scale;
 mod spectral;
 mod times;
+mod volumes;

@@ -65,6 +65,7 @@ from ._mesh import (
     repair,
     validate,
 )
+from ._volume import VolumeReport, read_volume, validate_volume
 from ._retrieval import (
     DESCRIPTORS,
     PAPER_DESCRIPTORS,
@@ -94,6 +95,9 @@ __all__ = [
     # meshes and operators
     "read_mesh",
     "read_points",
+    "read_volume",
+    "validate_volume",
+    "VolumeReport",
     "cloud_operators",
     "LAPLACIANS",
     "DEFAULT_NEIGHBORS",

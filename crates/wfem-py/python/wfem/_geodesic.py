@@ -86,6 +86,14 @@ class GeodesicSolver:
         refine: int = 0,
         n_neighbors: int | None = None,
     ) -> None:
+        from ._volume import tets_of
+
+        tets = tets_of(V, F)
+        if tets is not None:
+            if refine:
+                raise InvalidInputError("a volume cannot be refined; use refine=0", "InvalidParameter", name="refine")
+            self._s = _wfem.GeodesicSolver.from_volume(*tets, method, float(t_coef))
+            return
         P = points_of(V, F)
         if P is not None:
             if not use_robust or refine:

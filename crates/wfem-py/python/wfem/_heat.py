@@ -9,7 +9,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _choices, _wfem
-from ._errors import TimeWarning, warn_user
+from ._errors import InvalidInputError, TimeWarning, warn_user
 from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, points_of, to_csc
 
 __all__ = [
@@ -102,6 +102,14 @@ class HeatKernel:
         n_neighbors: int | None = None,
     ) -> None:
         mass = _choices.mass_of(mass, kernel, lumped)
+        from ._volume import tets_of
+
+        tets = tets_of(V, F)
+        if tets is not None:
+            if laplacian is not None:
+                raise InvalidInputError("a volume has the linear FEM Laplacian only (laplacian=None)", "InvalidParameter", name="laplacian")
+            self._k = _wfem.HeatKernel.from_volume(*tets, mass, method, degree, k, backend)
+            return
         P = points_of(V, F)
         if P is not None:
             p = as_float_array(P, "P", (2,))

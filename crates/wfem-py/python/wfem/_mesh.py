@@ -13,7 +13,7 @@ import scipy.sparse as sp
 from . import _wfem
 from ._arrays import as_mesh, as_vector, points_of, to_csc
 from ._cloud import DEFAULT_NEIGHBORS
-from ._errors import MeshError
+from ._errors import InvalidInputError, MeshError
 
 __all__ = [
     "read_mesh",
@@ -199,6 +199,10 @@ def operators(
 
     All three share one sparsity pattern (vertex–edge graph plus diagonal).
 
+    **Volumes**: ``operators(V, T)`` with T an (m, 4) array of tetrahedra gives the linear FEM
+    operators of the solid (``L = −igl.cotmatrix(V, T)``, B with |T|/10 and |T|/20, D = |T|/4 per
+    corner; LaPy's ``Solver(TetMesh(v, t), lump=False)`` stiffness and mass).
+
     ``laplacian="robust"`` (names in ``wfem.LAPLACIANS``) gives instead the intrinsic Delaunay
     Laplacian of the mesh's tufted cover (Sharp & Crane 2020; L and D equal robust_laplacian's
     ``mesh_laplacian``), with B and D on the intrinsic triangulation: for non-manifold, badly
@@ -210,6 +214,13 @@ def operators(
     """
     from ._cloud import cloud_operators
 
+    from ._volume import tets_of, volume_operators
+
+    tets = tets_of(V, F)
+    if tets is not None:
+        if laplacian is not None or mollify_factor is not None:
+            raise InvalidInputError("a volume has the linear FEM Laplacian only (laplacian=None)", "InvalidParameter", name="laplacian")
+        return volume_operators(*tets, lumped)
     P = points_of(V, F)
     if P is not None:
         k = DEFAULT_NEIGHBORS if n_neighbors is None else n_neighbors

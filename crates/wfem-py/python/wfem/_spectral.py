@@ -159,11 +159,17 @@ def eigenbasis(
     a basis of at most ``max_dim`` vectors (default max(2k, k + 4b) + b), restarted at most
     ``max_restarts`` times (then ``ConvergenceError`` carrying the converged pairs)."""
     mass = _choices.mass_of(mass, kernel, lumped)
-    P = points_of(V, F)
-    if P is not None:
+    from ._volume import tets_of, volume_pencil
+
+    tets = tets_of(V, F)
+    P = None if tets is not None else points_of(V, F)
+    if tets is not None or P is not None:
         from ._cloud import cloud_pencil
 
-        L, M = cloud_pencil(P, mass, laplacian=laplacian, n_neighbors=n_neighbors)
+        if tets is not None:
+            L, M = volume_pencil(*tets, mass)
+        else:
+            L, M = cloud_pencil(P, mass, laplacian=laplacian, n_neighbors=n_neighbors)
         return Eigenbasis.from_operators(
             L, M, k, tol=tol, block_size=block_size, max_dim=max_dim,
             seed=seed, shift=shift, max_restarts=max_restarts,
@@ -238,6 +244,20 @@ def hks(
         warn_user("exact=True is now method='exact'", DeprecationWarning)
         method = _wfem.canonical("hks_method", "exact") if method is None else method
     mass = _choices.mass_of(mass, kernel, None)
+    from ._volume import tets_of
+
+    if tets_of(V, F) is not None:
+        # A volume: the truncated sum of its eigenbasis (the exact diagonal is for surfaces).
+        if method is not None or time_unit is not None or laplacian is not None:
+            raise InvalidInputError(
+                "on a volume hks takes times in absolute units and the spectral sum (method, time_unit, laplacian not given)",
+                "InvalidParameter",
+                name="method" if method is not None else "time_unit" if time_unit is not None else "laplacian",
+            )
+        b = basis if basis is not None else eigenbasis(V, F, k, mass=mass)
+        kw = {} if num_times is None else {"num_times": num_times}
+        hv, ht = b.hks(times, convention=convention, scaled=scaled, normalization=normalization, **kw)
+        return (hv, ht) if return_times else hv
     P = points_of(V, F)
     if P is not None:
         v, f = P, None

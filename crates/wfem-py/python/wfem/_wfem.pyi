@@ -37,6 +37,9 @@ DEFAULT_NEIGHBORS: int
 # meshes
 def read_mesh(path: _Path, triangulate: bool = False) -> tuple[_Mesh, str]: ...
 def validate_mesh(v: _F64, f: _I64) -> str: ...
+def read_volume(path: _Path) -> tuple[tuple[_F64, _I64], str]: ...
+def validate_volume(v: _F64, t: _I64) -> str: ...
+def volume_operators(v: _F64, t: _I64, lumped_mass: str | None = None) -> tuple[_Sparse, _Sparse, _Sparse]: ...
 def repair_mesh(
     v: _F64,
     f: _I64,
@@ -88,6 +91,16 @@ class HeatKernel:
         k: int | None = None,
         backend: str | None = None,
         laplacian: str | None = None,
+    ) -> HeatKernel: ...
+    @staticmethod
+    def from_volume(
+        v: _F64,
+        t: _I64,
+        mass: str | None = None,
+        method_name: str | None = None,
+        degree: int | None = None,
+        k: int | None = None,
+        backend: str | None = None,
     ) -> HeatKernel: ...
     @staticmethod
     def from_cloud(
@@ -204,6 +217,13 @@ class GeodesicSolver:
         t_coef: float = ...,
         use_robust: bool = True,
         refine: int = 0,
+    ) -> GeodesicSolver: ...
+    @staticmethod
+    def from_volume(
+        v: _F64,
+        t: _I64,
+        method: str | None = None,
+        t_coef: float = ...,
     ) -> GeodesicSolver: ...
     @staticmethod
     def from_cloud(

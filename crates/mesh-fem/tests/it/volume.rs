@@ -1,0 +1,329 @@
+//! Tetrahedral meshes (issue #39): the FEM identities of L, B, D on tetrahedra, the element
+//! against a hand-computed one, refinement, the boundary, validation and repairs, and every
+//! reader on the real volumes of the corpus with the counts of its SOURCES.md.
+
+use mesh_fem::generate::tet_cube;
+use mesh_fem::io::volume::{read_volume, VolumeFormat};
+use mesh_fem::volume::{
+    assemble_volume, boundary_faces, repair_volume, tet_element, validate_volume, TetMesh, VolumeProblem,
+};
+use mesh_fem::{AssemblyParams, Laplacian, Lumping, MeshError};
+
+fn dense(m: &faer::sparse::SparseColMat<usize, f64>) -> Vec<Vec<f64>> {
+    let n = m.nrows();
+    let mut out = vec![vec![0.0; n]; n];
+    let r = m.as_ref();
+    for j in 0..n {
+        for (&i, &v) in r.row_idx_of_col_raw(j).iter().zip(r.val_of_col(j)) {
+            out[i][j] += v;
+        }
+    }
+    out
+}
+
+#[test]
+fn the_operators_of_a_cube_keep_the_fem_identities() {
+    let mesh = tet_cube(4);
+    let ops = assemble_volume(&mesh, &AssemblyParams::default()).unwrap();
+    let (l, b) = (dense(&ops.stiffness), dense(&ops.mass));
+    let n = mesh.n_vertices();
+    let total: f64 = b.iter().flatten().sum();
+    assert!((total - 1.0).abs() < 1e-13, "1ᵀB1 = {total}");
+    assert!((ops.lumped_diagonal.iter().sum::<f64>() - 1.0).abs() < 1e-13);
+    for i in 0..n {
+        let row: f64 = l[i].iter().sum();
+        assert!(row.abs() < 1e-12, "L·1 at {i}: {row}");
+        assert!(
+            (b[i].iter().sum::<f64>() - ops.lumped_diagonal[i]).abs() < 1e-15,
+            "D = row sums of B"
+        );
+        assert!(l[i][i] > 0.0);
+        for j in 0..n {
+            assert_eq!(l[i][j], l[j][i]);
+            assert_eq!(b[i][j], b[j][i]);
+        }
+    }
+    // A linear function is harmonic inside: (Lx)_i = 0 at interior vertices.
+    let x: Vec<f64> = mesh.positions().iter().map(|p| p[0]).collect();
+    for (i, p) in mesh.positions().iter().enumerate() {
+        if p.iter().all(|c| *c > 1e-9 && *c < 1.0 - 1e-9) {
+            let lx: f64 = (0..n).map(|j| l[i][j] * x[j]).sum();
+            assert!(lx.abs() < 1e-12, "{lx}");
+        }
+    }
+}
+
+#[test]
+fn the_element_of_the_reference_tetrahedron() {
+    // Corners 0, e1, e2, e3: volume 1/6, ∇φ₀ = (−1, −1, −1), ∇φᵢ = eᵢ.
+    let e = tet_element([[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]).unwrap();
+    assert!((e.volume - 1.0 / 6.0).abs() < 1e-16);
+    assert_eq!(e.gradients[0], [-1.0, -1.0, -1.0]);
+    assert_eq!(e.gradients[1], [1.0, 0.0, 0.0]);
+    // L_01 = V ∇φ₀·∇φ₁ = −1/6 (the −(1/6) ℓ cot θ of the opposite edge's dihedral angle 90°… for
+    // the edge 23 of length √2 with dihedral angle 60°: −√2·cot 60°/6 = −1/(3√6)·√3 = −1/6·…).
+    let mesh = TetMesh::new(
+        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        vec![[0, 1, 2, 3]],
+    )
+    .unwrap();
+    let ops = assemble_volume(&mesh, &AssemblyParams::default()).unwrap();
+    let l = dense(&ops.stiffness);
+    assert!((l[0][1] + 1.0 / 6.0).abs() < 1e-15 && (l[1][2]).abs() < 1e-15 && (l[0][0] - 0.5).abs() < 1e-15);
+    let b = dense(&ops.mass);
+    assert!((b[0][0] - 1.0 / 60.0).abs() < 1e-16 && (b[0][1] - 1.0 / 120.0).abs() < 1e-16);
+    // An inverted copy gives the same matrices.
+    let flipped = TetMesh::new(mesh.positions().to_vec(), vec![[1, 0, 2, 3]]).unwrap();
+    let f = assemble_volume(&flipped, &AssemblyParams::default()).unwrap();
+    assert_eq!(dense(&f.stiffness), l);
+}
+
+#[test]
+fn scaling_multiplies_l_by_s_and_b_by_s_cubed() {
+    let mesh = tet_cube(2);
+    let a = assemble_volume(&mesh, &AssemblyParams::default()).unwrap();
+    for s in [1e-6, 1e6] {
+        let b = assemble_volume(&mesh.scaled(s).unwrap(), &AssemblyParams::default()).unwrap();
+        for (x, y) in a.stiffness.val().iter().zip(b.stiffness.val()) {
+            assert!((y - s * x).abs() <= 1e-12 * (s * x).abs().max(s * 1e-3));
+        }
+        for (x, y) in a.mass.val().iter().zip(b.mass.val()) {
+            assert!((y - s * s * s * x).abs() <= 1e-12 * (s * s * s * x).abs());
+        }
+    }
+}
+
+#[test]
+fn refinement_and_the_boundary_keep_the_solid() {
+    let mesh = tet_cube(2);
+    let fine = mesh.refined();
+    assert_eq!(fine.n_tets(), 8 * mesh.n_tets());
+    assert!((fine.volume() - 1.0).abs() < 1e-14);
+    assert!((0..fine.n_tets()).all(|t| fine.signed_volume(t) > 0.0));
+    let report = validate_volume(&fine);
+    assert!(report.problems.is_empty(), "{:?}", report.problems);
+    // The boundary of the cube: 2 triangles per boundary square, 6 sides, closed (χ = 2),
+    // oriented outward (its divergence-theorem volume is the volume).
+    let faces = boundary_faces(&mesh);
+    assert_eq!(faces.len(), 12 * 4);
+    assert_eq!(validate_volume(&mesh).boundary_euler, 2);
+    let p = mesh.positions();
+    let volume: f64 = faces
+        .iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|v| p[v as usize]);
+            mesh_fem::vec3::dot(a, mesh_fem::vec3::cross(b, c)) / 6.0
+        })
+        .sum();
+    assert!((volume - 1.0).abs() < 1e-14, "{volume}");
+    let surface = mesh.boundary_mesh().unwrap();
+    assert_eq!(surface.n_vertices(), mesh.n_vertices());
+}
+
+#[test]
+fn validation_names_every_problem_and_the_repairs_fix_them() {
+    let cube = tet_cube(2);
+    let mut positions = cube.positions().to_vec();
+    positions.push([5.0, 5.0, 5.0]); // unreferenced
+    let mut tets = cube.tets().to_vec();
+    tets[0].swap(0, 1); // inverted
+    let flat = [0u32, 1, 2, 0];
+    tets.push([flat[0], flat[1], flat[2], 2]); // repeated vertex: zero volume
+    let mesh = TetMesh::new(positions, tets).unwrap();
+    let report = validate_volume(&mesh);
+    assert!(report.problems.iter().any(|p| matches!(p, VolumeProblem::Flat { .. })));
+    assert!(report
+        .problems
+        .iter()
+        .any(|p| matches!(p, VolumeProblem::Unreferenced { count: 1, .. })));
+    assert!(report
+        .problems
+        .iter()
+        .any(|p| matches!(p, VolumeProblem::Inverted { count: 1, first: 0 })));
+    assert!(report.clone().into_result().is_err());
+    assert!(matches!(
+        assemble_volume(&mesh, &AssemblyParams::default()),
+        Err(MeshError::DegenerateTet { .. })
+    ));
+    let (fixed, rep) = repair_volume(&mesh, true, true, true).unwrap();
+    assert_eq!((rep.flipped, rep.dropped_tets, rep.dropped_vertices), (1, 1, 1));
+    assert!(validate_volume(&fixed).problems.is_empty());
+    assert!(assemble_volume(&fixed, &AssemblyParams::default()).is_ok());
+    // What tetrahedra cannot have.
+    for params in [
+        AssemblyParams::for_mass(mesh_fem::Mass::Lumped(Lumping::Voronoi)),
+        AssemblyParams {
+            laplacian: Laplacian::Robust(Default::default()),
+            ..Default::default()
+        },
+    ] {
+        assert!(matches!(
+            assemble_volume(&fixed, &params),
+            Err(MeshError::InvalidParameter { .. })
+        ));
+    }
+    assert!(matches!(
+        TetMesh::new(vec![[0.0; 3]; 3], vec![[0, 1, 2, 3]]),
+        Err(MeshError::TetIndexOutOfRange { index: 3, .. })
+    ));
+    assert!(matches!(
+        TetMesh::new(vec![[f64::NAN; 3]; 4], vec![[0, 1, 2, 3]]),
+        Err(MeshError::NonFiniteCoordinate { .. })
+    ));
+}
+
+/// (file, format, vertices, tetrahedra, ignored elements) from the corpus' SOURCES.md.
+const FILES: [(&str, VolumeFormat, usize, usize, &[(&str, usize)]); 8] = [
+    (
+        "flip-free-parametrization/cow.mesh",
+        VolumeFormat::Medit,
+        2304,
+        8103,
+        &[("triangles", 3318)],
+    ),
+    (
+        "libigl-tutorial-data/octopus-low.mesh",
+        VolumeFormat::Medit,
+        452,
+        1140,
+        &[("triangles", 898)],
+    ),
+    ("sfepy/unit_ball.mesh", VolumeFormat::Medit, 363, 1110, &[]),
+    (
+        "libigl-tutorial-data/hand.msh",
+        VolumeFormat::Gmsh,
+        7234,
+        29998,
+        &[("triangles", 9556)],
+    ),
+    (
+        "scikit-fem/box.msh",
+        VolumeFormat::Gmsh,
+        358,
+        1105,
+        &[("triangles", 312)],
+    ),
+    (
+        "scikit-fem/cuubat.msh",
+        VolumeFormat::Gmsh,
+        419,
+        1391,
+        &[("triangles", 132)],
+    ),
+    ("lapy/cubeTetra.vtk", VolumeFormat::Vtk, 9261, 48000, &[]),
+    (
+        "flip-free-parametrization/fish.mesh",
+        VolumeFormat::Medit,
+        1890,
+        6418,
+        &[("triangles", 2896)],
+    ),
+];
+
+#[test]
+fn every_reader_reads_the_corpus_with_its_counts() {
+    let Ok(_) = wfem_corpus::volumes_dir() else {
+        eprintln!("skipped: no volume corpus");
+        return;
+    };
+    for (rel, format, n, m, ignored) in FILES {
+        let path = wfem_corpus::volume_path(rel).unwrap();
+        let read = read_volume(&path).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        assert_eq!(read.format, format, "{rel}");
+        assert_eq!((read.mesh.n_vertices(), read.mesh.n_tets()), (n, m), "{rel}");
+        for (kind, count) in ignored {
+            assert!(
+                read.ignored.iter().any(|(k, c)| k == kind && c == count),
+                "{rel}: {:?}",
+                read.ignored
+            );
+        }
+        let report = validate_volume(&read.mesh);
+        match rel {
+            "sfepy/unit_ball.mesh" => {
+                assert!(report
+                    .problems
+                    .iter()
+                    .any(|p| matches!(p, VolumeProblem::Unreferenced { count: 1, first: 0 })));
+                assert!((report.volume - 4.10663).abs() < 1e-5, "{}", report.volume);
+            }
+            "lapy/cubeTetra.vtk" => {
+                assert!(report
+                    .problems
+                    .iter()
+                    .any(|p| matches!(p, VolumeProblem::Inverted { count: 24000, .. })));
+                assert!((report.volume - 1.0).abs() < 1e-12);
+                assert_eq!(report.n_boundary_faces, 4800);
+            }
+            "libigl-tutorial-data/hand.msh" => {
+                assert!(report
+                    .problems
+                    .iter()
+                    .any(|p| matches!(p, VolumeProblem::Slivers { count: 17, .. })));
+            }
+            // One tet of quality 0.00998, just under the sliver bound 0.01.
+            "libigl-tutorial-data/octopus-low.mesh" => {
+                assert!(report
+                    .problems
+                    .iter()
+                    .any(|p| matches!(p, VolumeProblem::Slivers { count: 1, .. })));
+            }
+            "scikit-fem/cuubat.msh" => assert!((report.volume - 2.0).abs() < 1e-12),
+            _ => assert!(report.problems.is_empty(), "{rel}: {:?}", report.problems),
+        }
+        assert_eq!(report.boundary_euler, 2, "{rel}");
+        if report.clone().into_result().is_ok() {
+            assemble_volume(&read.mesh, &AssemblyParams::default()).unwrap();
+        }
+    }
+}
+
+#[test]
+fn bad_volume_files_get_typed_errors_with_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &str, &str); 10] = [
+        ("a.mesh", "MeshVersionFormatted 1\nDimension 3\nVertices\n2\n0 0 0 0\n1 1 1\n", "ends"),
+        ("b.mesh", "MeshVersionFormatted 1\nDimension 3\nVertices\n-4\n", "negative"),
+        ("c.mesh", "MeshVersionFormatted 1\nDimension 3\nVertices\n1000000000\n0 0 0 0\n", "more than the file"),
+        ("d.mesh", "MeshVersionFormatted 1\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 nan 0\nTetrahedra\n1\n1 2 3 4 0\nEnd\n", "not finite"),
+        ("e.mesh", "MeshVersionFormatted 1\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\nTetrahedra\n1\n1 2 3 9 0\nEnd\n", "out of range"),
+        ("f.mesh", "MeshVersionFormatted 1\nDimension 2\n", "dimension 3"),
+        ("g.mesh", "MeshVersionFormatted 1\nDimension 3\nBananas 3\n", "unknown MEDIT keyword"),
+        ("h.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n$Elements\n1\n1 4 0 1 2 3 4\n$EndElements\n", "not defined"),
+        ("i.vtk", "# vtk DataFile Version 3.0\nx\nBINARY\nDATASET UNSTRUCTURED_GRID\n", "only ASCII"),
+        ("j.vtk", "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 2\n10\n", "ends"),
+    ];
+    for (name, text, expected) in cases {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let err = read_volume(&path).unwrap_err().to_string();
+        assert!(err.contains(expected), "{name}: {err}");
+    }
+    // A FIFO is refused, never waited on; an unknown extension names the volume formats.
+    #[cfg(unix)]
+    {
+        let fifo = dir.path().join("x.mesh");
+        let status = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+        assert!(status.success());
+        let err = read_volume(&fifo).unwrap_err().to_string();
+        assert!(err.contains("FIFO"), "{err}");
+    }
+    let err = read_volume(&dir.path().join("x.tet")).unwrap_err().to_string();
+    assert!(err.contains(".mesh, .msh, .vtk"), "{err}");
+}
+
+#[test]
+fn tetgen_files_are_read_from_either_path() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("t.node"),
+        "# a tetrahedron\n4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("t.ele"), "1 4 0\n1 1 2 3 4\n").unwrap();
+    for name in ["t.ele", "t.node"] {
+        let read = read_volume(&dir.path().join(name)).unwrap();
+        assert_eq!(read.mesh.tets(), &[[0, 1, 2, 3]]);
+        assert!((read.mesh.volume() - 1.0 / 6.0).abs() < 1e-16);
+    }
+}

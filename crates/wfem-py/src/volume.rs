@@ -1,0 +1,126 @@
+//! Tetrahedral meshes (issue #39): `read_volume(path) -> (V, T)`, their validation and their
+//! linear FEM operators; `HeatKernel.from_volume` and `GeodesicSolver.from_volume` build on
+//! [`volume_in`].
+
+use crate::errors::{invalid, Error};
+use crate::out::{sparse_out, SparseOut};
+use crate::run::run;
+use mesh_fem::io::volume::read_volume as read_volume_file;
+use mesh_fem::volume::{assemble_volume, validate_volume as validate_tets, TetMesh};
+use mesh_fem::{AssemblyParams, Lumping};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2};
+use pyo3::prelude::*;
+use std::path::PathBuf;
+use wfem_base::Choice;
+
+type VolumeArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
+
+/// A tetrahedral mesh from V (n, 3) float64 and T (m, 4) int64, validated by `TetMesh::new`.
+pub fn volume_in(py: Python<'_>, v: &PyReadonlyArray2<'_, f64>, t: &PyReadonlyArray2<'_, i64>) -> PyResult<TetMesh> {
+    let (va, ta) = (v.as_array(), t.as_array());
+    if va.ncols() != 3 {
+        return Err(invalid(
+            py,
+            "VerticesShape",
+            format!("V must have shape (n, 3), got {:?}", va.shape()),
+        ));
+    }
+    if ta.ncols() != 4 {
+        return Err(invalid(
+            py,
+            "TetsShape",
+            format!("T must have shape (m, 4) (tetrahedra), got {:?}", ta.shape()),
+        ));
+    }
+    let positions: Vec<[f64; 3]> = va.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+    let mut tets = Vec::with_capacity(ta.nrows());
+    for r in ta.rows() {
+        let mut q = [0u32; 4];
+        for (c, &x) in r.iter().enumerate() {
+            // Beyond u32 (or negative) is out of range: TetMesh::new names the tetrahedron.
+            q[c] = u32::try_from(x).unwrap_or(u32::MAX);
+        }
+        tets.push(q);
+    }
+    TetMesh::new(positions, tets).map_err(|e| crate::errors::mesh(py, &e))
+}
+
+fn volume_out<'py>(py: Python<'py>, mesh: &TetMesh) -> VolumeArrays<'py> {
+    let (p, t) = (mesh.positions(), mesh.tets());
+    let v = Array2::from_shape_fn((p.len(), 3), |(i, j)| p[i][j]).into_pyarray(py);
+    let t = Array2::from_shape_fn((t.len(), 4), |(i, j)| i64::from(t[i][j])).into_pyarray(py);
+    (v, t)
+}
+
+/// `read_volume(path) -> ((V, T), report JSON)`: MEDIT, Gmsh, VTK legacy, TetGen by extension.
+#[pyfunction]
+pub fn read_volume(py: Python<'_>, path: PathBuf) -> PyResult<(VolumeArrays<'_>, String)> {
+    let read = run(py, move |_| read_volume_file(&path).map_err(Error::from))?;
+    let report = serde_json::json!({
+        "format": read.format.name(),
+        "ignored": read.ignored,
+    });
+    Ok((volume_out(py, &read.mesh), report.to_string()))
+}
+
+/// `validate_volume(V, T) -> report JSON`.
+#[pyfunction]
+pub fn validate_volume(py: Python<'_>, v: PyReadonlyArray2<'_, f64>, t: PyReadonlyArray2<'_, i64>) -> PyResult<String> {
+    let mesh = volume_in(py, &v, &t)?;
+    let r = run(py, move |_| Ok(validate_tets(&mesh)))?;
+    let problems: Vec<serde_json::Value> = r
+        .problems
+        .iter()
+        .map(|p| serde_json::json!({"severity": if p.is_fatal() { "Error" } else { "Warning" }, "message": p.to_string()}))
+        .collect();
+    Ok(serde_json::json!({
+        "n_vertices": r.n_vertices,
+        "n_tets": r.n_tets,
+        "volume": r.volume,
+        "n_boundary_faces": r.n_boundary_faces,
+        "n_boundary_vertices": r.n_boundary_vertices,
+        "boundary_euler": r.boundary_euler,
+        "n_components": r.n_components,
+        "quality": [r.quality.0, r.quality.1],
+        "usable": !r.problems.iter().any(|p| p.is_fatal()),
+        "problems": problems,
+    })
+    .to_string())
+}
+
+/// `volume_operators(V, T, lumped_mass=None) -> (L, B, D)` of the linear tetrahedral elements.
+#[pyfunction]
+#[pyo3(signature = (v, t, lumped_mass=None))]
+pub fn volume_operators<'py>(
+    py: Python<'py>,
+    v: PyReadonlyArray2<'py, f64>,
+    t: PyReadonlyArray2<'py, i64>,
+    lumped_mass: Option<&str>,
+) -> PyResult<(SparseOut<'py>, SparseOut<'py>, SparseOut<'py>)> {
+    let mesh = volume_in(py, &v, &t)?;
+    let lumping: Lumping = crate::choices::parse(py, "lumped_mass", lumped_mass)?;
+    let fem = run(py, move |_| {
+        assemble_volume(
+            &mesh,
+            &AssemblyParams {
+                lumping,
+                ..AssemblyParams::default()
+            },
+        )
+        .map_err(Error::from)
+    })?;
+    Ok((
+        sparse_out(py, fem.stiffness.as_ref()),
+        sparse_out(py, fem.mass.as_ref()),
+        sparse_out(py, fem.lumped_mass().as_ref()),
+    ))
+}
+
+/// Registers the functions.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_volume, m)?)?;
+    m.add_function(wrap_pyfunction!(validate_volume, m)?)?;
+    m.add_function(wrap_pyfunction!(volume_operators, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,103 @@
+"""Tetrahedral meshes from Python (issue #39): reading the real volume corpus, the operators
+against libigl's tetrahedral cotmatrix and closed forms, the spectrum against scipy's dense
+generalized eigensolver, the heat kernel against scipy's expm_multiply, geodesics through a solid
+against Euclidean distances in a cube, and typed errors for bad tetrahedra."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.sparse.linalg as sla
+
+import wfem
+
+# (file, vertices, tetrahedra) as SOURCES.md of the volume corpus counts them.
+FILES = [
+    ("flip-free-parametrization/cow.mesh", 2304, 8103),
+    ("libigl-tutorial-data/hand.msh", 7234, 29998),
+    ("lapy/cubeTetra.vtk", 9261, 48000),
+    ("scikit-fem/cuubat.msh", 419, 1391),
+    ("sfepy/unit_ball.mesh", None, None),
+]
+
+
+@pytest.mark.parametrize("rel,n,m", FILES)
+def test_read_volume_counts(volumes, rel, n, m):
+    V, T = wfem.read_volume(volumes / rel)
+    assert V.dtype == np.float64 and T.dtype == np.int64 and T.shape[1] == 4
+    if n is not None:
+        assert V.shape == (n, 3) and T.shape == (m, 4)
+    r = wfem.validate_volume(V, T)
+    assert r.n_vertices == len(V) and r.n_tets == len(T) and r.boundary_euler == 2
+
+
+def test_operators_match_libigl_and_closed_forms(volumes):
+    igl = pytest.importorskip("igl")
+    V, T = wfem.read_volume(volumes / "flip-free-parametrization/cow.mesh")
+    L, B, D = wfem.operators(V, T)
+    Lref = -igl.cotmatrix(V, T)
+    assert abs(L - Lref).max() < 1e-10 * abs(Lref).max()
+    vol = wfem.validate_volume(V, T).volume
+    one = np.ones(len(V))
+    assert abs(one @ (B @ one) - vol) < 1e-12 * vol
+    assert np.allclose(D.diagonal(), B @ one, rtol=1e-12, atol=0)
+    assert np.abs(L @ one).max() < 1e-10 * abs(L).max()
+    # One tetrahedron: B = |T|/20 (1 + I), the P1 mass in closed form.
+    Vt = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    _, Bt, _ = wfem.operators(Vt, np.array([[0, 1, 2, 3]]))
+    assert np.allclose(Bt.toarray(), (np.ones((4, 4)) + np.eye(4)) / 6 / 20, rtol=1e-14)
+
+
+def test_spectrum_heat_and_signatures_against_dense_references(volumes):
+    V, T = wfem.read_volume(volumes / "scikit-fem/cuubat.msh")
+    L, B, _ = wfem.operators(V, T)
+    lam, X = scipy.linalg.eigh(L.toarray(), B.toarray())
+    basis = wfem.eigenbasis(V, T, 12)
+    assert np.allclose(basis.values, lam[:12], rtol=1e-9, atol=1e-9)
+    # K_t f = exp(−t B⁻¹L) f (paper Eq. (6)) on the solid.
+    f = np.zeros(len(V))
+    f[7] = 1.0
+    kernel = wfem.HeatKernel(V, T)
+    A = scipy.linalg.solve(B.toarray(), L.toarray())
+    for t in (1e-3, 1e-2, 0.1):
+        ref = sla.expm_multiply(-t * A, f)
+        assert np.abs(kernel.apply(f, t) - ref).max() < 1e-8 * np.abs(ref).max()
+    # HKS of the volume = its eigenbasis' signature; WKS has one column per energy.
+    h = wfem.hks(V, T, [0.05, 0.2], k=12)
+    assert np.allclose(h, basis.hks([0.05, 0.2])[0], rtol=1e-12)
+    ref_h = (X[:, :12] ** 2) @ np.exp(-np.outer(lam[:12], [0.05, 0.2]))  # the same 12 pairs, dense
+    assert np.abs(h - ref_h).max() < 1e-8 * ref_h.max()
+    assert wfem.wks(V, T, num_energies=5, k=12).shape == (len(V), 5)
+
+
+def test_geodesics_through_a_cube_are_euclidean(volumes):
+    V, T = wfem.read_volume(volumes / "lapy/cubeTetra.vtk")
+    s = int(np.argmin(np.linalg.norm(V - 0.5, axis=1)))  # the centre
+    d = wfem.GeodesicSolver(V, T).distance(s)  # the heat method, the default on a volume
+    exact = np.linalg.norm(V - V[s], axis=1)
+    keep = exact > 0
+    err = np.abs(d[keep] - exact[keep]) / exact[keep]
+    assert err.mean() < 0.05, err.mean()
+    with pytest.raises(wfem.InvalidInputError):
+        wfem.GeodesicSolver(V, T, refine=1)
+
+
+def test_bad_tetrahedra_get_typed_errors(tmp_path):
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    with pytest.raises(wfem.InvalidInputError):
+        wfem.operators(V, np.array([[0, 1, 2, -1]]))
+    with pytest.raises(wfem.MeshError):
+        wfem.operators(V, np.array([[0, 1, 2, 9]]))
+    with pytest.raises(wfem.InvalidInputError):
+        wfem.operators(V, np.array([[0.0, 1, 2, 3]]))
+    with pytest.raises(wfem.InvalidInputError):
+        wfem.HeatKernel(V, np.array([[0, 1, 2, 3]]), laplacian="robust")
+    with pytest.raises(FileNotFoundError):
+        wfem.read_volume(tmp_path / "none.mesh")
+    bad = tmp_path / "bad.mesh"
+    bad.write_text("MeshVersionFormatted 1\nDimension 3\nVertices\n-4\n")
+    with pytest.raises(wfem.MeshError):
+        wfem.read_volume(bad)
+    flat = wfem.validate_volume(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]), np.array([[0, 1, 2, 3]]))
+    assert not flat.usable and flat.problems[0]["severity"] == "Error"

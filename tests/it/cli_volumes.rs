@@ -1,0 +1,123 @@
+//! The CLI on tetrahedral meshes (issue #39): `info`, `heat`, `geodesic`, `operators` read a
+//! volume file; its operators are the tetrahedra's; bad flags for a volume are refused.
+
+use crate::common::{read_npy, stderr, wfem};
+use std::fmt::Write as _;
+
+/// The generated unit cube of 6n³ tetrahedra as MEDIT text (1-based indices).
+fn write_cube(dir: &std::path::Path, n: usize) -> std::path::PathBuf {
+    let cube = mesh_fem::generate::tet_cube(n);
+    let mut text = String::from("MeshVersionFormatted 1\nDimension 3\nVertices\n");
+    writeln!(text, "{}", cube.n_vertices()).unwrap();
+    for p in cube.positions() {
+        writeln!(text, "{} {} {} 0", p[0], p[1], p[2]).unwrap();
+    }
+    writeln!(text, "Tetrahedra\n{}", cube.n_tets()).unwrap();
+    for t in cube.tets() {
+        writeln!(text, "{} {} {} {} 0", t[0] + 1, t[1] + 1, t[2] + 1, t[3] + 1).unwrap();
+    }
+    text.push_str("End\n");
+    let path = dir.join("cube.mesh");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn info_heat_and_geodesic_read_a_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = write_cube(dir.path(), 6);
+    let path = cube.to_str().unwrap();
+    let n = 7 * 7 * 7;
+
+    let o = wfem(&["info", path, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let info: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(info["n_tets"], 6 * 216);
+    assert_eq!(info["n_vertices"], n);
+    assert!((info["total_volume"].as_f64().unwrap() - 1.0).abs() < 1e-12);
+    assert_eq!(info["boundary_euler"], 2);
+
+    // Heat from the centre: conserved (1ᵀB K_t e = 1ᵀB e), symmetric about the centre.
+    let centre = n / 2;
+    let heat = dir.path().join("u.npy");
+    let o = wfem(&[
+        "heat",
+        path,
+        "--source",
+        &centre.to_string(),
+        "--t",
+        "0.01",
+        "-o",
+        heat.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (shape, u) = read_npy(&heat).unwrap();
+    assert_eq!(shape[0], n);
+    // 1ᵀB f = Σ D_ii f_i (D holds the row sums of B).
+    let fem = mesh_fem::volume::assemble_volume(&mesh_fem::generate::tet_cube(6), &Default::default()).unwrap();
+    let d = &fem.lumped_diagonal;
+    let bu: f64 = u.iter().zip(d).map(|(x, m)| x * m).sum();
+    assert!((bu - d[centre]).abs() < 1e-12 * d[centre], "{bu} vs {}", d[centre]);
+    assert!(u.iter().all(|v| v.is_finite()));
+
+    // Geodesics through the solid default to the heat method and are nearly Euclidean.
+    let geo = dir.path().join("g.npy");
+    let o = wfem(&[
+        "geodesic",
+        path,
+        "--from",
+        &centre.to_string(),
+        "-o",
+        geo.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, d) = read_npy(&geo).unwrap();
+    let cube = mesh_fem::generate::tet_cube(6);
+    let c = cube.positions()[centre];
+    let mut err = 0.0;
+    for (v, p) in cube.positions().iter().enumerate() {
+        if v != centre {
+            let exact = mesh_fem::vec3::norm(mesh_fem::vec3::sub(*p, c));
+            err += (d[v] - exact).abs() / exact;
+        }
+    }
+    assert!(
+        err / (n - 1) as f64 > 0.0 && err / ((n - 1) as f64) < 0.08,
+        "mean relative error {}",
+        err / (n - 1) as f64
+    );
+}
+
+#[test]
+fn flags_for_surfaces_are_refused_on_a_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = write_cube(dir.path(), 2);
+    let path = cube.to_str().unwrap();
+    let out = dir.path().join("x.npy");
+    for (args, expected) in [
+        (
+            vec!["heat", path, "--t", "0.1", "--source", "0", "--laplacian", "robust"],
+            "linear FEM",
+        ),
+        (
+            vec!["heat", path, "--t", "0.1", "--source", "0", "--triangulate"],
+            "--triangulate",
+        ),
+        (
+            vec!["heat", path, "--t", "0.1", "--source", "0", "--repair", "weld"],
+            "orient, degenerate and unreferenced",
+        ),
+        (
+            vec!["geodesic", path, "--from", "0", "--method", "fast-marching"],
+            "heat method",
+        ),
+    ] {
+        let mut a = args.clone();
+        a.extend(["-o", out.to_str().unwrap()]);
+        let o = wfem(&a);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(stderr(&o).contains(expected), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+    }
+    assert!(!out.exists());
+}
