@@ -63,6 +63,9 @@ def test_refused_dtypes_and_shapes(sphere):
     with pytest.raises(wfem.InvalidInputError, match=r"\(n, 3\)"):
         wfem.operators(V[:, :2], F)
     with pytest.raises(wfem.InvalidInputError, match="triangles"):
+        wfem.operators(V, np.column_stack([F, F, F[:, :1]]))
+    # Four columns are tetrahedra (issue #39): these repeat a vertex, so they are flat.
+    with pytest.raises(wfem.MeshError, match="zero volume"):
         wfem.operators(V, np.column_stack([F, F[:, :1]]))
     with pytest.raises(wfem.InvalidInputError, match=r"\(n, 3\)"):
         wfem.operators(V[:, :2])  # no F: a point cloud (issue #27), which must be (n, 3)

@@ -107,7 +107,7 @@ def as_mesh(V: Any, F: Any = None) -> tuple[np.ndarray, np.ndarray]:
             name="F",
         )
     if f.ndim != 2 or f.shape[1] != 3:
-        raise InvalidInputError(f"F must have shape (m, 3) (triangles), got {f.shape}", "Shape", name="F")
+        raise InvalidInputError(f"F must have shape (m, 3) (triangles) or (m, 4) (tetrahedra), got {f.shape}", "Shape", name="F")
     if f.dtype == np.uint64 and f.size and int(f.max()) > np.iinfo(np.int64).max:
         raise InvalidInputError("F holds indices beyond int64", "IndexOutOfRange", name="F")
     f = f.astype(np.int64, copy=False)
