@@ -271,6 +271,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         highlight: &approx.anchors,
         meta,
         allow_infinity: false,
+        volume: input.volume.as_ref().map(|v| &v.mesh),
     };
     // The files first, then the report: a reader that stops early (`| head`) loses
     // nothing but the report.

@@ -40,7 +40,7 @@ pub struct DistanceArgs {
     /// default fast exact path.
     #[arg(long)]
     pub degree: Option<usize>,
-    /// Output file: .ply, .npy (+ .json sidecar), .csv or .png.
+    /// Output file: .ply, .npy (+ .json sidecar), .csv, .vtu (ParaView; a volume's tetrahedra) or .png.
     #[arg(short = 'o', long = "output", value_parser = Output::parse)]
     pub output: Output,
     #[command(flatten)]
@@ -154,6 +154,7 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
         highlight: &sources,
         meta,
         allow_infinity: false,
+        volume: input.volume.as_ref().map(|v| &v.mesh),
     };
     for path in write_fields(&args.output, &input.mesh, &columns, how)? {
         writeln!(out, "wrote {}", path.display())?;

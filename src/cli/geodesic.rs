@@ -44,7 +44,7 @@ pub struct GeodesicArgs {
     /// accurate, about 4× the work per level; distances at the mesh's own vertices).
     #[arg(long, default_value_t = 0)]
     pub refine: u32,
-    /// Output file: .ply, .npy (+ .json sidecar), .csv or .png (iso-lines, sources marked);
+    /// Output file: .ply, .npy (+ .json sidecar), .csv, .vtu (ParaView; a volume's tetrahedra) or .png (iso-lines, sources marked);
     /// .npy with --all-pairs.
     #[arg(short = 'o', long = "output", value_parser = Output::parse)]
     pub output: Output,
@@ -175,6 +175,7 @@ pub fn geodesic(args: &GeodesicArgs, out: &mut dyn Write) -> Result<(), CliError
         highlight: &sources,
         meta,
         allow_infinity: true,
+        volume: input.volume.as_ref().map(|v| &v.mesh),
     };
     for path in write_fields(&args.output, &input.mesh, &columns, how)? {
         writeln!(out, "wrote {}", path.display())?;

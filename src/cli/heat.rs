@@ -133,7 +133,7 @@ pub struct HeatArgs {
     /// 0.1 % (the estimate is printed and recorded in the .npy sidecar).
     #[arg(long)]
     pub allow_inaccurate: bool,
-    /// Output file: .ply, .npy (+ .json sidecar), .csv or .png (several t: one figure each,
+    /// Output file: .ply, .npy (+ .json sidecar), .csv, .vtu (ParaView; a volume's tetrahedra) or .png (several t: one figure each,
     /// named x-t<t>.png).
     #[arg(short = 'o', long = "output", value_parser = Output::parse)]
     pub output: Output,
@@ -343,6 +343,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
         highlight: &highlight,
         meta,
         allow_infinity: false,
+        volume: input.volume.as_ref().map(|v| &v.mesh),
     };
     let written = super::output::write_fields(&args.output, &input.mesh, &columns, how)?;
     for path in written {

@@ -221,6 +221,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         highlight: &[],
         meta,
         allow_infinity: false,
+        volume: input.volume.as_ref().map(|v| &v.mesh),
     };
     for path in write_fields(&args.output, &input.mesh, &columns, how)? {
         writeln!(out, "wrote {}", path.display())?;

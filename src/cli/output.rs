@@ -428,13 +428,17 @@ pub struct Writing<'a> {
     /// `+∞` is a value (a distance no source reaches): written as ∞ (`inf` in CSV), drawn at
     /// the largest finite value in figures. Otherwise every value must be finite.
     pub allow_infinity: bool,
+    /// The tetrahedra when the input is a volume: a `.vtu` output holds them (figures and
+    /// `.ply` show the boundary surface `mesh`).
+    pub volume: Option<&'a mesh_fem::volume::TetMesh>,
 }
 
 /// Writes per-vertex fields in the format of `output`, all-or-nothing: `.png` renders one
 /// figure per field (the path itself for one field, `stem-<suffix>.png` beside it for several;
 /// a point cloud is drawn as splats, in the views chosen from its neighbourhood mesh),
 /// `.ply` holds the mesh with one vertex property per field and vertex colors of the first,
-/// `.csv` one column per field, and `.npy` an n × k array plus its `.json` sidecar.
+/// `.csv` one column per field, `.vtu` the triangles (or a volume's tetrahedra) with one
+/// array per field, and `.npy` an n × k array plus its `.json` sidecar.
 ///
 /// # Errors
 /// Rendering and writing errors; [`CliError::NonFinite`] if a field holds NaN or ∞.
@@ -512,15 +516,25 @@ pub fn write_fields(
             let step = progress::step(format!("writing {}", output.path.display()));
             let refs: Vec<(&str, &[f64])> = columns.iter().map(|c| (c.name.as_str(), c.values.as_slice())).collect();
             let colors = (format == FieldFormat::Ply).then(|| colors_of(&finite_for_figures(&columns[0].values)));
-            stage_field_with(
-                &mut set,
-                &output.path,
-                format,
-                mesh,
-                &refs,
-                colors.as_deref(),
-                how.allow_infinity,
-            )?;
+            match (format, how.volume) {
+                (FieldFormat::Vtu, Some(volume)) => mesh_fem::io::vtu::stage_vtu(
+                    &mut set,
+                    &output.path,
+                    volume.positions(),
+                    mesh_fem::io::vtu::Cells::Tetrahedra(volume.tets()),
+                    &refs,
+                    how.allow_infinity,
+                )?,
+                _ => stage_field_with(
+                    &mut set,
+                    &output.path,
+                    format,
+                    mesh,
+                    &refs,
+                    colors.as_deref(),
+                    how.allow_infinity,
+                )?,
+            }
             if let Some(sidecar) = output.sidecar() {
                 let text = sidecar_json(output, mesh, columns, how.meta)?;
                 set.stage(&sidecar, |w| w.write_all(text.as_bytes()))?;
@@ -632,7 +646,7 @@ mod tests {
             npy.targets(&["a".into()]),
             [PathBuf::from("x.npy"), PathBuf::from("x.json")]
         );
-        assert!(Output::parse("x.obj").unwrap_err().contains(".ply, .npy, .csv, .png"));
+        assert!(Output::parse("x.obj").unwrap_err().contains(".ply, .npy, .csv, .vtu, .png"));
         assert!(Output::parse(".png").is_err());
     }
 }

@@ -108,3 +108,22 @@ def test_approx_matches_the_cli(cli, mesh_file, tmp_path):
         assert a["anchors"] == b["anchors"]
         np.testing.assert_allclose(a["coefficients"], b["coefficients"], rtol=1e-9, atol=1e-12)
         assert abs(a["relative_linf_error"] - b["relative_linf_error"]) <= 1e-9
+
+
+def test_vtu_outputs_open_in_meshio(cli, volumes, mesh_file, tmp_path):
+    # Issue #39: a volume's field as a VTK unstructured grid of its tetrahedra (ParaView's
+    # format), read back by meshio, equal to the .npy of the same run; a surface's as triangles.
+    meshio = pytest.importorskip("meshio")
+    vol = volumes / "flip-free-parametrization/cow.mesh"
+    run(cli, "heat", vol, "--source", 100, "--t", 0.01, "-o", tmp_path / "h.vtu")
+    run(cli, "heat", vol, "--source", 100, "--t", 0.01, "-o", tmp_path / "h.npy")
+    m = meshio.read(tmp_path / "h.vtu")
+    V, T = wfem.read_volume(vol)
+    assert np.array_equal(m.points, V)
+    assert [c.type for c in m.cells] == ["tetra"] and np.array_equal(m.cells[0].data, T)
+    (values,) = m.point_data.values()
+    assert np.array_equal(values, np.load(tmp_path / "h.npy"))
+    run(cli, "geodesic", mesh_file, "--from", 0, "-o", tmp_path / "g.vtu")
+    s = meshio.read(tmp_path / "g.vtu")
+    assert [c.type for c in s.cells] == ["triangle"]
+    assert np.allclose(s.point_data["geodesic_distance"], wfem.GeodesicSolver(*wfem.read_mesh(mesh_file)).distance(0), rtol=1e-12)

@@ -85,6 +85,8 @@ pub enum FieldFormat {
     Npy,
     /// Comma-separated values with a header line of field names.
     Csv,
+    /// VTK XML unstructured grid (ParaView): the points, the cells and one array per field.
+    Vtu,
 }
 
 wfem_base::registry! {
@@ -93,6 +95,8 @@ wfem_base::registry! {
             "binary PLY: the mesh with one double vertex property per field (MeshLab, Polyscope)",
         FieldFormat::Npy = FieldFormat::Npy => "npy": "NumPy .npy: an n × k float64 array",
         FieldFormat::Csv = FieldFormat::Csv => "csv": "comma-separated values with a header of field names",
+        FieldFormat::Vtu = FieldFormat::Vtu => "vtu":
+            "VTK XML unstructured grid (ParaView): the mesh's triangles or the volume's tetrahedra, one array per field",
     }
 }
 
@@ -144,6 +148,8 @@ impl FieldFormat {
 /// * `.npy`: an n × k float64 array in C order (1-D of length n when k = 1), NPY format 1.0.
 /// * `.csv`: a header line with the field names, then one row per vertex (values printed with
 ///   Rust's shortest round-trip representation, so reading them back is exact).
+/// * `.vtu`: VTK XML unstructured grid of the triangles with one point-data array per field
+///   ([`super::vtu`], which also writes a volume's tetrahedra).
 ///
 /// `colors` is used by PLY only.
 ///
@@ -219,6 +225,14 @@ pub fn stage_field_with(
             require_fields(path, fields, "an NPY file")?;
             set.stage(path, |w| write_npy(w, mesh.n_vertices(), fields))
         }
+        FieldFormat::Vtu => super::vtu::stage_vtu(
+            set,
+            path,
+            mesh.positions(),
+            super::vtu::Cells::Triangles(mesh.faces()),
+            fields,
+            allow_infinity,
+        ),
         FieldFormat::Csv => {
             require_fields(path, fields, "a CSV file")?;
             for (name, _) in fields {

@@ -42,6 +42,7 @@ pub mod rows;
 mod stl;
 mod text;
 pub mod volume;
+pub mod vtu;
 
 pub use atomic::{write_atomic, AtomicSet};
 pub use field::{read_field, stage_field, stage_field_with, write_field, write_mesh, FieldFormat};

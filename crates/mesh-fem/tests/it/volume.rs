@@ -327,3 +327,36 @@ fn tetgen_files_are_read_from_either_path() {
         assert!((read.mesh.volume() - 1.0 / 6.0).abs() < 1e-16);
     }
 }
+
+#[test]
+fn vtu_holds_the_tetrahedra_and_refuses_bad_fields() {
+    use mesh_fem::io::vtu::{stage_vtu, Cells};
+    use mesh_fem::io::AtomicSet;
+    let cube = mesh_fem::generate::tet_cube(2);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("c.vtu");
+    let f: Vec<f64> = cube.positions().iter().map(|p| p[0]).collect();
+    let mut set = AtomicSet::new();
+    stage_vtu(&mut set, &path, cube.positions(), Cells::Tetrahedra(cube.tets()), &[("x<1>", &f)], false).unwrap();
+    set.commit().unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains(&format!("NumberOfPoints=\"{}\" NumberOfCells=\"{}\"", cube.n_vertices(), cube.n_tets())));
+    assert!(text.contains("Name=\"x&lt;1&gt;\""));
+    assert_eq!(text.matches(" 10").count() >= cube.n_tets(), true);
+    let short = vec![0.0; 3];
+    let nan = vec![f64::NAN; cube.n_vertices()];
+    let other = dir.path().join("d.vtu");
+    for (fields, expected) in [
+        (vec![("a", short.as_slice())], "values"),
+        (vec![("a", nan.as_slice())], "NaN"),
+        (vec![("a", f.as_slice()), ("a", f.as_slice())], "twice"),
+        (vec![], "at least one field"),
+    ] {
+        let mut set = AtomicSet::new();
+        let err = stage_vtu(&mut set, &other, cube.positions(), Cells::Tetrahedra(cube.tets()), &fields, false)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(expected), "{err}");
+    }
+    assert!(!other.exists());
+}
