@@ -303,6 +303,25 @@ pub struct RenderArgs {
     /// Up direction of the figures (.png).
     #[arg(long, value_parser = super::choice::choice::<Up>(), default_value = Up::default_name(), allow_hyphen_values = true)]
     pub up: Up,
+    /// A volume's figures also show its interior: the cut by the plane AXIS=VALUE (x, y or z,
+    /// in the mesh's coordinates, e.g. x=0.1), keeping the side below it; by default the plane
+    /// through the centre facing the front view.
+    #[arg(long, value_parser = parse_cut, allow_hyphen_values = true)]
+    pub cut: Option<([f64; 3], f64)>,
+}
+
+/// Parses `--cut AXIS=VALUE`: the axis as `--up` names them (x, -y, …), the plane's normal.
+fn parse_cut(text: &str) -> Result<([f64; 3], f64), String> {
+    let bad = || format!("{text:?} is not a plane: give AXIS=VALUE with AXIS x, y or z (or -x, …) and a finite VALUE, e.g. x=0.1");
+    let (axis, value) = text.rsplit_once('=').ok_or_else(bad)?;
+    let normal = match Up::parse(axis.trim()) {
+        Ok(Up::Axis(axis)) => Frame::from_up(axis).up,
+        _ => return Err(bad()),
+    };
+    match value.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok((normal, v)),
+        _ => Err(bad()),
+    }
 }
 
 impl RenderArgs {
@@ -498,14 +517,24 @@ pub fn write_fields(
                 wfem_render::direction_label(frame.front),
                 wfem_render::direction_label(frame.right),
             ));
+            let cut = match how.volume {
+                Some(volume) => Some(volume_cut(volume, how.render.cut, &frame)?),
+                None => {
+                    if how.render.cut.is_some() {
+                        progress::warn("--cut shows the interior of a tetrahedral mesh; this input is a surface, so it is not used");
+                    }
+                    None
+                }
+            };
             let bar = progress::bar(columns.len(), "rendering figures");
             for (column, target) in columns.iter().zip(&targets) {
                 bar.set_detail(&column.suffix);
                 let values = finite_for_figures(&column.values);
                 let params = figure_params(&column.title, &values, how.highlight, views.clone());
-                let png = match how.splats {
-                    Some(splats) => render_splats_png(splats, &values, &params)?,
-                    None => render_png(mesh, &values, &params)?,
+                let png = match (how.splats, &cut) {
+                    (Some(splats), _) => render_splats_png(splats, &values, &params)?,
+                    (None, Some(cut)) => with_cut(mesh, cut, &values, params, &frame)?,
+                    (None, None) => render_png(mesh, &values, &params)?,
                 };
                 set.stage(target, |w| w.write_all(&png))?;
                 bar.inc(&column.suffix);
@@ -545,6 +574,65 @@ pub fn write_fields(
     let written: Vec<PathBuf> = set.targets().map(Path::to_path_buf).collect();
     set.commit()?;
     Ok(written)
+}
+
+/// A volume's cut for its figures, with the plane's name: `--cut AXIS=VALUE`, or the plane
+/// through the centre of the bounding box facing the front view.
+fn volume_cut(
+    volume: &mesh_fem::volume::TetMesh,
+    plane: Option<([f64; 3], f64)>,
+    frame: &Frame,
+) -> Result<(mesh_fem::volume::cut::Cut, [f64; 3], String), CliError> {
+    let (normal, offset, name) = match plane {
+        Some((n, value)) => {
+            let axis = wfem_render::direction_label(n);
+            (n, value, format!("{}={value}", axis.trim_start_matches('+')))
+        }
+        None => {
+            let (lo, hi) = mesh_fem::vec3::bounding_box(volume.positions());
+            let centre = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
+            let n = frame.front;
+            (n, mesh_fem::vec3::dot(centre, n), "the centre, facing the front view".to_string())
+        }
+    };
+    let cut = mesh_fem::volume::cut::cut(volume, normal, offset).map_err(|e| {
+        CliError::Usage(format!("--cut {name}: the plane leaves nothing of the volume below it ({e})"))
+    })?;
+    progress::note(&format!(
+        "figures: the interior shown by a cut at {name} ({} triangles), below the surface views",
+        cut.mesh.n_faces()
+    ));
+    Ok((cut, normal, name))
+}
+
+/// The figure of a volume's boundary with the figure of its cut below it, on one colour scale.
+fn with_cut(
+    mesh: &TriMesh,
+    cut: &(mesh_fem::volume::cut::Cut, [f64; 3], String),
+    values: &[f64],
+    mut params: wfem_render::RenderParams,
+    frame: &Frame,
+) -> Result<Vec<u8>, CliError> {
+    let (cut, normal, name) = cut;
+    let (lo, hi) = values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    params.range = params.range.or(Some((lo, hi.max(lo))));
+    let surface = wfem_render::render_rgb(mesh, values, &params)?;
+    // Looking along the plane's normal; a horizontal cut is seen from above, back at the top.
+    let vertical = mesh_fem::vec3::dot(*normal, frame.up).abs() > 0.9;
+    let screen_up = if vertical { frame.front.map(|x| -x) } else { frame.up };
+    let side = View::new(*normal, screen_up);
+    let oblique = View::new(
+        [0, 1, 2].map(|k| normal[k] + 0.5 * frame.up[k] + 0.5 * frame.right[k]),
+        screen_up,
+    );
+    let inside = wfem_render::RenderParams {
+        title: Some(format!("cut at {name}: the interior")),
+        highlight: Vec::new(),
+        views: vec![side, oblique],
+        ..params
+    };
+    let section = wfem_render::render_rgb(&cut.mesh, &cut.values(values), &inside)?;
+    Ok(wfem_render::RgbImage::stacked(&[surface, section]).to_png()?)
 }
 
 /// The sidecar of an `.npy` output: what its columns are.

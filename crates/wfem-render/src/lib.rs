@@ -231,6 +231,24 @@ impl RgbImage {
         Self { width, height, data }
     }
 
+    /// The images one below the other, left-aligned on a white background as wide as the
+    /// widest (a figure and the figure of its cut).
+    pub fn stacked(images: &[RgbImage]) -> Self {
+        let width = images.iter().map(|i| i.width).max().unwrap_or(0);
+        let height = images.iter().map(|i| i.height).sum();
+        let mut out = Self::new(width, height, [255; 3]);
+        let mut top = 0usize;
+        for img in images {
+            for y in 0..img.height as usize {
+                let src = 3 * y * img.width as usize;
+                let dst = 3 * ((top + y) * width as usize);
+                out.data[dst..dst + 3 * img.width as usize].copy_from_slice(&img.data[src..src + 3 * img.width as usize]);
+            }
+            top += img.height as usize;
+        }
+        out
+    }
+
     /// The colour at (x, y); panics if out of bounds (like slice indexing).
     pub fn pixel(&self, x: u32, y: u32) -> [u8; 3] {
         assert!(

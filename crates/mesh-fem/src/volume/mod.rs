@@ -12,6 +12,7 @@
 //! value, so an inverted tetrahedron gives the same matrices as its reoriented copy.
 
 mod assembly;
+pub mod cut;
 mod validate;
 
 pub use assembly::{assemble_volume, tet_element, TetElement};

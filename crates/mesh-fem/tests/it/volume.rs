@@ -360,3 +360,30 @@ fn vtu_holds_the_tetrahedra_and_refuses_bad_fields() {
     }
     assert!(!other.exists());
 }
+
+#[test]
+fn a_cut_shows_the_interior_field_exactly() {
+    use mesh_fem::volume::cut::cut;
+    // The cube cut at x = 0.37 (between grid planes): the section is the unit square at x = 0.37,
+    // the kept boundary is the part of the surface with x ≤ 0.37 (area 1 + 4·0.37), and a linear
+    // field is interpolated exactly (P1).
+    let cube = mesh_fem::generate::tet_cube(4);
+    let c = cut(&cube, [1.0, 0.0, 0.0], 0.37).unwrap();
+    let p = c.mesh.positions();
+    assert!(p.iter().all(|q| q[0] <= 0.37 + 1e-12));
+    let f: Vec<f64> = cube.positions().iter().map(|q| q[0] + 2.0 * q[1] - 3.0 * q[2]).collect();
+    for (q, v) in p.iter().zip(c.values(&f)) {
+        assert!((v - (q[0] + 2.0 * q[1] - 3.0 * q[2])).abs() < 1e-12);
+    }
+    let area = |face: &[u32; 3]| {
+        let [a, b, d] = face.map(|i| p[i as usize]);
+        0.5 * mesh_fem::vec3::norm(mesh_fem::vec3::cross(mesh_fem::vec3::sub(b, a), mesh_fem::vec3::sub(d, a)))
+    };
+    let on_plane = |face: &[u32; 3]| face.iter().all(|&i| (p[i as usize][0] - 0.37).abs() < 1e-12);
+    let section: f64 = c.mesh.faces().iter().filter(|f| on_plane(f)).map(area).sum();
+    let rest: f64 = c.mesh.faces().iter().filter(|f| !on_plane(f)).map(area).sum();
+    assert!((section - 1.0).abs() < 1e-12, "section {section}");
+    assert!((rest - (1.0 + 4.0 * 0.37)).abs() < 1e-12, "kept boundary {rest}");
+    // A plane beyond the volume leaves nothing.
+    assert!(cut(&cube, [1.0, 0.0, 0.0], -1.0).is_err());
+}
