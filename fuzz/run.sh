@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Runs the given fuzz targets (default: all five) one after another, each for
+# Runs the given fuzz targets (default: all eight) one after another, each for
 # $FUZZ_SECONDS seconds (default 600), with the limits of docs/FUZZING.md.
 # Logs go to fuzz/logs/<target>.log; crashes to fuzz/artifacts/<target>/.
 set -u
 cd "$(dirname "$0")"
 seconds="${FUZZ_SECONDS:-600}"
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(obj ply off stl pipeline)
+[ ${#targets[@]} -eq 0 ] && targets=(obj ply off stl pipeline volume_medit volume_gmsh volume_vtk)
 python3 seed.py >/dev/null
 mkdir -p logs
 for t in "${targets[@]}"; do

@@ -123,7 +123,8 @@ fn entry(m: &faer::sparse::SparseColMat<usize, f64>, i: usize, j: usize) -> f64 
 fn check_operators(mesh: &TriMesh, ops: &mesh_fem::FemOperators) {
     let n = mesh.n_vertices();
     assert_eq!(ops.n(), n);
-    for (what, m) in [("L", &ops.stiffness), ("B", &ops.mass), ("D", &ops.lumped_mass)] {
+    let lumped = ops.lumped_mass();
+    for (what, m) in [("L", &ops.stiffness), ("B", &ops.mass), ("D", &lumped)] {
         assert_eq!((m.nrows(), m.ncols()), (n, n), "{what} has the wrong shape");
         assert!(m.val().iter().all(|v| v.is_finite()), "{what} has a non-finite entry");
     }
@@ -163,5 +164,30 @@ fn check_operators(mesh: &TriMesh, ops: &mesh_fem::FemOperators) {
             "D_ii = {dd} but Σ_j B_ij = {} at row {i}",
             b_row_sum[i]
         );
+    }
+}
+
+/// Reads `data` as a one-file volume format and checks the result: a typed error naming the
+/// file, or tetrahedra with indices in range and finite coordinates whose validation report
+/// counts them, and — when no problem is fatal — operators that assemble with finite values.
+pub fn read_volume_and_check(data: &[u8], format: mesh_fem::io::volume::VolumeFormat) {
+    use mesh_fem::volume::{assemble_volume, validate_volume};
+    let name = Path::new("fuzz.volume");
+    match mesh_fem::io::volume::parse_volume(data, format, name) {
+        Err(e) => assert!(!e.to_string().is_empty(), "error without a message: {e:?}"),
+        Ok(read) => {
+            let m = &read.mesh;
+            let n = m.n_vertices();
+            assert!(n > 0 && m.n_tets() > 0, "reader returned an empty volume");
+            assert!(m.tets().iter().flatten().all(|&i| (i as usize) < n));
+            assert!(m.positions().iter().flatten().all(|c| c.is_finite()));
+            let report = validate_volume(m);
+            assert_eq!((report.n_vertices, report.n_tets), (n, m.n_tets()));
+            if report.clone().into_result().is_ok() {
+                if let Ok(fem) = assemble_volume(m, &AssemblyParams::default()) {
+                    assert!(fem.lumped_diagonal.iter().all(|d| d.is_finite() && *d > 0.0));
+                }
+            }
+        }
     }
 }

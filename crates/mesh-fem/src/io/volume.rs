@@ -72,22 +72,47 @@ pub fn read_volume(path: &Path) -> Result<VolumeRead, MeshError> {
             ),
         });
     };
-    let mut p = Parser::default();
-    p.path = path.to_path_buf();
+    if format == VolumeFormat::TetGen {
+        let mut p = Parser {
+            path: path.to_path_buf(),
+            ..Parser::default()
+        };
+        let (node, ele) = (path.with_extension("node"), path.with_extension("ele"));
+        let nodes = super::read_regular_file(&node)?;
+        let elements = super::read_regular_file(&ele)?;
+        let (positions, tets) = p.tetgen(&node, &nodes, &ele, &elements)?;
+        return Ok(VolumeRead {
+            mesh: TetMesh::new(positions, tets)?,
+            ignored: p.ignored,
+            format,
+        });
+    }
+    parse_volume(&super::read_regular_file(path)?, format, path)
+}
+
+/// Parses the bytes of a one-file volume format (MEDIT, Gmsh, VTK; `name` is the path errors
+/// name): what [`read_volume`] does after reading the file, for data already in memory.
+///
+/// # Errors
+/// As [`read_volume`]; [`MeshError::UnknownFormat`] for TetGen, which is two files.
+pub fn parse_volume(bytes: &[u8], format: VolumeFormat, name: &Path) -> Result<VolumeRead, MeshError> {
+    let mut p = Parser {
+        path: name.to_path_buf(),
+        ..Parser::default()
+    };
     let (positions, tets) = match format {
-        VolumeFormat::Medit => p.medit(&super::read_regular_file(path)?)?,
-        VolumeFormat::Gmsh => p.gmsh(&super::read_regular_file(path)?)?,
-        VolumeFormat::Vtk => p.vtk(&super::read_regular_file(path)?)?,
+        VolumeFormat::Medit => p.medit(bytes)?,
+        VolumeFormat::Gmsh => p.gmsh(bytes)?,
+        VolumeFormat::Vtk => p.vtk(bytes)?,
         VolumeFormat::TetGen => {
-            let (node, ele) = (path.with_extension("node"), path.with_extension("ele"));
-            let nodes = super::read_regular_file(&node)?;
-            let elements = super::read_regular_file(&ele)?;
-            p.tetgen(&node, &nodes, &ele, &elements)?
+            return Err(MeshError::UnknownFormat {
+                path: name.to_path_buf(),
+                extension: "ele (TetGen is two files, .node and .ele: use read_volume)".into(),
+            })
         }
     };
-    let mesh = TetMesh::new(positions, tets)?;
     Ok(VolumeRead {
-        mesh,
+        mesh: TetMesh::new(positions, tets)?,
         ignored: p.ignored,
         format,
     })
