@@ -26,7 +26,7 @@ pub struct DemoArgs {
     pub level: u32,
     /// Number of eigenpairs of the spectral method (default min(200, n); at most n/10 above
     /// 1000 vertices).
-    #[arg(long)]
+    #[arg(long = "eigenpairs", alias = "eigs")]
     pub eigs: Option<usize>,
     /// Hide the progress (same as `wfem --progress never demo`).
     #[arg(long)]

@@ -12,7 +12,7 @@ use wfem_base::Choice;
 use wfem_heat::method::{Method, MethodOptions};
 use wfem_heat::{HeatKernel, HeatParams};
 
-/// `--method` with its options (`--degree`, `--backend`, `--eigs`): the heat method of the
+/// `--method` with its options (`--degree`, `--backend`, `--eigenpairs`): the heat method of the
 /// library's registry ([`Method`]) with the options that apply to it.
 #[derive(Args, Clone, Debug)]
 pub struct MethodArgs {
@@ -30,7 +30,7 @@ pub struct MethodArgs {
     pub backend: Option<shifted_solve::backend::Backend>,
     /// Number of eigenpairs, --method spectral only (default min(200, n); at most n/10 on
     /// meshes above 1000 vertices, where more cost more than --method dense or fast).
-    #[arg(long)]
+    #[arg(long = "eigenpairs", alias = "eigs")]
     pub eigs: Option<usize>,
 }
 
@@ -75,12 +75,8 @@ impl MethodArgs {
 fn option_error(e: wfem_heat::HeatError) -> CliError {
     match e {
         wfem_heat::HeatError::MisplacedOption { option, method, owner } => {
-            let flag = match option {
-                "eigenpairs" => "eigs",
-                other => other,
-            };
             CliError::Usage(format!(
-                "--{flag} applies to --method {owner} only, not to --method {method}"
+                "--{option} applies to --method {owner} only, not to --method {method}"
             ))
         }
         other => CliError::Heat(other),

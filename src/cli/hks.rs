@@ -39,7 +39,7 @@ pub struct HksArgs {
     pub method: HksMethod,
     /// Number k of eigenpairs of the truncated spectral sum (Eq. (8)); default min(100, n),
     /// at most n/10 above 5000 vertices. Not used by --method exact with --times.
-    #[arg(long)]
+    #[arg(long = "eigenpairs", alias = "eigs")]
     pub eigs: Option<usize>,
     /// Output: .npy (n × T array, + .json sidecar with the times), .csv, .ply (fields
     /// `hks_t<t>`) or .png (one figure per time, at most 64).
@@ -115,7 +115,7 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let spectrum_needed = args.method != HksMethod::Exact || args.times.is_empty();
     if args.eigs.is_some() && !spectrum_needed {
         return Err(CliError::Usage(format!(
-            "--eigs does not apply to --method {} with --times (no eigenpairs are computed)",
+            "--eigenpairs does not apply to --method {} with --times (no eigenpairs are computed)",
             args.method.name()
         )));
     }

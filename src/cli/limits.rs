@@ -83,11 +83,11 @@ pub fn columns(flag: &'static str, count: usize, n: usize) -> Result<(), CliErro
 /// n / [`SPECTRAL_FRACTION`] where the partial eigensolver runs (above
 /// [`wfem_heat::spectral::DENSE_MAX_VERTICES`] vertices; below, a large k uses the dense decomposition).
 pub fn descriptor_eigenpairs(k: usize, n: usize) -> Result<usize, CliError> {
-    let k = eigenpairs("--eigs", k, n)?;
+    let k = eigenpairs("--eigenpairs", k, n)?;
     let limit = n / SPECTRAL_FRACTION;
     if n > wfem_heat::spectral::DENSE_MAX_VERTICES && k > limit {
         return Err(out_of_range(
-            "--eigs",
+            "--eigenpairs",
             k,
             format!("1..={limit} (n/{SPECTRAL_FRACTION}) on this {n}-vertex mesh"),
             "the partial eigensolver slows down sharply beyond; the signature at the usual times needs 100–300",
@@ -119,7 +119,7 @@ pub fn eigenpairs(flag: &'static str, k: usize, n: usize) -> Result<usize, CliEr
 /// The number of eigenpairs of `--method spectral`: [`eigenpairs`], and at most
 /// n / [`SPECTRAL_FRACTION`] above [`SMALL_MESH`] vertices.
 pub fn spectral_eigenpairs(k: usize, n: usize) -> Result<usize, CliError> {
-    let k = eigenpairs("--eigs", k, n)?;
+    let k = eigenpairs("--eigenpairs", k, n)?;
     let limit = n / SPECTRAL_FRACTION;
     if n > SMALL_MESH && k > limit {
         let exact = if n <= wfem_heat::spectral::DENSE_MAX_VERTICES {
@@ -128,7 +128,7 @@ pub fn spectral_eigenpairs(k: usize, n: usize) -> Result<usize, CliError> {
             "--method fast or --method rational (exact, no eigenpairs)"
         };
         return Err(out_of_range(
-            "--eigs",
+            "--eigenpairs",
             k,
             format!("1..={limit} (n/{SPECTRAL_FRACTION}) on this {n}-vertex mesh"),
             format!("more eigenpairs cost more than an exact method; use {exact}"),
@@ -142,7 +142,7 @@ pub use shape_retrieval::limits::{MAX_RETRIEVAL_EIGS, MAX_WORDS};
 /// The sizes of `retrieval build` (the library's bounds, [`shape_retrieval::limits`], named
 /// by their flags).
 pub fn retrieval_sizes(eigs: usize, words: usize) -> Result<(), CliError> {
-    count("--eigs", eigs, 1, MAX_RETRIEVAL_EIGS, "eigenpairs per shape")?;
+    count("--eigenpairs", eigs, 1, MAX_RETRIEVAL_EIGS, "eigenpairs per shape")?;
     count("--words", words, 1, MAX_WORDS, "vocabulary size")?;
     Ok(())
 }
@@ -155,9 +155,9 @@ mod tests {
     fn eigensolver_memory_grows_with_k_and_saturates_at_n() {
         assert_eq!(partial_eigensolver_bytes(100, 100), 8 * (2 * 100 * 100 + 100 * 100));
         assert!(partial_eigensolver_bytes(48_485, 200) < EIGENSOLVER_MEMORY);
-        assert!(eigenpairs("--eigs", 5000, 48_485).is_err());
-        assert!(eigenpairs("--eigs", usize::MAX, 10).is_err());
-        assert!(eigenpairs("--eigs", 0, 10).is_err());
+        assert!(eigenpairs("--eigenpairs", 5000, 48_485).is_err());
+        assert!(eigenpairs("--eigenpairs", usize::MAX, 10).is_err());
+        assert!(eigenpairs("--eigenpairs", 0, 10).is_err());
     }
 
     #[test]
@@ -166,7 +166,7 @@ mod tests {
         assert!(spectral_eigenpairs(1000, 1000).is_ok());
         assert!(spectral_eigenpairs(500, 5000).is_ok());
         let e = spectral_eigenpairs(501, 5000).unwrap_err().to_string();
-        assert!(e.contains("--eigs 501") && e.contains("--method dense"), "{e}");
+        assert!(e.contains("--eigenpairs 501") && e.contains("--method dense"), "{e}");
     }
 
     #[test]

@@ -296,7 +296,7 @@ pub struct DescriptorArgs {
     #[arg(long, value_parser = choice::<Laplacian>(), default_value = Laplacian::default_name())]
     pub laplacian: Laplacian,
     /// Eigenpairs k per shape.
-    #[arg(long, default_value_t = shape_retrieval::descriptor::DEFAULT_EIGENPAIRS)]
+    #[arg(long = "eigenpairs", alias = "eigs", default_value_t = shape_retrieval::descriptor::DEFAULT_EIGENPAIRS)]
     pub eigs: usize,
     /// SI-HKS: first τ of the times t = A·2^τ (A = surface area) [default: −12].
     #[arg(long, allow_hyphen_values = true)]

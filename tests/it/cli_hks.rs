@@ -168,7 +168,7 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
         out.to_str().unwrap(),
     ]);
     assert!(
-        stderr(&o).contains("--eigs does not apply to --method exact"),
+        stderr(&o).contains("--eigenpairs does not apply to --method exact"),
         "{}",
         stderr(&o)
     );

@@ -321,7 +321,7 @@ fn issue_16_spectral_with_too_many_eigenpairs_points_to_an_exact_method() {
     assert_eq!(o.status.code(), Some(1));
     let err = stderr(&o);
     assert!(
-        err.contains("--eigs 2562") && err.contains("1..=256") && err.contains("--method dense"),
+        err.contains("--eigenpairs 2562") && err.contains("1..=256") && err.contains("--method dense"),
         "{err}"
     );
     assert!(!out.exists());
