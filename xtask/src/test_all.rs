@@ -2,10 +2,10 @@
 //!
 //! 1. `cargo test --workspace --locked --features mesh-fem/nalgebra` (every optional feature of
 //!    a library crate that the workspace does not already turn on);
-//! 1b. every library crate checked **alone** (`cargo check -p X --lib` with only its own default
-//!    features, warnings refused): a crate that compiles only thanks to a feature another crate
-//!    turns on, or has code dead without it, fails here (ARCHITECTURE.md, "each crate usable
-//!    alone");
+//!    then every library crate checked **alone** (`cargo check -p X --lib` with only its own
+//!    default features, warnings refused): a crate that compiles only thanks to a feature another
+//!    crate turns on, or has code dead without it, fails here (ARCHITECTURE.md, "each crate
+//!    usable alone");
 //! 2. a virtual environment under the target directory (`$CARGO_TARGET_DIR` or `target/`,
 //!    `python-venv/`), created with `python3 -m venv` (or `$WFEM_PYTHON -m venv`); a missing
 //!    `venv` module stops with the command that installs it;

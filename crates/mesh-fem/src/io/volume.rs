@@ -118,6 +118,9 @@ pub fn parse_volume(bytes: &[u8], format: VolumeFormat, name: &Path) -> Result<V
     })
 }
 
+/// What a reader returns: the positions and the tetrahedra (0-based).
+type Parsed = (Vec<[f64; 3]>, Vec<[u32; 4]>);
+
 /// Whitespace-separated tokens with their line numbers ('#' starts a comment in the formats
 /// that allow it).
 struct Tokens<'a> {
@@ -243,7 +246,7 @@ impl Parser {
 
     // ---- MEDIT -----------------------------------------------------------------------------
 
-    fn medit(&mut self, bytes: &[u8]) -> Result<(Vec<[f64; 3]>, Vec<[u32; 4]>), MeshError> {
+    fn medit(&mut self, bytes: &[u8]) -> Result<Parsed, MeshError> {
         let mut t = Tokens::new(bytes, true);
         let (mut positions, mut tets) = (Vec::new(), Vec::new());
         while let Some(kw) = t.next() {
@@ -306,7 +309,7 @@ impl Parser {
                     for _ in 0..c * per {
                         self.token(&mut t, kw)?;
                     }
-                    self.ignore(&other.to_string(), c);
+                    self.ignore(other, c);
                 }
             }
         }
@@ -315,7 +318,7 @@ impl Parser {
 
     // ---- VTK legacy ------------------------------------------------------------------------
 
-    fn vtk(&mut self, bytes: &[u8]) -> Result<(Vec<[f64; 3]>, Vec<[u32; 4]>), MeshError> {
+    fn vtk(&mut self, bytes: &[u8]) -> Result<Parsed, MeshError> {
         // Header: a version line, a title line, ASCII|BINARY, then tokens.
         let mut lines = bytes.splitn(4, |&b| b == b'\n');
         let version = lines.next().unwrap_or_default();
@@ -443,7 +446,7 @@ impl Parser {
         nodes: &[u8],
         ele_path: &Path,
         elements: &[u8],
-    ) -> Result<(Vec<[f64; 3]>, Vec<[u32; 4]>), MeshError> {
+    ) -> Result<Parsed, MeshError> {
         self.path = node_path.to_path_buf();
         let mut t = Tokens::new(nodes, true);
         let n = self.count(&mut t, "number of nodes", 4)?;
@@ -505,7 +508,7 @@ impl Parser {
 
     // ---- Gmsh ------------------------------------------------------------------------------
 
-    fn gmsh(&mut self, bytes: &[u8]) -> Result<(Vec<[f64; 3]>, Vec<[u32; 4]>), MeshError> {
+    fn gmsh(&mut self, bytes: &[u8]) -> Result<Parsed, MeshError> {
         let mut t = Tokens::new(bytes, false);
         if t.next() != Some("$MeshFormat") {
             return Err(self.err(1, "not a Gmsh file (no $MeshFormat)"));
@@ -659,7 +662,7 @@ impl Parser {
         Ok(())
     }
 
-    fn gmsh22_binary(&mut self, bytes: &[u8], mut pos: usize) -> Result<(Vec<[f64; 3]>, Vec<[u32; 4]>), MeshError> {
+    fn gmsh22_binary(&mut self, bytes: &[u8], mut pos: usize) -> Result<Parsed, MeshError> {
         let err = |s: &Self, m: String| s.err(0, m);
         let i32_at = |b: &[u8], p: usize| -> Option<i32> {
             b.get(p..p + 4).map(|x| i32::from_le_bytes([x[0], x[1], x[2], x[3]]))

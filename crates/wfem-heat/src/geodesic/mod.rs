@@ -22,6 +22,7 @@
 //!   3. `L φ = ∇·X` (the integrated divergence `Σ|T| X·∇φᵢ`) with φ pinned to 0 on **every**
 //!      source vertex (to the exact in-face distances on the corners of a source point), so that
 //!      distances from many sources are right near each of them.
+//!
 //!   Both factorizations (`D + tL` and the grounded L) are made once and reused by every query.
 //!
 //! `refine` splits every triangle into four at its edge midpoints that many times first (the
