@@ -38,6 +38,8 @@ def test_operators_match_libigl_and_closed_forms(volumes):
     L, B, D = wfem.operators(V, T)
     Lref = -igl.cotmatrix(V, T)
     assert abs(L - Lref).max() < 1e-10 * abs(Lref).max()
+    Dref = igl.massmatrix(V, T, igl.MASSMATRIX_TYPE_BARYCENTRIC)  # |T|/4 per corner
+    assert abs(D - Dref).max() < 1e-13 * abs(Dref).max()
     vol = wfem.validate_volume(V, T).volume
     one = np.ones(len(V))
     assert abs(one @ (B @ one) - vol) < 1e-12 * vol
