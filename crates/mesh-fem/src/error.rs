@@ -67,7 +67,7 @@ pub enum MeshError {
         corners: usize,
     },
     /// A vertex belongs to no face.
-    #[error("vertex {vertex} belongs to no face (drop unreferenced vertices with the repair option)")]
+    #[error("vertex {vertex} belongs to no face or tetrahedron (drop unreferenced vertices with the repair option)")]
     UnreferencedVertex {
         /// Vertex index.
         vertex: usize,

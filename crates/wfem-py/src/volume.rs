@@ -117,10 +117,36 @@ pub fn volume_operators<'py>(
     ))
 }
 
+/// `repair_volume(V, T, orient, degenerate, unreferenced) -> ((V, T), report JSON)`.
+#[pyfunction]
+#[pyo3(signature = (v, t, orient=true, degenerate=true, unreferenced=true))]
+pub fn repair_volume<'py>(
+    py: Python<'py>,
+    v: PyReadonlyArray2<'py, f64>,
+    t: PyReadonlyArray2<'py, i64>,
+    orient: bool,
+    degenerate: bool,
+    unreferenced: bool,
+) -> PyResult<(VolumeArrays<'py>, String)> {
+    let mesh = volume_in(py, &v, &t)?;
+    let (repaired, report) = run(py, move |_| {
+        mesh_fem::volume::repair_volume(&mesh, orient, degenerate, unreferenced).map_err(Error::from)
+    })?;
+    let map: Vec<i64> = report.vertex_map.iter().map(|m| m.map_or(-1, i64::from)).collect();
+    let json = serde_json::json!({
+        "flipped": report.flipped,
+        "dropped_tets": report.dropped_tets,
+        "dropped_vertices": report.dropped_vertices,
+        "vertex_map": map,
+    });
+    Ok((volume_out(py, &repaired), json.to_string()))
+}
+
 /// Registers the functions.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_volume, m)?)?;
     m.add_function(wrap_pyfunction!(validate_volume, m)?)?;
     m.add_function(wrap_pyfunction!(volume_operators, m)?)?;
+    m.add_function(wrap_pyfunction!(repair_volume, m)?)?;
     Ok(())
 }

@@ -103,3 +103,18 @@ def test_bad_tetrahedra_get_typed_errors(tmp_path):
         wfem.read_volume(bad)
     flat = wfem.validate_volume(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]), np.array([[0, 1, 2, 3]]))
     assert not flat.usable and flat.problems[0]["severity"] == "Error"
+
+
+def test_repair_volume_drops_the_unreferenced_vertex_of_sfepys_ball(volumes):
+    V, T = wfem.read_volume(volumes / "sfepy/unit_ball.mesh")
+    with pytest.raises(wfem.MeshError, match="belongs to no face or tetrahedron"):
+        wfem.operators(V, T)
+    V2, T2, r = wfem.repair_volume(V, T)
+    assert r["dropped_vertices"] == 1 and r["vertex_map"][0] == -1 and len(V2) == len(V) - 1
+    assert np.array_equal(V2, V[1:]) and np.array_equal(T2, T - 1)  # vertex 0 was the one
+    L, B, _ = wfem.operators(V2, T2)
+    assert abs(B.sum() - wfem.validate_volume(V2, T2).volume) < 1e-12
+    # The first Neumann eigenvalue of the unit ball is (the first root of j1')^2 = 4.3330;
+    # on this coarse polyhedral ball P1 overestimates it by a few per cent.
+    lam = wfem.eigenbasis(V2, T2, 4).values
+    assert abs(lam[0]) < 1e-8 and 4.33 < lam[1] < 4.33 * 1.08, lam

@@ -65,7 +65,7 @@ from ._mesh import (
     repair,
     validate,
 )
-from ._volume import VolumeReport, read_volume, validate_volume
+from ._volume import VolumeReport, read_volume, repair_volume, validate_volume
 from ._retrieval import (
     DESCRIPTORS,
     PAPER_DESCRIPTORS,
@@ -97,6 +97,7 @@ __all__ = [
     "read_points",
     "read_volume",
     "validate_volume",
+    "repair_volume",
     "VolumeReport",
     "cloud_operators",
     "LAPLACIANS",

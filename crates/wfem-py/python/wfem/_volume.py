@@ -17,7 +17,7 @@ from . import _wfem
 from ._arrays import as_float_array, to_csc
 from ._errors import InvalidInputError
 
-__all__ = ["read_volume", "validate_volume", "VolumeReport", "tets_of", "volume_pencil"]
+__all__ = ["read_volume", "validate_volume", "repair_volume", "VolumeReport", "tets_of", "volume_pencil"]
 
 
 def read_volume(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -65,6 +65,20 @@ def validate_volume(V: Any, T: Any) -> VolumeReport:
     r = json.loads(_wfem.validate_volume(v, t))
     r["quality"] = tuple(r["quality"])
     return VolumeReport(**r)
+
+
+def repair_volume(
+    V: Any, T: Any, *, orient: bool = True, degenerate: bool = True, unreferenced: bool = True
+) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """Explicit repairs of a tetrahedral mesh (the input is not changed): ``orient`` makes every
+    signed volume positive, ``degenerate`` drops flat tetrahedra, ``unreferenced`` drops
+    vertices in no tetrahedron (renumbering the rest in order). Returns ``(V, T, report)`` with
+    ``report["vertex_map"][i]`` the new index of old vertex i (−1: dropped) and the counts."""
+    v, t = tets_of(V, T, required=True)  # type: ignore[misc]
+    (V2, T2), r = _wfem.repair_volume(v, t, bool(orient), bool(degenerate), bool(unreferenced))
+    report = json.loads(r)
+    report["vertex_map"] = np.asarray(report["vertex_map"], dtype=np.int64)
+    return V2, T2, report
 
 
 def tets_of(V: Any, F: Any, *, required: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
