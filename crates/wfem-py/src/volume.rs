@@ -35,11 +35,22 @@ pub fn volume_in(py: Python<'_>, v: &PyReadonlyArray2<'_, f64>, t: &PyReadonlyAr
     }
     let positions: Vec<[f64; 3]> = va.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
     let mut tets = Vec::with_capacity(ta.nrows());
-    for r in ta.rows() {
+    for (tet, r) in ta.rows().into_iter().enumerate() {
         let mut q = [0u32; 4];
         for (c, &x) in r.iter().enumerate() {
-            // Beyond u32 (or negative) is out of range: TetMesh::new names the tetrahedron.
-            q[c] = u32::try_from(x).unwrap_or(u32::MAX);
+            q[c] = u32::try_from(x).map_err(|_| {
+                crate::errors::raise(
+                    py,
+                    crate::errors::Class::Mesh,
+                    "TetIndexOutOfRange",
+                    format!("tetrahedron {tet} uses vertex {x}, but the mesh has {} vertices", va.nrows()),
+                    vec![
+                        ("tet", tet.into()),
+                        ("index", crate::errors::Value::Int(x.into())),
+                        ("n_vertices", va.nrows().into()),
+                    ],
+                )
+            })?;
         }
         tets.push(q);
     }

@@ -150,6 +150,21 @@ CASES: list[tuple[str, str, str]] = [
     ),
     ("index build words -1", "wfem.RetrievalIndex.build([mesh_file()], os.path.join(d, 'i.sqlite'), words=-1)", "wfem"),
     ("index build words 1e9", "wfem.RetrievalIndex.build([mesh_file()], os.path.join(d, 'i.sqlite'), words=10**9)", "wfem"),
+    # Volumes (issue #39): files and arrays.
+    ("read_volume FIFO", "p = os.path.join(d, 'v.mesh'); os.mkfifo(p); wfem.read_volume(p)", "wfem"),
+    ("read_volume directory", "p = os.path.join(d, 'v.msh'); os.mkdir(p); wfem.read_volume(p)", "wfem"),
+    (
+        "read_volume 1e9 vertices declared",
+        "p = os.path.join(d, 'v.mesh'); open(p, 'w').write('MeshVersionFormatted 1\\nDimension 3\\nVertices\\n1000000000\\n0 0 0 0\\n'); "
+        "wfem.read_volume(p)",
+        "wfem",
+    ),
+    ("volume T index 2^40", "wfem.operators(np.eye(4, 3), np.array([[0, 1, 2, 2**40]]))", "wfem"),
+    ("volume T huge index", "wfem.operators(np.eye(4, 3), np.array([[0, 1, 2, 2**62]]))", "wfem"),
+    ("volume V nan", "wfem.HeatKernel(np.full((4, 3), np.nan), np.array([[0, 1, 2, 3]]))", "wfem"),
+    ("volume flat tetrahedron", "wfem.HeatKernel(np.zeros((4, 3)), np.array([[0, 1, 2, 3]]))", "wfem"),
+    ("volume empty", "wfem.operators(np.zeros((0, 3)), np.zeros((0, 4), dtype=np.int64))", "wfem"),
+    ("volume geodesic source -1", "wfem.GeodesicSolver(np.vstack([np.zeros(3), np.eye(3)]), np.array([[0, 1, 2, 3]])).distance(-1)", "wfem"),
     # Batch outputs.
     ("batch read missing", "wfem.batch.read(os.path.join(d, 'nothing'))", "wfem"),
     ("batch shard_size 0", "wfem.batch.descriptors([], os.path.join(d, 'o'), shard_size=0)", "wfem"),

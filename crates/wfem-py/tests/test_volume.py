@@ -91,6 +91,8 @@ def test_bad_tetrahedra_get_typed_errors(tmp_path):
         wfem.operators(V, np.array([[0, 1, 2, -1]]))
     with pytest.raises(wfem.MeshError):
         wfem.operators(V, np.array([[0, 1, 2, 9]]))
+    with pytest.raises(wfem.MeshError, match="uses vertex 1099511627776"):
+        wfem.operators(V, np.array([[0, 1, 2, 2**40]]))
     with pytest.raises(wfem.InvalidInputError):
         wfem.operators(V, np.array([[0.0, 1, 2, 3]]))
     with pytest.raises(wfem.InvalidInputError):
