@@ -472,36 +472,41 @@ impl ClassRule {
     }
 }
 
-/// Parses a label file: one `file,class` pair per line; an optional header line `file,class`,
-/// blank lines and lines starting with `#` are skipped; fields are trimmed (no quoting: a file
-/// name with a comma cannot be listed). `source` names the file in errors.
+/// Parses a label file as spreadsheet programs write it: one `file,class` pair per line; a
+/// UTF-8 byte-order mark, CRLF line ends, blank lines and lines starting with `#` are skipped;
+/// fields may be quoted (`"a, b.off",cat`, `""` for a quote inside); an optional header line
+/// (`file,class`, `path,label`, `name,category` in any case) is skipped; fields are trimmed.
+/// `source` names the file in errors.
 ///
 /// # Errors
-/// [`RetrievalError::Labels`] naming the line for a line without two non-empty fields, a file
-/// listed twice, or a file without any pair.
+/// [`RetrievalError::Labels`] naming the line for a line without two non-empty fields, an
+/// unclosed quote, a file listed twice, or a file without any pair.
 pub fn parse_labels(text: &str, source: &str) -> Result<Vec<(String, String)>, RetrievalError> {
     let bad = |line: usize, reason: &str| RetrievalError::Labels {
         location: format!("{source}:{line}"),
         reason: reason.to_string(),
     };
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut out: Vec<(String, String)> = Vec::new();
     let mut seen = std::collections::HashSet::new();
+    let mut first = true;
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if out.is_empty() && seen.is_empty() && fields.len() == 2 && fields[0] == "file" && fields[1] == "class" {
-            seen.insert(String::new());
+        let fields = csv_fields(line).ok_or_else(|| bad(i + 1, "a quoted field is not closed"))?;
+        let header = first && fields.len() == 2 && is_header(&fields[0], &fields[1]);
+        first = false;
+        if header {
             continue;
         }
         match fields.as_slice() {
             [file, class] if !file.is_empty() && !class.is_empty() => {
-                if !seen.insert(file.to_string()) {
+                if !seen.insert(file.clone()) {
                     return Err(bad(i + 1, "this file is listed twice"));
                 }
-                out.push((file.to_string(), class.to_string()));
+                out.push((file.clone(), class.clone()));
             }
             _ => return Err(bad(i + 1, "expected `file,class`")),
         }
@@ -513,6 +518,47 @@ pub fn parse_labels(text: &str, source: &str) -> Result<Vec<(String, String)>, R
         });
     }
     Ok(out)
+}
+
+/// Whether a first line names the columns rather than a shape.
+fn is_header(file: &str, class: &str) -> bool {
+    let (f, c) = (file.to_ascii_lowercase(), class.to_ascii_lowercase());
+    ["file", "path", "name", "mesh", "shape", "filename"].contains(&f.as_str())
+        && ["class", "label", "category", "family"].contains(&c.as_str())
+}
+
+/// The comma-separated fields of one line, trimmed, with RFC 4180 quoting (`"a, b",c`, `""`
+/// for a quote inside quotes); `None` for an unclosed quote.
+fn csv_fields(line: &str) -> Option<Vec<String>> {
+    let mut fields = Vec::new();
+    let mut field = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        if quoted {
+            if c != '"' {
+                field.push(c);
+            } else if chars.peek() == Some(&'"') {
+                chars.next();
+                field.push('"');
+            } else {
+                quoted = false;
+            }
+        } else if c == '"' && field.trim().is_empty() {
+            field.clear();
+            quoted = true;
+        } else if c == ',' {
+            fields.push(field.trim().to_string());
+            field.clear();
+        } else {
+            field.push(c);
+        }
+    }
+    if quoted {
+        return None;
+    }
+    fields.push(field.trim().to_string());
+    Some(fields)
 }
 
 /// Reads a label file ([`parse_labels`]) and resolves each file against the label file's

@@ -194,6 +194,21 @@ fn label_files() {
     }
     let e = parse_labels("file,class\n\n", "l").unwrap_err();
     assert!(matches!(e, RetrievalError::Labels { .. }), "{e}");
+    // As spreadsheet programs write them (issue #41): a BOM, CRLF, quoted fields, another header.
+    let excel = "\u{feff}File,Label\r\n\"shrec/a, b.obj\",snake\r\n\"say \"\"hi\"\".off\", \"ants\" \r\n";
+    assert_eq!(
+        parse_labels(excel, "l").unwrap(),
+        vec![
+            ("shrec/a, b.obj".to_string(), "snake".to_string()),
+            ("say \"hi\".off".to_string(), "ants".to_string())
+        ]
+    );
+    match parse_labels("\"a.off,x\n", "l").unwrap_err() {
+        RetrievalError::Labels { location, reason } => {
+            assert!(location == "l:1" && reason.contains("quoted"), "{reason}")
+        }
+        e => panic!("{e}"),
+    }
 }
 
 /// Three classes of three generated shapes each: spheres, tori, ellipsoids, each member a
