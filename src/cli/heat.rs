@@ -74,11 +74,9 @@ impl MethodArgs {
 /// A method option that does not apply, named by its flag.
 fn option_error(e: wfem_heat::HeatError) -> CliError {
     match e {
-        wfem_heat::HeatError::MisplacedOption { option, method, owner } => {
-            CliError::Usage(format!(
-                "--{option} applies to --method {owner} only, not to --method {method}"
-            ))
-        }
+        wfem_heat::HeatError::MisplacedOption { option, method, owner } => CliError::Usage(format!(
+            "--{option} applies to --method {owner} only, not to --method {method}"
+        )),
         other => CliError::Heat(other),
     }
 }

@@ -312,7 +312,11 @@ pub struct RenderArgs {
 
 /// Parses `--cut AXIS=VALUE`: the axis as `--up` names them (x, -y, …), the plane's normal.
 fn parse_cut(text: &str) -> Result<([f64; 3], f64), String> {
-    let bad = || format!("{text:?} is not a plane: give AXIS=VALUE with AXIS x, y or z (or -x, …) and a finite VALUE, e.g. x=0.1");
+    let bad = || {
+        format!(
+            "{text:?} is not a plane: give AXIS=VALUE with AXIS x, y or z (or -x, …) and a finite VALUE, e.g. x=0.1"
+        )
+    };
     let (axis, value) = text.rsplit_once('=').ok_or_else(bad)?;
     let normal = match Up::parse(axis.trim()) {
         Ok(Up::Axis(axis)) => Frame::from_up(axis).up,
@@ -592,11 +596,17 @@ fn volume_cut(
             let (lo, hi) = mesh_fem::vec3::bounding_box(volume.positions());
             let centre = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
             let n = frame.front;
-            (n, mesh_fem::vec3::dot(centre, n), "the centre, facing the front view".to_string())
+            (
+                n,
+                mesh_fem::vec3::dot(centre, n),
+                "the centre, facing the front view".to_string(),
+            )
         }
     };
     let cut = mesh_fem::volume::cut::cut(volume, normal, offset).map_err(|e| {
-        CliError::Usage(format!("--cut {name}: the plane leaves nothing of the volume below it ({e})"))
+        CliError::Usage(format!(
+            "--cut {name}: the plane leaves nothing of the volume below it ({e})"
+        ))
     })?;
     progress::note(&format!(
         "figures: the interior shown by a cut at {name} ({} triangles), below the surface views",
@@ -614,7 +624,9 @@ fn with_cut(
     frame: &Frame,
 ) -> Result<Vec<u8>, CliError> {
     let (cut, normal, name) = cut;
-    let (lo, hi) = values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     params.range = params.range.or(Some((lo, hi.max(lo))));
     let surface = wfem_render::render_rgb(mesh, values, &params)?;
     // Looking along the plane's normal; a horizontal cut is seen from above, back at the top.
@@ -734,7 +746,9 @@ mod tests {
             npy.targets(&["a".into()]),
             [PathBuf::from("x.npy"), PathBuf::from("x.json")]
         );
-        assert!(Output::parse("x.obj").unwrap_err().contains(".ply, .npy, .csv, .vtu, .png"));
+        assert!(Output::parse("x.obj")
+            .unwrap_err()
+            .contains(".ply, .npy, .csv, .vtu, .png"));
         assert!(Output::parse(".png").is_err());
     }
 }

@@ -128,7 +128,18 @@ fn a_volume_figure_shows_a_cut_and_a_bad_plane_is_refused() {
     let cube = write_cube(dir.path(), 3);
     let path = cube.to_str().unwrap();
     let png = dir.path().join("h.png");
-    let o = wfem(&["heat", path, "--source", "0", "--t", "0.05", "--cut", "x=0.4", "-o", png.to_str().unwrap()]);
+    let o = wfem(&[
+        "heat",
+        path,
+        "--source",
+        "0",
+        "--t",
+        "0.05",
+        "--cut",
+        "x=0.4",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("cut at x=0.4"), "{}", stderr(&o));
     let bytes = std::fs::read(&png).unwrap();
@@ -138,9 +149,24 @@ fn a_volume_figure_shows_a_cut_and_a_bad_plane_is_refused() {
         u32::from_be_bytes(bytes[20..24].try_into().unwrap()),
     );
     assert!(h * 3 > w, "{w} × {h}: no second row");
-    for (plane, expected) in [("w=1", "not a plane"), ("x=nan", "not a plane"), ("x=-5", "leaves nothing")] {
+    for (plane, expected) in [
+        ("w=1", "not a plane"),
+        ("x=nan", "not a plane"),
+        ("x=-5", "leaves nothing"),
+    ] {
         let out = dir.path().join("bad.png");
-        let o = wfem(&["heat", path, "--source", "0", "--t", "0.05", "--cut", plane, "-o", out.to_str().unwrap()]);
+        let o = wfem(&[
+            "heat",
+            path,
+            "--source",
+            "0",
+            "--t",
+            "0.05",
+            "--cut",
+            plane,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
         assert!(!o.status.success(), "{plane}");
         assert!(stderr(&o).contains(expected), "{plane}: {}", stderr(&o));
         assert!(!out.exists());

@@ -592,7 +592,10 @@ fn heat_rows() -> Vec<Row> {
             "--t 0.1 --source 3 --method spectral --eigenpairs {U64} -o {o}/k.csv",
             Typed(&["--eigenpairs 18446744073709551615"]),
         ),
-        heat("--t 0.1 --source 3 --method spectral --eigenpairs -5 -o {o}/k.csv", Clap),
+        heat(
+            "--t 0.1 --source 3 --method spectral --eigenpairs -5 -o {o}/k.csv",
+            Clap,
+        ),
         heat(
             "--t 0.1 --source 3 --method taylor -o {o}/k.csv",
             Typed(&["--method taylor is off by"]),
@@ -976,7 +979,10 @@ fn hks_rows() -> Vec<Row> {
         hks("--times 1 --num-times 3 -o {o}/h.npy", Clap),
         hks("--eigenpairs 0 -o {o}/h.npy", Typed(&["--eigenpairs 0", "1..=42"])),
         hks("--eigenpairs 43 -o {o}/h.npy", Typed(&["--eigenpairs 43"])),
-        hks("--eigenpairs 100000000000 -o {o}/h.npy", Typed(&["--eigenpairs 100000000000"])),
+        hks(
+            "--eigenpairs 100000000000 -o {o}/h.npy",
+            Typed(&["--eigenpairs 100000000000"]),
+        ),
         hks("--eigenpairs {U64} -o {o}/h.npy", Typed(&["--eigenpairs"])),
         hks("--eigenpairs -3 -o {o}/h.npy", Clap),
         hks("--kernel linear -o {o}/h.npy", ok(&[Npy("h.npy", N, 16)])),
@@ -1011,9 +1017,18 @@ fn demo_rows() -> Vec<Row> {
         row("demo --out {o}/demo --level 4294967295", Typed(&["--level 4294967295"])),
         row("demo --out {o}/demo --level 4294967296", Clap),
         row("demo --out {o}/demo --level -1", Clap),
-        row("demo --out {o}/demo --level 1 --eigenpairs 0", Typed(&["--eigenpairs 0"])),
-        row("demo --out {o}/demo --level 1 --eigenpairs 43", Typed(&["--eigenpairs 43"])),
-        row("demo --out {o}/demo --level 1 --eigenpairs {U64}", Typed(&["--eigenpairs"])),
+        row(
+            "demo --out {o}/demo --level 1 --eigenpairs 0",
+            Typed(&["--eigenpairs 0"]),
+        ),
+        row(
+            "demo --out {o}/demo --level 1 --eigenpairs 43",
+            Typed(&["--eigenpairs 43"]),
+        ),
+        row(
+            "demo --out {o}/demo --level 1 --eigenpairs {U64}",
+            Typed(&["--eigenpairs"]),
+        ),
         row(
             "demo --out {o}/demo --level 5 --eigenpairs 2000",
             Typed(&["--eigenpairs 2000", "n/10"]),

@@ -43,7 +43,10 @@ pub fn volume_in(py: Python<'_>, v: &PyReadonlyArray2<'_, f64>, t: &PyReadonlyAr
                     py,
                     crate::errors::Class::Mesh,
                     "TetIndexOutOfRange",
-                    format!("tetrahedron {tet} uses vertex {x}, but the mesh has {} vertices", va.nrows()),
+                    format!(
+                        "tetrahedron {tet} uses vertex {x}, but the mesh has {} vertices",
+                        va.nrows()
+                    ),
                     vec![
                         ("tet", tet.into()),
                         ("index", crate::errors::Value::Int(x.into())),

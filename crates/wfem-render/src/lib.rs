@@ -242,7 +242,8 @@ impl RgbImage {
             for y in 0..img.height as usize {
                 let src = 3 * y * img.width as usize;
                 let dst = 3 * ((top + y) * width as usize);
-                out.data[dst..dst + 3 * img.width as usize].copy_from_slice(&img.data[src..src + 3 * img.width as usize]);
+                out.data[dst..dst + 3 * img.width as usize]
+                    .copy_from_slice(&img.data[src..src + 3 * img.width as usize]);
             }
             top += img.height as usize;
         }

@@ -102,14 +102,31 @@ pub fn stage_vtu(
     set.stage(path, |w| write_vtu(w, positions, cells, fields))
 }
 
-fn write_vtu(w: &mut dyn Write, positions: &[[f64; 3]], cells: Cells<'_>, fields: &[(&str, &[f64])]) -> std::io::Result<()> {
+fn write_vtu(
+    w: &mut dyn Write,
+    positions: &[[f64; 3]],
+    cells: Cells<'_>,
+    fields: &[(&str, &[f64])],
+) -> std::io::Result<()> {
     writeln!(w, "<?xml version=\"1.0\"?>")?;
-    writeln!(w, "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">")?;
+    writeln!(
+        w,
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"
+    )?;
     writeln!(w, "  <UnstructuredGrid>")?;
-    writeln!(w, "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">", positions.len(), cells.len())?;
+    writeln!(
+        w,
+        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+        positions.len(),
+        cells.len()
+    )?;
     writeln!(w, "      <PointData Scalars=\"{}\">", attribute(fields[0].0))?;
     for (name, values) in fields {
-        writeln!(w, "        <DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">", attribute(name))?;
+        writeln!(
+            w,
+            "        <DataArray type=\"Float64\" Name=\"{}\" format=\"ascii\">",
+            attribute(name)
+        )?;
         for chunk in values.chunks(8) {
             let line: Vec<String> = chunk.iter().map(|v| format!("{v:?}")).collect();
             writeln!(w, "          {}", line.join(" "))?;
@@ -118,20 +135,29 @@ fn write_vtu(w: &mut dyn Write, positions: &[[f64; 3]], cells: Cells<'_>, fields
     }
     writeln!(w, "      </PointData>")?;
     writeln!(w, "      <Points>")?;
-    writeln!(w, "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">")?;
+    writeln!(
+        w,
+        "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">"
+    )?;
     for p in positions {
         writeln!(w, "          {:?} {:?} {:?}", p[0], p[1], p[2])?;
     }
     writeln!(w, "        </DataArray>")?;
     writeln!(w, "      </Points>")?;
     writeln!(w, "      <Cells>")?;
-    writeln!(w, "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">")?;
+    writeln!(
+        w,
+        "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
+    )?;
     for i in 0..cells.len() {
         let c: Vec<String> = cells.cell(i).iter().map(u32::to_string).collect();
         writeln!(w, "          {}", c.join(" "))?;
     }
     writeln!(w, "        </DataArray>")?;
-    writeln!(w, "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">")?;
+    writeln!(
+        w,
+        "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">"
+    )?;
     let k = cells.corners();
     for chunk in (1..=cells.len()).collect::<Vec<_>>().chunks(16) {
         let line: Vec<String> = chunk.iter().map(|i| (i * k).to_string()).collect();

@@ -51,7 +51,11 @@ impl Points<'_> {
         }
         let (a, b) = key;
         let (sa, sb) = (self.side[a as usize], self.side[b as usize]);
-        let w = if a == b || sa == sb { 0.0 } else { (sa / (sa - sb)).clamp(0.0, 1.0) };
+        let w = if a == b || sa == sb {
+            0.0
+        } else {
+            (sa / (sa - sb)).clamp(0.0, 1.0)
+        };
         let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
         let p = [0, 1, 2].map(|k| (1.0 - w) * pa[k] + w * pb[k]);
         let i = self.out.len() as u32;
@@ -148,7 +152,11 @@ fn tangent_basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     use crate::vec3::{cross, norm};
     let l = norm(n);
     let n = n.map(|x| x / l);
-    let helper = if n[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+    let helper = if n[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
     let u = cross(helper, n);
     let lu = norm(u);
     let u = u.map(|x| x / lu);

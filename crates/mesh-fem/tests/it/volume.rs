@@ -337,10 +337,22 @@ fn vtu_holds_the_tetrahedra_and_refuses_bad_fields() {
     let path = dir.path().join("c.vtu");
     let f: Vec<f64> = cube.positions().iter().map(|p| p[0]).collect();
     let mut set = AtomicSet::new();
-    stage_vtu(&mut set, &path, cube.positions(), Cells::Tetrahedra(cube.tets()), &[("x<1>", &f)], false).unwrap();
+    stage_vtu(
+        &mut set,
+        &path,
+        cube.positions(),
+        Cells::Tetrahedra(cube.tets()),
+        &[("x<1>", &f)],
+        false,
+    )
+    .unwrap();
     set.commit().unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
-    assert!(text.contains(&format!("NumberOfPoints=\"{}\" NumberOfCells=\"{}\"", cube.n_vertices(), cube.n_tets())));
+    assert!(text.contains(&format!(
+        "NumberOfPoints=\"{}\" NumberOfCells=\"{}\"",
+        cube.n_vertices(),
+        cube.n_tets()
+    )));
     assert!(text.contains("Name=\"x&lt;1&gt;\""));
     assert!(text.matches(" 10").count() >= cube.n_tets());
     let short = vec![0.0; 3];
@@ -353,9 +365,16 @@ fn vtu_holds_the_tetrahedra_and_refuses_bad_fields() {
         (vec![], "at least one field"),
     ] {
         let mut set = AtomicSet::new();
-        let err = stage_vtu(&mut set, &other, cube.positions(), Cells::Tetrahedra(cube.tets()), &fields, false)
-            .unwrap_err()
-            .to_string();
+        let err = stage_vtu(
+            &mut set,
+            &other,
+            cube.positions(),
+            Cells::Tetrahedra(cube.tets()),
+            &fields,
+            false,
+        )
+        .unwrap_err()
+        .to_string();
         assert!(err.contains(expected), "{err}");
     }
     assert!(!other.exists());
@@ -371,13 +390,20 @@ fn a_cut_shows_the_interior_field_exactly() {
     let c = cut(&cube, [1.0, 0.0, 0.0], 0.37).unwrap();
     let p = c.mesh.positions();
     assert!(p.iter().all(|q| q[0] <= 0.37 + 1e-12));
-    let f: Vec<f64> = cube.positions().iter().map(|q| q[0] + 2.0 * q[1] - 3.0 * q[2]).collect();
+    let f: Vec<f64> = cube
+        .positions()
+        .iter()
+        .map(|q| q[0] + 2.0 * q[1] - 3.0 * q[2])
+        .collect();
     for (q, v) in p.iter().zip(c.values(&f)) {
         assert!((v - (q[0] + 2.0 * q[1] - 3.0 * q[2])).abs() < 1e-12);
     }
     let area = |face: &[u32; 3]| {
         let [a, b, d] = face.map(|i| p[i as usize]);
-        0.5 * mesh_fem::vec3::norm(mesh_fem::vec3::cross(mesh_fem::vec3::sub(b, a), mesh_fem::vec3::sub(d, a)))
+        0.5 * mesh_fem::vec3::norm(mesh_fem::vec3::cross(
+            mesh_fem::vec3::sub(b, a),
+            mesh_fem::vec3::sub(d, a),
+        ))
     };
     let on_plane = |face: &[u32; 3]| face.iter().all(|&i| (p[i as usize][0] - 0.37).abs() < 1e-12);
     let section: f64 = c.mesh.faces().iter().filter(|f| on_plane(f)).map(area).sum();
