@@ -189,3 +189,21 @@ def test_bad_sources_are_typed_errors():
     for points in ([[len(F), 1, 0, 0]], [[0, 0.5, 0.5, 0.5]], [[0, -1, 1, 1]], [[0.5, 1, 0, 0]], [[0, 1, 0]]):
         with pytest.raises(wfem.WfemError):
             solver.distance([], points=points)
+
+
+@pytest.mark.parametrize("error", [KeyError, ValueError, TypeError, RuntimeError])
+def test_a_raising_progress_callback_keeps_its_exception(tmp_path, error):
+    # Issue #41 point 6: the caller's own exception comes back as it was (the work is cancelled;
+    # a job this small may have finished before the first report reaches the callback).
+    V, F = wfem.generate.icosphere(2)
+    calls = []
+
+    def progress(step):
+        calls.append(step)
+        raise error("from the callback")
+
+    with pytest.raises(error, match="from the callback"):
+        wfem.GeodesicSolver(V, F).all_pairs(tmp_path / "D.npy", progress=progress, block_rows=8)
+    with pytest.raises(error, match="from the callback"):
+        wfem.HeatKernel(V, F).distance(0.01).all_pairs(tmp_path / "E.npy", progress=progress, block_rows=8)
+    assert len(calls) == 2

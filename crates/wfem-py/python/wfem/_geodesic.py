@@ -171,7 +171,9 @@ class GeodesicSolver:
         file appears complete or not at all; an interrupted call leaves a partial file beside it
         that the same call continues. ``progress("done/total")`` is called after each block;
         ``block_rows`` rows are computed at a time (default: 64 MB of them). Returns the path."""
-        path, _ = self._s.all_pairs(os.fspath(out), progress, block_rows)
+        from ._progress import user_callback
+
+        path, _ = self._s.all_pairs(os.fspath(out), user_callback(progress), block_rows)
         return str(path)
 
 

@@ -61,6 +61,9 @@ def guard(fn: Callable[..., Any]) -> Callable[..., Any]:
         except WfemError:
             raise
         except _CONVERTED as e:
+            if getattr(e, "__wfem_callback__", False):
+                # Raised by the caller's own callback (progress=): theirs, unchanged.
+                raise
             tb = e.__traceback__
             if isinstance(e, TypeError) and (tb is None or tb.tb_next is None):
                 # Raised while entering `fn`: a wrong call (arity, keyword), not a bad value.

@@ -450,5 +450,7 @@ class DiffusionDistance:
         ``block_rows`` rows are computed at a time (default: 64 MB of them). Returns the path."""
         import os
 
-        path, _ = self._d.all_pairs(os.fspath(out), progress, block_rows)
+        from ._progress import user_callback
+
+        path, _ = self._d.all_pairs(os.fspath(out), user_callback(progress), block_rows)
         return str(path)

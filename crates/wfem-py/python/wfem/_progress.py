@@ -16,6 +16,25 @@ from ._errors import InvalidInputError
 ProgressArg = Union[None, bool, Callable[[int, int, str], object]]
 
 
+def user_callback(fn: Callable[..., Any] | None) -> Callable[..., Any] | None:
+    """``fn`` with its exceptions marked as the caller's own: the public API re-raises them as
+    they were (type, message, traceback) instead of re-typing them as an invalid argument."""
+    if fn is None:
+        return None
+
+    def call(*args: Any) -> Any:
+        try:
+            return fn(*args)
+        except BaseException as e:
+            try:
+                e.__wfem_callback__ = True  # type: ignore[attr-defined]
+            except (AttributeError, TypeError):
+                pass
+            raise
+
+    return call
+
+
 def _tqdm() -> Any:
     try:
         from tqdm.auto import tqdm  # type: ignore[import-not-found, import-untyped, unused-ignore]
@@ -58,11 +77,11 @@ def reporter(progress: ProgressArg, total: int, what: str) -> Iterator[Callable[
             kind="InvalidParameter",
             name="progress",
         )
-    user = progress
+    user = user_callback(progress)
     count = [0]
 
     def call(name: str) -> None:
         count[0] += 1
-        user(count[0], total, name)
+        user(count[0], total, name)  # type: ignore[misc]
 
     yield call
