@@ -55,7 +55,14 @@ impl TimeUnitArgs {
             .on(&lengths)
             .map_err(|e| CliError::Usage(format!("--time-unit {}: {e}", unit.name())))?;
         let absolute: Vec<f64> = given.iter().map(|t| t * unit_value).collect();
-        for &t in &absolute {
+        for (&t, &g) in absolute.iter().zip(given) {
+            if g.is_finite() && g > 0.0 && !t.is_finite() {
+                // The given time is fine; its product with the unit is not (issue #41).
+                return Err(CliError::Usage(format!(
+                    "{flag} {g:e} --time-unit {}: {g:e} × {unit_value:.4e} (the unit on this mesh) overflows; give a smaller time",
+                    unit.name()
+                )));
+            }
             super::limits::time(flag, t)?;
         }
         Ok(Times {

@@ -172,3 +172,27 @@ fn a_volume_figure_shows_a_cut_and_a_bad_plane_is_refused() {
         assert!(!out.exists());
     }
 }
+
+#[test]
+fn a_time_that_overflows_in_its_unit_is_named_as_given() {
+    // Issue #41: `--t 1e308 --time-unit area` was reported as "--t inf".
+    let dir = tempfile::tempdir().unwrap();
+    let cube = write_cube(dir.path(), 2);
+    let out = dir.path().join("x.npy");
+    let o = wfem(&[
+        "heat",
+        cube.to_str().unwrap(),
+        "--source",
+        "0",
+        "--t",
+        "1e308",
+        "--time-unit",
+        "area",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("--t 100000000") || e.contains("--t 1e308"), "{e}");
+    assert!(e.contains("overflows") && !e.contains("inf"), "{e}");
+}
