@@ -443,6 +443,12 @@ pub fn load_shape_quietly(path: &Path, laplacian: Laplacian) -> Result<Shape, Cl
             path.display()
         )));
     }
+    if mesh_fem::io::volume::VolumeFormat::from_path(path).is_some() {
+        return Err(CliError::Usage(format!(
+            "{} is a tetrahedral mesh: retrieval describes surfaces and point clouds (heat, hks, wks, geodesic and info take volumes)",
+            path.display()
+        )));
+    }
     let shape = load_shape(path, &LoadOptions::default())?;
     if let Shape::Mesh(mesh, _) = &shape {
         if !matches!(laplacian, Laplacian::Robust(_)) {

@@ -196,3 +196,20 @@ fn a_time_that_overflows_in_its_unit_is_named_as_given() {
     assert!(e.contains("--t 100000000") || e.contains("--t 1e308"), "{e}");
     assert!(e.contains("overflows") && !e.contains("inf"), "{e}");
 }
+
+#[test]
+fn retrieval_says_a_volume_is_not_a_surface() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = write_cube(dir.path(), 2);
+    let index = dir.path().join("i.sqlite");
+    let o = wfem(&[
+        "retrieval",
+        "build",
+        cube.to_str().unwrap(),
+        "--out",
+        index.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("is a tetrahedral mesh"), "{}", stderr(&o));
+    assert!(!index.exists());
+}
