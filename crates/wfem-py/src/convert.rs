@@ -24,7 +24,43 @@ pub fn mat_in(a: &PyReadonlyArray2<'_, f64>) -> Mat<f64> {
 /// A mesh from V (n, 3) float64 and F (m, 3) int64, validated by `TriMesh::new` (indices in
 /// range, finite coordinates, not empty).
 pub fn mesh_in(py: Python<'_>, v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArray2<'_, i64>) -> PyResult<TriMesh> {
-    let (va, fa) = (v.as_array(), f.as_array());
+    let elements = Elements {
+        array: "F",
+        shape_kind: "FacesShape",
+        shape: "(m, 3) (triangles)",
+        element: "face",
+        key: "face",
+        index_kind: "IndexOutOfRange",
+    };
+    let (positions, faces) = elements_in::<3>(py, v, f, &elements)?;
+    TriMesh::new(positions, faces).map_err(|e| crate::errors::mesh(py, &e))
+}
+
+/// How [`elements_in`] names an element array in its errors.
+pub struct Elements {
+    /// The argument (`F`, `T`).
+    pub array: &'static str,
+    /// The error kind of a wrong shape.
+    pub shape_kind: &'static str,
+    /// The shape it must have, as messages say it.
+    pub shape: &'static str,
+    /// One element, as messages say it (`face`, `tetrahedron`).
+    pub element: &'static str,
+    /// Its key in the error's details.
+    pub key: &'static str,
+    /// The error kind of an index out of range.
+    pub index_kind: &'static str,
+}
+
+/// Positions from V (n, 3) and K-vertex elements from an (m, K) index array, every index
+/// checked to fit (the mesh type checks that it names a vertex).
+pub fn elements_in<const K: usize>(
+    py: Python<'_>,
+    v: &PyReadonlyArray2<'_, f64>,
+    e: &PyReadonlyArray2<'_, i64>,
+    names: &Elements,
+) -> PyResult<(Vec<[f64; 3]>, Vec<[u32; K]>)> {
+    let (va, ea) = (v.as_array(), e.as_array());
     if va.ncols() != 3 {
         return Err(invalid(
             py,
@@ -32,35 +68,39 @@ pub fn mesh_in(py: Python<'_>, v: &PyReadonlyArray2<'_, f64>, f: &PyReadonlyArra
             format!("V must have shape (n, 3), got {:?}", va.shape()),
         ));
     }
-    if fa.ncols() != 3 {
+    if ea.ncols() != K {
         return Err(invalid(
             py,
-            "FacesShape",
-            format!("F must have shape (m, 3) (triangles), got {:?}", fa.shape()),
+            names.shape_kind,
+            format!("{} must have shape {}, got {:?}", names.array, names.shape, ea.shape()),
         ));
     }
     let positions: Vec<[f64; 3]> = va.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
-    let mut faces = Vec::with_capacity(fa.nrows());
-    for (face, r) in fa.rows().into_iter().enumerate() {
-        let mut tri = [0u32; 3];
+    let mut elements = Vec::with_capacity(ea.nrows());
+    for (i, r) in ea.rows().into_iter().enumerate() {
+        let mut element = [0u32; K];
         for (c, &x) in r.iter().enumerate() {
-            tri[c] = u32::try_from(x).map_err(|_| {
+            element[c] = u32::try_from(x).map_err(|_| {
                 crate::errors::raise(
                     py,
                     crate::errors::Class::Mesh,
-                    "IndexOutOfRange",
-                    format!("face {face} uses vertex {x}, but the mesh has {} vertices", va.nrows()),
+                    names.index_kind,
+                    format!(
+                        "{} {i} uses vertex {x}, but the mesh has {} vertices",
+                        names.element,
+                        va.nrows()
+                    ),
                     vec![
-                        ("face", face.into()),
+                        (names.key, i.into()),
                         ("index", crate::errors::Value::Int(x.into())),
                         ("n_vertices", va.nrows().into()),
                     ],
                 )
             })?;
         }
-        faces.push(tri);
+        elements.push(element);
     }
-    TriMesh::new(positions, faces).map_err(|e| crate::errors::mesh(py, &e))
+    Ok((positions, elements))
 }
 
 /// A sparse matrix argument: CSC arrays (indptr, indices, data) and its shape.

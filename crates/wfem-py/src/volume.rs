@@ -2,7 +2,8 @@
 //! linear FEM operators; `HeatKernel.from_volume` and `GeodesicSolver.from_volume` build on
 //! [`volume_in`].
 
-use crate::errors::{invalid, Error};
+use crate::convert::{elements_in, Elements};
+use crate::errors::Error;
 use crate::out::{sparse_out, SparseOut};
 use crate::run::run;
 use mesh_fem::io::volume::read_volume as read_volume_file;
@@ -18,45 +19,15 @@ type VolumeArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
 
 /// A tetrahedral mesh from V (n, 3) float64 and T (m, 4) int64, validated by `TetMesh::new`.
 pub fn volume_in(py: Python<'_>, v: &PyReadonlyArray2<'_, f64>, t: &PyReadonlyArray2<'_, i64>) -> PyResult<TetMesh> {
-    let (va, ta) = (v.as_array(), t.as_array());
-    if va.ncols() != 3 {
-        return Err(invalid(
-            py,
-            "VerticesShape",
-            format!("V must have shape (n, 3), got {:?}", va.shape()),
-        ));
-    }
-    if ta.ncols() != 4 {
-        return Err(invalid(
-            py,
-            "TetsShape",
-            format!("T must have shape (m, 4) (tetrahedra), got {:?}", ta.shape()),
-        ));
-    }
-    let positions: Vec<[f64; 3]> = va.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
-    let mut tets = Vec::with_capacity(ta.nrows());
-    for (tet, r) in ta.rows().into_iter().enumerate() {
-        let mut q = [0u32; 4];
-        for (c, &x) in r.iter().enumerate() {
-            q[c] = u32::try_from(x).map_err(|_| {
-                crate::errors::raise(
-                    py,
-                    crate::errors::Class::Mesh,
-                    "TetIndexOutOfRange",
-                    format!(
-                        "tetrahedron {tet} uses vertex {x}, but the mesh has {} vertices",
-                        va.nrows()
-                    ),
-                    vec![
-                        ("tet", tet.into()),
-                        ("index", crate::errors::Value::Int(x.into())),
-                        ("n_vertices", va.nrows().into()),
-                    ],
-                )
-            })?;
-        }
-        tets.push(q);
-    }
+    let elements = Elements {
+        array: "T",
+        shape_kind: "TetsShape",
+        shape: "(m, 4) (tetrahedra)",
+        element: "tetrahedron",
+        key: "tet",
+        index_kind: "TetIndexOutOfRange",
+    };
+    let (positions, tets) = elements_in::<4>(py, v, t, &elements)?;
     TetMesh::new(positions, tets).map_err(|e| crate::errors::mesh(py, &e))
 }
 

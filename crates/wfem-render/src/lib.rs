@@ -237,17 +237,22 @@ impl RgbImage {
         let width = images.iter().map(|i| i.width).max().unwrap_or(0);
         let height = images.iter().map(|i| i.height).sum();
         let mut out = Self::new(width, height, [255; 3]);
-        let mut top = 0usize;
+        let mut top = 0;
         for img in images {
-            for y in 0..img.height as usize {
-                let src = 3 * y * img.width as usize;
-                let dst = 3 * ((top + y) * width as usize);
-                out.data[dst..dst + 3 * img.width as usize]
-                    .copy_from_slice(&img.data[src..src + 3 * img.width as usize]);
-            }
-            top += img.height as usize;
+            out.blit(img, 0, top);
+            top += img.height;
         }
         out
+    }
+
+    /// Copies `img` into this image with its top-left corner at (x, y); it must fit.
+    fn blit(&mut self, img: &RgbImage, x: u32, y: u32) {
+        let row = 3 * img.width as usize;
+        for r in 0..img.height as usize {
+            let src = r * row;
+            let dst = 3 * ((y as usize + r) * self.width as usize + x as usize);
+            self.data[dst..dst + row].copy_from_slice(&img.data[src..src + row]);
+        }
     }
 
     /// The colour at (x, y); panics if out of bounds (like slice indexing).
@@ -507,12 +512,7 @@ fn render_surface(
     let scene = raster::Scene::new(positions, surface, field, params, range);
     let views: Vec<RgbImage> = params.views.par_iter().map(|v| scene.render_view(v, params)).collect();
     for (rect, view) in lay.views.iter().zip(&views) {
-        for y in 0..view.height {
-            let src = 3 * (y as usize * view.width as usize);
-            let dst = 3 * ((rect.y + y) as usize * img.width as usize + rect.x as usize);
-            img.data[dst..dst + 3 * view.width as usize]
-                .copy_from_slice(&view.data[src..src + 3 * view.width as usize]);
-        }
+        img.blit(view, rect.x, rect.y);
     }
     let fs = font_scale(params.height);
     if let Some(bar) = lay.legend_bar {

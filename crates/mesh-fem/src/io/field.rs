@@ -21,14 +21,15 @@ fn unsupported(path: &Path, supported: &str) -> MeshError {
     }
 }
 
-fn check_fields(
+/// Every field has one value per vertex (of `n`), finite (or `+∞` when `allow_infinity`);
+/// `colors` too has one per vertex. Shared by every field writer (PLY, NPY, CSV, VTU).
+pub(super) fn check_fields(
     path: &Path,
-    mesh: &TriMesh,
+    n: usize,
     fields: &[(&str, &[f64])],
     colors: Option<&[[u8; 3]]>,
     allow_infinity: bool,
 ) -> Result<(), MeshError> {
-    let n = mesh.n_vertices();
     for (name, values) in fields {
         if values.len() != n {
             return Err(MeshError::FieldLength {
@@ -67,8 +68,18 @@ fn invalid_name(path: &Path, name: &str, why: &str) -> MeshError {
     }
 }
 
+/// No field name appears twice (PLY properties, VTU arrays).
+pub(super) fn unique_names(path: &Path, fields: &[(&str, &[f64])]) -> Result<(), MeshError> {
+    for (i, (name, _)) in fields.iter().enumerate() {
+        if fields[..i].iter().any(|(other, _)| other == name) {
+            return Err(invalid_name(path, name, "appears twice"));
+        }
+    }
+    Ok(())
+}
+
 /// `fields` must not be empty: `file` ("an NPY file", …) holds at least one.
-fn require_fields(path: &Path, fields: &[(&str, &[f64])], file: &str) -> Result<(), MeshError> {
+pub(super) fn require_fields(path: &Path, fields: &[(&str, &[f64])], file: &str) -> Result<(), MeshError> {
     if fields.is_empty() {
         let why = format!("list is empty: {file} needs at least one field");
         return Err(invalid_name(path, "", &why));
@@ -200,7 +211,7 @@ pub fn stage_field_with(
     colors: Option<&[[u8; 3]]>,
     allow_infinity: bool,
 ) -> Result<(), MeshError> {
-    check_fields(path, mesh, fields, colors, allow_infinity)?;
+    check_fields(path, mesh.n_vertices(), fields, colors, allow_infinity)?;
     match format {
         FieldFormat::Ply => {
             const RESERVED: [&str; 6] = ["x", "y", "z", "red", "green", "blue"];

@@ -69,36 +69,9 @@ pub fn stage_vtu(
     fields: &[(&str, &[f64])],
     allow_infinity: bool,
 ) -> Result<(), MeshError> {
-    let n = positions.len();
-    if fields.is_empty() {
-        return Err(MeshError::Invalid {
-            reason: format!("{}: a .vtu output needs at least one field", path.display()),
-        });
-    }
-    for (i, (name, values)) in fields.iter().enumerate() {
-        if values.len() != n {
-            return Err(MeshError::FieldLength {
-                path: path.to_path_buf(),
-                name: (*name).to_string(),
-                expected: n,
-                found: values.len(),
-            });
-        }
-        let bad = |v: f64| !(v.is_finite() || (allow_infinity && v == f64::INFINITY));
-        if let Some((vertex, &value)) = values.iter().enumerate().find(|(_, v)| bad(**v)) {
-            return Err(MeshError::NonFiniteValue {
-                path: path.to_path_buf(),
-                name: (*name).to_string(),
-                vertex,
-                value,
-            });
-        }
-        if fields[..i].iter().any(|(other, _)| other == name) {
-            return Err(MeshError::Invalid {
-                reason: format!("{}: field name {name:?} appears twice", path.display()),
-            });
-        }
-    }
+    super::field::require_fields(path, fields, "a VTU file")?;
+    super::field::check_fields(path, positions.len(), fields, None, allow_infinity)?;
+    super::field::unique_names(path, fields)?;
     set.stage(path, |w| write_vtu(w, positions, cells, fields))
 }
 
