@@ -103,7 +103,8 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
             kind.name(),
             args.degree
         );
-        let rows = |range: std::ops::Range<usize>| Ok(dd.rows(&range.collect::<Vec<usize>>())?.concat());
+        let rows =
+            |range: std::ops::Range<usize>, block: &mut [f64]| dd.rows_into(&range.collect::<Vec<usize>>(), block);
         return super::output::write_all_pairs(&args.output, dd.n(), &key, rows, meta, out);
     }
     let list: Vec<usize> = sources.iter().map(|&v| v as usize).collect();

@@ -131,9 +131,9 @@ pub fn geodesic(args: &GeodesicArgs, out: &mut dyn Write) -> Result<(), CliError
     if args.all_pairs {
         // What the rows are: a resume continues only the same computation.
         let key = format!("{}|{:?}", input.meta(&args.input.mesh), solver.params());
-        let rows = |range: std::ops::Range<usize>| {
+        let rows = |range: std::ops::Range<usize>, block: &mut [f64]| {
             let sources: Vec<u32> = (range.start as u32..range.end as u32).collect();
-            Ok(solver.distance_each(&sources)?.concat())
+            solver.distance_each_into(&sources, block)
         };
         return super::output::write_all_pairs(&args.output, solver.n_vertices(), &key, rows, meta, out);
     }

@@ -688,7 +688,7 @@ pub fn write_all_pairs(
     output: &Output,
     n: usize,
     key: &str,
-    compute: impl Fn(std::ops::Range<usize>) -> Result<Vec<f64>, wfem_heat::HeatError>,
+    compute: impl Fn(std::ops::Range<usize>, &mut [f64]) -> Result<(), wfem_heat::HeatError>,
     mut meta: Map<String, Value>,
     out: &mut dyn std::io::Write,
 ) -> Result<(), CliError> {

@@ -272,6 +272,18 @@ impl DiffusionDistance {
     /// [`Self::gram_apply`].
     pub fn rows(&self, sources: &[usize]) -> Result<Vec<Vec<f64>>, HeatError> {
         let n = self.n();
+        let mut out = vec![0.0; sources.len() * n];
+        self.rows_into(sources, &mut out)?;
+        Ok(out.chunks(n).map(<[f64]>::to_vec).collect())
+    }
+
+    /// [`Self::rows`] written into `out` (`|sources| × n`, row-major) instead of new vectors:
+    /// what [`write_rows`] streams an all-pairs matrix with.
+    ///
+    /// # Errors
+    /// As [`Self::rows`]; [`HeatError::LengthMismatch`] if `out` is not `|sources| × n`.
+    pub fn rows_into(&self, sources: &[usize], out: &mut [f64]) -> Result<(), HeatError> {
+        let n = self.n();
         if sources.is_empty() {
             return Err(HeatError::InvalidParameter {
                 name: "sources",
@@ -279,21 +291,25 @@ impl DiffusionDistance {
             });
         }
         check::vertices(sources, n)?;
+        if out.len() != sources.len() * n {
+            return Err(HeatError::LengthMismatch {
+                expected: sources.len() * n,
+                found: out.len(),
+            });
+        }
         let e = unit_columns(n, sources)?;
         let y = self.gram_apply(e.as_ref())?;
         let first: Vec<f64> = y.col(0).iter().copied().collect();
         let d = self.diagonal_from(sources[0], &first)?;
-        Ok(sources
-            .iter()
-            .enumerate()
-            .map(|(c, &i)| {
-                let col = y.col(c);
-                let aii = col[i];
-                let mut row: Vec<f64> = (0..n).map(|j| (aii - 2.0 * col[j] + d[j]).max(0.0).sqrt()).collect();
-                row[i] = 0.0;
-                row
-            })
-            .collect())
+        for ((c, &i), row) in sources.iter().enumerate().zip(out.chunks_mut(n)) {
+            let col = y.col(c);
+            let aii = col[i];
+            for (j, r) in row.iter_mut().enumerate() {
+                *r = (aii - 2.0 * col[j] + d[j]).max(0.0).sqrt();
+            }
+            row[i] = 0.0;
+        }
+        Ok(())
     }
 
     /// Distances from vertex i to every vertex (square roots of [`Self::row_squared`]).
@@ -322,9 +338,9 @@ pub struct RowsReport {
 }
 
 /// Writes an `n_rows × n_cols` matrix to an `.npy` file a block of rows at a time
-/// (`compute(range)` gives the rows of `range`, concatenated; `block_rows` of them, by default
-/// as many as fit in [`ROW_BLOCK_BYTES`]), so memory holds one block whatever the size of the
-/// matrix: an all-pairs distance matrix
+/// (`compute(range, block)` fills `block` with the rows of `range`, concatenated; `block_rows`
+/// of them, by default as many as fit in [`ROW_BLOCK_BYTES`]), so memory holds one block — one
+/// buffer, reused — whatever the size of the matrix: an all-pairs distance matrix
 /// of 50K vertices (20 GB) in 64 MB. Atomic and resumable ([`mesh_fem::io::rows`]): an
 /// interrupted run (Ctrl-C, [`wfem_base::interrupt`], a crash) leaves the rows it finished in
 /// a partial file beside the target, which a run with the same `key` continues.
@@ -339,7 +355,7 @@ pub fn write_rows(
     n_cols: usize,
     key: &str,
     block_rows: Option<usize>,
-    compute: impl Fn(std::ops::Range<usize>) -> Result<Vec<f64>, HeatError>,
+    compute: impl Fn(std::ops::Range<usize>, &mut [f64]) -> Result<(), HeatError>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<RowsReport, HeatError> {
     let mut file = mesh_fem::io::rows::RowFile::open(path, n_rows, n_cols, key)?;
@@ -349,16 +365,13 @@ pub fn write_rows(
     let resumed_from = file.rows_done();
     progress(resumed_from, n_rows);
     let mut start = resumed_from;
+    let mut buffer = vec![0.0; block.min(n_rows - resumed_from.min(n_rows)) * n_cols];
     while start < n_rows {
         wfem_base::interrupt::checkpoint().map_err(shifted_solve::SolveError::from)?;
         let end = (start + block).min(n_rows);
-        let rows = compute(start..end)?;
-        if rows.len() != (end - start) * n_cols {
-            return Err(HeatError::LengthMismatch {
-                found: rows.len(),
-                expected: (end - start) * n_cols,
-            });
-        }
+        let rows = &mut buffer[..(end - start) * n_cols];
+        rows.fill(f64::NAN);
+        compute(start..end, rows)?;
         if let Some(i) = rows.iter().position(|x| x.is_nan()) {
             return Err(HeatError::NonFiniteResult {
                 method: "distance rows",
@@ -366,7 +379,7 @@ pub fn write_rows(
                 column: i % n_cols,
             });
         }
-        file.append(&rows)?;
+        file.append(rows)?;
         start = end;
         progress(start, n_rows);
     }

@@ -175,9 +175,9 @@ impl PyGeodesicSolver {
                 n,
                 &key,
                 block_rows,
-                |range| {
+                |range, block| {
                     let sources: Vec<u32> = (range.start as u32..range.end as u32).collect();
-                    Ok(inner.distance_each(&sources)?.concat())
+                    inner.distance_each_into(&sources, block)
                 },
                 &mut |done, total| report.step(&format!("{done}/{total}")),
             )?;
@@ -204,7 +204,7 @@ pub fn diffusion_all_pairs(
             n,
             &key,
             block_rows,
-            |range| Ok(inner.rows(&range.collect::<Vec<usize>>())?.concat()),
+            |range, block| inner.rows_into(&range.collect::<Vec<usize>>(), block),
             &mut |done, total| report.step(&format!("{done}/{total}")),
         )?;
         Ok((r.path, r.resumed_from))

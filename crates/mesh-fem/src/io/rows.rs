@@ -13,6 +13,9 @@ use std::fs::{File, OpenOptions};
 use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+/// Values converted to bytes and written at a time by [`RowFile::append`] (64 KB).
+const APPEND_CHUNK: usize = 8192;
+
 /// An `.npy` matrix being written row by row (see the module docs).
 #[derive(Debug)]
 pub struct RowFile {
@@ -146,11 +149,16 @@ impl RowFile {
                 ),
             });
         }
-        let mut bytes = Vec::with_capacity(8 * values.len());
-        for v in values {
-            bytes.extend_from_slice(&v.to_le_bytes());
+        // A small buffer reused chunk by chunk: appending a block of rows never holds a second
+        // copy of it in memory.
+        let mut bytes = Vec::with_capacity(8 * APPEND_CHUNK);
+        for chunk in values.chunks(APPEND_CHUNK) {
+            bytes.clear();
+            for v in chunk {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+            self.file.write_all(&bytes).map_err(|e| io(&self.partial, e))?;
         }
-        self.file.write_all(&bytes).map_err(|e| io(&self.partial, e))?;
         self.rows_done += values.len() / self.n_cols;
         Ok(())
     }

@@ -543,6 +543,30 @@ impl GeodesicSolver {
         vertices.par_iter().map(|&v| self.distance(&[v])).collect()
     }
 
+    /// [`Self::distance_each`] written into `out` (`|vertices| × n`, row-major) instead of new
+    /// vectors: what [`crate::distance::write_rows`] streams an all-pairs matrix with.
+    ///
+    /// # Errors
+    /// As [`Self::distance`]; [`HeatError::LengthMismatch`] if `out` is not `|vertices| × n`.
+    pub fn distance_each_into(&self, vertices: &[u32], out: &mut [f64]) -> Result<(), HeatError> {
+        if vertices.is_empty() {
+            return Err(empty_sources());
+        }
+        let n = self.n;
+        if out.len() != vertices.len() * n {
+            return Err(HeatError::LengthMismatch {
+                expected: vertices.len() * n,
+                found: out.len(),
+            });
+        }
+        out.par_chunks_mut(n)
+            .zip(vertices.par_iter())
+            .try_for_each(|(row, &v)| {
+                row.copy_from_slice(&self.distance(&[v])?);
+                Ok(())
+            })
+    }
+
     /// Geodesic distances from sources (vertices and points on faces) to every vertex, and what
     /// was met.
     ///
