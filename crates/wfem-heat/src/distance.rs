@@ -365,7 +365,8 @@ pub fn write_rows(
     let resumed_from = file.rows_done();
     progress(resumed_from, n_rows);
     let mut start = resumed_from;
-    let mut buffer = vec![0.0; block.min(n_rows - resumed_from.min(n_rows)) * n_cols];
+    // rows_done() never exceeds n_rows.
+    let mut buffer = vec![0.0; block.min(n_rows - resumed_from) * n_cols];
     while start < n_rows {
         wfem_base::interrupt::checkpoint().map_err(shifted_solve::SolveError::from)?;
         let end = (start + block).min(n_rows);
