@@ -139,25 +139,7 @@ impl Vocabulary {
     /// # Errors
     /// [`RetrievalError::DimensionMismatch`] if d differs from the words', [`RetrievalError::NonFinite`].
     pub fn soft_assignment(&self, descriptors: MatRef<'_, f64>) -> Result<Mat<f64>, RetrievalError> {
-        let d = self.words.ncols();
-        check::same("descriptor dimension vs vocabulary", d, descriptors.ncols())?;
-        check::finite_mat("descriptors", descriptors)?;
-        let words = row_major(self.words.as_ref());
-        let v = self.size();
-        let inv_two_sigma2 = 1.0 / (2.0 * self.sigma * self.sigma);
-        let rows: Vec<Vec<f64>> = (0..descriptors.nrows())
-            .into_par_iter()
-            .map(|i| {
-                let x: Vec<f64> = (0..d).map(|j| descriptors[(i, j)]).collect();
-                let d2: Vec<f64> = words.chunks_exact(d).map(|w| squared_distance(&x, w)).collect();
-                let min = d2.iter().copied().fold(f64::INFINITY, f64::min);
-                let mut theta: Vec<f64> = d2.iter().map(|q| (-(q - min) * inv_two_sigma2).exp()).collect();
-                let sum: f64 = theta.iter().sum();
-                theta.iter_mut().for_each(|t| *t /= sum);
-                theta
-            })
-            .collect();
-        Ok(Mat::from_fn(descriptors.nrows(), v, |i, j| rows[i][j]))
+        self.assignment_matrix(descriptors, Assignment::Normalized)
     }
 
     /// The Gaussian kernel assignment `κ_i(x) = exp(−(‖p(x) − p_i‖² − m)/(2σ²))` (n × V), *not*
@@ -168,22 +150,64 @@ impl Vocabulary {
     /// # Errors
     /// As [`Self::soft_assignment`].
     pub fn kernel_assignment(&self, descriptors: MatRef<'_, f64>) -> Result<Mat<f64>, RetrievalError> {
-        let d = self.words.ncols();
-        check::same("descriptor dimension vs vocabulary", d, descriptors.ncols())?;
-        check::finite_mat("descriptors", descriptors)?;
-        let words = row_major(self.words.as_ref());
-        let d2: Vec<Vec<f64>> = (0..descriptors.nrows())
-            .into_par_iter()
-            .map(|i| {
-                let x: Vec<f64> = (0..d).map(|j| descriptors[(i, j)]).collect();
-                words.chunks_exact(d).map(|w| squared_distance(&x, w)).collect()
+        self.assignment_matrix(descriptors, Assignment::Kernel)
+    }
+
+    fn assignment_matrix(
+        &self,
+        descriptors: MatRef<'_, f64>,
+        assignment: Assignment,
+    ) -> Result<Mat<f64>, RetrievalError> {
+        let rows = AssignmentRows::new(self, descriptors, assignment)?;
+        let (n, v) = (descriptors.nrows(), self.size());
+        // Row-major blocks filled in parallel, one allocation; then Θ column-major.
+        let mut flat = vec![0.0; n * v];
+        flat.par_chunks_mut(ROW_BLOCK * v.max(1))
+            .enumerate()
+            .for_each(|(b, block)| {
+                wfem_base::simd::clear_upper_state();
+                let mut x = vec![0.0; rows.d];
+                for (r, out) in block.chunks_exact_mut(v).enumerate() {
+                    rows.fill(b * ROW_BLOCK + r, &mut x, out);
+                }
+            });
+        Ok(Mat::from_fn(n, v, |i, j| flat[i * v + j]))
+    }
+
+    /// `Θᵀ w` (length V) without forming Θ (n × V): rows in blocks of [`ROW_BLOCK`], each block
+    /// summed in order and the blocks added in order (the same sum whatever the threads).
+    ///
+    /// # Errors
+    /// As [`Self::soft_assignment`]; [`RetrievalError::DimensionMismatch`] if `weights` is not
+    /// one per row.
+    pub fn weighted_assignment(
+        &self,
+        descriptors: MatRef<'_, f64>,
+        weights: &[f64],
+        assignment: Assignment,
+    ) -> Result<Vec<f64>, RetrievalError> {
+        check::same("vertex weights vs descriptors", descriptors.nrows(), weights.len())?;
+        check::finite_slice("vertex weights", weights)?;
+        let rows = AssignmentRows::new(self, descriptors, assignment)?;
+        let v = self.size();
+        let partial: Vec<Vec<f64>> = weights
+            .par_chunks(ROW_BLOCK)
+            .enumerate()
+            .map(|(b, w)| {
+                wfem_base::simd::clear_upper_state();
+                let (mut x, mut theta, mut acc) = (vec![0.0; rows.d], vec![0.0; v], vec![0.0; v]);
+                for (r, &a) in w.iter().enumerate() {
+                    rows.fill(b * ROW_BLOCK + r, &mut x, &mut theta);
+                    acc.iter_mut().zip(&theta).for_each(|(s, t)| *s += t * a);
+                }
+                acc
             })
             .collect();
-        let m = d2.iter().flatten().copied().fold(f64::INFINITY, f64::min);
-        let inv_two_sigma2 = 1.0 / (2.0 * self.sigma * self.sigma);
-        Ok(Mat::from_fn(descriptors.nrows(), self.size(), |i, j| {
-            (-(d2[i][j] - m) * inv_two_sigma2).exp()
-        }))
+        let mut bag = vec![0.0; v];
+        for p in &partial {
+            bag.iter_mut().zip(p).for_each(|(s, t)| *s += t);
+        }
+        Ok(bag)
     }
 
     /// The bag of features `Θᵀ a` (length V) with vertex areas `a` (e.g. [`vertex_areas`] of B,
@@ -218,13 +242,7 @@ impl Vocabulary {
             vertex_weights.len(),
         )?;
         check::finite_slice("vertex weights", vertex_weights)?;
-        let theta = match assignment {
-            Assignment::Normalized => self.soft_assignment(descriptors)?,
-            Assignment::Kernel => self.kernel_assignment(descriptors)?,
-        };
-        Ok((0..self.size())
-            .map(|c| theta.col(c).iter().zip(vertex_weights).map(|(t, a)| t * a).sum())
-            .collect())
+        self.weighted_assignment(descriptors, vertex_weights, assignment)
     }
 
     /// The spatially sensitive bag of features `F = Θᵀ B K_t Θ` (V × V).
@@ -305,6 +323,84 @@ fn sample_rows(n: usize, m: usize, seed: u64) -> Vec<usize> {
     idx.truncate(m);
     idx.sort_unstable();
     idx
+}
+
+/// Rows per parallel task of the assignments.
+const ROW_BLOCK: usize = 256;
+
+/// One row of an assignment at a time: the words row-major, the scale and, for the kernel
+/// assignment, the common shift m.
+struct AssignmentRows<'a> {
+    descriptors: MatRef<'a, f64>,
+    words: Vec<f64>,
+    d: usize,
+    inv_two_sigma2: f64,
+    /// `None`: normalised per row (shift = the row's own minimum).
+    shift: Option<f64>,
+}
+
+impl<'a> AssignmentRows<'a> {
+    fn new(
+        vocabulary: &Vocabulary,
+        descriptors: MatRef<'a, f64>,
+        assignment: Assignment,
+    ) -> Result<Self, RetrievalError> {
+        let d = vocabulary.words.ncols();
+        check::same("descriptor dimension vs vocabulary", d, descriptors.ncols())?;
+        check::finite_mat("descriptors", descriptors)?;
+        let mut rows = Self {
+            descriptors,
+            words: row_major(vocabulary.words.as_ref()),
+            d,
+            inv_two_sigma2: 1.0 / (2.0 * vocabulary.sigma * vocabulary.sigma),
+            shift: None,
+        };
+        if assignment == Assignment::Kernel {
+            let min = (0..descriptors.nrows())
+                .into_par_iter()
+                .map_init(
+                    || {
+                        wfem_base::simd::clear_upper_state();
+                        (vec![0.0; d], Vec::new())
+                    },
+                    |(x, d2), i| {
+                        rows.distances(i, x, d2);
+                        d2.iter().copied().fold(f64::INFINITY, f64::min)
+                    },
+                )
+                .reduce(|| f64::INFINITY, f64::min);
+            rows.shift = Some(min);
+        }
+        Ok(rows)
+    }
+
+    /// The squared distances of row i to every word, into `d2` (`x`: scratch of length d).
+    fn distances(&self, i: usize, x: &mut [f64], d2: &mut Vec<f64>) {
+        x.iter_mut()
+            .enumerate()
+            .for_each(|(j, v)| *v = self.descriptors[(i, j)]);
+        d2.clear();
+        d2.extend(self.words.chunks_exact(self.d).map(|w| squared_distance(x, w)));
+    }
+
+    /// Row i of Θ into `out` (length V).
+    fn fill(&self, i: usize, x: &mut [f64], out: &mut [f64]) {
+        x.iter_mut()
+            .enumerate()
+            .for_each(|(j, v)| *v = self.descriptors[(i, j)]);
+        for (o, w) in out.iter_mut().zip(self.words.chunks_exact(self.d)) {
+            *o = squared_distance(x, w);
+        }
+        let shift = self
+            .shift
+            .unwrap_or_else(|| out.iter().copied().fold(f64::INFINITY, f64::min));
+        out.iter_mut()
+            .for_each(|q| *q = (-(*q - shift) * self.inv_two_sigma2).exp());
+        if self.shift.is_none() {
+            let sum: f64 = out.iter().sum();
+            out.iter_mut().for_each(|t| *t /= sum);
+        }
+    }
 }
 
 fn row_major(m: MatRef<'_, f64>) -> Vec<f64> {

@@ -263,6 +263,7 @@ pub fn scale_invariant_hks(spectrum: &Spectrum<'_>, params: &SihksParams) -> Res
         let block: Vec<Result<Vec<f64>, RetrievalError>> = (0..rows.len())
             .into_par_iter()
             .map(|r| {
+                wfem_base::simd::clear_upper_state();
                 let mut log_h = Vec::with_capacity(m);
                 for (j, &t) in times.iter().enumerate() {
                     let value = hks[(r, j)];

@@ -40,13 +40,14 @@
 //! ```
 
 #![warn(missing_docs)]
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 
 mod choice;
 
 pub mod fs;
 pub mod interrupt;
 pub mod rng;
+pub mod simd;
 
 pub use choice::serde_name;
 pub use choice::{check_entries, check_registry, normalize, Choice, Entry, UnknownName};

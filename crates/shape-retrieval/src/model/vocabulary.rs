@@ -298,8 +298,17 @@ impl VocabularyModel {
         weights: &[f64],
         assignment: Assignment,
     ) -> Result<Vec<f64>, RetrievalError> {
-        let theta = self.assignment(descriptors, assignment)?;
-        Self::normalised_bag(theta.as_ref(), weights)
+        let standardized;
+        let descriptors = match &self.standardizer {
+            Some(z) => {
+                standardized = z.apply(descriptors)?;
+                standardized.as_ref()
+            }
+            None => descriptors,
+        };
+        // Θᵀw without forming Θ (n × V: 60 MB for 15K vertices and 512 words).
+        let bag = self.vocabulary.weighted_assignment(descriptors, weights, assignment)?;
+        check::unit_sum("bag", "the vertex weights sum", bag)
     }
 
     /// The assignment Θ (n × V) of descriptors (n × d, not z-scored) to the words.
@@ -329,11 +338,11 @@ impl VocabularyModel {
     /// [`RetrievalError::InvalidModel`] if the weights sum to zero or the features lack the
     /// eigenpairs a spatial bag needs.
     pub fn shape_bag(&self, features: &ShapeFeatures, bags: &BagSettings) -> Result<Vec<f64>, RetrievalError> {
-        let theta = self.assignment(features.descriptors.as_ref(), bags.assignment)?;
-        let bag = Self::normalised_bag(theta.as_ref(), &features.weights)?;
+        let bag = self.bag(features.descriptors.as_ref(), &features.weights, bags.assignment)?;
         let Some(spatial) = &bags.spatial else {
             return Ok(bag);
         };
+        let theta = self.assignment(features.descriptors.as_ref(), bags.assignment)?;
         let spectrum = features.spectrum.as_ref().ok_or_else(|| RetrievalError::InvalidModel {
             what: "features",
             reason: format!(
@@ -364,15 +373,5 @@ impl VocabularyModel {
         // computed on every call.
         let _ = self.groups.set((classes, groups.clone()));
         Ok(std::borrow::Cow::Owned(groups))
-    }
-
-    /// `Θᵀw / 1ᵀΘᵀw`.
-    fn normalised_bag(theta: MatRef<'_, f64>, weights: &[f64]) -> Result<Vec<f64>, RetrievalError> {
-        check::same("vertex weights vs descriptors", theta.nrows(), weights.len())?;
-        check::finite_slice("vertex weights", weights)?;
-        let bag: Vec<f64> = (0..theta.ncols())
-            .map(|c| theta.col(c).iter().zip(weights).map(|(t, a)| t * a).sum())
-            .collect();
-        check::unit_sum("bag", "the vertex weights sum", bag)
     }
 }

@@ -340,3 +340,60 @@ fn shape_google_pipeline_separates_spheres_from_bumpy_shapes() {
     eprintln!("mAP = {}", report.mean_average_precision);
     assert_eq!(report.mean_average_precision, 1.0);
 }
+
+/// The streamed bag `Θᵀw` (Θ never formed, rows in blocks) against the plain formula, for
+/// both assignments, over more rows than one block; and the same bits on one thread as on
+/// three.
+#[test]
+fn streamed_bag_matches_the_formula_and_is_the_same_on_any_thread_count() {
+    use shape_retrieval::bof::Assignment;
+    let mut rng = wfem_base::rng::SplitMix64::new(42);
+    let (v, d, n) = (24, 3, 1100);
+    let words = Mat::from_fn(v, d, |_, _| 4.0 * rng.next_f64());
+    let x = Mat::from_fn(n, d, |_, _| 5.0 * rng.next_f64() - 0.5);
+    let a: Vec<f64> = (0..n).map(|_| 0.5 + rng.next_f64()).collect();
+    let sigma = 0.3;
+    let voc = Vocabulary::new(words.clone(), sigma).unwrap();
+    let d2 = |i: usize, c: usize| (0..d).map(|j| (x[(i, j)] - words[(c, j)]).powi(2)).sum::<f64>();
+    let global_min = (0..n)
+        .flat_map(|i| (0..v).map(move |c| (i, c)))
+        .map(|(i, c)| d2(i, c))
+        .fold(f64::INFINITY, f64::min);
+    for assignment in [Assignment::Normalized, Assignment::Kernel] {
+        let mut want = vec![0.0; v];
+        for i in 0..n {
+            let shift = match assignment {
+                Assignment::Normalized => (0..v).map(|c| d2(i, c)).fold(f64::INFINITY, f64::min),
+                Assignment::Kernel => global_min,
+            };
+            let w: Vec<f64> = (0..v)
+                .map(|c| (-(d2(i, c) - shift) / (2.0 * sigma * sigma)).exp())
+                .collect();
+            let sum: f64 = match assignment {
+                Assignment::Normalized => w.iter().sum(),
+                Assignment::Kernel => 1.0,
+            };
+            for c in 0..v {
+                want[c] += w[c] / sum * a[i];
+            }
+        }
+        let total: f64 = want.iter().sum();
+        let got = voc.bag_with(x.as_ref(), &a, assignment).unwrap();
+        for c in 0..v {
+            assert!(
+                (got[c] - want[c]).abs() <= 1e-13 * total,
+                "{assignment:?} word {c}: {} vs {}",
+                got[c],
+                want[c]
+            );
+        }
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| voc.bag_with(x.as_ref(), &a, assignment).unwrap())
+        };
+        assert_eq!(on(1), on(3));
+    }
+}
