@@ -46,7 +46,7 @@ use shape_retrieval::model::{
 use shape_retrieval::spatial::SpatialBag;
 use shape_retrieval::store::{IndexStore, JsonFile, VocabularyStore};
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use wfem_base::Choice;
 
 /// Arguments of `wfem retrieval`.
@@ -147,13 +147,19 @@ pub enum RetrievalAction {
         #[allow(missing_docs)]
         strict: StrictArg,
     },
-    /// Rank the indexed shapes by distance to a query mesh or point cloud.
+    /// Rank the indexed shapes by distance to a query mesh or point cloud, or (--id) to an
+    /// indexed shape.
     Query {
         /// Index file written by `wfem retrieval build` (SQLite or JSON).
         index: PathBuf,
         #[command(flatten)]
         #[allow(missing_docs)]
         input: MeshArgs,
+        /// The query names an indexed shape (as `build` stored it, or its file name or stem):
+        /// `query INDEX --id NAME` ranks the others from its stored signature, nothing read or
+        /// described (the shape itself is left out of the results).
+        #[arg(long, conflicts_with_all = ["laplacian", "triangulate", "repair"])]
+        id: bool,
         /// Number of results.
         #[arg(long, default_value_t = 5)]
         top: usize,
@@ -702,9 +708,12 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
         RetrievalAction::Query {
             index: path,
             input,
+            id,
             top,
         } => {
-            let ranked: Vec<(f64, String)> = if is_sqlite(path)? {
+            let ranked: Vec<(f64, String)> = if *id {
+                query_by_name(path, &input.mesh.to_string_lossy(), *top)?
+            } else if is_sqlite(path)? {
                 let store = SqliteIndex::new(path);
                 let (settings, rows) = store.open()?;
                 stored_sizes(&settings)?;
@@ -737,6 +746,28 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// `wfem retrieval query INDEX --id NAME`: the `top` shapes nearest to the indexed shape
+/// `name`, from its stored signature (itself left out), as (distance, name).
+fn query_by_name(path: &Path, name: &str, top: usize) -> Result<Vec<(f64, String)>, CliError> {
+    Ok(if is_sqlite(path)? {
+        let store = SqliteIndex::new(path);
+        let (settings, rows) = store.open()?;
+        stored_sizes(&settings)?;
+        let (_, hits) = store.search_stored(&settings, &rows, name, top)?;
+        hits.into_iter().map(|h| (h.distance, h.name)).collect()
+    } else {
+        let index = JsonFile::new(path).load_index()?;
+        stored_sizes(&index)?;
+        let entry = index.find(name)?;
+        index
+            .rank_entry(entry)?
+            .iter()
+            .take(top)
+            .map(|r| (r.distance, index.entries()[r.entry].name.clone()))
+            .collect()
+    })
 }
 
 /// The query of `wfem retrieval query`, read as the index needs it: with the index's

@@ -234,3 +234,51 @@ fn a_build_racing_an_add_in_another_process_never_mixes_vocabularies() {
     }
     eprintln!("outcomes: {outcomes:?}");
 }
+
+/// `query INDEX --id NAME` ranks from the stored signature (issue #42): the same order and
+/// distances as querying with the shape's own file (up to the f32 storage of a SQLite index),
+/// the shape itself left out; by stored name, file name or stem; an unknown or ambiguous name
+/// and mesh-reading flags are refused by name.
+#[test]
+fn query_by_id_ranks_from_the_stored_signature() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    let parse = |o: &std::process::Output| -> Vec<(String, f64)> {
+        assert!(o.status.success(), "{}", stderr(o));
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .map(|l| {
+                let f: Vec<&str> = l.split('\t').collect();
+                (f[2].to_string(), f[1].parse().unwrap())
+            })
+            .collect()
+    };
+    for name in ["index.sqlite", "index.json"] {
+        let index = dir.path().join(name);
+        let o = build(&files, &index, &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let index = index.to_str().unwrap();
+        let by_file = parse(&wfem(&["retrieval", "query", index, &files[0], "--top", "3"]));
+        // The file finds itself first at distance 0; --id leaves it out and gives the rest.
+        assert_eq!(by_file[0].0, files[0]);
+        assert!(by_file[0].1 < 1e-9, "{by_file:?}");
+        for id in [files[0].as_str(), "bumpy.off", "bumpy"] {
+            let by_id = parse(&wfem(&["retrieval", "query", index, "--id", id, "--top", "3"]));
+            assert_eq!(by_id.len(), 2, "{by_id:?}");
+            for (a, b) in by_id.iter().zip(&by_file[1..]) {
+                assert_eq!(a.0, b.0);
+                assert!((a.1 - b.1).abs() <= 1e-6 * b.1.max(1.0), "{by_id:?} vs {by_file:?}");
+            }
+        }
+        let o = wfem(&["retrieval", "query", index, "--id", "teapot"]);
+        assert!(!o.status.success());
+        assert!(
+            stderr(&o).contains("no indexed shape is named \"teapot\""),
+            "{}",
+            stderr(&o)
+        );
+        let o = wfem(&["retrieval", "query", index, "--id", "bumpy", "--laplacian", "robust"]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("cannot be used with"), "{}", stderr(&o));
+    }
+}

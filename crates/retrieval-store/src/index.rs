@@ -148,6 +148,34 @@ impl SqliteIndex {
             .collect())
     }
 
+    /// The `k` indexed shapes nearest to the stored shape that `name` names
+    /// ([`shape_retrieval::model::resolve_name`]: its stored name, file name or stem), itself
+    /// left out: a query by an indexed shape from its stored signature, nothing described.
+    /// Returns the shape's stored name and the hits.
+    ///
+    /// # Errors
+    /// [`RetrievalError::UnknownShape`], and those of [`Self::search`].
+    pub fn search_stored(
+        &self,
+        settings: &RetrievalIndex,
+        store: &Store,
+        name: &str,
+        k: usize,
+    ) -> Result<(String, Vec<IndexHit>), RetrievalError> {
+        let shapes = store.shapes().map_err(|e| self.storage(e))?;
+        let i = shape_retrieval::model::resolve_name(shapes.iter().map(|s| s.name.as_str()), name)?;
+        let id = shapes[i].id;
+        let row = store
+            .vector(id)
+            .map_err(|e| self.storage(e))?
+            .ok_or_else(|| self.storage(format!("shape {id} ({}) has no stored vector", shapes[i].name)))?;
+        let query = signature(settings, &row);
+        let mut hits = self.search(settings, store, &query, k.saturating_add(1))?;
+        hits.retain(|h| h.id != id);
+        hits.truncate(k);
+        Ok((shapes[i].name.clone(), hits))
+    }
+
     /// Appends shapes whose signatures were computed with `opened` (the settings of
     /// [`SqliteIndex::open`], e.g. by [`RetrievalIndex::describe`]) in one transaction;
     /// nothing else is rewritten.

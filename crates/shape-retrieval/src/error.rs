@@ -184,4 +184,12 @@ pub enum RetrievalError {
         /// What went wrong.
         reason: String,
     },
+    /// No indexed shape, or more than one, answers to a name (`query --id`).
+    #[error("{reason}")]
+    UnknownShape {
+        /// The name asked for.
+        name: String,
+        /// Why it does not name one shape, with the candidates.
+        reason: String,
+    },
 }

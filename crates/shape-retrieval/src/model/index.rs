@@ -132,6 +132,32 @@ impl RetrievalIndex {
         &self.entries
     }
 
+    /// The entry named `name` ([`resolve_name`]).
+    ///
+    /// # Errors
+    /// [`RetrievalError::UnknownShape`].
+    pub fn find(&self, name: &str) -> Result<usize, RetrievalError> {
+        resolve_name(self.entries.iter().map(|e| e.name.as_str()), name)
+    }
+
+    /// Every entry by increasing distance to entry `entry`'s stored signature, itself left
+    /// out: a query by an indexed shape, nothing described again.
+    ///
+    /// # Errors
+    /// [`RetrievalError::DimensionMismatch`] if there is no such entry.
+    pub fn rank_entry(&self, entry: usize) -> Result<Vec<Ranked>, RetrievalError> {
+        let Some(e) = self.entries.get(entry) else {
+            return Err(RetrievalError::DimensionMismatch {
+                what: "entry index vs entries",
+                expected: self.entries.len(),
+                actual: entry,
+            });
+        };
+        let mut ranked = self.rank(&e.signature)?;
+        ranked.retain(|r| r.entry != entry);
+        Ok(ranked)
+    }
+
     /// Computes the features of a shape (a mesh or a point cloud) with the index's settings
     /// (one eigensolve): a query is always described as the indexed shapes were, with the
     /// recorded Laplacian and cleaning.
@@ -238,5 +264,84 @@ impl RetrievalIndex {
             .collect();
         ranked.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.entry.cmp(&b.entry)));
         Ok(ranked)
+    }
+}
+
+/// Which of `names` (in order) a user means by `wanted`: the one named exactly so; otherwise
+/// the only one whose file name (`dir/cat0.off` → `cat0.off`) or file stem (`cat0`) it is.
+///
+/// # Errors
+/// [`RetrievalError::UnknownShape`] when none matches or several do (named in the message).
+pub fn resolve_name<'a>(names: impl Iterator<Item = &'a str>, wanted: &str) -> Result<usize, RetrievalError> {
+    let names: Vec<&str> = names.collect();
+    let exact: Vec<usize> = (0..names.len()).filter(|&i| names[i] == wanted).collect();
+    let matches = if exact.is_empty() {
+        let path = |i: usize| std::path::Path::new(names[i]).to_path_buf();
+        (0..names.len())
+            .filter(|&i| {
+                let p = path(i);
+                p.file_name().is_some_and(|f| f == wanted) || p.file_stem().is_some_and(|f| f == wanted)
+            })
+            .collect()
+    } else {
+        exact
+    };
+    match matches.as_slice() {
+        [one] => Ok(*one),
+        [] => Err(RetrievalError::UnknownShape {
+            name: wanted.to_string(),
+            reason: format!(
+                "no indexed shape is named {wanted:?} (of {} shapes{}); give a name as `build` stored it, its file name or its stem",
+                names.len(),
+                names
+                    .first()
+                    .map_or(String::new(), |n| format!(", e.g. {n:?}"))
+            ),
+        }),
+        several => Err(RetrievalError::UnknownShape {
+            name: wanted.to_string(),
+            reason: format!(
+                "{wanted:?} names {} indexed shapes ({}); give the whole name",
+                several.len(),
+                several
+                    .iter()
+                    .take(5)
+                    .map(|&i| format!("{:?}", names[i]))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        }),
+    }
+}
+
+#[cfg(test)]
+mod name_tests {
+    use super::resolve_name;
+    use crate::RetrievalError;
+
+    #[test]
+    fn names_resolve_exactly_then_by_file_name_or_stem() {
+        let names = ["data/cat0.off", "data/cat1.off", "other/cat1.ply", "dog"];
+        let find = |w: &str| resolve_name(names.iter().copied(), w);
+        assert_eq!(find("data/cat0.off").unwrap(), 0);
+        assert_eq!(find("cat0.off").unwrap(), 0);
+        assert_eq!(find("cat0").unwrap(), 0);
+        assert_eq!(find("cat1.ply").unwrap(), 2);
+        assert_eq!(find("dog").unwrap(), 3);
+        match find("cat1") {
+            Err(RetrievalError::UnknownShape { reason, .. }) => {
+                assert!(reason.contains("names 2 indexed shapes"), "{reason}");
+                assert!(
+                    reason.contains("data/cat1.off") && reason.contains("other/cat1.ply"),
+                    "{reason}"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+        match find("horse") {
+            Err(RetrievalError::UnknownShape { reason, .. }) => assert!(reason.contains("of 4 shapes"), "{reason}"),
+            other => panic!("{other:?}"),
+        }
+        assert!(resolve_name(std::iter::empty(), "x").is_err());
     }
 }

@@ -50,7 +50,7 @@ pub use cleaning::{
     DEFAULT_VERTICES_PER_EIGENPAIR,
 };
 pub use global_signature::GlobalSignature;
-pub use index::{IndexEntry, Ranked, RetrievalIndex, ShapeSignature};
+pub use index::{resolve_name, IndexEntry, Ranked, RetrievalIndex, ShapeSignature};
 pub use settings::{BagSettings, DescriptorSettings, RetrievalSettings, TrainingParams, DEFAULT_WORDS};
 pub use shape::{AsShape, ShapeRef};
 pub use spec::DescriptorSpec;
