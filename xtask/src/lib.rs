@@ -5,6 +5,7 @@
 
 pub mod approx;
 pub mod bench;
+pub mod fusion_lab;
 pub mod lab;
 pub mod peers;
 pub mod real_eval;

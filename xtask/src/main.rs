@@ -126,6 +126,26 @@ enum Cmd {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// How the bags and the global spectrum are best combined (issue #42): every label-free
+    /// rule and weight on every collection, with the leave-one-collection-out table.
+    FusionLab {
+        /// Mesh corpus folder.
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Cache eigenbases in this folder.
+        #[arg(long)]
+        cache: Option<PathBuf>,
+        /// Comma-separated collections (those of real-eval).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "shrec11,tosca76,shrec11-fourleg,tosca-people,tosca-noniso,shrec11-people"
+        )]
+        collections: Vec<String>,
+        /// Write the raw scores here (JSON).
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Measure and write the benchmark report: DIR/BENCHMARKS.md (generated section) and
     /// DIR/bench/*.svg. Full run: 10K/41K/164K vertices (see docs/BENCHMARKS.md), then the
     /// peers table: wfem's CLI against scipy/libigl, whole process (xtask/src/peers.rs).
@@ -360,6 +380,30 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 }
                 None => print!("{text}"),
             }
+        }
+        Cmd::FusionLab {
+            meshes,
+            cache,
+            collections,
+            json,
+        } => {
+            use xtask::real_eval::Collection;
+            let meshes_dir = match meshes {
+                Some(d) => d,
+                None => wfem_corpus::meshes_dir()?,
+            };
+            let collections = collections
+                .iter()
+                .map(|c| {
+                    Collection::from_name(c)
+                        .ok_or_else(|| format!("unknown collection {c:?}: one of {}", Collection::NAMES.join(", ")))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let cache = eigen_cache(cache)?;
+            print!(
+                "{}",
+                xtask::fusion_lab::run(&meshes_dir, &cache, &collections, json.as_deref())?
+            );
         }
         Cmd::Bench {
             quick,

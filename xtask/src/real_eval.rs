@@ -25,19 +25,40 @@ pub enum Collection {
     /// TOSCA-76's 76 meshes and the same shapes as clouds in one collection (152 shapes, 8
     /// classes): a cloud should find its own mesh first.
     Tosca76Mixed,
+    /// TOSCA-76's three people (david, michael, victoria; 39 shapes): classes that are
+    /// individuals of one species and differ by build, not by parts (issue #42).
+    ToscaPeople,
+    /// TOSCA's non-isometric set (`TOSCA_nonIsometric`: gorilla, man, woman; 24 shapes):
+    /// each class a body in poses that also stretch it.
+    ToscaNonIso,
+    /// SHREC'11's man and woman classes (40 shapes).
+    Shrec11People,
+    /// Generated people ([`shrec_bench::creatures::people_files`]): 10 individuals of
+    /// different builds in 8 poses each (80 shapes), written to the temporary folder.
+    GeneratedPeople,
+    /// The same with builds twice as alike (spread 0.5).
+    GeneratedPeopleAlike,
 }
+
+/// TOSCA-76's people (families).
+const PEOPLE: [&str; 3] = ["david", "michael", "victoria"];
 
 /// The seed of the TOSCA clouds (mixed with each file's name).
 pub const CLOUD_SEED: u64 = 27;
 
 impl Collection {
     /// Every collection.
-    pub const ALL: [Collection; 5] = [
+    pub const ALL: [Collection; 10] = [
         Collection::Shrec11,
         Collection::Tosca76,
         Collection::Shrec11Fourleg,
         Collection::Tosca76Clouds,
         Collection::Tosca76Mixed,
+        Collection::ToscaPeople,
+        Collection::ToscaNonIso,
+        Collection::Shrec11People,
+        Collection::GeneratedPeople,
+        Collection::GeneratedPeopleAlike,
     ];
     /// Every collection's name.
     pub const NAMES: &'static [&'static str] = &[
@@ -46,6 +67,11 @@ impl Collection {
         "shrec11-fourleg",
         "tosca76-clouds",
         "tosca76-mixed",
+        "tosca-people",
+        "tosca-noniso",
+        "shrec11-people",
+        "generated-people",
+        "generated-people-alike",
     ];
 
     /// Its name.
@@ -56,6 +82,11 @@ impl Collection {
             Collection::Shrec11Fourleg => "shrec11-fourleg",
             Collection::Tosca76Clouds => "tosca76-clouds",
             Collection::Tosca76Mixed => "tosca76-mixed",
+            Collection::ToscaPeople => "tosca-people",
+            Collection::ToscaNonIso => "tosca-noniso",
+            Collection::Shrec11People => "shrec11-people",
+            Collection::GeneratedPeople => "generated-people",
+            Collection::GeneratedPeopleAlike => "generated-people-alike",
         }
     }
 
@@ -80,10 +111,15 @@ impl Collection {
             Collection::Shrec11Fourleg => "SHREC'11 + 20 SHREC'07 four-legged animals as a 31st class",
             Collection::Tosca76Clouds => "TOSCA-76 as point clouds of 5,000 points (76 clouds, 8 classes)",
             Collection::Tosca76Mixed => "TOSCA-76 meshes and clouds together (152 shapes, 8 classes)",
+            Collection::ToscaPeople => "TOSCA's three people: david, michael, victoria (39 shapes, 3 classes)",
+            Collection::ToscaNonIso => "TOSCA non-isometric: gorilla, man, woman (24 shapes, 3 classes)",
+            Collection::Shrec11People => "SHREC'11's man and woman classes (40 shapes, 2 classes)",
+            Collection::GeneratedPeople => "Generated people of different builds (80 shapes, 10 classes)",
+            Collection::GeneratedPeopleAlike => "Generated people of alike builds, spread 0.5 (80 shapes, 10 classes)",
         }
     }
 
-    fn files(self, meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
+    pub(crate) fn files(self, meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
         match self {
             Collection::Shrec11 => real::shrec11_files(meshes_dir),
             Collection::Tosca76 => protocol::tosca_files(meshes_dir),
@@ -97,6 +133,21 @@ impl Collection {
                 let mut f = protocol::tosca_files(meshes_dir)?;
                 f.extend(Self::clouds(f.clone()));
                 Ok(f)
+            }
+            Collection::ToscaPeople => Ok(protocol::tosca_files(meshes_dir)?
+                .into_iter()
+                .filter(|f| PEOPLE.contains(&f.family.as_str()))
+                .collect()),
+            Collection::ToscaNonIso => real::noniso_files(meshes_dir),
+            Collection::Shrec11People => Ok(real::shrec11_files(meshes_dir)?
+                .into_iter()
+                .filter(|f| f.family == "man" || f.family == "woman")
+                .collect()),
+            Collection::GeneratedPeople => {
+                shrec_bench::creatures::people_files(&std::env::temp_dir().join("wfem-people-1"), 1.0)
+            }
+            Collection::GeneratedPeopleAlike => {
+                shrec_bench::creatures::people_files(&std::env::temp_dir().join("wfem-people-0.5"), 0.5)
             }
         }
     }
@@ -113,6 +164,10 @@ impl Collection {
             Collection::Shrec11Fourleg => all
                 .into_iter()
                 .filter(|f| !f.name.starts_with("shrec07-fourleg"))
+                .collect(),
+            Collection::ToscaNonIso => all
+                .into_iter()
+                .filter(|f| !f.name.contains("TOSCA_nonIsometric"))
                 .collect(),
             _ => all,
         }))
@@ -225,17 +280,30 @@ pub fn run(opts: &RealEvalOptions<'_>) -> Result<Vec<CollectionResult>, BenchErr
     for &collection in opts.collections {
         let files = collection.files(opts.meshes_dir)?;
         let mut rows = Vec::new();
+        let t_base = std::time::Instant::now();
         let baseline = real::shape_dna_baseline(&files, opts.cache)?;
+        let per_shape_base = t_base.elapsed().as_secs_f64() / files.len().max(1) as f64;
         rows.push(Row {
             method: "Shape-DNA baseline".into(),
             vocabulary: "–".into(),
             report: baseline,
         });
-        println!("[{}] {}: {}", collection.name(), rows[0].method, line(&rows[0]));
+        println!(
+            "[{}] {}: {} ({per_shape_base:.3} s per shape)",
+            collection.name(),
+            rows[0].method,
+            line(&rows[0])
+        );
         for v in opts.variants {
             let t0 = std::time::Instant::now();
             let settings: &RetrievalSettings = &v.settings;
             let described = real::describe(files.clone(), settings, opts.cache)?;
+            println!(
+                "[{}] {}: described in {:.3} s per shape (the baseline {per_shape_base:.3} s; without --cache both include their eigensolves)",
+                collection.name(),
+                v.name,
+                t0.elapsed().as_secs_f64() / files.len().max(1) as f64
+            );
             let mut vocabularies: Vec<(String, Option<shape_retrieval::model::VocabularyModel>)> =
                 vec![("indexed shapes".into(), None)];
             if opts.outside {

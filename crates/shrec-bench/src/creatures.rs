@@ -142,6 +142,106 @@ pub fn creature_files(dir: &Path, count: u64) -> Result<Vec<ShapeFile>, BenchErr
 
 type Plan = ([f64; 3], Vec<Limb>);
 
+/// Individuals of [`people_files`].
+pub const PEOPLE_INDIVIDUALS: u64 = 10;
+/// Poses per individual of [`people_files`].
+pub const PEOPLE_POSES: u64 = 8;
+/// The icosphere level of [`people_files`]: 2,562 vertices (enough for 100 eigenpairs).
+pub const PEOPLE_LEVEL: u32 = 4;
+
+/// Person `individual` in pose `pose` (issue #42: individuals of one species that differ by
+/// build, not by parts): a biped whose **build** — the body's axes, the head's, arms' and
+/// legs' lengths, widths and profiles, the same on both sides — comes from the individual's
+/// seed, and whose **pose** — where each arm points, how much each limb bends and to which
+/// side — from the pose's. A pose bends limbs without stretching them, so the poses of one
+/// individual are nearly isometric and two individuals differ by proportions only. `spread`
+/// (1: the bipeds of [`creature`]) scales every build range about its middle: 0.5 gives
+/// people twice as alike.
+///
+/// # Errors
+/// [`MeshError`] as [`creature`].
+pub fn person(individual: u64, pose: u64, level: u32, spread: f64) -> Result<TriMesh, MeshError> {
+    let uniform = |rng: &mut SplitMix64, (a, b): (f64, f64)| {
+        let mid = 0.5 * (a + b);
+        uniform(rng, (mid - spread * (mid - a), mid + spread * (b - mid)))
+    };
+    let mut build = SplitMix64::new(0x9e37_79b9_7f4a_7c15 ^ individual);
+    let mut posing = SplitMix64::new(individual.wrapping_mul(1_000_003).wrapping_add(pose) ^ 0x5bd1_e995);
+    let axes = [
+        uniform(&mut build, (0.45, 0.65)),
+        uniform(&mut build, (0.28, 0.42)),
+        1.0,
+    ];
+    let head = (uniform(&mut build, (0.35, 0.7)), uniform(&mut build, (0.25, 0.35)));
+    let arm = (uniform(&mut build, (1.2, 2.2)), uniform(&mut build, (0.13, 0.22)));
+    let leg = (uniform(&mut build, (1.5, 2.4)), uniform(&mut build, (0.2, 0.3)));
+    let limb = |rng: &mut SplitMix64, direction: [f64; 3], axis: [f64; 3], (length, width): (f64, f64), bend: f64| {
+        let axis = near(rng, axis, 0.1);
+        Limb {
+            direction: normalized(direction),
+            axis,
+            perpendicular: normalized(cross(axis, rng.unit_vector())),
+            length,
+            width,
+            exponent: 4,
+            bend: bend * rng.next_f64(),
+        }
+    };
+    let mut limbs = vec![limb(&mut posing, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], head, 0.3)];
+    for side in [-1.0, 1.0] {
+        let down = -0.9 + 1.3 * posing.next_f64();
+        limbs.push(limb(&mut posing, [side, 0.0, 0.6], [side, 0.0, down], arm, 0.9));
+        limbs.push(limb(
+            &mut posing,
+            [0.35 * side, 0.0, -1.0],
+            [0.15 * side, 0.0, -1.0],
+            leg,
+            0.5,
+        ));
+    }
+    let (sphere, faces) = icosphere(level).into_parts();
+    let positions = sphere
+        .iter()
+        .map(|&u| {
+            let body = [u[0] * axes[0], u[1] * axes[1], u[2] * axes[2]];
+            limbs.iter().fold(body, |x, limb| add(x, limb.displacement(u)))
+        })
+        .collect();
+    TriMesh::new(positions, faces)
+}
+
+/// [`PEOPLE_INDIVIDUALS`] people in [`PEOPLE_POSES`] poses each ([`person`] of `spread`) as
+/// OFF files in `dir` (written where missing; one folder per spread), family = the
+/// individual (`person03`).
+///
+/// # Errors
+/// [`BenchError::Data`] if the folder or a file cannot be written.
+pub fn people_files(dir: &Path, spread: f64) -> Result<Vec<ShapeFile>, BenchError> {
+    std::fs::create_dir_all(dir).map_err(|e| BenchError::Data(format!("{}: {e}", dir.display())))?;
+    let mut out = Vec::new();
+    for individual in 0..PEOPLE_INDIVIDUALS {
+        for pose in 0..PEOPLE_POSES {
+            let family = format!("person{individual:02}");
+            let name = format!("{family}-pose{pose}");
+            let path = dir.join(format!("{name}.off"));
+            if !path.is_file() {
+                let mesh =
+                    person(individual, pose, PEOPLE_LEVEL, spread).map_err(|e| BenchError::Data(e.to_string()))?;
+                mesh_fem::io::write_mesh(&path, &mesh).map_err(|e| BenchError::Data(e.to_string()))?;
+            }
+            out.push(ShapeFile {
+                path,
+                name,
+                family,
+                transform: None,
+                strength: 0,
+                cloud: None,
+            });
+        }
+    }
+    Ok(out)
+}
+
 fn uniform(rng: &mut SplitMix64, range: (f64, f64)) -> f64 {
     range.0 + (range.1 - range.0) * rng.next_f64()
 }
@@ -284,6 +384,34 @@ mod tests {
         let v = a.n_vertices() as i64;
         let f = a.n_faces() as i64;
         assert_eq!(v - 3 * f / 2 + f, 2);
+    }
+
+    #[test]
+    fn people_keep_their_build_across_poses() {
+        let areas = |individual: u64, spread: f64| -> Vec<f64> {
+            (0..8)
+                .map(|p| person(individual, p, 3, spread).unwrap().area())
+                .collect()
+        };
+        let mean = |a: &[f64]| a.iter().sum::<f64>() / a.len() as f64;
+        assert_eq!(
+            person(3, 0, 3, 1.0).unwrap().positions(),
+            person(3, 0, 3, 1.0).unwrap().positions()
+        );
+        assert_ne!(
+            person(3, 0, 3, 1.0).unwrap().positions(),
+            person(3, 1, 3, 1.0).unwrap().positions()
+        );
+        // A pose bends limbs and hardly stretches them (area within ±6 % over 8 poses); another
+        // build is another body (here 30 % less area).
+        let (a, b) = (areas(3, 1.0), areas(4, 1.0));
+        for x in &a {
+            assert!((x / mean(&a) - 1.0).abs() < 0.06, "{a:?}");
+        }
+        assert!((mean(&b) / mean(&a) - 1.0).abs() > 0.2, "{a:?} {b:?}");
+        // Spread 0 makes every individual the same body: only the poses differ.
+        let (c, d) = (areas(3, 0.0), areas(4, 0.0));
+        assert!((mean(&c) / mean(&d) - 1.0).abs() < 0.03, "{c:?} {d:?}");
     }
 
     #[test]

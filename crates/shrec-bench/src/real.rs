@@ -49,6 +49,37 @@ pub fn shrec11_files(meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
         .collect())
 }
 
+/// TOSCA's non-isometric set (`tosca-bcicp-5k/TOSCA_nonIsometric`, 24 shapes), family = the
+/// body (`8_gorilla_01` → `gorilla`), sorted by name.
+///
+/// # Errors
+/// [`BenchError::Data`] if the folder cannot be read or holds no `.off` file.
+pub fn noniso_files(meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
+    let dir = meshes_dir.join("tosca-bcicp-5k").join("TOSCA_nonIsometric");
+    let mut out: Vec<ShapeFile> = std::fs::read_dir(&dir)
+        .map_err(|e| BenchError::Data(format!("{}: {e}", dir.display())))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().and_then(|x| x.to_str()) == Some("off"))
+        .filter_map(|path| {
+            let name = path.file_stem()?.to_str()?.to_string();
+            let family = name.split('_').nth(1)?.to_string();
+            Some(ShapeFile {
+                path,
+                name,
+                family,
+                transform: None,
+                strength: 0,
+                cloud: None,
+            })
+        })
+        .collect();
+    out.sort_by(|a, b| a.name.cmp(&b.name));
+    if out.is_empty() {
+        return Err(BenchError::Data(format!("no .off file in {}", dir.display())));
+    }
+    Ok(out)
+}
+
 /// The 20 SHREC'07 four-legged animals (`shrec07-fourleg/`), one class `fourleg`: 20 different
 /// animals, a class of shapes that are alike but not isometric, and distractors for the others.
 ///
@@ -129,6 +160,27 @@ pub fn evaluate(
 /// # Errors
 /// The first unreadable mesh or failed eigensolve, naming the file.
 pub fn shape_dna_baseline(files: &[ShapeFile], cache: &EigenCache) -> Result<EvalReport, BenchError> {
+    let signatures = shape_dna_signatures(files, cache)?;
+    let n = files.len();
+    let distances = Mat::from_fn(n, n, |i, j| {
+        signatures[i]
+            .iter()
+            .zip(&signatures[j])
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt()
+    });
+    let names: Vec<String> = files.iter().map(|f| f.name.clone()).collect();
+    let classes: Vec<String> = files.iter().map(|f| f.family.clone()).collect();
+    evaluate_distances(&names, &classes, distances.as_ref(), "none (no vocabulary)")
+        .map_err(BenchError::retrieval("Shape-DNA baseline"))
+}
+
+/// The baseline's signatures of `files` (in order).
+///
+/// # Errors
+/// The first unreadable mesh or failed eigensolve, naming the file.
+pub fn shape_dna_signatures(files: &[ShapeFile], cache: &EigenCache) -> Result<Vec<Vec<f64>>, BenchError> {
     let settings = DescriptorSettings {
         eigenpairs: SHAPE_DNA_EIGENVALUES + 1,
         despiking: None,
@@ -158,19 +210,7 @@ pub fn shape_dna_baseline(files: &[ShapeFile], cache: &EigenCache) -> Result<Eva
             Ok(weyl_shape_dna(&basis.values, area, SHAPE_DNA_EIGENVALUES))
         })
         .collect::<Result<_, BenchError>>()?;
-    let n = files.len();
-    let distances = Mat::from_fn(n, n, |i, j| {
-        signatures[i]
-            .iter()
-            .zip(&signatures[j])
-            .map(|(a, b)| (a - b) * (a - b))
-            .sum::<f64>()
-            .sqrt()
-    });
-    let names: Vec<String> = files.iter().map(|f| f.name.clone()).collect();
-    let classes: Vec<String> = files.iter().map(|f| f.family.clone()).collect();
-    evaluate_distances(&names, &classes, distances.as_ref(), "none (no vocabulary)")
-        .map_err(BenchError::retrieval("Shape-DNA baseline"))
+    Ok(signatures)
 }
 
 /// `λ_i A / (4π i)`, i = 1 … m, of ascending eigenvalues (λ₀ = 0 skipped; missing ones are 0).
