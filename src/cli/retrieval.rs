@@ -154,12 +154,12 @@ pub enum RetrievalAction {
         index: PathBuf,
         #[command(flatten)]
         #[allow(missing_docs)]
-        input: MeshArgs,
-        /// The query names an indexed shape (as `build` stored it, or its file name or stem):
-        /// `query INDEX --id NAME` ranks the others from its stored signature, nothing read or
+        input: Option<MeshArgs>,
+        /// Query by an indexed shape instead of a mesh: NAME as `build` stored it, or its file
+        /// name or stem. The others are ranked from its stored signature, nothing read or
         /// described (the shape itself is left out of the results).
-        #[arg(long, conflicts_with_all = ["laplacian", "triangulate", "repair"])]
-        id: bool,
+        #[arg(long, value_name = "NAME", conflicts_with_all = ["mesh", "laplacian", "triangulate", "repair", "weld_tolerance"])]
+        id: Option<String>,
         /// Number of results.
         #[arg(long, default_value_t = 5)]
         top: usize,
@@ -711,34 +711,14 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             id,
             top,
         } => {
-            let ranked: Vec<(f64, String)> = if *id {
-                query_by_name(path, &input.mesh.to_string_lossy(), *top)?
-            } else if is_sqlite(path)? {
-                let store = SqliteIndex::new(path);
-                let (settings, rows) = store.open()?;
-                stored_sizes(&settings)?;
-                let query = read_query(input, &settings)?;
-                let query = super::progress::run("describing the query", || {
-                    settings.describe(&input.mesh.display().to_string(), &query.as_shape())
-                })?;
-                store
-                    .search(&settings, &rows, &query.signature, *top)?
-                    .into_iter()
-                    .map(|h| (h.distance, h.name))
-                    .collect()
-            } else {
-                let index = JsonFile::new(path).load_index()?;
-                stored_sizes(&index)?;
-                let query = read_query(input, &index)?;
-                let query = super::progress::run("describing the query", || {
-                    index.describe(&input.mesh.display().to_string(), &query.as_shape())
-                })?;
-                index
-                    .rank(&query.signature)?
-                    .iter()
-                    .take(*top)
-                    .map(|r| (r.distance, index.entries()[r.entry].name.clone()))
-                    .collect()
+            let ranked: Vec<(f64, String)> = match (id, input) {
+                (Some(name), _) => query_by_name(path, name, *top)?,
+                (None, Some(input)) => query_by_mesh(path, input, *top)?,
+                (None, None) => {
+                    return Err(CliError::Usage(
+                        "retrieval query needs a query mesh (or point cloud), or --id NAME of an indexed shape".into(),
+                    ))
+                }
             };
             for (rank, (distance, name)) in ranked.iter().enumerate() {
                 writeln!(out, "{}\t{distance:.6}\t{name}", rank + 1)?;
@@ -748,6 +728,38 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
     Ok(())
 }
 
+/// `wfem retrieval query INDEX MESH`: the `top` indexed shapes nearest to the query mesh, as
+/// (distance, name).
+fn query_by_mesh(path: &Path, input: &MeshArgs, top: usize) -> Result<Vec<(f64, String)>, CliError> {
+    Ok(if is_sqlite(path)? {
+        let store = SqliteIndex::new(path);
+        let (settings, rows) = store.open()?;
+        stored_sizes(&settings)?;
+        let query = read_query(input, &settings)?;
+        let query = super::progress::run("describing the query", || {
+            settings.describe(&input.mesh.display().to_string(), &query.as_shape())
+        })?;
+        store
+            .search(&settings, &rows, &query.signature, top)?
+            .into_iter()
+            .map(|h| (h.distance, h.name))
+            .collect()
+    } else {
+        let index = JsonFile::new(path).load_index()?;
+        stored_sizes(&index)?;
+        let query = read_query(input, &index)?;
+        let query = super::progress::run("describing the query", || {
+            index.describe(&input.mesh.display().to_string(), &query.as_shape())
+        })?;
+        index
+            .rank(&query.signature)?
+            .iter()
+            .take(top)
+            .map(|r| (r.distance, index.entries()[r.entry].name.clone()))
+            .collect()
+    })
+}
+
 /// `wfem retrieval query INDEX --id NAME`: the `top` shapes nearest to the indexed shape
 /// `name`, from its stored signature (itself left out), as (distance, name).
 fn query_by_name(path: &Path, name: &str, top: usize) -> Result<Vec<(f64, String)>, CliError> {
@@ -755,12 +767,19 @@ fn query_by_name(path: &Path, name: &str, top: usize) -> Result<Vec<(f64, String
         let store = SqliteIndex::new(path);
         let (settings, rows) = store.open()?;
         stored_sizes(&settings)?;
-        let (_, hits) = store.search_stored(&settings, &rows, name, top)?;
+        let (found, hits) = store.search_stored(&settings, &rows, name, top)?;
+        if found != name {
+            eprintln!("wfem: --id {name}: the indexed shape {found}");
+        }
         hits.into_iter().map(|h| (h.distance, h.name)).collect()
     } else {
         let index = JsonFile::new(path).load_index()?;
         stored_sizes(&index)?;
         let entry = index.find(name)?;
+        let found = &index.entries()[entry].name;
+        if found != name {
+            eprintln!("wfem: --id {name}: the indexed shape {found}");
+        }
         index
             .rank_entry(entry)?
             .iter()

@@ -267,9 +267,20 @@ fn query_by_id_ranks_from_the_stored_signature() {
             assert_eq!(by_id.len(), 2, "{by_id:?}");
             for (a, b) in by_id.iter().zip(&by_file[1..]) {
                 assert_eq!(a.0, b.0);
-                assert!((a.1 - b.1).abs() <= 1e-6 * b.1.max(1.0), "{by_id:?} vs {by_file:?}");
+                // Printed with 6 decimals; the SQLite index stores f32.
+                assert!((a.1 - b.1).abs() <= 2e-6 * b.1.max(1.0), "{by_id:?} vs {by_file:?}");
             }
         }
+        // --top counts the others: one hit, not the shape itself.
+        let one = parse(&wfem(&["retrieval", "query", index, "--id", "bumpy", "--top", "1"]));
+        assert_eq!(one.len(), 1);
+        assert_eq!(one[0].0, by_file[1].0);
+        // Neither a mesh nor --id, or both: refused by name.
+        let o = wfem(&["retrieval", "query", index]);
+        assert!(!o.status.success());
+        let o = wfem(&["retrieval", "query", index, &files[1], "--id", "bumpy"]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("cannot be used with"), "{}", stderr(&o));
         let o = wfem(&["retrieval", "query", index, "--id", "teapot"]);
         assert!(!o.status.success());
         assert!(

@@ -147,7 +147,10 @@ fn contrast(m: &Mat<f64>, k: usize) -> f64 {
         .map(|q| {
             let mut row = off_diagonal_row(m, q);
             row.sort_by(f64::total_cmp);
-            row[(k - 1).min(row.len() - 1)] / row[row.len() / 2].max(1e-300)
+            match row.len() {
+                0 => 0.0,
+                len => row[(k - 1).min(len - 1)] / row[len / 2].max(1e-300),
+            }
         })
         .sum::<f64>()
         / n as f64
@@ -264,7 +267,8 @@ pub fn report(all: &BTreeMap<String, BTreeMap<String, Measures>>) -> String {
     let Some(first) = cols.first() else {
         return s;
     };
-    let names: Vec<&String> = all[*first].keys().collect();
+    // The contrasts are statistics of a distance, not candidates.
+    let names: Vec<&String> = all[*first].keys().filter(|c| !c.starts_with("contrast")).collect();
     let best = |among: &[&String]| -> String {
         names
             .iter()

@@ -111,7 +111,9 @@ enum Cmd {
         /// defaults); without it, the defaults alone.
         #[arg(long)]
         variants: Option<PathBuf>,
-        /// Comma-separated collections: shrec11, tosca76, shrec11-fourleg.
+        /// Comma-separated collections: shrec11, tosca76, shrec11-fourleg, tosca76-clouds,
+        /// tosca76-mixed, tosca-people, tosca-noniso, shrec11-people, generated-people,
+        /// generated-people-alike.
         #[arg(long, value_delimiter = ',', default_value = "shrec11,tosca76")]
         collections: Vec<String>,
         /// Also evaluate with a vocabulary trained on shapes outside the collection.

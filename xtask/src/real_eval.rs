@@ -144,10 +144,10 @@ impl Collection {
                 .filter(|f| f.family == "man" || f.family == "woman")
                 .collect()),
             Collection::GeneratedPeople => {
-                shrec_bench::creatures::people_files(&std::env::temp_dir().join("wfem-people-1"), 1.0)
+                shrec_bench::creatures::people_files(&std::env::temp_dir().join("wfem-people-v1-spread1"), 1.0)
             }
             Collection::GeneratedPeopleAlike => {
-                shrec_bench::creatures::people_files(&std::env::temp_dir().join("wfem-people-0.5"), 0.5)
+                shrec_bench::creatures::people_files(&std::env::temp_dir().join("wfem-people-v1-spread0.5"), 0.5)
             }
         }
     }

@@ -211,7 +211,8 @@ pub fn person(individual: u64, pose: u64, level: u32, spread: f64) -> Result<Tri
 }
 
 /// [`PEOPLE_INDIVIDUALS`] people in [`PEOPLE_POSES`] poses each ([`person`] of `spread`) as
-/// OFF files in `dir` (written where missing; one folder per spread), family = the
+/// OFF files in `dir` (written where missing: name the folder by the generator's version and
+/// the spread, since files already there are reused), family = the
 /// individual (`person03`).
 ///
 /// # Errors

@@ -179,7 +179,11 @@ impl PyGeodesicSolver {
                     let sources: Vec<u32> = (range.start as u32..range.end as u32).collect();
                     inner.distance_each_into(&sources, block)
                 },
-                &mut |done, total| report.step(&format!("{done}/{total}")),
+                &mut |done, total| {
+                    // Synchronous: a callback that raises stops the call before the next block.
+                    report.step(&format!("{done}/{total}"));
+                    report.flush();
+                },
             )?;
             Ok((r.path, r.resumed_from))
         })
@@ -205,7 +209,11 @@ pub fn diffusion_all_pairs(
             &key,
             block_rows,
             |range, block| inner.rows_into(&range.collect::<Vec<usize>>(), block),
-            &mut |done, total| report.step(&format!("{done}/{total}")),
+            &mut |done, total| {
+                // Synchronous: a callback that raises stops the call before the next block.
+                report.step(&format!("{done}/{total}"));
+                report.flush();
+            },
         )?;
         Ok((r.path, r.resumed_from))
     })

@@ -8,7 +8,7 @@ use crate::errors::Error;
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::mpsc::{channel, RecvTimeoutError, Sender};
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::time::Duration;
 use wfem_base::interrupt::Interrupt;
 
@@ -155,7 +155,7 @@ where
         })
         .map_err(|e| Error::Panic(format!("cannot start a worker thread: {e}")).into_py(py))?;
     let mut rx = rx;
-    let report = |py: Python<'_>| -> PyResult<()> {
+    let report = |py: Python<'_>, progress_rx: &Receiver<Report>| -> PyResult<()> {
         if let Some(callback) = &callback {
             for report in progress_rx.try_iter() {
                 match report {
@@ -170,19 +170,30 @@ where
         }
         Ok(())
     };
+    // An interrupted call returns only once the worker has stopped (it sees the cancel at its
+    // next check): whatever it writes — a partial file, a finished one — is in place when the
+    // caller continues, and a second call never races the first on the same files. Dropping
+    // the progress receiver releases a worker waiting in `Progress::flush`.
+    let stop = |py: Python<'_>, rx: Receiver<Result<T, Error>>, progress_rx: Receiver<Report>| {
+        cancel.0.raise();
+        drop(progress_rx);
+        py.detach(move || {
+            let _ = rx.recv();
+        });
+    };
     loop {
         // The receiver moves into the GIL-free closure and back (it is Send, not Sync).
         let (received, back) = py.detach(move || (rx.recv_timeout(POLL), rx));
         rx = back;
-        if let Err(e) = report(py) {
-            cancel.0.raise();
+        if let Err(e) = report(py, &progress_rx) {
+            stop(py, rx, progress_rx);
             return Err(e);
         }
         match received {
             Ok(result) => return result.map_err(|e| e.into_py(py)),
             Err(RecvTimeoutError::Timeout) => {
                 if let Err(e) = py.check_signals() {
-                    cancel.0.raise();
+                    stop(py, rx, progress_rx);
                     return Err(e);
                 }
             }

@@ -275,6 +275,15 @@ impl RetrievalIndex {
 pub fn resolve_name<'a>(names: impl Iterator<Item = &'a str>, wanted: &str) -> Result<usize, RetrievalError> {
     let names: Vec<&str> = names.collect();
     let exact: Vec<usize> = (0..names.len()).filter(|&i| names[i] == wanted).collect();
+    if exact.len() > 1 {
+        return Err(RetrievalError::UnknownShape {
+            name: wanted.to_string(),
+            reason: format!(
+                "{} indexed shapes are named {wanted:?} (the index repeats the name): query with the file instead",
+                exact.len()
+            ),
+        });
+    }
     let matches = if exact.is_empty() {
         let path = |i: usize| std::path::Path::new(names[i]).to_path_buf();
         (0..names.len())
@@ -343,5 +352,11 @@ mod name_tests {
             other => panic!("{other:?}"),
         }
         assert!(resolve_name(std::iter::empty(), "x").is_err());
+        match resolve_name(["a/x.off", "a/x.off"].into_iter(), "a/x.off") {
+            Err(RetrievalError::UnknownShape { reason, .. }) => {
+                assert!(reason.contains("repeats the name"), "{reason}")
+            }
+            other => panic!("{other:?}"),
+        }
     }
 }

@@ -338,11 +338,17 @@ impl VocabularyModel {
     /// [`RetrievalError::InvalidModel`] if the weights sum to zero or the features lack the
     /// eigenpairs a spatial bag needs.
     pub fn shape_bag(&self, features: &ShapeFeatures, bags: &BagSettings) -> Result<Vec<f64>, RetrievalError> {
-        let bag = self.bag(features.descriptors.as_ref(), &features.weights, bags.assignment)?;
         let Some(spatial) = &bags.spatial else {
-            return Ok(bag);
+            return self.bag(features.descriptors.as_ref(), &features.weights, bags.assignment);
         };
+        // Spatial bags need Θ itself: the plain bag is taken from the same Θ.
         let theta = self.assignment(features.descriptors.as_ref(), bags.assignment)?;
+        check::same("vertex weights vs descriptors", theta.nrows(), features.weights.len())?;
+        check::finite_slice("vertex weights", &features.weights)?;
+        let bag: Vec<f64> = (0..theta.ncols())
+            .map(|c| theta.col(c).iter().zip(&features.weights).map(|(t, a)| t * a).sum())
+            .collect();
+        let bag = check::unit_sum("bag", "the vertex weights sum", bag)?;
         let spectrum = features.spectrum.as_ref().ok_or_else(|| RetrievalError::InvalidModel {
             what: "features",
             reason: format!(

@@ -361,7 +361,7 @@ fn streamed_bag_matches_the_formula_and_is_the_same_on_any_thread_count() {
         .fold(f64::INFINITY, f64::min);
     for assignment in [Assignment::Normalized, Assignment::Kernel] {
         let mut want = vec![0.0; v];
-        for i in 0..n {
+        for (i, &ai) in a.iter().enumerate() {
             let shift = match assignment {
                 Assignment::Normalized => (0..v).map(|c| d2(i, c)).fold(f64::INFINITY, f64::min),
                 Assignment::Kernel => global_min,
@@ -373,8 +373,8 @@ fn streamed_bag_matches_the_formula_and_is_the_same_on_any_thread_count() {
                 Assignment::Normalized => w.iter().sum(),
                 Assignment::Kernel => 1.0,
             };
-            for c in 0..v {
-                want[c] += w[c] / sum * a[i];
+            for (acc, wc) in want.iter_mut().zip(&w) {
+                *acc += wc / sum * ai;
             }
         }
         let total: f64 = want.iter().sum();
