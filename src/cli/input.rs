@@ -16,6 +16,7 @@ use wfem_render::Splats;
 pub struct MeshArgs {
     /// Mesh file (.obj, .ply, .off, .stl), or a point cloud (.ply without faces, .xyz, .pts,
     /// .csv, .npy): its operators come from local triangulations of the 30 nearest neighbours.
+    #[arg(id = "mesh_file", value_name = "MESH")]
     pub mesh: PathBuf,
     /// Laplacian of a mesh: cotan (the default, paper Eq. (3)) or robust (intrinsic Delaunay
     /// L of the tufted cover: for non-manifold, badly oriented or degenerate meshes; its

@@ -158,7 +158,7 @@ pub enum RetrievalAction {
         /// Query by an indexed shape instead of a mesh: NAME as `build` stored it, or its file
         /// name or stem. The others are ranked from its stored signature, nothing read or
         /// described (the shape itself is left out of the results).
-        #[arg(long, value_name = "NAME", conflicts_with_all = ["mesh", "laplacian", "triangulate", "repair", "weld_tolerance"])]
+        #[arg(long, value_name = "NAME", conflicts_with_all = ["mesh_file", "laplacian", "triangulate", "repair", "weld_tolerance"])]
         id: Option<String>,
         /// Number of results.
         #[arg(long, default_value_t = 5)]
@@ -712,7 +712,13 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
             top,
         } => {
             let ranked: Vec<(f64, String)> = match (id, input) {
-                (Some(name), _) => query_by_name(path, name, *top)?,
+                (Some(_), Some(input)) => {
+                    return Err(CliError::Usage(format!(
+                        "--id names an indexed shape in place of a query mesh: give {} or --id, not both",
+                        input.mesh.display()
+                    )))
+                }
+                (Some(name), None) => query_by_name(path, name, *top)?,
                 (None, Some(input)) => query_by_mesh(path, input, *top)?,
                 (None, None) => {
                     return Err(CliError::Usage(
