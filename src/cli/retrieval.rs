@@ -535,6 +535,7 @@ fn load_all(
             check_output(f, out)?;
         }
     }
+    refuse_repeated(files)?;
     let bar = super::progress::bar(files.len(), "reading shapes");
     let mut meshes = Vec::with_capacity(files.len());
     for f in files {
@@ -548,6 +549,37 @@ fn load_all(
     bar.done();
     refused.check_some(meshes.len(), files.len())?;
     Ok(meshes)
+}
+
+/// Refuses a collection that names one file more than once (as given or through another
+/// path to it): each would be described again, and the index would hold it twice (issue #41:
+/// 10,000 copies of one path ran for hours before failing on something unrelated).
+fn refuse_repeated(files: &[PathBuf]) -> Result<(), CliError> {
+    let mut first: std::collections::HashMap<PathBuf, (usize, usize)> = std::collections::HashMap::new();
+    for (i, f) in files.iter().enumerate() {
+        let key = std::fs::canonicalize(f).unwrap_or_else(|_| f.clone());
+        first.entry(key).or_insert((i, 0)).1 += 1;
+    }
+    let mut repeated: Vec<(usize, usize)> = first.into_values().filter(|&(_, n)| n > 1).collect();
+    if repeated.is_empty() {
+        return Ok(());
+    }
+    repeated.sort_unstable();
+    let named: Vec<String> = repeated
+        .iter()
+        .take(3)
+        .map(|&(i, n)| format!("{} ({n} times)", files[i].display()))
+        .collect();
+    let more = repeated.len().saturating_sub(3);
+    Err(CliError::Usage(format!(
+        "{}{} given more than once: each shape is described once, give each file once",
+        named.join(", "),
+        if more > 0 {
+            format!(" and {more} more files")
+        } else {
+            String::new()
+        }
+    )))
 }
 
 /// `wfem retrieval vocab|build|query`.

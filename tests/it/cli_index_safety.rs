@@ -293,3 +293,32 @@ fn query_by_id_ranks_from_the_stored_signature() {
         assert!(stderr(&o).contains("cannot be used with"), "{}", stderr(&o));
     }
 }
+
+/// Issue #41: a collection naming one file twice (as given, or by another path to it) is
+/// refused up front, naming the file and its count, before anything is described or written.
+#[test]
+fn repeated_files_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    let index = dir.path().join("index.sqlite");
+    let other_path = format!("{}/./bumpy.off", dir.path().display());
+    let o = build(&[files[0].clone(), files[1].clone(), other_path], &index, &[]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("bumpy.off (2 times)") && err.contains("give each file once"),
+        "{err}"
+    );
+    assert!(!index.exists());
+    // add: the same check.
+    let o = build(&files, &index, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = std::fs::read(&index).unwrap();
+    let extra = dir.path().join("extra.off");
+    mesh_fem::io::write_mesh(&extra, &mesh_fem::generate::icosphere(1)).unwrap();
+    let e = extra.to_str().unwrap();
+    let o = wfem(&["retrieval", "add", index.to_str().unwrap(), e, e]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("extra.off (2 times)"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&index).unwrap(), before);
+}
