@@ -308,6 +308,16 @@ pub fn read_input(args: &MeshArgs) -> Result<Input, CliError> {
     }
     let shape = progress::run(format!("reading {name}"), || {
         load_shape(&args.mesh, &LoadOptions::with_triangulation(args.triangulate))
+    })
+    .map_err(|e| match e {
+        // The cloud's own checks do not know the file (issue #41: "the point cloud has 0
+        // points" for an empty query file).
+        MeshError::TooFewPoints { .. } => MeshError::Parse {
+            path: args.mesh.clone(),
+            line: 0,
+            message: e.to_string(),
+        },
+        e => e,
     })?;
     let laplacian = args.laplacian();
     let (mesh, load_report, cloud, splats) = match shape {

@@ -381,3 +381,19 @@ fn retrieval_indexes_meshes_and_point_clouds_together() {
     let o = wfem(&["retrieval", "query", &robust, &files[0], "--top", "1"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// Issue #41 (small messages): an empty point file is refused naming the file (every command
+/// reads its input through the same `read_input`; `hks` here), and nothing is written.
+#[test]
+fn an_empty_point_file_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty.xyz");
+    std::fs::write(&empty, "").unwrap();
+    let e = empty.to_str().unwrap();
+    let out = dir.path().join("h.npy");
+    let o = wfem(&["hks", e, "-o", out.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("empty.xyz") && err.contains("0 points"), "{err}");
+    assert!(!out.exists());
+}
