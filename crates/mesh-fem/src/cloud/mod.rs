@@ -72,7 +72,9 @@ impl PointCloud {
     /// # Errors
     /// [`MeshError::TooFewPoints`] for fewer than [`MIN_POINTS`] points,
     /// [`MeshError::NonFinitePoint`] for a NaN or infinite coordinate or normal component,
-    /// [`MeshError::NormalsLength`] when the normals are not one per point.
+    /// [`MeshError::NormalsLength`] when the normals are not one per point,
+    /// [`MeshError::Invalid`] when the cloud's extent squared overflows (coordinates beyond
+    /// ~1e154).
     pub fn new(positions: Vec<[f64; 3]>, normals: Option<Vec<[f64; 3]>>) -> Result<Self, MeshError> {
         if positions.len() < MIN_POINTS {
             return Err(MeshError::TooFewPoints {
@@ -101,6 +103,25 @@ impl PointCloud {
                     what: "normal",
                 });
             }
+        }
+        // Local triangles' areas are squared lengths: a cloud whose extent squared overflows
+        // would be refused later as "collinear neighbours" (issue #41), so say why here.
+        let extent = (0..3)
+            .map(|a| {
+                let (lo, hi) = positions
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                        (lo.min(p[a]), hi.max(p[a]))
+                    });
+                hi - lo
+            })
+            .fold(0.0f64, f64::max);
+        if !(extent * extent).is_finite() {
+            return Err(MeshError::Invalid {
+                reason: format!(
+                    "the point cloud spans {extent:e}: its squared lengths overflow (coordinates beyond ~1e154); scale it down first"
+                ),
+            });
         }
         Ok(Self { positions, normals })
     }

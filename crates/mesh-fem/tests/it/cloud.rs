@@ -278,3 +278,16 @@ fn every_cloud_error_names_its_culprit() {
         Err(MeshError::DegenerateNeighbourhood { n_neighbours: 30, .. })
     ));
 }
+
+/// Issue #41: a cloud too large for its squared lengths is refused as such (it was refused as
+/// "collinear neighbours"); one of ~1e150 still assembles.
+#[test]
+fn a_cloud_whose_lengths_overflow_is_named_as_such() {
+    let scaled = |s: f64| -> Vec<[f64; 3]> { sphere_cloud(200, 6).iter().map(|p| p.map(|c| c * s)).collect() };
+    match PointCloud::new(scaled(1e300), None) {
+        Err(MeshError::Invalid { reason }) => assert!(reason.contains("overflow"), "{reason}"),
+        other => panic!("{other:?}"),
+    }
+    let cloud = PointCloud::new(scaled(1e150), None).unwrap();
+    assemble_cloud(&cloud, &CloudParams::default(), &AssemblyParams::default()).unwrap();
+}
