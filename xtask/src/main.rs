@@ -357,13 +357,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 Some(p) => serde_json::from_str(&std::fs::read_to_string(&p)?)?,
                 None => serde_json::from_str(r#"[{"name": "default"}]"#)?,
             };
-            let collections = collections
-                .iter()
-                .map(|c| {
-                    Collection::from_name(c)
-                        .ok_or_else(|| format!("unknown collection {c:?}: one of {}", Collection::NAMES.join(", ")))
-                })
-                .collect::<Result<Vec<_>, _>>()?;
+            let collections = Collection::parse_list(&collections)?;
             let cache = eigen_cache(cache)?;
             let results = real_eval::run(&RealEvalOptions {
                 meshes_dir: &meshes_dir,
@@ -394,13 +388,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 Some(d) => d,
                 None => wfem_corpus::meshes_dir()?,
             };
-            let collections = collections
-                .iter()
-                .map(|c| {
-                    Collection::from_name(c)
-                        .ok_or_else(|| format!("unknown collection {c:?}: one of {}", Collection::NAMES.join(", ")))
-                })
-                .collect::<Result<Vec<_>, _>>()?;
+            let collections = Collection::parse_list(&collections)?;
             let cache = eigen_cache(cache)?;
             print!(
                 "{}",

@@ -103,6 +103,19 @@ impl Collection {
         Self::ALL.into_iter().find(|c| c.name() == name)
     }
 
+    /// The collections of a comma-separated command-line list, in order.
+    ///
+    /// # Errors
+    /// The first unknown name, with the known ones.
+    pub fn parse_list(names: &[String]) -> Result<Vec<Self>, String> {
+        names
+            .iter()
+            .map(|c| {
+                Self::from_name(c).ok_or_else(|| format!("unknown collection {c:?}: one of {}", Self::NAMES.join(", ")))
+            })
+            .collect()
+    }
+
     /// A title for the report.
     pub fn title(self) -> &'static str {
         match self {

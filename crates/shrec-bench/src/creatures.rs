@@ -98,6 +98,11 @@ pub fn creature(seed: u64, level: u32) -> Result<TriMesh, MeshError> {
     for _ in 0..n_bumps {
         limbs.push(Limb::random(&mut rng, (0.05, 0.2), (0.1, 0.3), 0.0));
     }
+    deformed_sphere(axes, &limbs, level)
+}
+
+/// The icosphere of `level` scaled to the ellipsoid `axes` and displaced by every limb.
+fn deformed_sphere(axes: [f64; 3], limbs: &[Limb], level: u32) -> Result<TriMesh, MeshError> {
     let (sphere, faces) = icosphere(level).into_parts();
     let positions = sphere
         .iter()
@@ -199,15 +204,7 @@ pub fn person(individual: u64, pose: u64, level: u32, spread: f64) -> Result<Tri
             0.5,
         ));
     }
-    let (sphere, faces) = icosphere(level).into_parts();
-    let positions = sphere
-        .iter()
-        .map(|&u| {
-            let body = [u[0] * axes[0], u[1] * axes[1], u[2] * axes[2]];
-            limbs.iter().fold(body, |x, limb| add(x, limb.displacement(u)))
-        })
-        .collect();
-    TriMesh::new(positions, faces)
+    deformed_sphere(axes, &limbs, level)
 }
 
 /// [`PEOPLE_INDIVIDUALS`] people in [`PEOPLE_POSES`] poses each ([`person`] of `spread`) as

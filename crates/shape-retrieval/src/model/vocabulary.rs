@@ -298,17 +298,23 @@ impl VocabularyModel {
         weights: &[f64],
         assignment: Assignment,
     ) -> Result<Vec<f64>, RetrievalError> {
-        let standardized;
-        let descriptors = match &self.standardizer {
-            Some(z) => {
-                standardized = z.apply(descriptors)?;
-                standardized.as_ref()
-            }
-            None => descriptors,
-        };
         // Θᵀw without forming Θ (n × V: 60 MB for 15K vertices and 512 words).
-        let bag = self.vocabulary.weighted_assignment(descriptors, weights, assignment)?;
+        let bag = self.standardized(descriptors, |d| {
+            self.vocabulary.weighted_assignment(d, weights, assignment)
+        })?;
         check::unit_sum("bag", "the vertex weights sum", bag)
+    }
+
+    /// `f` of the descriptors z-scored by the model's standardizer (as given without one).
+    fn standardized<R>(
+        &self,
+        descriptors: MatRef<'_, f64>,
+        f: impl FnOnce(MatRef<'_, f64>) -> Result<R, RetrievalError>,
+    ) -> Result<R, RetrievalError> {
+        match &self.standardizer {
+            Some(z) => f(z.apply(descriptors)?.as_ref()),
+            None => f(descriptors),
+        }
     }
 
     /// The assignment Θ (n × V) of descriptors (n × d, not z-scored) to the words.
@@ -316,18 +322,10 @@ impl VocabularyModel {
     /// # Errors
     /// Those of [`Standardizer::apply`] and [`Vocabulary::soft_assignment`].
     pub fn assignment(&self, descriptors: MatRef<'_, f64>, assignment: Assignment) -> Result<Mat<f64>, RetrievalError> {
-        let standardized;
-        let descriptors = match &self.standardizer {
-            Some(z) => {
-                standardized = z.apply(descriptors)?;
-                standardized.as_ref()
-            }
-            None => descriptors,
-        };
-        match assignment {
-            Assignment::Normalized => self.vocabulary.soft_assignment(descriptors),
-            Assignment::Kernel => self.vocabulary.kernel_assignment(descriptors),
-        }
+        self.standardized(descriptors, |d| match assignment {
+            Assignment::Normalized => self.vocabulary.soft_assignment(d),
+            Assignment::Kernel => self.vocabulary.kernel_assignment(d),
+        })
     }
 
     /// The bag of a shape under `bags`: the normalised bag, followed by the spatial histogram
