@@ -209,9 +209,45 @@ impl Fast {
     }
 }
 
+/// The widest window `t_max / t_min` one factor serves in [`PreparedMethod::apply_times`]:
+/// three decades take 78–81 Lanczos steps for a unit vector (see [`Fast::run_times`]); over
+/// the four to five decades from a mesh's resolution `1/λ_max` to `1/λ₂₀` a rough column (a
+/// noisy field, a random probe) stalled at the 200-step limit (estimate 3e−11 on TOSCA
+/// centaur0). Wider lists are split into windows of at most this ratio, one factor each.
+pub(crate) const WINDOW_RATIO: f64 = 1e3;
+
+/// `times` grouped into windows of ratio at most [`WINDOW_RATIO`]: lists of indices into
+/// `times`, by increasing t.
+pub(crate) fn windows(times: &[f64]) -> Vec<Vec<usize>> {
+    let mut order: Vec<usize> = (0..times.len()).collect();
+    order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    for i in order {
+        match out.last_mut() {
+            Some(w) if times[i] <= WINDOW_RATIO * times[w[0]] => w.push(i),
+            _ => out.push(vec![i]),
+        }
+    }
+    out
+}
+
 impl PreparedMethod for Fast {
     fn apply_times(&self, ops: &Operators, f: MatRef<'_, f64>, times: &[f64], kernel_matrix: bool) -> TimesResult {
-        self.run_times(ops, f, times, kernel_matrix)
+        let groups = windows(times);
+        if groups.len() <= 1 {
+            return self.run_times(ops, f, times, kernel_matrix);
+        }
+        let mut values: Vec<Option<Mat<f64>>> = vec![None; times.len()];
+        let mut estimates = vec![None; times.len()];
+        for group in groups {
+            let sub: Vec<f64> = group.iter().map(|&i| times[i]).collect();
+            let (v, e) = self.run_times(ops, f, &sub, kernel_matrix)?;
+            for ((&i, v), e) in group.iter().zip(v).zip(e) {
+                values[i] = Some(v);
+                estimates[i] = e;
+            }
+        }
+        Ok((values.into_iter().flatten().collect(), estimates))
     }
 
     fn apply(&self, ops: &Operators, f: MatRef<'_, f64>, t: f64) -> Result<Mat<f64>, HeatError> {
@@ -228,5 +264,28 @@ impl PreparedMethod for Fast {
         let gamma = self.params.gamma;
         let h = |s: f64| if s <= 0.0 { 0.0 } else { exp_of(s, gamma) / s };
         Ok(self.run(ops, g, t, &h, true)?.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn windows_cover_every_time_once_within_the_ratio() {
+        let times = [5e-6, 1.0, 1e-2, 2e-6, 0.5, 1e-6, 3e-3];
+        let groups = windows(&times);
+        let mut seen: Vec<usize> = groups.iter().flatten().copied().collect();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..times.len()).collect::<Vec<_>>());
+        for g in &groups {
+            let lo = g.iter().map(|&i| times[i]).fold(f64::INFINITY, f64::min);
+            let hi = g.iter().map(|&i| times[i]).fold(0.0, f64::max);
+            assert!(hi <= WINDOW_RATIO * lo, "{g:?}");
+        }
+        // [1e−6, 5e−6] · [3e−3, 1e−2, 0.5, 1]: two windows.
+        assert_eq!(groups, vec![vec![5, 3, 0], vec![6, 2, 4, 1]]);
+        assert_eq!(windows(&[1.0, 2.0]), vec![vec![0, 1]]);
+        assert!(windows(&[]).is_empty());
     }
 }

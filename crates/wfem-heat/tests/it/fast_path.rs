@@ -144,3 +144,49 @@ fn many_times_from_one_factorization_match_dense() {
         Err(wfem_heat::HeatError::InvalidTime { .. })
     ));
 }
+
+/// A rough column (random signs, like a noisy field or a trace probe) over the whole scale
+/// range of a real mesh, from its resolution 1/λ_max to 1/λ₂₀ (4–5 decades) and given out of
+/// order: one factor for the whole window stalled at the 200-step limit (TOSCA centaur0,
+/// estimate 3e−11); the window is split ([`wfem_heat`]'s `WINDOW_RATIO`), and every t equals
+/// the rational method's one-t-at-a-time value.
+#[test]
+fn a_rough_column_over_the_whole_scale_range_converges_and_is_exact() {
+    let path = wfem_corpus::mesh_path("tosca-bcicp-5k/TOSCA_Isometric/centaur0.off")
+        .expect("the mesh corpus is required (or set WFEM_MESHES)");
+    let (mesh, _) = mesh_fem::io::load(&path, &Default::default()).unwrap();
+    let ops = mesh_fem::assemble(&mesh, &Default::default()).unwrap();
+    let fast = HeatKernel::new(&ops, HeatParams::default()).unwrap();
+    let lambda_max = wfem_heat::scale::largest_eigenvalue(fast.operators(), &Default::default()).unwrap();
+    let eig = wfem_heat::spectral::Eigenbasis::partial_of(fast.operators(), 20, &Default::default()).unwrap();
+    let (t_min, t_max) = (1.0 / lambda_max, 1.0 / eig.values[19]);
+    assert!(t_max / t_min > 1e4, "the window spans {:e}", t_max / t_min);
+    let mut times = wfem_heat::approx::geometric_times(t_min, t_max, 24);
+    times.reverse();
+    times.swap(3, 17);
+    let n = ops.n();
+    let mut rng = wfem_base::rng::SplitMix64::new(3);
+    let block = faer::Mat::<f64>::from_fn(n, 2, |_, _| if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 });
+    let series = fast.apply_times(block.as_ref(), &times).unwrap();
+    let rational = HeatKernel::new(
+        &ops,
+        HeatParams {
+            method: Method::rational(shifted_solve::poles::DEFAULT_DEGREE),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    for &l in &[0, 3, 11, 17, 23] {
+        let r = rational.apply_many(block.as_ref(), times[l]).unwrap();
+        for c in 0..2 {
+            let g: Vec<f64> = series.values[l].col(c).iter().copied().collect();
+            let want: Vec<f64> = r.col(c).iter().copied().collect();
+            assert!(
+                rel_err(&g, &want) < 1e-9,
+                "t = {:e} column {c}: {:e}",
+                times[l],
+                rel_err(&g, &want)
+            );
+        }
+    }
+}
