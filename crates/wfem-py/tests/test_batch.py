@@ -198,3 +198,44 @@ def test_read_says_exactly_what_is_wrong(collection, tmp_path):
         wfem.batch.read(out)
     with pytest.raises(wfem.InvalidInputError, match="no such folder"):
         wfem.batch.read(tmp_path / "absent")
+
+
+def _dead_pid():
+    import subprocess
+    import sys
+
+    p = subprocess.Popen([sys.executable, "-c", "pass"])
+    p.wait()
+    return p.pid
+
+
+def test_a_run_killed_in_a_write_resumes_and_leaves_no_temp_file(collection, tmp_path):
+    # Issue #41 point 4: killed (kill -9) while run.json was written, the folder holds only the
+    # dead process's temporary file: a plain run and resume=True both start afresh.
+    paths = collection[:6]
+    full = _serial(paths, tmp_path / "reference")
+    dead = _dead_pid()
+    for kw in [{}, {"resume": True}]:
+        out = tmp_path / f"killed-in-run-json-{len(kw)}"
+        out.mkdir()
+        (out / f".run.json.{dead}.tmp").write_text('{"kind": ')
+        assert _serial(paths, out, **kw).equals(full)
+        assert wfem.batch.read(out).equals(full)
+        assert not [f for f in os.listdir(out) if f.endswith(".tmp")]
+    # Killed while a shard was written: the resumed run removes the dead process's part file;
+    # a temporary file of a process that still runs (this one) is left alone.
+    out = tmp_path / "killed-in-a-shard"
+    _serial(paths[:4], out)
+    os.remove(out / "manifest.json")
+    (out / f".part-00002.parquet.{dead}.tmp").write_bytes(b"PAR1 half")
+    live = out / f".part-00009.parquet.{os.getpid()}.tmp"
+    live.write_bytes(b"being written")
+    assert _serial(paths, out, resume=True).equals(full)
+    assert wfem.batch.read(out).equals(full)
+    assert sorted(f for f in os.listdir(out) if f.endswith(".tmp")) == [live.name]
+    # A replacing run killed before its rename leaves a sibling folder: the next replace removes it.
+    stale = tmp_path / f".killed-in-a-shard.{dead}.new"
+    stale.mkdir()
+    (stale / "run.json").write_text("{}")
+    assert _serial(paths, out, replace=True).equals(full)
+    assert not stale.exists()

@@ -25,7 +25,11 @@ directory without a manifest is an interrupted run. :func:`read` loads a finishe
 already holds a run is refused unless ``replace=True`` (the new run is written beside it and
 renamed into place only once complete, so the old run stays readable until then) or
 ``resume=True`` (the shapes already in its shards are skipped; the settings, the shard size
-and the order of the paths must be those of the first run, or it is refused).
+and the order of the paths must be those of the first run, or it is refused). What a process
+killed in a write left (``.<name>.<pid>.tmp`` of a process that no longer runs, e.g. after a
+``kill -9``) is removed by the next run in the folder, and the half-built ``.<folder>.<pid>.new``
+sibling of a killed ``replace=True`` run by the next replacing one; a folder that held nothing else (killed
+while ``run.json`` was written) counts as empty.
 
 Columns: ``path``, ``ok``, ``error_type``, ``error_kind``, ``error``, ``n_vertices``, ``n_faces``,
 ``area``, then ``descriptor`` (flattened row-major, with ``dim``; :func:`descriptor_arrays`
@@ -256,8 +260,56 @@ def _done_rows(out: str, settings: dict[str, Any], names: list[str]) -> tuple[li
     return rows, shards
 
 
+def _alive(pid: int) -> bool:
+    """Whether a process with this id runs (one of another user counts as running)."""
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, ValueError):
+        return True
+    return True
+
+
+def _sweep_dead(out: str) -> list[str]:
+    """Removes from `out` the temporary files ``.<name>.<pid>.tmp`` of processes that no longer
+    run (a ``kill -9`` in a write) and returns their names; those of a running process stay."""
+    removed = []
+    for name in sorted(os.listdir(out)):
+        parts = name.rsplit(".", 2)
+        if not (name.startswith(".") and len(parts) == 3 and parts[2] == "tmp" and parts[1].isdigit()):
+            continue
+        if not _alive(int(parts[1])):
+            try:
+                os.remove(os.path.join(out, name))
+                removed.append(name)
+            except FileNotFoundError:
+                pass
+    return removed
+
+
+def _sweep_dead_siblings(parent: str, base: str) -> None:
+    """Removes the half-built ``.<base>.<pid>.new`` / ``.old`` folders of a replacing run whose
+    process no longer runs."""
+    import shutil
+
+    for name in os.listdir(parent):
+        if not name.startswith(f".{base}."):
+            continue
+        parts = name[len(base) + 2 :].split(".")
+        if len(parts) == 2 and parts[0].isdigit() and parts[1] in ("new", "old") and not _alive(int(parts[0])):
+            shutil.rmtree(os.path.join(parent, name), ignore_errors=True)
+
+
 def _is_run(out: str) -> bool:
-    return os.path.isdir(out) and bool(os.listdir(out))
+    """Whether `out` holds something of an earlier run, once what dead processes left half
+    written is removed (a run killed while writing ``run.json`` leaves nothing else)."""
+    if not os.path.isdir(out):
+        return False
+    _sweep_dead(out)
+    return bool(os.listdir(out))
 
 
 def _run(
@@ -295,6 +347,7 @@ def _run(
                     os.remove(manifest)
             elif replace:
                 parent = os.path.dirname(os.path.abspath(out))
+                _sweep_dead_siblings(parent, os.path.basename(os.path.abspath(out)))
                 target = os.path.join(parent, f".{os.path.basename(os.path.abspath(out))}.{os.getpid()}.new")
                 shutil.rmtree(target, ignore_errors=True)
             else:
