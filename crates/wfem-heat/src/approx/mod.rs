@@ -27,9 +27,11 @@
 
 mod features;
 mod global;
+mod scale_choice;
 
 pub use features::{eigenfunction_features, extrema, persistent_extremum_count, ranked_anchors, RankedAnchors};
 pub use global::{fit_global_component, global_component, GlobalComponent, RESOLVED_OVERLAP};
+pub use scale_choice::{choose_scale, ScaleChoice, DEFAULT_TRACE_PROBES};
 
 use crate::check;
 use crate::scale::{largest_eigenvalue, LargestEigenParams};

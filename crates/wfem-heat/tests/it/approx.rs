@@ -55,6 +55,34 @@ fn dense_kernel(ops: &mesh_fem::FemOperators, t: f64) -> DMatrix<f64> {
     &b_inv_sqrt * &e.eigenvectors * decay * e.eigenvectors.transpose() * b_sqrt
 }
 
+/// [`dense_kernel`] at any t from one eigendecomposition.
+fn dense_kernels(ops: &mesh_fem::FemOperators) -> impl Fn(f64) -> DMatrix<f64> {
+    let n = ops.stiffness.nrows();
+    let to_dense = |m: &faer::sparse::SparseColMat<usize, f64>| {
+        let mut d = DMatrix::<f64>::zeros(n, n);
+        let s = m.symbolic();
+        for j in 0..n {
+            for p in s.col_range(j) {
+                d[(s.row_idx()[p], j)] = m.val()[p];
+            }
+        }
+        d
+    };
+    let (l, b) = (to_dense(&ops.stiffness), to_dense(&ops.mass));
+    let b_eig = nalgebra::SymmetricEigen::new(b);
+    let power = |q: f64| {
+        &b_eig.eigenvectors
+            * DMatrix::from_diagonal(&b_eig.eigenvalues.map(|x| x.powf(q)))
+            * b_eig.eigenvectors.transpose()
+    };
+    let (b_inv_sqrt, b_sqrt) = (power(-0.5), power(0.5));
+    let s = &b_inv_sqrt * &l * &b_inv_sqrt;
+    let e = nalgebra::SymmetricEigen::new(0.5 * (&s + s.transpose()));
+    let left = &b_inv_sqrt * &e.eigenvectors;
+    let right = e.eigenvectors.transpose() * b_sqrt;
+    move |t| &left * DMatrix::from_diagonal(&e.eigenvalues.map(|x| (-t * x.max(0.0)).exp())) * &right
+}
+
 /// A smooth field with a dozen extrema on a unit-size shape.
 fn smooth_field(mesh: &mesh_fem::TriMesh) -> Vec<f64> {
     mesh.positions()
@@ -334,4 +362,83 @@ fn warning_names_the_option_to_change() {
     let s = fit_global_component(&k, &a.anchors, &noisy, a.scales[5].t, Coefficients::Smooth).unwrap();
     assert!(s.anchors.is_empty() && s.coefficients.is_empty());
     assert!(rel_err(&s.values, &k.apply(&noisy, a.scales[5].t).unwrap()) < 1e-15);
+}
+
+/// The GCV scale of a noisy map (issue #40) against an independent dense reference: the
+/// trace fraction `tr(W K_t)/tr W` of the Hutchinson estimate against the dense kernel's
+/// diagonal (nalgebra), the scores against the exact GCV, the chosen t's error to the clean
+/// map against the best t knowing it, and the noise estimate against the noise added.
+#[test]
+fn the_gcv_scale_matches_the_dense_reference_and_denoises() {
+    let (mesh, ops) = ops_of(&generate::icosphere(3));
+    let n = mesh.n_vertices();
+    let k = kernel(&ops, Method::fast());
+    let kernels = dense_kernels(&ops);
+    let clean = smooth_field(&mesh);
+    let sigma = 0.15;
+    let mut rng = wfem_base::rng::SplitMix64::new(5);
+    let f: Vec<f64> = clean.iter().map(|c| c + sigma * rng.next_normal()).collect();
+    let lambda = Eigenbasis::dense(&ops.stiffness, &ops.mass).unwrap().values;
+    let times = geometric_times(1.0 / lambda[n - 1], 1.0 / lambda[19], 24);
+    let choice = wfem_heat::approx::choose_scale(&k, &f, &times, 16).unwrap();
+    let w = wfem(&ops).vertex_areas();
+    let area: f64 = w.iter().sum();
+    let fv = DVector::from_column_slice(&f);
+    let mut exact_scores = Vec::new();
+    let mut errors = Vec::new();
+    for (l, &t) in times.iter().enumerate() {
+        let kt = kernels(t);
+        let fraction: f64 = (0..n).map(|i| w[i] * kt[(i, i)]).sum::<f64>() / area;
+        // Hutchinson with 16 probes on 642 vertices: standard deviation ≈ √(2/(16·642)) ≈ 0.014.
+        assert!(
+            (choice.trace_fraction[l] - fraction).abs() < 0.05,
+            "t = {t:e}: estimated {} exact {fraction}",
+            choice.trace_fraction[l]
+        );
+        let g = &kt * &fv;
+        let residual: f64 = (0..n).map(|i| w[i] * (f[i] - g[i]).powi(2)).sum::<f64>() / area;
+        exact_scores.push(residual / (1.0 - fraction).powi(2));
+        // The residual part of the score is exact; its only estimate is the trace.
+        let with_estimate = residual / (1.0 - choice.trace_fraction[l]).powi(2);
+        assert!(
+            (choice.scores[l] - with_estimate).abs() <= 1e-8 * with_estimate,
+            "t = {t:e}: score {} against {with_estimate}",
+            choice.scores[l]
+        );
+        let l2: f64 = (0..n).map(|i| w[i] * (g[i] - clean[i]).powi(2)).sum::<f64>() / area;
+        errors.push(l2.sqrt());
+    }
+    for (l, (&s, &e)) in choice.scores.iter().zip(&exact_scores).enumerate() {
+        assert!((s - e).abs() <= 0.1 * e, "t = {:e}: score {s:e} exact {e:e}", times[l]);
+    }
+    let exact_best = (0..times.len())
+        .min_by(|&a, &b| exact_scores[a].total_cmp(&exact_scores[b]))
+        .unwrap();
+    assert!(
+        choice.index.abs_diff(exact_best) <= 1,
+        "{} vs {exact_best}",
+        choice.index
+    );
+    // The chosen scale denoises nearly as well as the best one chosen knowing the clean map,
+    // and far better than no smoothing (error σ).
+    let oracle = errors.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(
+        errors[choice.index] <= 1.1 * oracle,
+        "{} vs oracle {oracle}",
+        errors[choice.index]
+    );
+    assert!(errors[choice.index] < 0.7 * sigma, "{}", errors[choice.index]);
+    assert!(
+        (choice.noise - sigma).abs() < 0.1 * sigma,
+        "noise {} vs {sigma}",
+        choice.noise
+    );
+    assert_eq!(choice.t, times[choice.index]);
+    // Bad input is refused.
+    assert!(wfem_heat::approx::choose_scale(&k, &f[1..], &times, 8).is_err());
+    assert!(wfem_heat::approx::choose_scale(&k, &f, &[], 8).is_err());
+    assert!(wfem_heat::approx::choose_scale(&k, &f, &times, 0).is_err());
+    let mut nan = f.clone();
+    nan[3] = f64::NAN;
+    assert!(wfem_heat::approx::choose_scale(&k, &nan, &times, 8).is_err());
 }
