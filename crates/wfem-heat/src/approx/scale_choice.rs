@@ -16,10 +16,11 @@
 //! `σ̂² = (‖f − K_t f‖²_W / tr W) / (1 − tr(W K_t)/tr W)` at the chosen t.
 //!
 //! Measured on the 18 maps of `cargo xtask approx-eval` at σ = 5 % of the range (a 40-time
-//! grid from 1/λ_max to 1/λ₂₀, 8 probes): `K_t f` at the chosen t is within 1.04 × the L2
-//! error of the best t chosen knowing the clean map on all 18, and within 1.25 × its L∞
-//! error on 12 (the others are up to 1.65 ×: a kink, as the tip of a distance cone, wants a
-//! smaller t than the L2 optimum).
+//! grid from 1/λ_max to 1/λ₂₀, 8 probes; a prototype run of 2026-12-02): `K_t f` at the
+//! chosen t is within 1.04 × the L2 error of the best t chosen knowing the clean map on all
+//! 18, and within 1.25 × its L∞ error on 14 (the other four are 1.30–1.65 ×, three of them
+//! diffusion-distance maps: the kink at the tip of the distance cone wants a smaller t than
+//! the L2 optimum). The default decomposition does not use it yet (issue #40).
 
 use crate::{check, HeatError, HeatKernel};
 use faer::Mat;
