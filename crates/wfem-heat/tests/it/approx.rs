@@ -28,31 +28,7 @@ fn kernel(ops: &mesh_fem::FemOperators, method: Method) -> HeatKernel {
 /// The dense kernel K_t = X e^{−tΛ} Xᵀ B (paper Eq. (6)) from nalgebra's own symmetric
 /// eigensolver on B^{-1/2} L B^{-1/2} (independent of faer and of every wfem method).
 fn dense_kernel(ops: &mesh_fem::FemOperators, t: f64) -> DMatrix<f64> {
-    let n = ops.stiffness.nrows();
-    let to_dense = |m: &faer::sparse::SparseColMat<usize, f64>| {
-        let mut d = DMatrix::<f64>::zeros(n, n);
-        let s = m.symbolic();
-        for j in 0..n {
-            for p in s.col_range(j) {
-                d[(s.row_idx()[p], j)] = m.val()[p];
-            }
-        }
-        d
-    };
-    let l = to_dense(&ops.stiffness);
-    let b = to_dense(&ops.mass);
-    let b_eig = nalgebra::SymmetricEigen::new(b.clone());
-    let b_inv_sqrt = &b_eig.eigenvectors
-        * DMatrix::from_diagonal(&b_eig.eigenvalues.map(|x| 1.0 / x.sqrt()))
-        * b_eig.eigenvectors.transpose();
-    let s = &b_inv_sqrt * &l * &b_inv_sqrt;
-    let e = nalgebra::SymmetricEigen::new(0.5 * (&s + s.transpose()));
-    let decay = DMatrix::from_diagonal(&e.eigenvalues.map(|x| (-t * x.max(0.0)).exp()));
-    // K_t = B^{-1/2} U e^{−tΛ} Uᵀ B^{1/2}.
-    let b_sqrt = &b_eig.eigenvectors
-        * DMatrix::from_diagonal(&b_eig.eigenvalues.map(|x| x.sqrt()))
-        * b_eig.eigenvectors.transpose();
-    &b_inv_sqrt * &e.eigenvectors * decay * e.eigenvectors.transpose() * b_sqrt
+    dense_kernels(ops)(t)
 }
 
 /// [`dense_kernel`] at any t from one eigendecomposition.
@@ -70,16 +46,15 @@ fn dense_kernels(ops: &mesh_fem::FemOperators) -> impl Fn(f64) -> DMatrix<f64> {
     };
     let (l, b) = (to_dense(&ops.stiffness), to_dense(&ops.mass));
     let b_eig = nalgebra::SymmetricEigen::new(b);
-    let power = |q: f64| {
-        &b_eig.eigenvectors
-            * DMatrix::from_diagonal(&b_eig.eigenvalues.map(|x| x.powf(q)))
-            * b_eig.eigenvectors.transpose()
+    let power = |g: fn(f64) -> f64| {
+        &b_eig.eigenvectors * DMatrix::from_diagonal(&b_eig.eigenvalues.map(g)) * b_eig.eigenvectors.transpose()
     };
-    let (b_inv_sqrt, b_sqrt) = (power(-0.5), power(0.5));
+    let (b_inv_sqrt, b_sqrt) = (power(|x| 1.0 / x.sqrt()), power(f64::sqrt));
     let s = &b_inv_sqrt * &l * &b_inv_sqrt;
     let e = nalgebra::SymmetricEigen::new(0.5 * (&s + s.transpose()));
     let left = &b_inv_sqrt * &e.eigenvectors;
     let right = e.eigenvectors.transpose() * b_sqrt;
+    // K_t = B^{-1/2} U e^{−tΛ} Uᵀ B^{1/2}.
     move |t| &left * DMatrix::from_diagonal(&e.eigenvalues.map(|x| (-t * x.max(0.0)).exp())) * &right
 }
 
