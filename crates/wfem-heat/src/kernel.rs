@@ -256,7 +256,8 @@ pub struct DiagonalSeries {
 
 impl HeatKernel {
     /// `K_t F` for every t of `times` (paper Eq. (6)); with the fast path (the default), one
-    /// real sparse Cholesky of `M + σL` (σ chosen for the whole window) and one Krylov space
+    /// real sparse Cholesky of `M + σL` (σ chosen for the whole window; a list wider than three
+    /// decades is split into windows of three decades, one factor each) and one Krylov space
     /// per column serve every t, instead of one factorization per t — the way to evaluate a
     /// scale space, a multi-scale descriptor or a time window.
     ///

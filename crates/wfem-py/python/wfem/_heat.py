@@ -205,7 +205,7 @@ class HeatKernel:
             f: (n,) or (n, k): one function per column; all columns share one factorization.
             t: a positive time, or a 1-D array of times (each t is factored once for all
                 columns, at the method's full accuracy; :meth:`apply_times` shares one
-                factorization between the times).
+                factorization between the times of each span of three decades).
             time_unit: the unit of t: ``"absolute"`` (default; the mesh's squared length
                 units), ``"area"`` (t = τ·A, the same τ on any scaling of the shape) or
                 ``"edge"`` (t = τ·ℓ̄², ℓ̄ the mean edge length: potpourri3d's convention).
