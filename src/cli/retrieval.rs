@@ -35,16 +35,18 @@ use clap::{Args, Subcommand};
 use mesh_fem::io::Shape;
 use mesh_fem::Laplacian;
 use retrieval_store::index::SqliteIndex;
-use shape_retrieval::descriptor::Descriptor;
+use shape_retrieval::descriptor::{Descriptor, DescriptorOptions, RETRIEVAL_SIHKS};
 use shape_retrieval::distance::BagDistance;
 use shape_retrieval::eval::ClassRule;
 use shape_retrieval::global::GlobalKind;
+use shape_retrieval::hks::TimeSampling;
 use shape_retrieval::model::{
-    Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, Refinement, RetrievalIndex, RetrievalSettings,
-    ShapeFeatures, Smoothing, VertexWeights, VocabularyModel,
+    Denoising, Despiking, GlobalSignature, HoleFilling, Refinement, RetrievalIndex, RetrievalSettings, ShapeFeatures,
+    Smoothing, VertexWeights, VocabularyModel,
 };
 use shape_retrieval::spatial::SpatialBag;
 use shape_retrieval::store::{IndexStore, JsonFile, VocabularyStore};
+use shape_retrieval::RetrievalError;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use wfem_base::Choice;
@@ -161,7 +163,7 @@ pub enum RetrievalAction {
         #[arg(long, value_name = "NAME", conflicts_with_all = ["mesh_file", "laplacian", "triangulate", "repair", "weld_tolerance"])]
         id: Option<String>,
         /// Number of results.
-        #[arg(long, default_value_t = 5)]
+        #[arg(long, default_value_t = DEFAULT_TOP)]
         top: usize,
     },
 }
@@ -304,17 +306,13 @@ pub struct DescriptorArgs {
     /// Eigenpairs k per shape.
     #[arg(long = "eigenpairs", alias = "eigs", default_value_t = shape_retrieval::descriptor::DEFAULT_EIGENPAIRS)]
     pub eigs: usize,
-    /// SI-HKS: first τ of the times t = A·2^τ (A = surface area) [default: −12].
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, help = defaulted("SI-HKS: first τ of the times t = A·2^τ (A = surface area)", RETRIEVAL_SIHKS.tau_min))]
     pub tau_min: Option<f64>,
-    /// SI-HKS: last τ [default: 1].
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, help = defaulted("SI-HKS: last τ", RETRIEVAL_SIHKS.tau_max))]
     pub tau_max: Option<f64>,
-    /// SI-HKS: step Δτ [default: 0.125].
-    #[arg(long)]
+    #[arg(long, help = defaulted("SI-HKS: step Δτ", RETRIEVAL_SIHKS.tau_step))]
     pub tau_step: Option<f64>,
-    /// SI-HKS: number of Fourier magnitudes kept [default: 5].
-    #[arg(long)]
+    #[arg(long, help = defaulted("SI-HKS: number of Fourier magnitudes kept", RETRIEVAL_SIHKS.num_frequencies))]
     pub frequencies: Option<usize>,
     /// DHK1/DHK2: absolute times; DHK3: times in units of 1/λ_max (comma-separated).
     /// Default for DHK3: 4 ln10 · 10^{0.4 j}, j = 0…5; DHK1/DHK2 need them.
@@ -389,7 +387,7 @@ pub struct TrainingArgs {
     #[arg(long, default_value_t = shape_retrieval::model::DEFAULT_WORDS)]
     pub words: usize,
     /// k-means seed.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = shape_retrieval::model::TrainingParams::default().seed)]
     pub seed: u64,
     /// Do not z-score the descriptor dimensions before k-means.
     #[arg(long)]
@@ -420,11 +418,34 @@ pub struct BagArgs {
     pub fusion_kind: GlobalKind,
 }
 
-fn missing_times(descriptor: Descriptor) -> CliError {
-    CliError::Usage(format!(
-        "--descriptor {} has no default times (they depend on the collection's scale): give them with --times",
-        descriptor.name()
-    ))
+/// Results a query shows unless told otherwise (a screenful; the library's and Python's
+/// default is [`shape_retrieval::model::DEFAULT_RESULTS`]).
+const DEFAULT_TOP: usize = 5;
+
+/// The help of an option whose default is a library constant (for options that are `None`
+/// unless given, so that a misplaced one can be refused).
+fn defaulted(help: &str, default: impl std::fmt::Display) -> String {
+    format!("{help} [default: {default}]")
+}
+
+/// A descriptor option that does not apply, or missing times, named by the flags.
+fn descriptor_error(e: RetrievalError) -> CliError {
+    let flag = |option: &str| format!("--{}", option.replace('_', "-"));
+    match e {
+        RetrievalError::MisplacedOption {
+            option,
+            descriptor,
+            owners,
+        } => CliError::Usage(format!(
+            "{} is an option of --descriptor {}, not of --descriptor {descriptor}",
+            flag(option),
+            owners.join(" or ")
+        )),
+        RetrievalError::MissingTimes { descriptor } => CliError::Usage(format!(
+            "--descriptor {descriptor} has no default times (they depend on the collection's scale): give them with --times"
+        )),
+        other => CliError::Retrieval(other),
+    }
 }
 
 impl DescriptorArgs {
@@ -447,42 +468,19 @@ impl DescriptorArgs {
                 ..Default::default()
             });
         }
-        let sihks_only = [
-            ("--tau-min", self.tau_min.is_some()),
-            ("--tau-max", self.tau_max.is_some()),
-            ("--tau-step", self.tau_step.is_some()),
-            ("--frequencies", self.frequencies.is_some()),
-        ];
-        let default = DescriptorSpec::retrieval_default(self.descriptor);
-        settings.descriptor.descriptor = match default {
-            Some(default) if default.sihks_params().is_some() => {
-                if self.times.is_some() {
-                    return Err(CliError::Usage(format!(
-                        "--times does not apply to --descriptor {}: it takes --tau-min/--tau-max/--tau-step/--frequencies",
-                        self.descriptor.name()
-                    )));
-                }
-                let mut p = default.sihks_params().unwrap_or_default();
-                p.tau_min = self.tau_min.unwrap_or(p.tau_min);
-                p.tau_max = self.tau_max.unwrap_or(p.tau_max);
-                p.tau_step = self.tau_step.unwrap_or(p.tau_step);
-                p.num_frequencies = self.frequencies.unwrap_or(p.num_frequencies);
-                DescriptorSpec::sihks(&p)
-            }
-            default => {
-                if let Some((flag, _)) = sihks_only.iter().find(|(_, given)| *given) {
-                    return Err(CliError::Usage(format!(
-                        "{flag} is an option of --descriptor {}",
-                        Descriptor::SiHks.name()
-                    )));
-                }
-                match (&self.times, default) {
-                    (Some(times), _) => DescriptorSpec::with_times(self.descriptor, times.clone()),
-                    (None, Some(spec)) => spec,
-                    (None, None) => return Err(missing_times(self.descriptor)),
-                }
-            }
+        let options = DescriptorOptions {
+            times: self.times.clone().map(TimeSampling::Explicit),
+            tau_min: self.tau_min,
+            tau_max: self.tau_max,
+            tau_step: self.tau_step,
+            frequencies: self.frequencies,
+            ..Default::default()
         };
+        settings.descriptor.descriptor = self
+            .descriptor
+            .clone()
+            .for_collection(&options)
+            .map_err(descriptor_error)?;
         settings.descriptor.validate()?;
         Ok(())
     }
@@ -605,7 +603,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 out,
                 "trained {} words of {} on {} ({} descriptors) into {}",
                 vocabulary.vocabulary().size(),
-                settings.descriptor.descriptor.kind().label(),
+                settings.descriptor.descriptor.label(),
                 super::input::count_of(features.len(), "shape", "shapes"),
                 vocabulary.info().descriptors,
                 path.display()
@@ -649,7 +647,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 "indexed {}{} ({} of {} words, {} distance) with {from} into {}",
                 super::input::count_of(index.entries().len(), "file", "files"),
                 clouds_among(&meshes, &features),
-                index.vocabulary().descriptor().descriptor.kind().label(),
+                index.vocabulary().descriptor().descriptor.label(),
                 index.vocabulary().vocabulary().size(),
                 index.bags().distance.name(),
                 path.display()

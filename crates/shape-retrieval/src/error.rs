@@ -37,6 +37,25 @@ pub enum RetrievalError {
         /// Flat index (row-major for matrices: `row · ncols + col`) of the first bad value.
         index: usize,
     },
+    /// An option given beside a descriptor's name that belongs to other descriptors (it is
+    /// refused, not ignored; [`crate::descriptor::Descriptor::with_options`]). Front ends name
+    /// the option their way (`--tau-min`, `tau_min=`).
+    #[error("option `{option}` applies to descriptor {} only, not to {descriptor}", owners.join(", "))]
+    MisplacedOption {
+        /// The option ([`crate::descriptor::DescriptorOptions`] field name, e.g. `tau_min`).
+        option: &'static str,
+        /// The descriptor it was given to.
+        descriptor: &'static str,
+        /// The descriptors that take it.
+        owners: Vec<&'static str>,
+    },
+    /// A descriptor whose times depend on the collection's scale (DHK1, DHK2, area-HKS) was
+    /// asked to index a collection without its times.
+    #[error("descriptor {descriptor} has no default times (they depend on the collection's scale): give them")]
+    MissingTimes {
+        /// The descriptor.
+        descriptor: &'static str,
+    },
     /// A scalar parameter is outside its valid range.
     #[error("parameter `{name}` = {value} is invalid: {reason}")]
     InvalidParameter {

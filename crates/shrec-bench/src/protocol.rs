@@ -21,10 +21,8 @@ use crate::BenchError;
 use faer::Mat;
 use mesh_fem::TriMesh;
 use rayon::prelude::*;
-use shape_retrieval::descriptor::ShapeDescriptors;
-use shape_retrieval::model::{
-    DescriptorSettings, DescriptorSpec, RetrievalIndex, RetrievalSettings, ShapeFeatures, VocabularyModel,
-};
+use shape_retrieval::descriptor::{Descriptor, ShapeDescriptors};
+use shape_retrieval::model::{DescriptorSettings, RetrievalIndex, RetrievalSettings, ShapeFeatures, VocabularyModel};
 use shape_retrieval::retrieval::average_precision;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -451,7 +449,7 @@ pub fn features(
     settings: &RetrievalSettings,
     cache: &EigenCache,
 ) -> Result<Vec<ShapeFeatures>, BenchError> {
-    let lumped = matches!(settings.descriptor.descriptor, DescriptorSpec::Dhk1 { .. });
+    let lumped = matches!(settings.descriptor.descriptor, Descriptor::Dhk1 { .. });
     shapes
         .par_iter_mut()
         .map(|s| {

@@ -7,6 +7,7 @@
 mod choices;
 mod cloud;
 mod convert;
+mod defaults;
 mod errors;
 mod geodesic;
 mod heat;
@@ -53,12 +54,13 @@ fn _wfem(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SHIPPED_DEGREES", shifted_solve::poles::SHIPPED_DEGREES.to_vec())?;
     m.add(
         "PAPER_DESCRIPTORS",
-        shape_retrieval::descriptor::Descriptor::PAPER
+        shape_retrieval::descriptor::Descriptor::paper()
             .map(|d| wfem_base::Choice::name(&d))
             .to_vec(),
     )?;
     m.add("DEFAULT_NUM_TIMES", shape_retrieval::hks::DEFAULT_NUM_TIMES)?;
     choices::register(m)?;
+    defaults::register(m)?;
     mesh::register(m)?;
     cloud::register(m)?;
     heat::register(m)?;

@@ -11,7 +11,7 @@ use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use shape_retrieval::bof::{Vocabulary, VocabularyParams};
-use shape_retrieval::descriptor::{Descriptor, DescriptorParams, FeatureDetector, ShapeDescriptors};
+use shape_retrieval::descriptor::{Descriptor, DescriptorOptions, DescriptorParams, FeatureDetector, ShapeDescriptors};
 use shape_retrieval::hks::TimeSampling;
 use shape_retrieval::kmeans::{kmeans, KmeansParams};
 use shape_retrieval::retrieval::evaluate;
@@ -20,27 +20,46 @@ use shape_retrieval::RetrievalError;
 use std::sync::Arc;
 
 /// The descriptor pipeline's parameters from Python values.
-#[allow(clippy::too_many_arguments)]
 fn descriptor_params(
     k: usize,
-    times: Option<Vec<f64>>,
-    num_times: usize,
-    sihks: Option<SihksParams>,
     feature_time_factor: f64,
     feature_rings: usize,
     persistence_fraction: f64,
 ) -> DescriptorParams {
     DescriptorParams {
         eigenpairs: k,
-        times: match times {
-            Some(t) => TimeSampling::Explicit(t),
-            None => TimeSampling::Auto { num_times },
-        },
-        sihks: sihks.unwrap_or_default(),
         feature_time_factor,
         feature_rings,
         persistence_fraction,
         ..Default::default()
+    }
+}
+
+/// `descriptors`' keyword arguments as the options of one descriptor: each descriptor takes
+/// those that apply to it (the times for DHK1–3 and area-HKS, `sihks` for SI-HKS), so one call
+/// can ask for several.
+fn options_for(
+    descriptor: &Descriptor,
+    times: &Option<Vec<f64>>,
+    num_times: usize,
+    sihks: &SihksParams,
+) -> DescriptorOptions {
+    let takes = descriptor.options();
+    if takes.contains(&"times") {
+        let sampling = match times {
+            Some(t) => Some(TimeSampling::Explicit(t.clone())),
+            // area-HKS has no automatic times: without times it is refused as empty.
+            None if matches!(descriptor, Descriptor::AreaHks { .. }) => None,
+            None => Some(TimeSampling::Auto { num_times }),
+        };
+        DescriptorOptions {
+            times: sampling,
+            ..Default::default()
+        }
+    } else if takes.contains(&"tau_min") {
+        DescriptorOptions::sihks(sihks)
+    } else {
+        DescriptorOptions::default()
     }
 }
 
@@ -82,7 +101,7 @@ fn sihks_params(py: Python<'_>, d: Option<&Bound<'_, PyDict>>) -> PyResult<Optio
 
 /// Dense descriptors of one mesh: {name: (n, d) array}, sharing one eigenbasis per mass.
 #[pyfunction]
-#[pyo3(signature = (v, f, kinds, k=100, times=None, num_times=16, sihks=None))]
+#[pyo3(signature = (v, f, kinds, k=shape_retrieval::descriptor::DEFAULT_EIGENPAIRS, times=None, num_times=shape_retrieval::hks::DEFAULT_NUM_TIMES, sihks=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn descriptors<'py>(
     py: Python<'py>,
@@ -95,14 +114,25 @@ pub fn descriptors<'py>(
     sihks: Option<Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mesh = mesh_in(py, &v, &f)?;
+    let sihks = sihks_params(py, sihks.as_ref())?.unwrap_or_default();
     let which = kinds
         .iter()
-        .map(|s| choices::parse::<Descriptor>(py, "kinds", Some(s)))
+        .map(|s| {
+            let d = choices::parse::<Descriptor>(py, "kinds", Some(s))?;
+            let options = options_for(&d, &times, num_times, &sihks);
+            d.with_options(&options).map_err(|e| crate::errors::retrieval(py, &e))
+        })
         .collect::<PyResult<Vec<_>>>()?;
-    let params = descriptor_params(k, times, num_times, sihks_params(py, sihks.as_ref())?, 0.1, 1, 0.05);
+    let defaults = DescriptorParams::default();
+    let params = descriptor_params(
+        k,
+        defaults.feature_time_factor,
+        defaults.feature_rings,
+        defaults.persistence_fraction,
+    );
     let out = run(py, move |cancel| {
         let mut shape = ShapeDescriptors::new(&mesh, &params)?;
-        cancel.map(which, |d| Ok(shape.dense(d)?))
+        cancel.map(which, |d| Ok(shape.dense(&d)?))
     })?;
     let d = PyDict::new(py);
     for (name, m) in kinds.iter().zip(out) {
@@ -113,7 +143,7 @@ pub fn descriptors<'py>(
 
 /// Sparse feature points (SHK1 / SHK2) of a mesh and the feature time t_f.
 #[pyfunction]
-#[pyo3(signature = (v, f, detector=None, k=100, feature_time_factor=0.1, feature_rings=1, persistence_fraction=0.05))]
+#[pyo3(signature = (v, f, detector=None, k=shape_retrieval::descriptor::DEFAULT_EIGENPAIRS, feature_time_factor=shape_retrieval::descriptor::DescriptorParams::default().feature_time_factor, feature_rings=shape_retrieval::descriptor::DescriptorParams::default().feature_rings, persistence_fraction=shape_retrieval::descriptor::DescriptorParams::default().persistence_fraction))]
 #[allow(clippy::too_many_arguments)]
 pub fn sparse_features(
     py: Python<'_>,
@@ -127,15 +157,7 @@ pub fn sparse_features(
 ) -> PyResult<(Vec<u32>, f64)> {
     let mesh = mesh_in(py, &v, &f)?;
     let detector: FeatureDetector = choices::parse(py, "detector", detector)?;
-    let params = descriptor_params(
-        k,
-        None,
-        16,
-        None,
-        feature_time_factor,
-        feature_rings,
-        persistence_fraction,
-    );
+    let params = descriptor_params(k, feature_time_factor, feature_rings, persistence_fraction);
     run(py, move |_| {
         let mut shape = ShapeDescriptors::new(&mesh, &params)?;
         let (t, _) = shape.feature_function()?;
@@ -158,7 +180,7 @@ impl PyVocabulary {
     }
 
     #[staticmethod]
-    #[pyo3(signature = (descriptors, size=48, max_iter=300, seed=0, sigma=None, max_training_points=None))]
+    #[pyo3(signature = (descriptors, size=shape_retrieval::bof::VocabularyParams::default().size, max_iter=shape_retrieval::bof::VocabularyParams::default().max_iter, seed=shape_retrieval::bof::VocabularyParams::default().seed, sigma=None, max_training_points=None))]
     fn train(
         py: Python<'_>,
         descriptors: PyReadonlyArray2<'_, f64>,
@@ -249,7 +271,7 @@ type Clusters<'py> = (Bound<'py, PyArray2<f64>>, Vec<u32>, f64, usize, bool);
 
 /// k-means.
 #[pyfunction]
-#[pyo3(signature = (points, k, max_iter=300, seed=0))]
+#[pyo3(signature = (points, k, max_iter=shape_retrieval::kmeans::KmeansParams::default().max_iter, seed=shape_retrieval::kmeans::KmeansParams::default().seed))]
 pub fn kmeans_clusters<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,

@@ -5,6 +5,10 @@ use super::{AsShape, BagSettings, ShapeFeatures, VocabularyModel};
 use crate::check;
 use crate::RetrievalError;
 
+/// The number of results a query returns unless told otherwise (the library's and Python's
+/// `k`; the command line shows fewer, `wfem retrieval query --top`).
+pub const DEFAULT_RESULTS: usize = 10;
+
 /// The retrieval signature of one shape: its normalised bag and its global signature.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ShapeSignature {

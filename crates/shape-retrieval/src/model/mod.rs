@@ -3,7 +3,7 @@
 //! The pipeline (Shape Google, Bronstein et al. ACM TOG 30(1) 2011, on the wFEM kernel of the
 //! paper's Eq. (6)):
 //!
-//! 1. **Dense descriptor** p(x) per vertex ([`DescriptorSpec`]), from the k smallest eigenpairs
+//! 1. **Dense descriptor** p(x) per vertex ([`Descriptor`](crate::descriptor::Descriptor)), from the k smallest eigenpairs
 //!    of (L, B) (Eq. (4), truncated as in Eq. (8)). Default: SI-HKS with times in units of the
 //!    surface area, exactly scale invariant ([`crate::sihks`]).
 //! 2. **Vocabulary** ([`VocabularyModel`]): the descriptors of a training set are z-scored per
@@ -28,7 +28,7 @@
 //! ([`VocabularyModel::train`] on another set) to measure generalisation.
 //!
 //! One file per part, every type re-exported here: `shape` (what is described: a mesh or a
-//! point cloud, [`ShapeRef`], [`AsShape`]), `spec` ([`DescriptorSpec`]), `cleaning`
+//! point cloud, [`ShapeRef`], [`AsShape`]), `cleaning`
 //! (the steps before a shape is described: [`Despiking`], [`Denoising`], [`HoleFilling`],
 //! [`TopologyRepair`], [`Smoothing`], [`Refinement`]), `weights` ([`VertexWeights`]), `global_signature`
 //! ([`GlobalSignature`]), `settings` ([`DescriptorSettings`] — which also prepares a shape —,
@@ -40,7 +40,6 @@ mod global_signature;
 mod index;
 mod settings;
 mod shape;
-mod spec;
 mod vocabulary;
 mod weights;
 
@@ -50,9 +49,13 @@ pub use cleaning::{
     DEFAULT_VERTICES_PER_EIGENPAIR,
 };
 pub use global_signature::GlobalSignature;
-pub use index::{resolve_name, IndexEntry, Ranked, RetrievalIndex, ShapeSignature};
+pub use index::{resolve_name, IndexEntry, Ranked, RetrievalIndex, ShapeSignature, DEFAULT_RESULTS};
 pub use settings::{BagSettings, DescriptorSettings, RetrievalSettings, TrainingParams, DEFAULT_WORDS};
 pub use shape::{AsShape, ShapeRef};
-pub use spec::DescriptorSpec;
-pub use vocabulary::{ShapeFeatures, TrainingInfo, VocabularyModel};
+/// The descriptor with its parameters, by its former name (it was a type of its own beside a
+/// registry of bare names; now [`crate::descriptor::Descriptor`] is both).
+#[deprecated(note = "use shape_retrieval::descriptor::Descriptor, which now carries the parameters")]
+pub type DescriptorSpec = crate::descriptor::Descriptor;
+#[allow(deprecated)]
+pub use vocabulary::{ShapeFeatures, TrainingInfo, TrainingReport, VocabularyModel};
 pub use weights::{VertexWeights, DEFAULT_AREA_CAP};

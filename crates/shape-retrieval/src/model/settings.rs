@@ -2,11 +2,11 @@
 //! [`BagSettings`], [`TrainingParams`] and all of them together, [`RetrievalSettings`].
 
 use super::{
-    AsShape, Denoising, DescriptorSpec, Despiking, GlobalSignature, HoleFilling, Refinement, ShapeRef, Smoothing,
-    TopologyRepair, VertexWeights, DEFAULT_AREA_CAP,
+    AsShape, Denoising, Despiking, GlobalSignature, HoleFilling, Refinement, ShapeRef, Smoothing, TopologyRepair,
+    VertexWeights, DEFAULT_AREA_CAP,
 };
 use crate::bof::Assignment;
-use crate::descriptor::{DescriptorParams, ShapeDescriptors};
+use crate::descriptor::{Descriptor, DescriptorParams, ShapeDescriptors};
 use crate::distance::BagDistance;
 use crate::spatial::SpatialBag;
 use crate::{check, RetrievalError};
@@ -40,7 +40,7 @@ pub struct DescriptorSettings {
     #[serde(with = "wfem_base::serde_name")]
     pub laplacian: Laplacian,
     /// The descriptor (default SI-HKS, area time unit).
-    pub descriptor: DescriptorSpec,
+    pub descriptor: Descriptor,
     /// Optional smoothing of the embedding by a fixed time, after despiking, denoising and
     /// hole filling (default: none).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -77,7 +77,7 @@ impl Default for DescriptorSettings {
         Self {
             eigenpairs: crate::descriptor::DEFAULT_EIGENPAIRS,
             laplacian: Laplacian::default(),
-            descriptor: DescriptorSpec::default(),
+            descriptor: Descriptor::default(),
             smoothing: None,
             despiking: Some(Despiking::default()),
             denoising: Some(Denoising::default()),
@@ -93,7 +93,7 @@ impl DescriptorSettings {
     ///
     /// # Errors
     /// [`RetrievalError::InvalidParameter`] for k < 2 (a descriptor needs a nonzero eigenvalue)
-    /// and those of [`DescriptorSpec::validate`].
+    /// and those of [`Descriptor::validate`].
     pub fn validate(&self) -> Result<(), RetrievalError> {
         if self.eigenpairs < 2 {
             return Err(RetrievalError::InvalidParameter {

@@ -35,7 +35,7 @@ impl ShapeFeatures {
     /// the global signature.
     ///
     /// # Errors
-    /// [`RetrievalError::Mesh`] from assembly, and those of [`DescriptorSpec::compute`](super::DescriptorSpec::compute),
+    /// [`RetrievalError::Mesh`] from assembly, and those of [`Descriptor::compute`](crate::descriptor::Descriptor::compute),
     /// [`VertexWeights::compute`](super::VertexWeights::compute), [`GlobalSignature::compute`](super::GlobalSignature::compute).
     pub fn compute(
         name: &str,
@@ -130,12 +130,16 @@ impl ShapeFeatures {
 /// Where a vocabulary was trained: for provenance and for the "optimistic" warning.
 #[derive(Clone, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct TrainingInfo {
+pub struct TrainingReport {
     /// Names of the training shapes.
     pub shapes: Vec<String>,
     /// Number of pooled descriptors k-means ran on.
     pub descriptors: usize,
 }
+
+/// The old name of [`TrainingReport`] (one word per meaning: results are reports).
+#[deprecated(note = "renamed TrainingReport")]
+pub type TrainingInfo = TrainingReport;
 
 /// A trained vocabulary with everything needed to use it on new shapes: the descriptor settings,
 /// the z-score statistics and the words. Its own artifact (`wfem retrieval vocab`).
@@ -145,7 +149,7 @@ pub struct VocabularyModel {
     training: TrainingParams,
     standardizer: Option<Standardizer>,
     vocabulary: Vocabulary,
-    info: TrainingInfo,
+    info: TrainingReport,
     /// The word groups of spatial bags ([`crate::spatial::word_groups`]) for the last G asked
     /// for: a pure function of the words, computed once per model instead of once per shape.
     groups: std::sync::OnceLock<(usize, Vec<u32>)>,
@@ -203,7 +207,7 @@ impl VocabularyModel {
             training: *params,
             standardizer,
             vocabulary,
-            info: TrainingInfo {
+            info: TrainingReport {
                 shapes: shapes.iter().map(|s| s.name.clone()).collect(),
                 descriptors: rows.min(params.max_training_points),
             },
@@ -221,7 +225,7 @@ impl VocabularyModel {
         training: TrainingParams,
         standardizer: Option<Standardizer>,
         vocabulary: Vocabulary,
-        info: TrainingInfo,
+        info: TrainingReport,
     ) -> Result<Self, RetrievalError> {
         let invalid = |reason: String| RetrievalError::InvalidModel {
             what: "vocabulary",
@@ -233,7 +237,7 @@ impl VocabularyModel {
             return Err(invalid(format!(
                 "words have dimension {} but the {} descriptor has {d}",
                 vocabulary.words().ncols(),
-                descriptor.descriptor.kind().label()
+                descriptor.descriptor.label()
             )));
         }
         if let Some(z) = &standardizer {
@@ -282,7 +286,7 @@ impl VocabularyModel {
     }
 
     /// Where it was trained.
-    pub fn info(&self) -> &TrainingInfo {
+    pub fn info(&self) -> &TrainingReport {
         &self.info
     }
 

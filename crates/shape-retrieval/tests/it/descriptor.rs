@@ -8,11 +8,13 @@ use faer::Mat;
 use mesh_fem::generate::bumpy;
 use mesh_fem::{assemble, AssemblyParams, Lumping};
 use shape_retrieval::descriptor::{
-    dense_descriptor, sparse_features, Descriptor, DescriptorParams, FeatureDetector, ShapeDescriptors,
+    dense_descriptor, sparse_features, Descriptor, DescriptorOptions, DescriptorParams, FeatureDetector,
+    ShapeDescriptors,
 };
 use shape_retrieval::hks::TimeSampling;
 use shape_retrieval::sihks::{SihksParams, TimeUnit};
 use shape_retrieval::RetrievalError;
+use wfem_base::Choice;
 use wfem_heat::spectral::Eigenbasis;
 
 const TIMES: [f64; 4] = [0.02, 0.1, 0.5, 2.0];
@@ -20,17 +22,34 @@ const TIMES: [f64; 4] = [0.02, 0.1, 0.5, 2.0];
 fn params(k: usize) -> DescriptorParams {
     DescriptorParams {
         eigenpairs: k,
-        times: TimeSampling::Explicit(TIMES.to_vec()),
-        sihks: SihksParams {
+        ..Default::default()
+    }
+}
+
+/// A descriptor by name at `times` (DHK1–3) or with the test's SI-HKS options.
+fn at(name: &str, times: &[f64]) -> Descriptor {
+    let d = Descriptor::parse(name).unwrap();
+    let options = if d.options().contains(&"times") {
+        DescriptorOptions {
+            times: Some(TimeSampling::Explicit(times.to_vec())),
+            ..Default::default()
+        }
+    } else {
+        DescriptorOptions::sihks(&SihksParams {
             time_unit: TimeUnit::Absolute(1e-4),
             tau_min: 0.0,
             tau_max: 24.0,
             tau_step: 0.25,
             num_frequencies: 6,
             ..Default::default()
-        },
-        ..Default::default()
-    }
+        })
+    };
+    d.with_options(&options).unwrap()
+}
+
+/// [`at`] the test's times.
+fn named(name: &str) -> Descriptor {
+    at(name, &TIMES)
 }
 
 fn flat(m: &Mat<f64>) -> Vec<f64> {
@@ -57,7 +76,7 @@ fn dhk2_matches_dense_wfem_spectrum() {
     let mesh = bumpy(3);
     let dense = dense_spectrum(&mesh);
     let k = 40;
-    let got = dense_descriptor(&mesh, Descriptor::Dhk2, &params(k)).unwrap();
+    let got = dense_descriptor(&mesh, &named("dhk2"), &params(k)).unwrap();
     let want = reference_hks(&dense.eigenvalues, &dense.eigenvectors, k, &TIMES);
     assert!(rel_err(&flat(&got), &want) < 1e-8, "{}", rel_err(&flat(&got), &want));
 }
@@ -75,11 +94,11 @@ fn dhk1_matches_dense_voronoi_lumped_spectrum() {
     .unwrap();
     let dense = Eigenbasis::dense(&ops.stiffness, ops.lumped_mass()).unwrap();
     let k = 40;
-    let got = dense_descriptor(&mesh, Descriptor::Dhk1, &params(k)).unwrap();
+    let got = dense_descriptor(&mesh, &named("dhk1"), &params(k)).unwrap();
     let want = reference_hks(&dense.values, &dense.vectors, k, &TIMES);
     assert!(rel_err(&flat(&got), &want) < 1e-8);
     // And it is a different kernel from DHK2.
-    let dhk2 = dense_descriptor(&mesh, Descriptor::Dhk2, &params(k)).unwrap();
+    let dhk2 = dense_descriptor(&mesh, &named("dhk2"), &params(k)).unwrap();
     assert!(rel_err(&flat(&dhk2), &want) > 1e-3);
 }
 
@@ -89,7 +108,7 @@ fn dhk3_matches_dense_with_max_eigenvalue_normalization() {
     let dense = dense_spectrum(&mesh);
     let k = 40;
     let lmax = dense.eigenvalues[k - 1];
-    let got = dense_descriptor(&mesh, Descriptor::Dhk3, &params(k)).unwrap();
+    let got = dense_descriptor(&mesh, &named("dhk3"), &params(k)).unwrap();
     let scaled_times: Vec<f64> = TIMES.iter().map(|t| t / lmax).collect();
     let want: Vec<f64> = reference_hks(&dense.eigenvalues, &dense.eigenvectors, k, &scaled_times)
         .into_iter()
@@ -107,19 +126,16 @@ fn scale_laws_of_section_5() {
     let mut a = ShapeDescriptors::new(&mesh, &p).unwrap();
     let mut b = ShapeDescriptors::new(&big, &p).unwrap();
     // DHK3 and SI-HKS are scale-invariant; the scale changes DHK2 a lot.
-    for d in [Descriptor::Dhk3, Descriptor::SiHks] {
-        let (x, y) = (a.dense(d).unwrap(), b.dense(d).unwrap());
+    for d in [named("dhk3"), named("si-hks")] {
+        let (x, y) = (a.dense(&d).unwrap(), b.dense(&d).unwrap());
         let e = rel_err(&flat(&y), &flat(&x));
         assert!(e < 2e-2, "{}: {e}", d.label());
     }
-    let (x, y) = (a.dense(Descriptor::Dhk2).unwrap(), b.dense(Descriptor::Dhk2).unwrap());
+    let (x, y) = (a.dense(&named("dhk2")).unwrap(), b.dense(&named("dhk2")).unwrap());
     assert!(rel_err(&flat(&y), &flat(&x)) > 0.5);
     // DHK2 is scale-covariant: h_{αM}(t) = α⁻² h_M(α⁻² t) (paper, Sect. 5).
-    let covariant = DescriptorParams {
-        times: TimeSampling::Explicit(TIMES.iter().map(|t| t * alpha * alpha).collect()),
-        ..p.clone()
-    };
-    let y = dense_descriptor(&big, Descriptor::Dhk2, &covariant).unwrap();
+    let covariant = at("dhk2", &TIMES.map(|t| t * alpha * alpha));
+    let y = dense_descriptor(&big, &covariant, &p).unwrap();
     let y: Vec<f64> = flat(&y).into_iter().map(|v| v * alpha * alpha).collect();
     assert!(rel_err(&y, &flat(&x)) < 1e-8);
 }
@@ -177,11 +193,7 @@ fn bad_parameters_are_reported() {
         ShapeDescriptors::from_operators(&mesh, ops, &DescriptorParams::default()),
         Err(RetrievalError::DimensionMismatch { .. })
     ));
-    let bad_times = DescriptorParams {
-        times: TimeSampling::Explicit(vec![-1.0]),
-        ..params(10)
-    };
-    let err = dense_descriptor(&mesh, Descriptor::Dhk2, &bad_times);
+    let err = dense_descriptor(&mesh, &at("dhk2", &[-1.0]), &params(10));
     assert!(
         matches!(err, Err(RetrievalError::InvalidParameter { name: "time", .. })),
         "{err:?}"
@@ -194,8 +206,8 @@ fn snapshot_descriptors_on_bumpy() {
     let p = params(60);
     let mut s = ShapeDescriptors::new(&mesh, &p).unwrap();
     let mut out = String::new();
-    for d in Descriptor::PAPER {
-        let m = s.dense(d).unwrap();
+    for d in ["dhk1", "dhk2", "dhk3", "si-hks"].map(named) {
+        let m = s.dense(&d).unwrap();
         out += &format!("{} ({} × {})\n", d.label(), m.nrows(), m.ncols());
         for i in (0..m.nrows()).step_by(20) {
             out += &format!("v{i:03}:");

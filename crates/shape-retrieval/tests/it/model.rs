@@ -10,10 +10,11 @@ use faer::Mat;
 use mesh_fem::generate::{grid, icosphere};
 use mesh_fem::TriMesh;
 use shape_retrieval::bof::{Assignment, Vocabulary};
+use shape_retrieval::descriptor::Descriptor;
 use shape_retrieval::distance::BagDistance;
 use shape_retrieval::model::{
-    Denoising, DescriptorSettings, DescriptorSpec, GlobalSignature, IndexEntry, RetrievalIndex, ShapeFeatures,
-    ShapeSignature, Smoothing, TrainingParams, VertexWeights, VocabularyModel,
+    Denoising, DescriptorSettings, GlobalSignature, IndexEntry, RetrievalIndex, ShapeFeatures, ShapeSignature,
+    Smoothing, TrainingParams, VertexWeights, VocabularyModel,
 };
 use shape_retrieval::RetrievalError;
 
@@ -92,7 +93,7 @@ fn a_vocabulary_trained_elsewhere_is_reused_with_its_settings() {
     assert_eq!(vocabulary.info().shapes, vec!["torus", "ellipsoid"]);
     // The index takes the vocabulary's descriptor settings, whatever `settings` says.
     let mut other = settings.clone();
-    other.descriptor.descriptor = DescriptorSpec::dhk3_default();
+    other.descriptor.descriptor = Descriptor::dhk3_default();
     let index = RetrievalIndex::build(&shapes[..2], &other, Some(vocabulary)).unwrap();
     assert_eq!(index.vocabulary().descriptor(), &settings.descriptor);
     assert_eq!(index.entries().len(), 2);
@@ -385,7 +386,7 @@ fn invalid_settings_and_inputs_are_typed_errors() {
         Err(RetrievalError::InvalidParameter { .. })
     ));
     let mut settings = small_settings();
-    settings.descriptor.descriptor = DescriptorSpec::SiHks {
+    settings.descriptor.descriptor = Descriptor::SiHks {
         alpha: 2.0,
         tau_min: 0.0,
         tau_max: 1.0,
@@ -401,14 +402,14 @@ fn invalid_settings_and_inputs_are_typed_errors() {
             ..
         })
     ));
-    settings.descriptor.descriptor = DescriptorSpec::Dhk2 {
+    settings.descriptor.descriptor = Descriptor::Dhk2 {
         times: TimeSampling::Explicit(vec![]),
     };
     assert!(matches!(
         settings.descriptor.validate(),
         Err(RetrievalError::Empty { .. })
     ));
-    settings.descriptor.descriptor = DescriptorSpec::Dhk2 {
+    settings.descriptor.descriptor = Descriptor::Dhk2 {
         times: TimeSampling::Explicit(vec![1.0, -1.0]),
     };
     assert!(matches!(

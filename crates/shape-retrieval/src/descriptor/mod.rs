@@ -33,8 +33,11 @@
 //! the same function that survive persistence simplification at `persistence_fraction` of its
 //! range ([`mesh_fem::morse`], \[EMP06\]).
 
+mod kinds;
+
+pub use kinds::{Descriptor, DescriptorOptions, RETRIEVAL_SIHKS};
+
 use crate::hks::{heat_kernel_signature, HksParams, Spectrum, TimeSampling};
-use crate::sihks::SihksParams;
 use crate::RetrievalError;
 use faer::Mat;
 use mesh_fem::cloud::{assemble_cloud, CloudParams, PointCloud};
@@ -47,67 +50,6 @@ pub const DEFAULT_EIGENPAIRS: usize = 100;
 
 /// Meshes with at most this many vertices use the dense eigendecomposition.
 const DENSE_BELOW: usize = 400;
-
-/// A dense (per-vertex) descriptor, without its parameters (paper, Sect. 5): the registry of
-/// descriptor names. [`crate::model::DescriptorSpec`] is a descriptor with its parameters, and the
-/// one place a descriptor is computed ([`crate::model::DescriptorSpec::compute`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum Descriptor {
-    /// Scale-invariant HKS of Bronstein & Kokkinos on the wFEM spectrum ([`crate::sihks`]),
-    /// times in units of the surface area (the retrieval default).
-    #[default]
-    SiHks,
-    /// Log-HKS of the wFEM kernel on the shape rescaled to unit area, at dimensionless times.
-    AreaHks,
-    /// HKS of the lumped Voronoi-cot kernel, spectrum of (L, D) with D the mixed Voronoi areas (Eq. (7)).
-    Dhk1,
-    /// HKS of the wFEM kernel, spectrum of (L, B) (Eq. (6)).
-    Dhk2,
-    /// Scale-invariant wFEM HKS: eigenvalues divided by λ_max ([`SpectrumNormalization::MaxEigenvalue`](crate::hks::SpectrumNormalization::MaxEigenvalue)).
-    Dhk3,
-    /// The wave kernel signature on the wFEM spectrum ([`crate::wks`]), pyFM's energies.
-    Wks,
-}
-
-wfem_base::registry! {
-    Descriptor as "descriptor" {
-        Descriptor::SiHks = Descriptor::SiHks => "si-hks" ["sihks"]:
-            "scale-invariant HKS of the wFEM kernel, times in units of the surface area (default)",
-        Descriptor::AreaHks = Descriptor::AreaHks => "area-hks":
-            "log-HKS of the wFEM kernel on the shape rescaled to unit area",
-        Descriptor::Dhk1 = Descriptor::Dhk1 => "dhk1":
-            "HKS of the lumped Voronoi-cot kernel (Eq. (7)) at absolute times",
-        Descriptor::Dhk2 = Descriptor::Dhk2 => "dhk2":
-            "HKS of the wFEM kernel (Eq. (6)) at absolute times",
-        Descriptor::Dhk3 = Descriptor::Dhk3 => "dhk3":
-            "HKS of the wFEM kernel with eigenvalues divided by λ_max (the paper's scale-invariant DHK3)",
-        Descriptor::Wks = Descriptor::Wks => "wks" ["wave-kernel-signature"]:
-            "wave kernel signature (Aubry et al. 2011) of the wFEM spectrum, pyFM's energies",
-    }
-}
-
-impl Descriptor {
-    /// The four dense descriptors of the paper's Tables 3–4, in table order.
-    pub const PAPER: [Descriptor; 4] = [Descriptor::Dhk1, Descriptor::Dhk2, Descriptor::Dhk3, Descriptor::SiHks];
-
-    /// How the paper writes it (`DHK1`, …, `SI-HKS`, `area-HKS`), for tables and titles.
-    pub fn label(self) -> &'static str {
-        match self {
-            Descriptor::Dhk1 => "DHK1",
-            Descriptor::Dhk2 => "DHK2",
-            Descriptor::Dhk3 => "DHK3",
-            Descriptor::SiHks => "SI-HKS",
-            Descriptor::AreaHks => "area-HKS",
-            Descriptor::Wks => "WKS",
-        }
-    }
-
-    /// Whether it is computed from the spectrum of (L, D) (the lumped Voronoi mass) rather
-    /// than (L, B).
-    pub fn uses_lumped(self) -> bool {
-        matches!(self, Descriptor::Dhk1)
-    }
-}
 
 /// Sparse feature detectors of the paper's Sect. 5 (Table 4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -135,12 +77,6 @@ pub struct DescriptorParams {
     pub eigenpairs: usize,
     /// The Lanczos options.
     pub eigen: EigenParams,
-    /// Times of DHK1/DHK2 (in the units of the mesh) and of DHK3 (in units of 1/λ_max).
-    /// Default: 16 automatic times per shape ([`TimeSampling::Auto`]); give explicit times to
-    /// compare shapes, since automatic times adapt to each spectrum.
-    pub times: TimeSampling,
-    /// SI-HKS options (default [`SihksParams::default`], which assumes TOSCA-like units).
-    pub sihks: SihksParams,
     /// Feature time `t_f = feature_time_factor · 4 ln10/λ_2` of SHK1/SHK2 (default 0.1).
     pub feature_time_factor: f64,
     /// Edge rings within which an SHK1 feature must be the maximum (default 1: the local maxima
@@ -150,13 +86,25 @@ pub struct DescriptorParams {
     pub persistence_fraction: f64,
 }
 
+impl DescriptorParams {
+    /// The size limits of the eigenpair count on a shape of `n` vertices, checked before
+    /// anything is assembled or allocated.
+    ///
+    /// # Errors
+    /// [`RetrievalError::InvalidParameter`] for k = 0, [`RetrievalError::Heat`] beyond the limits.
+    fn check_size(&self, n: usize) -> Result<(), RetrievalError> {
+        crate::check::at_least_one("eigenpairs", self.eigenpairs)?;
+        let n = n.max(1);
+        wfem_heat::limits::eigenpairs("eigenpairs", self.eigenpairs.min(n), n)?;
+        Ok(())
+    }
+}
+
 impl Default for DescriptorParams {
     fn default() -> Self {
         Self {
             eigenpairs: DEFAULT_EIGENPAIRS,
             eigen: EigenParams::default(),
-            times: TimeSampling::Auto { num_times: 16 },
-            sihks: SihksParams::default(),
             feature_time_factor: 0.1,
             feature_rings: 1,
             persistence_fraction: 0.05,
@@ -195,8 +143,8 @@ impl ShapeDescriptors {
         laplacian: Laplacian,
         params: &DescriptorParams,
     ) -> Result<Self, RetrievalError> {
-        // Sizes first (a huge T or k must not cost an assembly, let alone an allocation).
-        params.times.check_size(mesh.n_vertices())?;
+        // Sizes first (a huge k must not cost an assembly, let alone an allocation).
+        params.check_size(mesh.n_vertices())?;
         let operators = assemble(
             mesh,
             &AssemblyParams {
@@ -217,7 +165,7 @@ impl ShapeDescriptors {
     /// [`RetrievalError::Mesh`] if assembly fails (duplicate points, degenerate
     /// neighbourhoods), and those of [`Self::from_operators`].
     pub fn from_cloud(cloud: &PointCloud, params: &DescriptorParams) -> Result<Self, RetrievalError> {
-        params.times.check_size(cloud.n_points())?;
+        params.check_size(cloud.n_points())?;
         let ops = assemble_cloud(
             cloud,
             &CloudParams::default(),
@@ -240,10 +188,7 @@ impl ShapeDescriptors {
         params: &DescriptorParams,
     ) -> Result<Self, RetrievalError> {
         crate::check::same("operator size vs mesh vertices", mesh.n_vertices(), operators.n())?;
-        crate::check::at_least_one("eigenpairs", params.eigenpairs)?;
-        let n = mesh.n_vertices().max(1);
-        wfem_heat::limits::eigenpairs("eigenpairs", params.eigenpairs.min(n), n)?;
-        params.times.check_size(n)?;
+        params.check_size(mesh.n_vertices())?;
         crate::check::positive("feature_time_factor", params.feature_time_factor)?;
         crate::check::at_least_one("feature_rings", params.feature_rings)?;
         if !(params.persistence_fraction.is_finite() && (0.0..=1.0).contains(&params.persistence_fraction)) {
@@ -430,9 +375,11 @@ pub fn smallest_eigenpairs(ops: &Operators, k: usize, eigen: &EigenParams) -> Re
 ///
 /// ```
 /// use shape_retrieval::descriptor::{dense_descriptor, Descriptor, DescriptorParams};
+/// use wfem_base::Choice;
 /// let mesh = mesh_fem::generate::icosphere(2);
 /// let params = DescriptorParams { eigenpairs: 20, ..Default::default() };
-/// let d = dense_descriptor(&mesh, Descriptor::Dhk2, &params)?;
+/// let dhk2 = Descriptor::parse("dhk2").expect("a registered name");
+/// let d = dense_descriptor(&mesh, &dhk2, &params)?;
 /// assert_eq!((d.nrows(), d.ncols()), (mesh.n_vertices(), 16));
 /// # Ok::<(), shape_retrieval::RetrievalError>(())
 /// ```
@@ -441,7 +388,7 @@ pub fn smallest_eigenpairs(ops: &Operators, k: usize, eigen: &EigenParams) -> Re
 /// Those of [`ShapeDescriptors::new`] and [`ShapeDescriptors::dense`].
 pub fn dense_descriptor(
     mesh: &TriMesh,
-    descriptor: Descriptor,
+    descriptor: &Descriptor,
     params: &DescriptorParams,
 ) -> Result<Mat<f64>, RetrievalError> {
     ShapeDescriptors::new(mesh, params)?.dense(descriptor)
