@@ -32,7 +32,7 @@ pub struct ApproxArgs {
     #[arg(long)]
     pub absolute: bool,
     /// Number of scales N (1..=100).
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = wfem_heat::approx::ApproxParams::default().scales)]
     pub scales: usize,
     /// How the scales are sampled.
     #[arg(long, value_parser = choice::<ScaleSampling>(), default_value = ScaleSampling::default_name())]

@@ -15,6 +15,10 @@ use wfem_heat::method::Method;
 use wfem_heat::HeatParams;
 use wfem_render::{render_png, Frame, View};
 
+/// The demo mesh's subdivision level unless told otherwise (10,242 vertices: a figure in
+/// seconds).
+const DEFAULT_LEVEL: u32 = 5;
+
 /// Arguments of `wfem demo`.
 #[derive(Args, Clone, Debug)]
 pub struct DemoArgs {
@@ -22,7 +26,7 @@ pub struct DemoArgs {
     #[arg(long, default_value = "wfem-out")]
     pub out: PathBuf,
     /// Subdivision level of the generated mesh, 0..=8 (level 5: 10,242 vertices; 8: 655,362).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = DEFAULT_LEVEL)]
     pub level: u32,
     /// Number of eigenpairs of the spectral method (default min(200, n); at most n/10 above
     /// 1000 vertices).

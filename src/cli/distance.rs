@@ -94,7 +94,7 @@ pub fn distance(args: &DistanceArgs, out: &mut dyn Write) -> Result<(), CliError
     meta.insert("command".into(), json!("distance"));
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("kind".into(), json!(kind.name()));
-    meta.insert("method".into(), super::heat::method_meta(&method));
+    meta.insert("method".into(), serde_json::json!(method));
     meta.insert("time_unit".into(), times.meta());
     if args.all_pairs {
         let key = format!(

@@ -42,7 +42,7 @@ pub struct GeodesicArgs {
     pub t_coef: f64,
     /// Split every triangle into four this many times first (same surface, finer: more
     /// accurate, about 4× the work per level; distances at the mesh's own vertices).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = wfem_heat::geodesic::DEFAULT_REFINE)]
     pub refine: u32,
     /// Output file: .ply, .npy (+ .json sidecar), .csv, .vtu (ParaView; a volume's tetrahedra) or .png (iso-lines, sources marked);
     /// .npy with --all-pairs.

@@ -321,7 +321,7 @@ pub fn heat(args: &HeatArgs, out: &mut dyn Write) -> Result<(), CliError> {
     meta.insert("command".into(), json!("heat"));
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("mass".into(), json!(mass.name()));
-    meta.insert("method".into(), method_meta(&method));
+    meta.insert("method".into(), json!(method));
     meta.insert("time_unit".into(), times.meta());
     match (&args.source, &args.field) {
         (Some(i), _) => meta.insert("source_vertex".into(), json!(i)),
@@ -382,19 +382,6 @@ fn check_accuracy(args: &HeatArgs, method: &Method, t: f64, label: &str, error: 
             t,
             error,
         })
-    }
-}
-
-/// The method's sidecar entry: its name and options.
-pub(crate) fn method_meta(method: &Method) -> serde_json::Value {
-    match method {
-        Method::Rational { degree, backend } => json!({
-            "name": method.name(),
-            "degree": degree,
-            "backend": backend.name(),
-        }),
-        Method::Spectral { k, .. } => json!({ "name": method.name(), "eigenpairs": k }),
-        m => json!({ "name": m.name() }),
     }
 }
 

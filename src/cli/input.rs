@@ -6,7 +6,7 @@ use clap::Args;
 use mesh_fem::cloud::{assemble_cloud, CloudParams, PointCloud};
 use mesh_fem::io::{load_shape, read_field, LoadOptions, LoadReport, MeshFormat, Shape};
 use mesh_fem::validate::{repair, RepairOptions, RepairReport, RepairStep};
-use mesh_fem::{assemble, AssemblyParams, FemOperators, Laplacian, Lumping, MeshError, TriMesh};
+use mesh_fem::{assemble, AssemblyParams, FemOperators, Laplacian, Lumping, MeshError, Remedy, TriMesh};
 use std::path::{Path, PathBuf};
 use wfem_base::Choice;
 use wfem_render::Splats;
@@ -34,7 +34,7 @@ pub struct MeshArgs {
     pub repair: Vec<RepairStep>,
     /// Distance below which --repair duplicate-vertices merges vertices, relative to the
     /// bounding-box diagonal (0: identical coordinates only).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = mesh_fem::validate::DEFAULT_WELD_TOLERANCE, allow_negative_numbers = true)]
     pub weld_tolerance: f64,
 }
 
@@ -474,7 +474,7 @@ pub fn load_shape_quietly(path: &Path, laplacian: Laplacian) -> Result<Shape, Cl
 /// orientation; an open mesh is a note: its natural boundary conditions are a fact, not a
 /// defect).
 fn say_warnings(name: &str, report: &mesh_fem::validate::ValidationReport) {
-    let summary = with_flags(&report.summary());
+    let summary = report.summary_with(&cli_fix);
     for line in summary.lines().skip(1) {
         let Some(text) = line.trim().strip_prefix("warning: ") else {
             continue;
@@ -482,7 +482,7 @@ fn say_warnings(name: &str, report: &mesh_fem::validate::ValidationReport) {
         let boundary = report
             .warnings()
             .find(|p| matches!(p, mesh_fem::validate::Problem::Boundary { .. }));
-        if boundary.is_some_and(|p| text.starts_with(&with_flags(&p.to_string()))) {
+        if boundary.is_some_and(|p| text.starts_with(&p.to_string())) {
             progress::note(&format!("{name}: {text}"));
         } else {
             progress::warn(&format!("{name}: {text}"));
@@ -490,39 +490,27 @@ fn say_warnings(name: &str, report: &mesh_fem::validate::ValidationReport) {
     }
 }
 
-/// Library names in messages of mesh-fem and the command-line flags that do the same.
-const FLAGS: [(&str, &str); 8] = [
-    ("enable LoadOptions::triangulate_polygons", "pass --triangulate"),
-    ("LoadOptions::triangulate_polygons", "--triangulate"),
-    ("RepairOptions::drop_degenerate_faces", "--repair degenerate"),
-    ("RepairOptions::drop_unreferenced_vertices", "--repair unreferenced"),
-    ("RepairOptions::drop_duplicate_faces", "--repair duplicate-faces"),
-    ("RepairOptions::orient_faces", "--repair orient"),
-    ("with the repair option", "with --repair unreferenced"),
-    (
-        "scale the mesh down (TriMesh::scaled)",
-        "scale the mesh coordinates down",
-    ),
-];
-
-/// A mesh-fem message with its library names replaced by the command-line flags.
-pub fn with_flags(text: &str) -> String {
-    FLAGS
-        .iter()
-        .fold(text.to_string(), |s, (lib, flag)| s.replace(lib, flag))
+/// A remedy in the command line's words: the `--repair` steps or the flag that does it.
+pub fn cli_fix(remedy: Remedy) -> String {
+    match (remedy, RepairStep::for_remedy(remedy)) {
+        // Dropping faces can leave vertices in no face: both steps.
+        (Remedy::DropDegenerateFaces, Some(step)) => {
+            format!("--repair {},{}", step.name(), RepairStep::Unreferenced.name())
+        }
+        (_, Some(step)) => format!("--repair {}", step.name()),
+        (Remedy::TriangulatePolygons, None) => "pass --triangulate (fan triangulation)".to_string(),
+        (Remedy::ScaleDown, None) => "scale the mesh coordinates down".to_string(),
+        (other, None) => other.in_library().to_string(),
+    }
 }
 
-/// The message of a mesh error as the CLI prints it: library names replaced by flags, and
-/// the `--repair` that fixes a fatal problem named.
+/// The message of a mesh error as the CLI prints it: its remedy in flags ([`cli_fix`]), and
+/// the weld tolerance named by its flag.
 pub fn mesh_message(e: &MeshError) -> String {
-    let text = with_flags(&e.to_string());
     match e {
-        MeshError::DegenerateFace { .. } | MeshError::RepeatedIndex { .. } => {
-            format!("{text}; drop such faces with --repair degenerate (then --repair unreferenced for the vertices they leave)")
-        }
         MeshError::InvalidRepairOption { option, message } if *option == "merge_duplicate_vertices" => {
             format!("--weld-tolerance: {message}")
         }
-        _ => text,
+        _ => e.message_with(&cli_fix),
     }
 }

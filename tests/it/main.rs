@@ -16,6 +16,7 @@ mod cli_retrieval_eval;
 mod cli_volumes;
 mod common;
 mod crate_roots;
+mod defaults;
 mod doc_paths;
 mod fuzz_regressions;
 mod hostile;

@@ -1,5 +1,47 @@
 use std::path::PathBuf;
 
+/// What fixes a problem of a mesh, for each front end to name in its own words (the command
+/// line's `--repair degenerate`, Python's `wfem.repair(…, drop_degenerate_faces=True)`, Rust's
+/// `RepairOptions::drop_degenerate_faces`): errors and validation reports carry it as data
+/// ([`MeshError::remedy`], `Problem::remedy`) instead of a sentence that names one API.
+/// [`Remedy::in_library`] is how this crate says it (its `Display`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[non_exhaustive]
+pub enum Remedy {
+    /// Drop vertices that belong to no face or tetrahedron.
+    DropUnreferencedVertices,
+    /// Drop faces that repeat a vertex or have zero area (tetrahedra of zero volume).
+    DropDegenerateFaces,
+    /// Drop later copies of faces with the same vertices.
+    DropDuplicateFaces,
+    /// Orient the faces (tetrahedra) consistently.
+    OrientFaces,
+    /// Read polygons fan-triangulated.
+    TriangulatePolygons,
+    /// Scale the coordinates down.
+    ScaleDown,
+}
+
+impl Remedy {
+    /// The option of this crate that does it (`RepairOptions::orient_faces`).
+    pub fn in_library(self) -> &'static str {
+        match self {
+            Remedy::DropUnreferencedVertices => "RepairOptions::drop_unreferenced_vertices",
+            Remedy::DropDegenerateFaces => "RepairOptions::drop_degenerate_faces",
+            Remedy::DropDuplicateFaces => "RepairOptions::drop_duplicate_faces",
+            Remedy::OrientFaces => "RepairOptions::orient_faces",
+            Remedy::TriangulatePolygons => "LoadOptions::triangulate_polygons (fan triangulation)",
+            Remedy::ScaleDown => "scale the mesh down (TriMesh::scaled)",
+        }
+    }
+}
+
+impl std::fmt::Display for Remedy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.in_library())
+    }
+}
+
 /// Everything that can go wrong between a file on disk and the FEM operators.
 ///
 /// Each variant names the culprit (file, line, face or vertex) so that a user can find it.
@@ -41,7 +83,7 @@ pub enum MeshError {
         area: f64,
     },
     /// A face repeats a vertex index.
-    #[error("face {face} repeats a vertex (vertices {vertices:?})")]
+    #[error("{}; fix: {}", repeated(*.face, .vertices), Remedy::DropDegenerateFaces)]
     RepeatedIndex {
         /// Face index.
         face: usize,
@@ -49,7 +91,7 @@ pub enum MeshError {
         vertices: Vec<u32>,
     },
     /// A face has zero area.
-    #[error("face {face} has zero area (vertices {vertices:?})")]
+    #[error("{}; fix: {}", zero_area(*.face, .vertices), Remedy::DropDegenerateFaces)]
     DegenerateFace {
         /// Face index.
         face: usize,
@@ -57,7 +99,7 @@ pub enum MeshError {
         vertices: [u32; 3],
     },
     /// A polygon with more than three corners was found and fan triangulation was not enabled.
-    #[error("{path}: face {face} has {corners} corners; enable LoadOptions::triangulate_polygons to fan-triangulate polygons")]
+    #[error("{}; fix: {}", polygon(.path, *.face, *.corners), Remedy::TriangulatePolygons)]
     Polygon {
         /// File read.
         path: PathBuf,
@@ -67,7 +109,7 @@ pub enum MeshError {
         corners: usize,
     },
     /// A vertex belongs to no face.
-    #[error("vertex {vertex} belongs to no face or tetrahedron (drop unreferenced vertices with the repair option)")]
+    #[error("{}; fix: {}", unreferenced(*.vertex), Remedy::DropUnreferencedVertices)]
     UnreferencedVertex {
         /// Vertex index.
         vertex: usize,
@@ -326,6 +368,54 @@ pub enum MeshError {
         /// Number of vertices of the mesh.
         n_vertices: usize,
     },
+}
+
+/// The problem of [`MeshError::Polygon`], without its remedy.
+fn polygon(path: &std::path::Path, face: usize, corners: usize) -> String {
+    format!("{}: face {face} has {corners} corners", path.display())
+}
+
+/// The problem of [`MeshError::RepeatedIndex`], without its remedy.
+fn repeated(face: usize, vertices: &[u32]) -> String {
+    format!("face {face} repeats a vertex (vertices {vertices:?})")
+}
+
+/// The problem of [`MeshError::DegenerateFace`], without its remedy.
+fn zero_area(face: usize, vertices: &[u32; 3]) -> String {
+    format!("face {face} has zero area (vertices {vertices:?})")
+}
+
+/// The problem of [`MeshError::UnreferencedVertex`], without its remedy.
+fn unreferenced(vertex: usize) -> String {
+    format!("vertex {vertex} belongs to no face or tetrahedron")
+}
+
+impl MeshError {
+    /// What fixes this error, when a repair or an option does.
+    pub fn remedy(&self) -> Option<Remedy> {
+        match self {
+            MeshError::Polygon { .. } => Some(Remedy::TriangulatePolygons),
+            MeshError::UnreferencedVertex { .. } => Some(Remedy::DropUnreferencedVertices),
+            MeshError::RepeatedIndex { .. } | MeshError::DegenerateFace { .. } => Some(Remedy::DropDegenerateFaces),
+            _ => None,
+        }
+    }
+
+    /// The message with its remedy named by `fix` (a front end's words for [`Remedy`]); the
+    /// `Display` form is `message_with(&|r| r.in_library().to_string())`.
+    pub fn message_with(&self, fix: &dyn Fn(Remedy) -> String) -> String {
+        let Some(remedy) = self.remedy() else {
+            return self.to_string();
+        };
+        let problem = match self {
+            MeshError::Polygon { path, face, corners } => polygon(path, *face, *corners),
+            MeshError::UnreferencedVertex { vertex } => unreferenced(*vertex),
+            MeshError::RepeatedIndex { face, vertices } => repeated(*face, vertices),
+            MeshError::DegenerateFace { face, vertices } => zero_area(*face, vertices),
+            other => return other.to_string(),
+        };
+        format!("{problem}; fix: {}", fix(remedy))
+    }
 }
 
 /// An I/O error as its operating-system error number (`None` when it has none): the field

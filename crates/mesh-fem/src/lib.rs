@@ -62,7 +62,7 @@ pub mod volume;
 // The curated root (ARCHITECTURE.md, "Crate roots"): the mesh, the operators and how they are
 // assembled, the error. Every other item is reached through its public module only.
 pub use assembly::assemble;
-pub use error::MeshError;
+pub use error::{MeshError, Remedy};
 pub use laplacian::{Laplacian, RobustParams};
 pub use mesh::TriMesh;
 pub use operators::{AssemblyParams, FemOperators, Lumping, Mass};

@@ -24,7 +24,7 @@
 use crate::mesh::{cross, dot, mul_pow2, neg, norm, scaled_edges, sub, ScaledTriangle};
 use crate::topology::{Topology, NONE};
 use crate::vec3::bbox_diagonal;
-use crate::{MeshError, TriMesh};
+use crate::{MeshError, Remedy, TriMesh};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -188,6 +188,36 @@ pub enum Problem {
 }
 
 impl Problem {
+    /// What fixes it, when a repair does.
+    pub fn remedy(&self) -> Option<Remedy> {
+        match self {
+            Problem::RepeatedIndex { .. } | Problem::ZeroAreaFace { .. } => Some(Remedy::DropDegenerateFaces),
+            Problem::UnreferencedVertex { .. } => Some(Remedy::DropUnreferencedVertices),
+            Problem::AreaOverflow { .. } => Some(Remedy::ScaleDown),
+            Problem::DuplicateFace { .. } => Some(Remedy::DropDuplicateFaces),
+            Problem::InconsistentOrientation { .. } => Some(Remedy::OrientFaces),
+            _ => None,
+        }
+    }
+
+    /// What it means for the operators, in a few words (`None` where nothing needs saying).
+    pub fn note(&self) -> Option<&'static str> {
+        Some(match self {
+            Problem::NonManifoldEdge { .. } | Problem::NonManifoldVertex { .. } => {
+                "FEM assembly is per face, so the operators still assemble"
+            }
+            Problem::DuplicateFace { .. } => "assembles but counts the face twice",
+            Problem::InconsistentOrientation { .. } => "L and B do not depend on it",
+            Problem::NonOrientable { .. } => "L and B do not depend on it, but no consistent normals exist",
+            Problem::NeedleFace { .. } => {
+                "rounding in L grows with |cot|: drop or collapse such faces if the heat kernel refuses them"
+            }
+            Problem::SeveralComponents { .. } => "L has one zero eigenvalue per component",
+            Problem::Boundary { .. } => "natural (Neumann) boundary conditions apply",
+            _ => return None,
+        })
+    }
+
     /// Severity of this kind of problem.
     pub fn severity(&self) -> Severity {
         match self {
@@ -340,8 +370,13 @@ impl ValidationReport {
     }
 
     /// A few human-readable lines: the verdict, then one line per kind of problem with its
-    /// count and first culprit.
+    /// count and first culprit, what it means and its remedy in this crate's terms.
     pub fn summary(&self) -> String {
+        self.summary_with(&|r| r.in_library().to_string())
+    }
+
+    /// [`Self::summary`] with each remedy named by `fix` (a front end's words for [`Remedy`]).
+    pub fn summary_with(&self, fix: &dyn Fn(Remedy) -> String) -> String {
         let n_errors = self.errors().count();
         let mut s = format!(
             "mesh with {} vertices and {} faces: {}",
@@ -371,28 +406,10 @@ impl ValidationReport {
             } else {
                 String::new()
             };
-            let hint = match p {
-                Problem::RepeatedIndex { .. } | Problem::ZeroAreaFace { .. } => {
-                    "; fix: RepairOptions::drop_degenerate_faces"
-                }
-                Problem::UnreferencedVertex { .. } => "; fix: RepairOptions::drop_unreferenced_vertices",
-                Problem::AreaOverflow { .. } => "; fix: scale the mesh down (TriMesh::scaled)",
-                Problem::NonManifoldEdge { .. } | Problem::NonManifoldVertex { .. } => {
-                    "; FEM assembly is per face, so the operators still assemble"
-                }
-                Problem::DuplicateFace { .. } => {
-                    "; assembles but counts the face twice; fix: RepairOptions::drop_duplicate_faces"
-                }
-                Problem::InconsistentOrientation { .. } => {
-                    "; L and B do not depend on it; fix: RepairOptions::orient_faces"
-                }
-                Problem::NonOrientable { .. } => "; L and B do not depend on it, but no consistent normals exist",
-                Problem::NeedleFace { .. } => {
-                    "; rounding in L grows with |cot|: drop or collapse such faces if the heat kernel refuses them"
-                }
-                Problem::SeveralComponents { .. } => "; L has one zero eigenvalue per component",
-                Problem::Boundary { .. } => "; natural (Neumann) boundary conditions apply",
-            };
+            let mut hint = p.note().map(|n| format!("; {n}")).unwrap_or_default();
+            if let Some(r) = p.remedy() {
+                hint.push_str(&format!("; fix: {}", fix(r)));
+            }
             s.push_str(&format!("\n  {tag}: {p}{more}{hint}"));
         }
         s
@@ -539,6 +556,10 @@ fn duplicate_faces(faces: &[[u32; 3]]) -> Vec<(usize, usize)> {
     out
 }
 
+/// The merge tolerance of the `duplicate-vertices` repair unless told otherwise: identical
+/// coordinates only (see [`RepairOptions::merge_duplicate_vertices`]).
+pub const DEFAULT_WELD_TOLERANCE: f64 = 0.0;
+
 /// Which repairs [`repair`] applies. Everything is off by default; the repairs run in the
 /// order of the fields below.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -579,6 +600,20 @@ pub enum RepairStep {
     Orient,
     /// Every step above.
     All,
+}
+
+impl RepairStep {
+    /// The step that carries out a remedy (`None` for a remedy that is not a repair: reading
+    /// polygons, scaling).
+    pub fn for_remedy(remedy: Remedy) -> Option<Self> {
+        match remedy {
+            Remedy::DropUnreferencedVertices => Some(RepairStep::Unreferenced),
+            Remedy::DropDegenerateFaces => Some(RepairStep::Degenerate),
+            Remedy::DropDuplicateFaces => Some(RepairStep::DuplicateFaces),
+            Remedy::OrientFaces => Some(RepairStep::Orient),
+            Remedy::TriangulatePolygons | Remedy::ScaleDown => None,
+        }
+    }
 }
 
 wfem_base::registry! {

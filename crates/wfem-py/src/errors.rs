@@ -6,7 +6,7 @@
 //! only the class of each variant.
 
 use crate::out::{mat_out, vec_out};
-use mesh_fem::MeshError;
+use mesh_fem::{MeshError, Remedy};
 use pyo3::prelude::*;
 use pyo3::types::{PyComplex, PyDict};
 use retrieval_store::StoreError;
@@ -115,7 +115,17 @@ fn raise_error<E: serde::Serialize + std::fmt::Display>(
     e: &E,
     extra: Vec<(&str, Value)>,
 ) -> PyErr {
-    let message = e.to_string();
+    raise_error_saying(py, class, e, e.to_string(), extra)
+}
+
+/// [`raise_error`] with the message given (a library message with its remedy in Python's words).
+fn raise_error_saying<E: serde::Serialize>(
+    py: Python<'_>,
+    class: Class,
+    e: &E,
+    message: String,
+    extra: Vec<(&str, Value)>,
+) -> PyErr {
     let build = || -> PyResult<PyErr> {
         let form = pythonize::pythonize(py, e).map_err(PyErr::from)?;
         let (kind, fields) = match form.extract::<String>() {
@@ -155,7 +165,25 @@ pub fn mesh(py: Python<'_>, e: &MeshError) -> PyErr {
         | InvalidRepairOption { .. } => Class::InvalidInput,
         _ => Class::Mesh,
     };
-    raise_error(py, class, e, Vec::new())
+    let extra = match e.remedy() {
+        Some(r) => vec![("remedy", Value::Str(python_fix(r)))],
+        None => Vec::new(),
+    };
+    raise_error_saying(py, class, e, e.message_with(&python_fix), extra)
+}
+
+/// A remedy in the Python package's words (the exception's `remedy` attribute).
+pub fn python_fix(remedy: Remedy) -> String {
+    match remedy {
+        Remedy::DropUnreferencedVertices => "wfem.repair(V, F, drop_unreferenced_vertices=True)",
+        Remedy::DropDegenerateFaces => "wfem.repair(V, F, drop_degenerate_faces=True, drop_unreferenced_vertices=True)",
+        Remedy::DropDuplicateFaces => "wfem.repair(V, F, drop_duplicate_faces=True)",
+        Remedy::OrientFaces => "wfem.repair(V, F, orient_faces=True)",
+        Remedy::TriangulatePolygons => "wfem.read_mesh(path, triangulate=True) (fan triangulation)",
+        Remedy::ScaleDown => "scale the coordinates down",
+        other => other.in_library(),
+    }
+    .to_string()
 }
 
 /// A [`SolveError`] as a Python exception.

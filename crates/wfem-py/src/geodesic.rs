@@ -43,7 +43,7 @@ pub struct PyGeodesicSolver {
 #[pymethods]
 impl PyGeodesicSolver {
     #[staticmethod]
-    #[pyo3(signature = (v, f, method=None, t_coef=wfem_heat::geodesic::DEFAULT_T_COEF, use_robust=true, refine=0))]
+    #[pyo3(signature = (v, f, method=None, t_coef=wfem_heat::geodesic::DEFAULT_T_COEF, use_robust=true, refine=wfem_heat::geodesic::DEFAULT_REFINE))]
     fn from_mesh(
         py: Python<'_>,
         v: PyReadonlyArray2<'_, f64>,

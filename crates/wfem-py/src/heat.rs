@@ -349,7 +349,7 @@ impl PyHeatKernel {
 
     /// The exact diagonal of the heat kernel at every t (n, T), without eigenpairs, by
     /// `method` ([`diagonal_method`]).
-    #[pyo3(signature = (times, convention=None, method=None, tol=wfem_heat::diagonal::DEFAULT_PROBING_TOL, max_columns=4096, block=64))]
+    #[pyo3(signature = (times, convention=None, method=None, tol=wfem_heat::diagonal::DEFAULT_PROBING_TOL, max_columns=wfem_heat::DiagonalParams::default().max_columns, block=wfem_heat::DiagonalParams::default().block))]
     #[allow(clippy::too_many_arguments)]
     fn diagonal<'py>(
         &self,
@@ -498,7 +498,7 @@ impl PyHeatKernel {
     }
 
     /// K_{−t} f by conjugate gradients (refused when ill-conditioned): (g, report dict).
-    #[pyo3(signature = (f, t, max_amplification=1e6, tol=1e-10, max_iter=300, stall_window=40))]
+    #[pyo3(signature = (f, t, max_amplification=wfem_heat::rkhs::InverseParams::default().max_amplification, tol=wfem_heat::rkhs::InverseParams::default().tol, max_iter=wfem_heat::rkhs::InverseParams::default().max_iter, stall_window=wfem_heat::rkhs::InverseParams::default().stall_window))]
     #[allow(clippy::too_many_arguments)]
     fn inverse<'py>(
         &self,
@@ -527,7 +527,7 @@ impl PyHeatKernel {
     }
 
     /// λ_max of L x = λ M x (Lanczos).
-    #[pyo3(signature = (tol=1e-10, max_iter=300, seed=0x1a2b_3c4d))]
+    #[pyo3(signature = (tol=wfem_heat::scale::LargestEigenParams::default().tol, max_iter=wfem_heat::scale::LargestEigenParams::default().max_iter, seed=wfem_heat::scale::LargestEigenParams::default().seed))]
     fn largest_eigenvalue(&self, py: Python<'_>, tol: f64, max_iter: usize, seed: u64) -> PyResult<f64> {
         let kernel = self.kernel.clone();
         let params = LargestEigenParams { tol, max_iter, seed };
@@ -614,7 +614,7 @@ impl PyHeatKernel {
     }
 
     /// Diffusion distances of `kind` at time t on this kernel.
-    #[pyo3(signature = (t, kind=None, block=64, diagonal=None, diagonal_tol=wfem_heat::diagonal::DEFAULT_PROBING_TOL))]
+    #[pyo3(signature = (t, kind=None, block=wfem_heat::distance::DistanceParams::default().block, diagonal=None, diagonal_tol=wfem_heat::diagonal::DEFAULT_PROBING_TOL))]
     fn distance(
         &self,
         py: Python<'_>,

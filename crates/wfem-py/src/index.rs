@@ -121,7 +121,7 @@ impl PyRetrievalIndex {
     /// `mesh_fem::Laplacian`, default cotan; point clouds always use the robust one), recorded
     /// in the index, which must be the vocabulary's when one is given.
     #[staticmethod]
-    #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=0,
+    #[pyo3(signature = (paths, out, vocabulary=None, words=None, seed=shape_retrieval::model::TrainingParams::default().seed,
         despike=Some(shape_retrieval::model::DEFAULT_SPIKE_THRESHOLD),
         fill_holes=Some(shape_retrieval::model::DEFAULT_MAX_HOLE_PERIMETER),
         denoise=Some(shape_retrieval::model::DEFAULT_TARGET_ROUGHNESS), overwrite=false,
@@ -276,7 +276,7 @@ impl PyRetrievalIndex {
     /// The k nearest indexed shapes to a mesh (`v`, `f`) or a point cloud (`v` alone):
     /// [(name, distance)], nearest first. The query is described with the index's Laplacian;
     /// `laplacian`, if given, must name it.
-    #[pyo3(signature = (v, f=None, k=10, laplacian=None))]
+    #[pyo3(signature = (v, f=None, k=shape_retrieval::model::DEFAULT_RESULTS, laplacian=None))]
     fn query<'py>(
         &self,
         py: Python<'py>,

@@ -78,7 +78,7 @@ fn truncation<'py>(py: Python<'py>, r: &TruncationReport) -> PyResult<Bound<'py,
 #[pymethods]
 impl PyEigenbasis {
     #[staticmethod]
-    #[pyo3(signature = (v, f, k=None, mass=None, tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None, max_restarts=100, laplacian=None))]
+    #[pyo3(signature = (v, f, k=None, mass=None, tol=wfem_heat::spectral::EigenParams::default().tol, block_size=wfem_heat::spectral::EigenParams::default().block_size, max_dim=None, seed=wfem_heat::spectral::EigenParams::default().seed, shift=None, max_restarts=wfem_heat::spectral::EigenParams::default().max_restarts, laplacian=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_mesh(
         py: Python<'_>,
@@ -109,7 +109,7 @@ impl PyEigenbasis {
     }
 
     #[staticmethod]
-    #[pyo3(signature = (l, m, k=None, tol=1e-10, block_size=8, max_dim=None, seed=0x5eed_2010, shift=None, max_restarts=100))]
+    #[pyo3(signature = (l, m, k=None, tol=wfem_heat::spectral::EigenParams::default().tol, block_size=wfem_heat::spectral::EigenParams::default().block_size, max_dim=None, seed=wfem_heat::spectral::EigenParams::default().seed, shift=None, max_restarts=wfem_heat::spectral::EigenParams::default().max_restarts))]
     #[allow(clippy::too_many_arguments)]
     fn from_operators(
         py: Python<'_>,
@@ -267,7 +267,7 @@ impl PyEigenbasis {
     }
 
     /// The scale-invariant HKS (n, K) of Bronstein & Kokkinos.
-    #[pyo3(signature = (alpha=2.0, tau_min=1.0, tau_max=25.0, tau_step=0.0625, time_unit=1.0, num_frequencies=6, convention=None))]
+    #[pyo3(signature = (alpha=shape_retrieval::sihks::BRONSTEIN_KOKKINOS.alpha, tau_min=shape_retrieval::sihks::BRONSTEIN_KOKKINOS.tau_min, tau_max=shape_retrieval::sihks::BRONSTEIN_KOKKINOS.tau_max, tau_step=shape_retrieval::sihks::BRONSTEIN_KOKKINOS.tau_step, time_unit=crate::defaults::absolute_unit(&shape_retrieval::sihks::BRONSTEIN_KOKKINOS), num_frequencies=shape_retrieval::sihks::BRONSTEIN_KOKKINOS.num_frequencies, convention=None))]
     #[allow(clippy::too_many_arguments)]
     fn sihks<'py>(
         &self,

@@ -51,7 +51,7 @@ impl PyIndexStore {
 #[pymethods]
 impl PyIndexStore {
     #[staticmethod]
-    #[pyo3(signature = (path, dimension, chunk_rows=4096, overwrite=false))]
+    #[pyo3(signature = (path, dimension, chunk_rows=retrieval_store::DEFAULT_CHUNK_ROWS, overwrite=false))]
     fn create(py: Python<'_>, path: PathBuf, dimension: usize, chunk_rows: usize, overwrite: bool) -> PyResult<Self> {
         let params = StoreParams { dimension, chunk_rows };
         run(py, move |_| Ok(Self::wrap(Store::create(&path, &params, overwrite)?)))
@@ -127,7 +127,7 @@ impl PyIndexStore {
     }
 
     /// The k nearest shapes: [(id, name, info, distance)].
-    #[pyo3(signature = (query, k=10, metric=None))]
+    #[pyo3(signature = (query, k=shape_retrieval::model::DEFAULT_RESULTS, metric=None))]
     fn search(
         &self,
         py: Python<'_>,

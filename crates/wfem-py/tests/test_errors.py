@@ -72,8 +72,11 @@ def test_degenerate_face_and_validation_report():
 def test_repair_report():
     V, F = tet()
     V2 = np.vstack([V, [[5.0, 5.0, 5.0]]])  # an unreferenced vertex
-    with pytest.raises(wfem.MeshError):
+    with pytest.raises(wfem.MeshError) as e:
         wfem.HeatKernel(V2, F)
+    # The remedy in Python's words, also as an attribute (issue #37: remedies are data).
+    assert e.value.remedy == "wfem.repair(V, F, drop_unreferenced_vertices=True)"
+    assert str(e.value).endswith("; fix: " + e.value.remedy) and "Options::" not in str(e.value)
     V3, F3, report = wfem.repair(V2, F, drop_unreferenced_vertices=True)
     assert report.dropped_vertices == 1 and report.vertex_map[4] is None
     assert not report.unchanged and "unreferenced" in report.summary.lower() or report.summary
@@ -183,6 +186,7 @@ def test_files(tmp_path):
     with pytest.raises(wfem.MeshError) as e2:
         wfem.read_mesh(quad)
     assert e2.value.kind == "Polygon" and e2.value.corners == 4
+    assert "triangulate=True" in str(e2.value) and "LoadOptions" not in str(e2.value)
     V, F = wfem.read_mesh(quad, triangulate=True)
     assert F.shape == (2, 3)
     (tmp_path / "x.xyz").write_text("")

@@ -123,3 +123,13 @@ def test_deprecated_exact_flag_is_method_exact_with_a_warning():
     # Attributed to the caller's line (not to a wfem wrapper), so Python's default filters
     # show it.
     assert [w.filename for w in caught] == [__file__]
+
+
+def test_an_old_name_warns_and_gives_the_new_one():
+    """Issue #37, point 4: `KERNELS` was renamed `MASSES`; the old name works for one release."""
+    with pytest.warns(DeprecationWarning, match="old name of wfem.MASSES"):
+        old = wfem.KERNELS
+    assert old is wfem.MASSES
+    assert "KERNELS" not in wfem.__all__
+    with pytest.raises(AttributeError):
+        wfem.NO_SUCH_NAME

@@ -866,3 +866,51 @@ fn needle_and_cap_faces_are_warned() {
     }
     assert!(report.summary().contains("needle or cap"), "{}", report.summary());
 }
+
+/// Issue #37: remedies are data, named by each front end in its own words; the library's own
+/// messages name its options, and nothing else is written into them.
+#[test]
+fn remedies_are_data_that_each_front_end_names() {
+    use mesh_fem::validate::RepairStep;
+    use mesh_fem::Remedy;
+    let unreferenced = MeshError::UnreferencedVertex { vertex: 4 };
+    assert_eq!(unreferenced.remedy(), Some(Remedy::DropUnreferencedVertices));
+    assert_eq!(
+        unreferenced.to_string(),
+        "vertex 4 belongs to no face or tetrahedron; fix: RepairOptions::drop_unreferenced_vertices"
+    );
+    assert_eq!(
+        unreferenced.message_with(&|r| format!("<{r:?}>")),
+        "vertex 4 belongs to no face or tetrahedron; fix: <DropUnreferencedVertices>"
+    );
+    let polygon = MeshError::Polygon {
+        path: "q.obj".into(),
+        face: 2,
+        corners: 4,
+    };
+    assert!(polygon
+        .message_with(&|_| "X".into())
+        .ends_with("q.obj: face 2 has 4 corners; fix: X"));
+    // An error without a remedy reads as it always did.
+    let empty = MeshError::Empty {
+        n_vertices: 0,
+        n_faces: 0,
+    };
+    assert_eq!(empty.remedy(), None);
+    assert_eq!(empty.message_with(&|_| "X".into()), empty.to_string());
+    // Every fatal problem of a broken mesh has a remedy, which is a repair step, and a summary
+    // names it in the front end's words only.
+    let (mut p, mut f) = icosphere(1).into_parts();
+    p.push([3.0, 0.0, 0.0]);
+    f[2] = [f[2][0], f[2][1], f[2][1]];
+    f[5].swap(0, 1);
+    f.push(f[10]);
+    let r = validate(&mesh(p, f));
+    for problem in r.errors() {
+        let remedy = problem.remedy().expect("a fatal problem has a remedy");
+        assert!(RepairStep::for_remedy(remedy).is_some(), "{problem}");
+    }
+    let summary = r.summary_with(&|r| format!("step {:?}", RepairStep::for_remedy(r)));
+    assert!(!summary.contains("Options::"), "{summary}");
+    assert_eq!(summary.matches("fix: step Some(").count(), 4, "{summary}");
+}

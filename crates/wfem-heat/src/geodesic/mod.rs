@@ -70,6 +70,9 @@ wfem_base::registry! {
 /// Most midpoint refinements (each multiplies the vertices by about 4).
 pub const MAX_REFINE: u32 = 3;
 
+/// Midpoint refinements by default: none (the mesh as given).
+pub const DEFAULT_REFINE: u32 = 0;
+
 /// How a [`GeodesicSolver`] is prepared.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GeodesicParams {
@@ -81,7 +84,8 @@ pub struct GeodesicParams {
     /// The triangulation (and, for the heat method, its Laplacian). Default: robust, the
     /// intrinsic Delaunay cover (potpourri3d's `use_robust=True`); cotan: the mesh's own.
     pub laplacian: Laplacian,
-    /// Midpoint refinements of the mesh before anything else (default 0, at most [`MAX_REFINE`]).
+    /// Midpoint refinements of the mesh before anything else (default [`DEFAULT_REFINE`], at
+    /// most [`MAX_REFINE`]).
     pub refine: u32,
 }
 
@@ -91,7 +95,7 @@ impl Default for GeodesicParams {
             method: GeodesicMethod::default(),
             t_coef: DEFAULT_T_COEF,
             laplacian: Laplacian::Robust(mesh_fem::RobustParams::default()),
-            refine: 0,
+            refine: DEFAULT_REFINE,
         }
     }
 }

@@ -100,6 +100,27 @@ wfem_base::registry! {
     }
 }
 
+/// A method as files record it (the sidecars of the command line): its name and the
+/// parameters a caller chose — `{"name": "rational", "degree": 16, "backend": "ldlt"}`,
+/// `{"name": "spectral", "eigenpairs": 200}`, `{"name": "fast"}`.
+impl serde::Serialize for Method {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        use wfem_base::Choice;
+        let mut map = serializer.serialize_map(None)?;
+        map.serialize_entry("name", self.name())?;
+        match self {
+            Method::Rational { degree, backend } => {
+                map.serialize_entry("degree", degree)?;
+                map.serialize_entry("backend", backend.name())?;
+            }
+            Method::Spectral { k, .. } => map.serialize_entry("eigenpairs", k)?,
+            _ => {}
+        }
+        map.end()
+    }
+}
+
 /// Options a caller may give beside a method's name (command-line flags, keyword arguments):
 /// each belongs to one method, and [`Method::with_options`] refuses it for another.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -307,7 +328,7 @@ pub(crate) trait PreparedMethod: Send + Sync + Debug {
         _ops: &Operators,
         _f: &[f64],
         _t: f64,
-    ) -> Option<Result<(Vec<f64>, shifted_solve::function::LanczosOutcome), HeatError>> {
+    ) -> Option<Result<(Vec<f64>, shifted_solve::function::LanczosReport), HeatError>> {
         None
     }
 }
@@ -319,7 +340,7 @@ pub(crate) fn fast_report(
     ops: &Operators,
     f: &[f64],
     t: f64,
-) -> Result<(Vec<f64>, shifted_solve::function::LanczosOutcome), HeatError> {
+) -> Result<(Vec<f64>, shifted_solve::function::LanczosReport), HeatError> {
     match prepared.fast_report(ops, f, t) {
         Some(result) => result,
         None => fast::Fast::new(ops, KrylovParams::default())?.apply_with_outcome(ops, f, t),
@@ -344,5 +365,22 @@ impl FactorCache {
         let factor = Arc::new(ops.factor_shifted(s, || format!("{what} with shift {s:e}"))?);
         *cache = Some((s, factor.clone()));
         Ok(factor)
+    }
+}
+
+#[cfg(test)]
+mod serde_tests {
+    use super::*;
+
+    #[test]
+    fn a_method_is_recorded_with_the_parameters_chosen() {
+        let json = |m: &Method| serde_json::to_string(m).unwrap();
+        assert_eq!(
+            json(&Method::rational(16)),
+            r#"{"name":"rational","degree":16,"backend":"ldlt"}"#
+        );
+        assert_eq!(json(&Method::spectral(200)), r#"{"name":"spectral","eigenpairs":200}"#);
+        assert_eq!(json(&Method::fast()), r#"{"name":"fast"}"#);
+        assert_eq!(json(&Method::BackwardEuler), r#"{"name":"backward-euler"}"#);
     }
 }

@@ -45,7 +45,6 @@ from ._choices import choices
 from ._heat import (
     APPROX_COEFFICIENTS,
     APPROX_SAMPLINGS,
-    KERNELS,
     MASSES,
     METHODS,
     ApproximationWarning,
@@ -88,6 +87,19 @@ from . import generate
 
 __version__: str = _wfem.__version__
 
+#: Old names kept for one release (issue #37): reading one warns and gives the new one.
+_OLD_NAMES = {"KERNELS": "MASSES"}
+
+
+def __getattr__(name: str):
+    if name in _OLD_NAMES:
+        import warnings
+
+        new = _OLD_NAMES[name]
+        warnings.warn(f"wfem.{name} is the old name of wfem.{new}; it will be removed", DeprecationWarning, stacklevel=2)
+        return globals()[new]
+    raise AttributeError(f"module 'wfem' has no attribute {name!r}")
+
 #: Largest mesh for the dense eigendecomposition (``k=None``, ``method="dense"``).
 DENSE_MAX_VERTICES: int = _wfem.DENSE_MAX_VERTICES
 
@@ -116,7 +128,6 @@ __all__ = [
     "DiffusionDistance",
     "METHODS",
     "MASSES",
-    "KERNELS",
     "choices",
     "APPROX_COEFFICIENTS",
     "APPROX_SAMPLINGS",

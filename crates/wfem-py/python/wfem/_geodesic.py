@@ -12,6 +12,9 @@ from . import _choices, _wfem
 from ._arrays import as_float_array, as_indices, as_mesh, points_of
 from ._errors import InvalidInputError, warn_user
 
+#: The library's default parameters by group (one place: the Rust crates).
+_DEFAULTS = _wfem.DEFAULTS
+
 __all__ = ["GeodesicSolver", "GeodesicWarning", "geodesic_distance", "GEODESIC_METHODS"]
 
 #: Names accepted by ``method=`` of :class:`GeodesicSolver`, default first (the library's registry).
@@ -83,7 +86,7 @@ class GeodesicSolver:
         method: str | None = None,
         t_coef: float = _wfem.DEFAULT_T_COEF,
         use_robust: bool = True,
-        refine: int = 0,
+        refine: int = _DEFAULTS["geodesic"]["refine"],
         n_neighbors: int | None = None,
     ) -> None:
         from ._volume import tets_of

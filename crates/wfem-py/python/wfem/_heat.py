@@ -12,6 +12,9 @@ from . import _choices, _wfem
 from ._errors import InvalidInputError, TimeWarning, warn_user
 from ._arrays import as_float_array, as_indices, as_mesh, as_sparse, as_times, as_vector, points_of, to_csc
 
+#: The library's default parameters by group (one place: the Rust crates).
+_DEFAULTS = _wfem.DEFAULTS
+
 __all__ = [
     "HeatKernel",
     "DiffusionDistance",
@@ -26,8 +29,6 @@ __all__ = [
 METHODS = _choices.names("method")
 #: Names accepted by ``mass=`` (paper, Table 1): which mass M the kernel exp(−t M⁻¹L) uses.
 MASSES = _choices.names("mass")
-#: Older name of :data:`MASSES`.
-KERNELS = MASSES
 #: Names accepted by ``feature_approximation(coefficients=)``, default first (the library's registry).
 APPROX_COEFFICIENTS = _choices.names("coefficients")
 #: Names accepted by ``feature_approximation(sampling=)``, default first (the library's registry).
@@ -248,9 +249,9 @@ class HeatKernel:
         convention: str | None = None,
         *,
         method: str | None = None,
-        tol: float = 1e-10,
-        max_columns: int = 4096,
-        block: int = 64,
+        tol: float = _DEFAULTS["diagonal"]["tol"],
+        max_columns: int = _DEFAULTS["diagonal"]["max_columns"],
+        block: int = _DEFAULTS["diagonal"]["block"],
         return_info: bool = False,
     ) -> Any:
         """The diagonal of the heat kernel at every t, **without eigenpairs**: the exact heat
@@ -308,10 +309,10 @@ class HeatKernel:
         f: Any,
         t: float,
         *,
-        max_amplification: float = 1e6,
-        tol: float = 1e-10,
-        max_iter: int = 300,
-        stall_window: int = 40,
+        max_amplification: float = _DEFAULTS["inverse"]["max_amplification"],
+        tol: float = _DEFAULTS["inverse"]["tol"],
+        max_iter: int = _DEFAULTS["inverse"]["max_iter"],
+        stall_window: int = _DEFAULTS["inverse"]["stall_window"],
     ) -> tuple[np.ndarray, dict[str, float]]:
         """``K_{−t} f = K_t⁻¹ f`` (paper, Sect. 4, inversion property) by conjugate gradients on
         ``K_t g = f`` — refused (:class:`IllConditionedError`) when the amplification
@@ -324,7 +325,7 @@ class HeatKernel:
         )
         return np.asarray(g), dict(report)
 
-    def largest_eigenvalue(self, *, tol: float = 1e-10, max_iter: int = 300) -> float:
+    def largest_eigenvalue(self, *, tol: float = _DEFAULTS["largest_eigenvalue"]["tol"], max_iter: int = _DEFAULTS["largest_eigenvalue"]["max_iter"]) -> float:
         """λ_max of ``L x = λ M x`` (Lanczos on M⁻¹L; paper, Sect. 5)."""
         return float(self._k.largest_eigenvalue(tol, max_iter))
 
@@ -333,9 +334,9 @@ class HeatKernel:
         t: float,
         kind: str | None = None,
         *,
-        block: int = 64,
+        block: int = _DEFAULTS["distance"]["block"],
         diagonal: str | None = None,
-        diagonal_tol: float = 1e-10,
+        diagonal_tol: float = _DEFAULTS["distance"]["diagonal_tol"],
         time_unit: str | None = None,
     ) -> "DiffusionDistance":
         """Diffusion distances at time t through this kernel (paper, Sect. 3, Eq. (18)).

@@ -16,6 +16,9 @@ from ._errors import InvalidInputError, RefusedShapesWarning, warn_user
 from ._heat import HeatKernel
 from ._progress import ProgressArg, reporter
 
+#: The library's default parameters by group (one place: the Rust crates).
+_DEFAULTS = _wfem.DEFAULTS
+
 __all__ = [
     "DESCRIPTORS",
     "descriptors",
@@ -44,9 +47,9 @@ def descriptors(
     F: Any = None,
     kinds: Sequence[str] = PAPER_DESCRIPTORS,
     *,
-    k: int = 100,
+    k: int = _DEFAULTS["descriptor"]["k"],
     times: Any = None,
-    num_times: int = 16,
+    num_times: int = _DEFAULTS["descriptor"]["num_times"],
     sihks: dict[str, Any] | None = None,
 ) -> dict[str, np.ndarray]:
     """Dense per-vertex descriptors of the paper's Sect. 5, sharing one eigenbasis per mass:
@@ -82,10 +85,10 @@ def sparse_features(
     F: Any = None,
     detector: str | None = None,
     *,
-    k: int = 100,
-    feature_time_factor: float = 0.1,
-    feature_rings: int = 1,
-    persistence_fraction: float = 0.05,
+    k: int = _DEFAULTS["descriptor"]["k"],
+    feature_time_factor: float = _DEFAULTS["descriptor"]["feature_time_factor"],
+    feature_rings: int = _DEFAULTS["descriptor"]["feature_rings"],
+    persistence_fraction: float = _DEFAULTS["descriptor"]["persistence_fraction"],
     return_time: bool = False,
 ) -> Any:
     """Sparse feature points (paper, Sect. 5, Table 4): local maxima of the wFEM HKS at
@@ -112,10 +115,10 @@ class Vocabulary:
     def train(
         cls,
         descriptors: Any,
-        size: int = 48,
+        size: int = _DEFAULTS["vocabulary"]["size"],
         *,
-        max_iter: int = 300,
-        seed: int = 0,
+        max_iter: int = _DEFAULTS["vocabulary"]["max_iter"],
+        seed: int = _DEFAULTS["vocabulary"]["seed"],
         sigma: float | None = None,
         max_training_points: int | None = None,
     ) -> "Vocabulary":
@@ -174,7 +177,7 @@ class Vocabulary:
         return cls(np.asarray(d["words"], dtype=np.float64), float(d["sigma"]))
 
 
-def kmeans(points: Any, k: int, *, max_iter: int = 300, seed: int = 0) -> dict[str, Any]:
+def kmeans(points: Any, k: int, *, max_iter: int = _DEFAULTS["kmeans"]["max_iter"], seed: int = _DEFAULTS["kmeans"]["seed"]) -> dict[str, Any]:
     """k-means++ and Lloyd: ``centers`` (k, d), ``assignment`` (N,), ``inertia``, ``iterations``,
     ``converged``."""
     c, a, inertia, it, conv = _wfem.kmeans_clusters(as_float_array(points, "points", (2,)), k, max_iter, seed)
@@ -256,7 +259,7 @@ class IndexStore:
 
     @classmethod
     def create(
-        cls, path: str | os.PathLike[str], dimension: int, *, chunk_rows: int = 4096, overwrite: bool = False
+        cls, path: str | os.PathLike[str], dimension: int, *, chunk_rows: int = _DEFAULTS["index"]["chunk_rows"], overwrite: bool = False
     ) -> "IndexStore":
         return cls(_wfem.IndexStore.create(os.fspath(path), dimension, chunk_rows, overwrite))
 
@@ -292,7 +295,7 @@ class IndexStore:
         v = v.reshape(1, -1) if v.ndim == 1 else v
         return list(self._s.add(names, infos, v))
 
-    def search(self, query: Any, k: int = 10, *, metric: str | None = None) -> list[Hit]:
+    def search(self, query: Any, k: int = _DEFAULTS["index"]["k"], *, metric: str | None = None) -> list[Hit]:
         """The k nearest shapes, nearest first (ties by id); ``metric`` one of
         ``wfem.choices()["metric"]`` (default "l1")."""
         return [Hit(*h) for h in self._s.search(as_vector(query, "query"), int(k), metric)]
@@ -349,7 +352,7 @@ class RetrievalIndex:
         *,
         vocabulary: str | os.PathLike[str] | None = None,
         words: int | None = None,
-        seed: int = 0,
+        seed: int = _DEFAULTS["index"]["seed"],
         despike: float | None = _wfem.DEFAULT_SPIKE_THRESHOLD,
         fill_holes: float | None = _wfem.DEFAULT_MAX_HOLE_PERIMETER,
         denoise: float | None = _wfem.DEFAULT_TARGET_ROUGHNESS,
@@ -487,7 +490,7 @@ class RetrievalIndex:
         return report
 
     def query_mesh(
-        self, V: Any, F: Any = None, k: int = 10, *, laplacian: str | None = None
+        self, V: Any, F: Any = None, k: int = _DEFAULTS["index"]["k"], *, laplacian: str | None = None
     ) -> list[tuple[str, float]]:
         """The k indexed shapes nearest to a mesh ``V, F`` or a point cloud ``V`` (n, 3) alone:
         ``[(name, distance)]``, nearest first.

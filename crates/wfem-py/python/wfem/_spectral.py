@@ -10,6 +10,9 @@ from . import _choices, _wfem
 from ._arrays import as_float_array, as_mesh, as_sparse, as_vector, points_of
 from ._errors import InvalidInputError, warn_user
 
+#: The library's default parameters by group (one place: the Rust crates).
+_DEFAULTS = _wfem.DEFAULTS
+
 __all__ = ["Eigenbasis", "eigenbasis", "hks", "sihks", "wks", "HKS_CONVENTIONS", "HKS_METHODS"]
 
 #: The two HKS conventions, named by what they are (see :func:`hks`).
@@ -39,12 +42,12 @@ class Eigenbasis:
         M: Any,
         k: int | None = None,
         *,
-        tol: float = 1e-10,
-        block_size: int = 8,
+        tol: float = _DEFAULTS["eigen"]["tol"],
+        block_size: int = _DEFAULTS["eigen"]["block_size"],
         max_dim: int | None = None,
-        seed: int = 0x5EED2010,
+        seed: int = _DEFAULTS["eigen"]["seed"],
         shift: float | None = None,
-        max_restarts: int = 100,
+        max_restarts: int = _DEFAULTS["eigen"]["max_restarts"],
     ) -> "Eigenbasis":
         """The k smallest eigenpairs of any (L PSD = −igl.cotmatrix, M SPD) by shift-invert
         block Lanczos, or all of them (``k=None``, dense, n ≤ 5000)."""
@@ -121,12 +124,12 @@ class Eigenbasis:
     def sihks(
         self,
         *,
-        alpha: float = 2.0,
-        tau_min: float = 1.0,
-        tau_max: float = 25.0,
-        tau_step: float = 1.0 / 16.0,
-        time_unit: float = 1.0,
-        num_frequencies: int = 6,
+        alpha: float = _DEFAULTS["sihks"]["alpha"],
+        tau_min: float = _DEFAULTS["sihks"]["tau_min"],
+        tau_max: float = _DEFAULTS["sihks"]["tau_max"],
+        tau_step: float = _DEFAULTS["sihks"]["tau_step"],
+        time_unit: float = _DEFAULTS["sihks"]["time_unit"],
+        num_frequencies: int = _DEFAULTS["sihks"]["num_frequencies"],
         convention: str | None = None,
     ) -> np.ndarray:
         """SI-HKS of this basis (n, num_frequencies); see :func:`sihks`."""
@@ -139,15 +142,15 @@ class Eigenbasis:
 def eigenbasis(
     V: Any,
     F: Any = None,
-    k: int | None = 100,
+    k: int | None = _DEFAULTS["eigen"]["k"],
     *,
     mass: str | None = None,
-    tol: float = 1e-10,
-    block_size: int = 8,
+    tol: float = _DEFAULTS["eigen"]["tol"],
+    block_size: int = _DEFAULTS["eigen"]["block_size"],
     max_dim: int | None = None,
-    seed: int = 0x5EED2010,
+    seed: int = _DEFAULTS["eigen"]["seed"],
     shift: float | None = None,
-    max_restarts: int = 100,
+    max_restarts: int = _DEFAULTS["eigen"]["max_restarts"],
     kernel: str | None = None,
     lumped: str | None = None,
     laplacian: str | None = None,
@@ -185,7 +188,7 @@ def hks(
     F: Any = None,
     times: Any = None,
     *,
-    k: int = 100,
+    k: int = _DEFAULTS["eigen"]["k"],
     num_times: int | None = None,
     convention: str | None = None,
     scaled: bool = False,
@@ -285,13 +288,13 @@ def sihks(
     V: Any,
     F: Any = None,
     *,
-    k: int = 100,
-    alpha: float = 2.0,
-    tau_min: float = 1.0,
-    tau_max: float = 25.0,
-    tau_step: float = 1.0 / 16.0,
-    time_unit: float = 1.0,
-    num_frequencies: int = 6,
+    k: int = _DEFAULTS["eigen"]["k"],
+    alpha: float = _DEFAULTS["sihks"]["alpha"],
+    tau_min: float = _DEFAULTS["sihks"]["tau_min"],
+    tau_max: float = _DEFAULTS["sihks"]["tau_max"],
+    tau_step: float = _DEFAULTS["sihks"]["tau_step"],
+    time_unit: float = _DEFAULTS["sihks"]["time_unit"],
+    num_frequencies: int = _DEFAULTS["sihks"]["num_frequencies"],
     convention: str | None = None,
     mass: str | None = None,
     basis: Eigenbasis | None = None,
@@ -322,7 +325,7 @@ def wks(
     F: Any = None,
     *,
     num_energies: int = _wfem.DEFAULT_ENERGIES,
-    k: int = 100,
+    k: int = _DEFAULTS["eigen"]["k"],
     mass: str | None = None,
     basis: Any = None,
     laplacian: str | None = None,

@@ -28,6 +28,8 @@ DEFAULT_WORDS: int
 SHIPPED_DEGREES: list[int]
 PAPER_DESCRIPTORS: list[str]
 DEFAULT_NUM_TIMES: int
+#: The library's default parameters by group ({"eigen": {"tol": …, …}, …}), read by the Python layer.
+DEFAULTS: dict[str, dict[str, Any]]
 
 # the registries of the library's choices
 def choices() -> dict[str, Any]: ...
@@ -146,8 +148,8 @@ class HeatKernel:
         convention: str | None = None,
         method: str | None = None,
         tol: float = ...,
-        max_columns: int = 4096,
-        block: int = 64,
+        max_columns: int = ...,
+        block: int = ...,
     ) -> tuple[_F64, dict[str, Any]]: ...
     def hks_by_method(
         self,
@@ -168,12 +170,12 @@ class HeatKernel:
         self,
         f: _F64,
         t: float,
-        max_amplification: float = 1e6,
-        tol: float = 1e-10,
-        max_iter: int = 300,
-        stall_window: int = 40,
+        max_amplification: float = ...,
+        tol: float = ...,
+        max_iter: int = ...,
+        stall_window: int = ...,
     ) -> tuple[_F64, dict[str, float]]: ...
-    def largest_eigenvalue(self, tol: float = 1e-10, max_iter: int = 300, seed: int = ...) -> float: ...
+    def largest_eigenvalue(self, tol: float = ..., max_iter: int = ..., seed: int = ...) -> float: ...
     def feature_approximation(
         self,
         f: _F64,
@@ -188,7 +190,7 @@ class HeatKernel:
         self,
         t: float,
         kind: str | None = None,
-        block: int = 64,
+        block: int = ...,
         diagonal: str | None = None,
         diagonal_tol: float = ...
     ) -> DiffusionDistance: ...
@@ -219,7 +221,7 @@ class GeodesicSolver:
         method: str | None = None,
         t_coef: float = ...,
         use_robust: bool = True,
-        refine: int = 0,
+        refine: int = ...,
     ) -> GeodesicSolver: ...
     @staticmethod
     def from_volume(
@@ -261,12 +263,12 @@ class Eigenbasis:
         f: _I64,
         k: int | None = None,
         mass: str | None = None,
-        tol: float = 1e-10,
-        block_size: int = 8,
+        tol: float = ...,
+        block_size: int = ...,
         max_dim: int | None = None,
         seed: int = ...,
         shift: float | None = None,
-        max_restarts: int = 100,
+        max_restarts: int = ...,
         laplacian: str | None = None,
     ) -> Eigenbasis: ...
     @staticmethod
@@ -274,12 +276,12 @@ class Eigenbasis:
         l: _Sparse,
         m: _Sparse,
         k: int | None = None,
-        tol: float = 1e-10,
-        block_size: int = 8,
+        tol: float = ...,
+        block_size: int = ...,
         max_dim: int | None = None,
         seed: int = ...,
         shift: float | None = None,
-        max_restarts: int = 100,
+        max_restarts: int = ...,
     ) -> Eigenbasis: ...
     @property
     def values(self) -> _F64: ...
@@ -305,12 +307,12 @@ class Eigenbasis:
     def wks(self, num_energies: int = ...) -> tuple[_F64, list[float], float]: ...
     def sihks(
         self,
-        alpha: float = 2.0,
-        tau_min: float = 1.0,
-        tau_max: float = 25.0,
-        tau_step: float = 0.0625,
-        time_unit: float = 1.0,
-        num_frequencies: int = 6,
+        alpha: float = ...,
+        tau_min: float = ...,
+        tau_max: float = ...,
+        tau_step: float = ...,
+        time_unit: float = ...,
+        num_frequencies: int = ...,
         convention: str | None = None,
     ) -> _F64: ...
 def mesh_time_unit(v: _F64, f: _I64, name: str | None = None) -> float: ...
@@ -337,22 +339,22 @@ def descriptors(
     v: _F64,
     f: _I64,
     kinds: list[str],
-    k: int = 100,
+    k: int = ...,
     times: list[float] | None = None,
-    num_times: int = 16,
+    num_times: int = ...,
     sihks: dict[str, Any] | None = None,
 ) -> dict[str, _F64]: ...
 def sparse_features(
     v: _F64,
     f: _I64,
     detector: str | None = None,
-    k: int = 100,
-    feature_time_factor: float = 0.1,
-    feature_rings: int = 1,
-    persistence_fraction: float = 0.05,
+    k: int = ...,
+    feature_time_factor: float = ...,
+    feature_rings: int = ...,
+    persistence_fraction: float = ...,
 ) -> tuple[list[int], float]: ...
 def kmeans_clusters(
-    points: _F64, k: int, max_iter: int = 300, seed: int = 0
+    points: _F64, k: int, max_iter: int = ..., seed: int = ...
 ) -> tuple[_F64, list[int], float, int, bool]: ...
 def evaluate_retrieval(
     distances: _F64, labels: list[int]
@@ -364,9 +366,9 @@ class Vocabulary:
     @staticmethod
     def train(
         descriptors: _F64,
-        size: int = 48,
-        max_iter: int = 300,
-        seed: int = 0,
+        size: int = ...,
+        max_iter: int = ...,
+        seed: int = ...,
         sigma: float | None = None,
         max_training_points: int | None = None,
     ) -> Vocabulary: ...
@@ -383,7 +385,7 @@ class Vocabulary:
 @final
 class IndexStore:
     @staticmethod
-    def create(path: _Path, dimension: int, chunk_rows: int = 4096, overwrite: bool = False) -> IndexStore: ...
+    def create(path: _Path, dimension: int, chunk_rows: int = ..., overwrite: bool = False) -> IndexStore: ...
     @staticmethod
     def open(path: _Path, readonly: bool = False) -> IndexStore: ...
     @property
@@ -394,7 +396,7 @@ class IndexStore:
     def meta(self, key: str) -> bytes | None: ...
     def set_meta(self, key: str, value: bytes) -> None: ...
     def add(self, names: list[str], infos: list[str], vectors: _F64) -> list[int]: ...
-    def search(self, query: _F64, k: int = 10, metric: str | None = None) -> list[tuple[int, str, str, float]]: ...
+    def search(self, query: _F64, k: int = ..., metric: str | None = None) -> list[tuple[int, str, str, float]]: ...
     def shapes(self) -> list[tuple[int, str, str]]: ...
     def find(self, name: str) -> tuple[int, str] | None: ...
     def vectors(self) -> _F32: ...
@@ -408,7 +410,7 @@ class RetrievalIndex:
         out: str,
         vocabulary: str | None = None,
         words: int | None = None,
-        seed: int = 0,
+        seed: int = ...,
         despike: float | None = ...,
         fill_holes: float | None = ...,
         denoise: float | None = ...,
@@ -430,7 +432,7 @@ class RetrievalIndex:
         self, paths: list[str], strict: bool = False, progress: Callable[[str], object] | None = None
     ) -> tuple[int, list[tuple[str, str]]]: ...
     def query(
-        self, v: _F64, f: _I64 | None = None, k: int = 10, laplacian: str | None = None
+        self, v: _F64, f: _I64 | None = None, k: int = ..., laplacian: str | None = None
     ) -> list[tuple[str, float]]: ...
     def evaluate(self, classes: list[str] | None = None, class_from: str | None = None) -> tuple[str, str]: ...
     def __len__(self) -> int: ...

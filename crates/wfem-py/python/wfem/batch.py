@@ -47,6 +47,13 @@ from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
+from . import _wfem
+
+#: The library's default parameters by group (one place: the Rust crates).
+_DEFAULTS = _wfem.DEFAULTS
+#: Rows per Parquet shard unless told otherwise.
+DEFAULT_SHARD_SIZE = 64
+
 __all__ = ["descriptors", "bags", "read", "descriptor_arrays", "SerialExecutor", "default_executor"]
 
 
@@ -431,10 +438,10 @@ def descriptors(
     *,
     executor: cf.Executor | None = None,
     kind: str = "sihks",
-    k: int = 100,
+    k: int = _DEFAULTS["eigen"]["k"],
     times: Sequence[float] | None = None,
     sihks: dict[str, Any] | None = None,
-    shard_size: int = 64,
+    shard_size: int = DEFAULT_SHARD_SIZE,
     replace: bool = False,
     resume: bool = False,
 ) -> Any:
@@ -455,10 +462,10 @@ def bags(
     *,
     executor: cf.Executor | None = None,
     kind: str = "sihks",
-    k: int = 100,
+    k: int = _DEFAULTS["eigen"]["k"],
     times: Sequence[float] | None = None,
     sihks: dict[str, Any] | None = None,
-    shard_size: int = 64,
+    shard_size: int = DEFAULT_SHARD_SIZE,
     replace: bool = False,
     resume: bool = False,
 ) -> Any:

@@ -12,6 +12,12 @@ __all__ = ["icosphere", "uv_sphere", "grid", "torus", "irregular_sphere", "bumpy
 Mesh = tuple[np.ndarray, np.ndarray]
 
 
+#: The test torus unless told otherwise: radii 1 and 0.3, 32 × 16 vertices.
+TORUS = (1.0, 0.3, 32, 16)
+#: How much the face areas of ``irregular_sphere`` vary unless told otherwise (about s⁴).
+IRREGULARITY = 4.0
+
+
 def icosphere(level: int) -> Mesh:
     """Unit icosphere: 10·4^level + 2 vertices (level 0: the icosahedron)."""
     return _wfem.icosphere(int(level))
@@ -27,12 +33,12 @@ def grid(nx: int, ny: int) -> Mesh:
     return _wfem.grid(int(nx), int(ny))
 
 
-def torus(major: float = 1.0, minor: float = 0.3, nu: int = 32, nv: int = 16) -> Mesh:
+def torus(major: float = TORUS[0], minor: float = TORUS[1], nu: int = TORUS[2], nv: int = TORUS[3]) -> Mesh:
     """Torus with radii 0 < minor < major, nu × nv vertices (genus 1)."""
     return _wfem.torus(float(major), float(minor), int(nu), int(nv))
 
 
-def irregular_sphere(level: int, s: float = 4.0) -> Mesh:
+def irregular_sphere(level: int, s: float = IRREGULARITY) -> Mesh:
     """Unit sphere whose face areas vary by about s⁴ (a conformally dilated icosphere)."""
     return _wfem.irregular_sphere(int(level), float(s))
 

@@ -30,6 +30,9 @@ from ._spectral import Eigenbasis
 __all__ = ["process", "operators_of"]
 
 
+#: pyFM's own default of ``TriMesh.process(k)``, kept so that the drop-in is one.
+PYFM_PROCESS_K = 200
+
 def operators_of(mesh: Any, *, intrinsic: bool = False, robust: bool = False) -> tuple[sp.csc_matrix, sp.dia_matrix, str]:
     """pyFM's stiffness W (positive semidefinite), its barycentric lumped mass A and the name of
     its discretization, computed by wfem: ``"cotan"`` (pyFM's ``cotangent_weights`` and
@@ -54,7 +57,7 @@ def operators_of(mesh: Any, *, intrinsic: bool = False, robust: bool = False) ->
     return sp.csc_matrix(L), sp.diags(np.asarray(D.diagonal()), format="dia"), method
 
 
-def process(mesh: Any, k: int = 200, *, intrinsic: bool = False, robust: bool = False, **_: Any) -> Any:
+def process(mesh: Any, k: int = PYFM_PROCESS_K, *, intrinsic: bool = False, robust: bool = False, **_: Any) -> Any:
     """Fills ``mesh.stiffness``, ``mesh.mass``, ``mesh.eigenvalues`` (k,) and
     ``mesh.eigenvectors`` (n, k, mass-orthonormal) of a pyFM ``TriMesh`` from wfem, as
     ``mesh.process(k, intrinsic=, robust=)`` would, and returns the mesh. Other keywords of
