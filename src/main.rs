@@ -3,7 +3,7 @@
 //! library crates and the facade `wfem` know nothing of it, so a library user never compiles
 //! clap, indicatif or the renderer.
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 use std::process::ExitCode;
 
 mod cli;
@@ -59,6 +59,8 @@ fn main() -> ExitCode {
     } else {
         parsed.progress
     });
+    let args: Vec<String> = std::env::args_os().map(|a| a.to_string_lossy().into_owned()).collect();
+    cli::warn_old_spellings(&Cli::command(), &args);
     let mut stdout = std::io::stdout().lock();
     let result = match command {
         Command::Info(a) => cli::info(&a, &mut stdout),

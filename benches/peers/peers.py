@@ -28,7 +28,7 @@ same way:
 
     python3 peers.py check
     python3 peers.py measure --repeat 3 -- python3 peers.py hks sphere6.off --k 100 --out h.npy
-    python3 peers.py measure -- target/release/wfem hks sphere6.off --eigs 100 -o h.npy
+    python3 peers.py measure -- target/release/wfem hks sphere6.off --eigenpairs 100 -o h.npy
     python3 peers.py compare a.npy b.npy
 
 Pinned versions: benches/peers/requirements.txt.

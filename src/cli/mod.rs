@@ -49,10 +49,10 @@ pub enum CliError {
     #[error("{}", input::mesh_message(.0))]
     Mesh(#[from] MeshError),
     /// Heat kernel evaluation.
-    #[error("{}", input::with_flags(&.0.to_string()))]
+    #[error("{}", heat_message(.0))]
     Heat(#[from] wfem_heat::HeatError),
     /// Descriptors, vocabularies, indexes and their files.
-    #[error(transparent)]
+    #[error("{}", retrieval_message(.0))]
     Retrieval(#[from] shape_retrieval::RetrievalError),
     /// Rendering a PNG.
     #[error(transparent)]
@@ -121,6 +121,24 @@ pub enum CliError {
     /// Writing to the terminal failed.
     #[error("cannot write to standard output: {0}")]
     Stdout(#[from] std::io::Error),
+}
+
+/// A heat-kernel error as the CLI prints it: a mesh error inside it with its remedy in flags.
+fn heat_message(e: &wfem_heat::HeatError) -> String {
+    match e {
+        wfem_heat::HeatError::Mesh(m) => input::mesh_message(m),
+        other => other.to_string(),
+    }
+}
+
+/// A retrieval error as the CLI prints it: a mesh error inside it (also within a heat-kernel
+/// error) with its remedy in flags.
+fn retrieval_message(e: &shape_retrieval::RetrievalError) -> String {
+    match e {
+        shape_retrieval::RetrievalError::Mesh(m) => input::mesh_message(m),
+        shape_retrieval::RetrievalError::Heat(h) => heat_message(h),
+        other => other.to_string(),
+    }
 }
 
 /// The exit status of a collection command that used only some of its files
@@ -203,8 +221,8 @@ pub fn info(args: &InfoArgs, out: &mut dyn Write) -> Result<(), CliError> {
             })),
             "stats": stats,
             "usable": report.is_usable(),
-            "errors": report.errors().map(|p| input::with_flags(&p.to_string())).collect::<Vec<_>>(),
-            "warnings": report.warnings().map(|p| input::with_flags(&p.to_string())).collect::<Vec<_>>(),
+            "errors": report.errors().map(|p| p.to_string()).collect::<Vec<_>>(),
+            "warnings": report.warnings().map(|p| p.to_string()).collect::<Vec<_>>(),
         });
         let text = serde_json::to_string_pretty(&value).map_err(|e| CliError::Usage(e.to_string()))?;
         writeln!(out, "{text}")?;
@@ -245,7 +263,7 @@ pub fn info(args: &InfoArgs, out: &mut dyn Write) -> Result<(), CliError> {
             s.min_angle_deg, s.max_angle_deg
         )?;
         writeln!(out, "  manifold / closed     {} / {}", s.is_manifold, s.is_closed)?;
-        writeln!(out, "{}", input::with_flags(&report.summary()))?;
+        writeln!(out, "{}", report.summary_with(&input::cli_fix))?;
     }
     Ok(())
 }
@@ -292,4 +310,42 @@ pub fn operators(args: &OperatorsArgs, out: &mut dyn Write) -> Result<(), CliErr
         }
     )?;
     Ok(())
+}
+
+/// The old spellings among `args` (the command line as given): hidden aliases of a flag of the
+/// subcommand they follow, which are the names a flag had before it was renamed (issue #37:
+/// kept for one release). Returns `(old, new)` pairs, in order.
+pub fn old_spellings(command: &clap::Command, args: &[String]) -> Vec<(String, String)> {
+    let mut current = command;
+    let mut out = Vec::new();
+    for token in args.iter().skip(1) {
+        if token == "--" {
+            break;
+        }
+        if let Some(flag) = token.strip_prefix("--") {
+            let name = flag.split('=').next().unwrap_or(flag);
+            let renamed = current.get_arguments().find(|a| {
+                a.get_long().is_some_and(|long| long != name)
+                    && a.get_all_aliases().is_some_and(|aliases| aliases.contains(&name))
+                    && !a.get_visible_aliases().is_some_and(|visible| visible.contains(&name))
+            });
+            if let Some(arg) = renamed.and_then(|a| a.get_long()) {
+                out.push((format!("--{name}"), format!("--{arg}")));
+            }
+        } else if !token.starts_with('-') {
+            if let Some(sub) = current.find_subcommand(token) {
+                current = sub;
+            }
+        }
+    }
+    out
+}
+
+/// Warns about every old spelling of a flag in `args` ([`old_spellings`]).
+pub fn warn_old_spellings(command: &clap::Command, args: &[String]) {
+    for (old, new) in old_spellings(command, args) {
+        progress::warn(&format!(
+            "{old} is the old spelling of {new}; it still works in this release but will be removed"
+        ));
+    }
 }

@@ -231,7 +231,7 @@ fn demo_writes_ply_png_and_report() {
         out.to_str().unwrap(),
         "--level",
         "2",
-        "--eigs",
+        "--eigenpairs",
         "40",
         "--quiet",
     ]);
@@ -302,4 +302,38 @@ fn heat_backends_agree() {
         "x.csv",
     ]);
     assert!(!o.status.success());
+}
+
+/// Issue #37, point 4: a renamed flag's old spelling still works for one release, with a
+/// warning that names the new one; the new spelling gives no warning.
+#[test]
+fn old_spellings_work_and_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = write_icosphere(dir.path(), 2);
+    let out = dir.path().join("h.npy");
+    let (mesh, out) = (mesh.to_str().unwrap(), out.to_str().unwrap());
+    let old = wfem(&[
+        "hks", mesh, "--eigs", "20", "--scales", "4", "--method", "spectral", "-o", out,
+    ]);
+    assert!(old.status.success(), "{}", stderr(&old));
+    let err = stderr(&old);
+    assert!(err.contains("--eigs is the old spelling of --eigenpairs"), "{err}");
+    assert!(err.contains("--scales is the old spelling of --num-times"), "{err}");
+    let new = wfem(&[
+        "hks",
+        mesh,
+        "--eigenpairs",
+        "20",
+        "--num-times",
+        "4",
+        "--method",
+        "spectral",
+        "-o",
+        out,
+    ]);
+    assert!(new.status.success(), "{}", stderr(&new));
+    assert!(!stderr(&new).contains("old spelling"), "{}", stderr(&new));
+    // A visible alias (`--out` of `-o`) is not an old spelling.
+    let visible = wfem(&["hks", mesh, "--eigenpairs", "20", "--times", "0.1", "--out", out]);
+    assert!(!stderr(&visible).contains("old spelling"), "{}", stderr(&visible));
 }

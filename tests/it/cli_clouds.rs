@@ -318,7 +318,7 @@ fn retrieval_indexes_meshes_and_point_clouds_together() {
     let files = ["torus.obj", "bumpy.off", "torus-cloud.npy", "bumpy-cloud.xyz"].map(p);
     let mut args = vec!["retrieval", "build"];
     args.extend(files.iter().map(String::as_str));
-    args.extend(["--out", &index, "--words", "6", "--eigs", "30"]);
+    args.extend(["--out", &index, "--words", "6", "--eigenpairs", "30"]);
     let o = wfem(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
@@ -371,7 +371,7 @@ fn retrieval_indexes_meshes_and_point_clouds_together() {
         &robust,
         "--words",
         "6",
-        "--eigs",
+        "--eigenpairs",
         "30",
         "--laplacian",
         "robust",

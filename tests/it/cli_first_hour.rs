@@ -153,7 +153,7 @@ fn collections_tolerate_bad_files() {
         good[1].as_str(),
         bad[1].as_str(),
     ];
-    args.extend(["--out", index.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+    args.extend(["--out", index.to_str().unwrap(), "--eigenpairs", "30", "--words", "8"]);
     let o = wfem(&args);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(3), "{err}");
@@ -219,7 +219,7 @@ fn collections_tolerate_bad_files() {
         bad[1].as_str(),
         "--out",
         vocab.to_str().unwrap(),
-        "--eigs",
+        "--eigenpairs",
         "30",
         "--words",
         "8",

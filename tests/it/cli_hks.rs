@@ -110,7 +110,7 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
                 out.to_str().unwrap(),
             ];
             if method != "exact" {
-                args.extend(["--eigs", "30"]);
+                args.extend(["--eigenpairs", "30"]);
             }
             if kernel == "lumped" {
                 args.extend(["--lumped", "voronoi"]);
@@ -137,7 +137,7 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
             }
         }
     }
-    // --lumped is for the lumped kernel only; --eigs is not used by exact values at given times.
+    // --lumped is for the lumped kernel only; --eigenpairs is not used by exact values at given times.
     let out = dir.path().join("x.npy");
     let o = wfem(&[
         "hks",
@@ -162,7 +162,7 @@ fn hks_matches_dense_reference_for_both_kernels_and_methods() {
         "0.1",
         "--method",
         "exact",
-        "--eigs",
+        "--eigenpairs",
         "5",
         "-o",
         out.to_str().unwrap(),
@@ -186,7 +186,7 @@ fn hks_automatic_scales_and_csv() {
         path.to_str().unwrap(),
         "--scales",
         "5",
-        "--eigs",
+        "--eigenpairs",
         "20",
         "-o",
         out.to_str().unwrap(),
@@ -209,7 +209,11 @@ fn hks_rejects_bad_input() {
     let path = dir.path().join("sphere.off");
     mesh_fem::io::write_mesh(&path, &mesh_fem::generate::icosphere(1)).unwrap();
     let out = dir.path().join("x.npy");
-    for args in [vec!["--times", "-1"], vec!["--scales", "0"], vec!["--eigs", "0"]] {
+    for args in [
+        vec!["--times", "-1"],
+        vec!["--num-times", "0"],
+        vec!["--eigenpairs", "0"],
+    ] {
         let mut all = vec!["hks", path.to_str().unwrap()];
         all.extend(args.iter().copied());
         all.extend(["-o", out.to_str().unwrap()]);
@@ -242,7 +246,7 @@ fn retrieval_build_then_query_finds_the_same_shape_first() {
     let index = dir.path().join("index.json");
     let mut args = vec!["retrieval", "build"];
     args.extend(files.iter().map(|s| s.as_str()));
-    args.extend(["--out", index.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+    args.extend(["--out", index.to_str().unwrap(), "--eigenpairs", "30", "--words", "8"]);
     let o = wfem(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     // A rescaled copy of the bumpy sphere retrieves the bumpy sphere first (the default SI-HKS
@@ -296,7 +300,7 @@ fn retrieval_sqlite_index_ranks_like_json_and_takes_appends() {
     let build = |out: &Path, files: &[String]| {
         let mut args = vec!["retrieval", "build"];
         args.extend(files.iter().map(|s| s.as_str()));
-        args.extend(["--out", out.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+        args.extend(["--out", out.to_str().unwrap(), "--eigenpairs", "30", "--words", "8"]);
         run(&args);
     };
     let parse = |text: &str| -> Vec<(String, f64)> {

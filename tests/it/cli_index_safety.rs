@@ -25,7 +25,7 @@ fn meshes(dir: &Path) -> Vec<String> {
 fn build(files: &[String], out: &Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec!["retrieval", "build"];
     args.extend(files.iter().map(|s| s.as_str()));
-    args.extend(["--out", out.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+    args.extend(["--out", out.to_str().unwrap(), "--eigenpairs", "30", "--words", "8"]);
     args.extend(extra);
     wfem(&args)
 }
@@ -176,7 +176,7 @@ fn a_build_racing_an_add_in_another_process_never_mixes_vocabularies() {
         // The index as it is before this round: an add may describe its shape with it.
         let (before, _) = SqliteIndex::new(&index).open().unwrap();
         let mut args = vec!["retrieval", "build", files[0].as_str(), files[1].as_str()];
-        args.extend(["--out", index.to_str().unwrap(), "--eigs", "30", "--words", "8"]);
+        args.extend(["--out", index.to_str().unwrap(), "--eigenpairs", "30", "--words", "8"]);
         args.extend(["--force", "--seed", seed.as_str()]);
         let mut rebuild = std::process::Command::new(exe)
             .args(&args)

@@ -313,7 +313,7 @@ fn issue_16_spectral_with_too_many_eigenpairs_points_to_an_exact_method() {
         "3",
         "--method",
         "spectral",
-        "--eigs",
+        "--eigenpairs",
         "2562",
         "-o",
         s(&out),

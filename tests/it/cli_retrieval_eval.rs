@@ -76,7 +76,7 @@ fn retrieval_eval_reports_the_measures_of_its_rankings() {
     let set = labelled_set(dir.path());
     let files: Vec<String> = set.iter().map(|(p, _)| p.to_str().unwrap().to_string()).collect();
     let (json, index) = (dir.path().join("report.json"), dir.path().join("index.json"));
-    let small = ["--eigs", "30", "--words", "6"];
+    let small = ["--eigenpairs", "30", "--words", "6"];
     let mut args = vec!["retrieval", "eval"];
     args.extend(files.iter().map(String::as_str));
     args.extend(small);

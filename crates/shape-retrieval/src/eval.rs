@@ -129,7 +129,7 @@ pub struct ClassMeasures {
 
 /// One query's outcome.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct QueryOutcome {
+pub struct QueryReport {
     /// The shape.
     pub name: String,
     /// Its class.
@@ -139,6 +139,10 @@ pub struct QueryOutcome {
     /// The first result.
     pub nearest: Option<String>,
 }
+
+/// The old name of [`QueryReport`] (one word per meaning: results are reports).
+#[deprecated(note = "renamed QueryReport")]
+pub type QueryOutcome = QueryReport;
 
 /// Class `query` confused with class `retrieved`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -169,7 +173,7 @@ pub struct EvalReport {
     /// Where the vocabulary was trained (free text, e.g. "the indexed shapes (optimistic)").
     pub vocabulary: String,
     /// Every query.
-    pub per_query: Vec<QueryOutcome>,
+    pub per_query: Vec<QueryReport>,
 }
 
 impl EvalReport {
@@ -265,10 +269,10 @@ pub fn evaluate_rankings(
     for c in classes {
         *sizes.entry(c).or_default() += 1;
     }
-    let per_query: Vec<QueryOutcome> = (0..n)
+    let per_query: Vec<QueryReport> = (0..n)
         .map(|q| {
             let relevance: Vec<bool> = rankings[q].iter().map(|&j| classes[j] == classes[q]).collect();
-            QueryOutcome {
+            QueryReport {
                 name: names[q].clone(),
                 class: classes[q].clone(),
                 measures: Measures::of_ranking(&relevance),

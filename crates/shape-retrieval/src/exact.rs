@@ -140,7 +140,7 @@ pub enum HksSource {
     },
     /// The exact diagonal, with the probing's relative tail (0 for selected inversion).
     Exact {
-        /// `DiagonalInfo::relative_tail` of the probes.
+        /// `DiagonalReport::relative_tail` of the probes.
         relative_tail: f64,
     },
 }

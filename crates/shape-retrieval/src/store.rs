@@ -13,7 +13,7 @@
 
 use crate::bof::Vocabulary;
 use crate::model::{
-    BagSettings, DescriptorSettings, IndexEntry, RetrievalIndex, ShapeSignature, TrainingInfo, TrainingParams,
+    BagSettings, DescriptorSettings, IndexEntry, RetrievalIndex, ShapeSignature, TrainingParams, TrainingReport,
     VocabularyModel,
 };
 use crate::standardize::Standardizer;
@@ -190,7 +190,7 @@ struct VocabularyRecord {
     version: u32,
     descriptor: DescriptorSettings,
     training: TrainingParams,
-    info: TrainingInfo,
+    info: TrainingReport,
     standardizer: Option<StandardizerRecord>,
     words: Vec<Vec<f64>>,
     sigma: f64,

@@ -63,7 +63,7 @@ pub struct BlockLanczosParams {
 
 /// The outcome of [`largest_eigenpairs`]: the converged pairs (θ descending) and what it cost.
 #[derive(Clone, Debug)]
-pub struct BlockLanczosOutcome {
+pub struct BlockLanczosReport {
     /// Converged eigenvalues θ of S, descending (all k requested ones on success).
     pub values: Vec<f64>,
     /// Their eigenvectors, n × `values.len()`, M-orthonormal.
@@ -83,7 +83,11 @@ pub struct BlockLanczosOutcome {
     pub basis_bound: usize,
 }
 
-impl BlockLanczosOutcome {
+/// The old name of [`BlockLanczosReport`] (one word per meaning: results are reports).
+#[deprecated(note = "renamed BlockLanczosReport")]
+pub type BlockLanczosOutcome = BlockLanczosReport;
+
+impl BlockLanczosReport {
     /// Whether all requested pairs converged.
     pub fn converged(&self) -> bool {
         self.values.len() >= self.requested
@@ -101,7 +105,7 @@ pub type BlockMass<'a> = dyn Fn(MatRef<'_, f64>) -> Mat<f64> + Sync + 'a;
 /// `mass` computes M X for n × b blocks; for the generalized problem `L x = λ M x`,
 /// S = (L − σM)⁻¹M and `apply` is one block solve with MX.
 ///
-/// Returns the converged pairs; fewer than k (with [`BlockLanczosOutcome::converged`] false) when
+/// Returns the converged pairs; fewer than k (with [`BlockLanczosReport::converged`] false) when
 /// `max_restarts` restarts did not suffice.
 ///
 /// # Errors
@@ -113,7 +117,7 @@ pub fn largest_eigenpairs(
     apply: &BlockOperator<'_>,
     mass: &BlockMass<'_>,
     params: &BlockLanczosParams,
-) -> Result<BlockLanczosOutcome, SolveError> {
+) -> Result<BlockLanczosReport, SolveError> {
     let bad = |name, value: f64, reason| Err(SolveError::InvalidParameter { name, value, reason });
     if k == 0 || k > n {
         return bad("k", k as f64, "must be in 1..=n");
@@ -192,7 +196,7 @@ struct Ritz {
 }
 
 impl Lanczos<'_, '_> {
-    fn run(mut self) -> Result<BlockLanczosOutcome, SolveError> {
+    fn run(mut self) -> Result<BlockLanczosReport, SolveError> {
         let (n, b) = (self.n, self.b);
         let start = Mat::<f64>::from_fn(n, b, |_, _| self.rng.next_centered());
         let (q0, _, mq0) = m_orthonormalize(start, self.mass, self.v.as_ref().get(.., 0..0), &mut self.rng, 0.0);
@@ -406,7 +410,7 @@ impl Lanczos<'_, '_> {
     }
 
     /// The locked pairs and the `take` largest Ritz pairs of the active part, θ descending.
-    fn finish(mut self, ritz: &Ritz, take: usize) -> BlockLanczosOutcome {
+    fn finish(mut self, ritz: &Ritz, take: usize) -> BlockLanczosReport {
         let (a0, dim) = (self.locked.len(), self.dim);
         let m = ritz.theta.len();
         let wanted = self.k - a0;
@@ -421,7 +425,7 @@ impl Lanczos<'_, '_> {
         let mut order: Vec<usize> = (0..count).collect();
         order.sort_by(|&x, &y| values[y].total_cmp(&values[x]));
         let vectors = Mat::<f64>::from_fn(self.n, count, |i, c| self.v[(i, order[c])]);
-        BlockLanczosOutcome {
+        BlockLanczosReport {
             values: order.iter().map(|&i| values[i]).collect(),
             vectors,
             requested: self.k,

@@ -87,7 +87,7 @@ pub struct LanczosParams {
 
 /// What one [`lanczos_function`] call did.
 #[derive(Clone, Debug, PartialEq)]
-pub struct LanczosOutcome {
+pub struct LanczosReport {
     /// Lanczos steps (solves with A).
     pub iterations: usize,
     /// Last successive-difference estimate (relative, M-norm).
@@ -99,6 +99,10 @@ pub struct LanczosOutcome {
     /// Off-diagonal of T_m followed by β_m (so `beta.len() == alpha.len()`).
     pub beta: Vec<f64>,
 }
+
+/// The old name of [`LanczosReport`] (one word per meaning: results are reports).
+#[deprecated(note = "renamed LanczosReport")]
+pub type LanczosOutcome = LanczosReport;
 
 /// y = h(T) e₁ from the eigendecomposition (θ, U) of T.
 fn h_e1(theta: &[f64], u: &Mat<f64>, h: &dyn Fn(f64) -> f64) -> Vec<f64> {
@@ -117,10 +121,10 @@ fn h_e1(theta: &[f64], u: &Mat<f64>, h: &dyn Fn(f64) -> f64) -> Vec<f64> {
 }
 
 /// Per function: the n × k results and the k outcomes.
-pub type FunctionsResult = Result<(Vec<Mat<f64>>, Vec<Vec<LanczosOutcome>>), SolveError>;
+pub type FunctionsResult = Result<(Vec<Mat<f64>>, Vec<Vec<LanczosReport>>), SolveError>;
 
 /// Per column: its n × count results and its outcomes.
-type ColumnsResult = Result<Vec<(Mat<f64>, Vec<LanczosOutcome>)>, SolveError>;
+type ColumnsResult = Result<Vec<(Mat<f64>, Vec<LanczosReport>)>, SolveError>;
 
 /// A column of the lockstep iteration: its index, its process and its functions.
 type ColumnSlot<'p, 'a> = (usize, &'p mut LanczosProcess<'a>, &'p mut Functions);
@@ -136,7 +140,7 @@ struct FunctionTracker {
     /// The previous successive difference ‖y_m − y_{m−1}‖ (relative), for the rate.
     diff_prev: f64,
     hits: usize,
-    outcome: LanczosOutcome,
+    outcome: LanczosReport,
 }
 
 impl FunctionTracker {
@@ -145,7 +149,7 @@ impl FunctionTracker {
             y_prev: Vec::new(),
             diff_prev: f64::INFINITY,
             hits: 0,
-            outcome: LanczosOutcome {
+            outcome: LanczosReport {
                 iterations: 0,
                 estimate: f64::INFINITY,
                 norm,
@@ -305,7 +309,7 @@ impl Functions {
         process.combine_block(y.as_ref(), process.norm())
     }
 
-    fn outcomes(self) -> Vec<LanczosOutcome> {
+    fn outcomes(self) -> Vec<LanczosReport> {
         self.trackers.into_iter().map(|t| t.outcome).collect()
     }
 }
@@ -326,7 +330,7 @@ pub fn lanczos_function(
     u: &[f64],
     h: &(dyn Fn(f64) -> f64 + Sync),
     params: &LanczosParams,
-) -> Result<(Vec<f64>, LanczosOutcome), SolveError> {
+) -> Result<(Vec<f64>, LanczosReport), SolveError> {
     let (x, mut outcomes) = lanczos_functions(solve, mass, u, &|_, s| h(s), 1, params)?;
     let outcome = outcomes.pop().ok_or(SolveError::KrylovNoConvergence {
         iterations: 0,
@@ -357,7 +361,7 @@ pub fn lanczos_functions(
     h: &(dyn Fn(usize, f64) -> f64 + Sync),
     count: usize,
     params: &LanczosParams,
-) -> Result<(Mat<f64>, Vec<LanczosOutcome>), SolveError> {
+) -> Result<(Mat<f64>, Vec<LanczosReport>), SolveError> {
     let n = u.len();
     // Measured on the icosphere at n = 40,962 (f = e_i, t = 0.01): local reorthogonalisation
     // gives the same iteration counts and errors against the rational reference for
@@ -393,7 +397,7 @@ pub fn lanczos_function_many(
     h: &(dyn Fn(f64) -> f64 + Sync),
     params: &LanczosParams,
     block: usize,
-) -> Result<(Mat<f64>, Vec<LanczosOutcome>), SolveError> {
+) -> Result<(Mat<f64>, Vec<LanczosReport>), SolveError> {
     let (mut values, mut outcomes) = lanczos_functions_many(solve_block, mass, u, &|_, s| h(s), 1, params, block)?;
     Ok((values.remove(0), outcomes.remove(0)))
 }
@@ -426,7 +430,7 @@ pub fn lanczos_functions_many(
 ) -> FunctionsResult {
     let (n, k) = (u.nrows(), u.ncols());
     let mut values = vec![Mat::<f64>::zeros(n, k); count];
-    let mut outcomes: Vec<Vec<LanczosOutcome>> = vec![Vec::with_capacity(k); count];
+    let mut outcomes: Vec<Vec<LanczosReport>> = vec![Vec::with_capacity(k); count];
     let mut warmup = 0usize;
     let lockstep = Lockstep {
         solve_block,

@@ -135,7 +135,7 @@ impl PrecondFactor {
 
 /// Outcome of one Krylov solve.
 #[derive(Debug, Clone)]
-pub(crate) struct KrylovOutcome {
+pub(crate) struct KrylovReport {
     pub x: Vec<f64>,
     pub iterations: usize,
     /// Relative residual estimate after each iteration (preconditioned norm for MINRES).
@@ -143,9 +143,9 @@ pub(crate) struct KrylovOutcome {
     pub converged: bool,
 }
 
-impl KrylovOutcome {
+impl KrylovReport {
     fn new(x: Vec<f64>, iterations: usize, history: Vec<f64>, converged: bool) -> Self {
-        KrylovOutcome {
+        KrylovReport {
             x,
             iterations,
             history,
@@ -166,7 +166,7 @@ pub(crate) fn minres(
     mut apply_m_inv: impl FnMut(&mut [f64]),
     rel_tol: f64,
     max_iters: usize,
-) -> KrylovOutcome {
+) -> KrylovReport {
     let m = b.len();
     let mut x = vec![0.0; m];
     let mut v_old = vec![0.0; m];
@@ -177,7 +177,7 @@ pub(crate) fn minres(
     let gamma1 = gamma;
     let mut history = Vec::new();
     if gamma1 == 0.0 || !gamma1.is_finite() {
-        return KrylovOutcome::new(x, 0, history, gamma1 == 0.0);
+        return KrylovReport::new(x, 0, history, gamma1 == 0.0);
     }
     let mut gamma_old = 1.0;
     let mut eta = gamma;
@@ -205,7 +205,7 @@ pub(crate) fn minres(
             // an eigenvalue). Stop before x and the residual turn into NaN: the error then
             // carries the last finite residual (x did not change in this step).
             history.push(history.last().copied().unwrap_or(1.0));
-            return KrylovOutcome::new(x, it, history, false);
+            return KrylovReport::new(x, it, history, false);
         }
         let a2 = s * delta + c_old * c * gamma;
         let a3 = s_old * gamma;
@@ -228,7 +228,7 @@ pub(crate) fn minres(
         let rel = eta.abs() / gamma1;
         history.push(rel);
         if !rel.is_finite() || !a1.is_finite() {
-            return KrylovOutcome::new(x, it, history, false);
+            return KrylovReport::new(x, it, history, false);
         }
         // γ_new ≈ 0 relative to the current step (γ_new ≤ 1e−13·a₁): the Krylov space is
         // numerically invariant and x is the exact minimiser over it. That solves the system
@@ -238,13 +238,13 @@ pub(crate) fn minres(
         // γ fell to 5e−15 at step 6).
         let invariant = gamma <= 1e-13 * a1;
         if rel < rel_tol || (invariant && rel < rel_tol.max(1e-8)) {
-            return KrylovOutcome::new(x, it, history, true);
+            return KrylovReport::new(x, it, history, true);
         }
         if invariant {
-            return KrylovOutcome::new(x, it, history, false);
+            return KrylovReport::new(x, it, history, false);
         }
     }
-    KrylovOutcome::new(x, max_iters, history, false)
+    KrylovReport::new(x, max_iters, history, false)
 }
 
 /// Preconditioned conjugate gradients for an SPD operator; stops on ‖r‖₂/‖b‖₂ < rel_tol.
@@ -254,14 +254,14 @@ pub(crate) fn pcg(
     mut apply_m_inv: impl FnMut(&mut [f64]),
     rel_tol: f64,
     max_iters: usize,
-) -> KrylovOutcome {
+) -> KrylovReport {
     let m = b.len();
     let mut x = vec![0.0; m];
     let mut r = b.to_vec();
     let b_norm = dot(b, b).sqrt();
     let mut history = Vec::new();
     if b_norm == 0.0 {
-        return KrylovOutcome::new(x, 0, history, true);
+        return KrylovReport::new(x, 0, history, true);
     }
     let mut zv = r.clone();
     apply_m_inv(&mut zv);
@@ -281,7 +281,7 @@ pub(crate) fn pcg(
             break;
         }
         if rel < rel_tol {
-            return KrylovOutcome::new(x, it, history, true);
+            return KrylovReport::new(x, it, history, true);
         }
         zv.copy_from_slice(&r);
         apply_m_inv(&mut zv);
@@ -293,5 +293,5 @@ pub(crate) fn pcg(
         }
     }
     let iterations = history.len();
-    KrylovOutcome::new(x, iterations, history, false)
+    KrylovReport::new(x, iterations, history, false)
 }

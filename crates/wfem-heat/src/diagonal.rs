@@ -93,7 +93,7 @@ impl DiagonalMethod {
 
 /// How a diagonal was computed.
 #[derive(Clone, Debug, PartialEq)]
-pub struct DiagonalInfo {
+pub struct DiagonalReport {
     /// The method that computed the diagonal: the one asked for, or the one it gave way to
     /// where it does not apply (probing at a t where the colouring needs more than n/4 colours
     /// takes the n unit columns; selected inversion of an operator whose diagonal is not on
@@ -110,12 +110,16 @@ pub struct DiagonalInfo {
     pub relative_tail: f64,
 }
 
+/// The old name of [`DiagonalReport`] (one word per meaning: results are reports).
+#[deprecated(note = "renamed DiagonalReport")]
+pub type DiagonalInfo = DiagonalReport;
+
 /// The probe vectors of a diagonal: the colour of every vertex (one probe column per colour).
 #[derive(Clone, Debug)]
 pub(crate) struct Probes {
     colour: Vec<usize>,
     n_colours: usize,
-    pub(crate) info: DiagonalInfo,
+    pub(crate) info: DiagonalReport,
 }
 
 impl Probes {
@@ -138,7 +142,7 @@ impl Probes {
             Some((tol, (colour, n_colours, hops, relative_tail))) => Self {
                 colour,
                 n_colours,
-                info: DiagonalInfo {
+                info: DiagonalReport {
                     method: DiagonalMethod::Probing { tol },
                     columns: n_colours,
                     hops: Some(hops),
@@ -148,7 +152,7 @@ impl Probes {
             None => Self {
                 colour: (0..n).collect(),
                 n_colours: n,
-                info: DiagonalInfo {
+                info: DiagonalReport {
                     method: DiagonalMethod::UnitColumns,
                     columns: n,
                     hops: None,
@@ -200,7 +204,7 @@ pub(crate) fn diagonal(
     i: usize,
     col: &[f64],
     apply: &BlockOperator<'_>,
-) -> Result<(Vec<f64>, DiagonalInfo), HeatError> {
+) -> Result<(Vec<f64>, DiagonalReport), HeatError> {
     let probes = Probes::new(pattern, method, i, col, usize::MAX);
     let mut d = probes.diagonals(block, 1, &mut |p| Ok(vec![apply(p)?]))?;
     Ok((d.remove(0), probes.info))

@@ -32,7 +32,7 @@
 //! Gram matrix `M K_t` has no diagonal on the pattern and is probed ([`crate::diagonal`]).
 
 use crate::check::{self, unit_columns};
-use crate::diagonal::{diagonal, DiagonalInfo, DiagonalMethod};
+use crate::diagonal::{diagonal, DiagonalMethod, DiagonalReport};
 use crate::{DiagonalParams, HeatError, HeatKernel, KernelDiagonal};
 use faer::{Mat, MatRef};
 use std::sync::OnceLock;
@@ -85,7 +85,7 @@ pub struct DiffusionDistance {
     kind: DistanceKind,
     t: f64,
     params: DistanceParams,
-    diagonal: OnceLock<(Vec<f64>, DiagonalInfo)>,
+    diagonal: OnceLock<(Vec<f64>, DiagonalReport)>,
 }
 
 impl DiffusionDistance {
@@ -219,7 +219,7 @@ impl DiffusionDistance {
     }
 
     /// How the cached diagonal was computed (`None` before the first row or diagonal).
-    pub fn diagonal_info(&self) -> Option<&DiagonalInfo> {
+    pub fn diagonal_info(&self) -> Option<&DiagonalReport> {
         self.diagonal.get().map(|(_, info)| info)
     }
 

@@ -1,7 +1,7 @@
 //! The heat kernel object `K_t = exp(−t M⁻¹L)` (paper, Eq. (5)–(9)): an operator context
 //! ([`Operators`]) with a prepared [`Method`], applied to any number of functions and times.
 
-use crate::diagonal::{DiagonalInfo, DiagonalMethod, Probes};
+use crate::diagonal::{DiagonalMethod, DiagonalReport, Probes};
 use crate::method::{spread_times, Method, PreparedMethod};
 use crate::spectral::Eigenbasis;
 use crate::{check, HeatError, Operators};
@@ -249,7 +249,7 @@ pub struct DiagonalSeries {
     /// How the probes were chosen (none for selected inversion: columns 0, tail 0);
     /// `relative_tail` bounds the probing error of each entry
     /// relative to the entry (at the largest t; smaller t decay faster).
-    pub info: DiagonalInfo,
+    pub info: DiagonalReport,
     /// The kernel evaluations' own error estimates per t (see [`TimeSeries`]).
     pub error_estimates: Vec<Option<f64>>,
 }
@@ -395,7 +395,7 @@ impl HeatKernel {
         Ok(DiagonalSeries {
             times: times.to_vec(),
             values: self.finite(values)?,
-            info: DiagonalInfo {
+            info: DiagonalReport {
                 method: DiagonalMethod::SelectedInversion,
                 columns: 0,
                 hops: None,
@@ -417,11 +417,11 @@ impl HeatKernel {
         t: f64,
         which: KernelDiagonal,
         params: &DiagonalParams,
-    ) -> Result<DiagonalInfo, HeatError> {
+    ) -> Result<DiagonalReport, HeatError> {
         check::time(t)?;
         params.method.validate()?;
         if params.method == DiagonalMethod::SelectedInversion {
-            return Ok(DiagonalInfo {
+            return Ok(DiagonalReport {
                 method: DiagonalMethod::SelectedInversion,
                 columns: 0,
                 hops: None,

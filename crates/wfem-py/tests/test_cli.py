@@ -53,7 +53,7 @@ def test_hks_matches_the_cli(cli, mesh_file, tmp_path):
     V, F = wfem.read_mesh(mesh_file)
     out = tmp_path / "h.npy"
     # The truncated sum of 40 eigenpairs on both sides...
-    run(cli, "hks", mesh_file, "--times", "0.01", "0.1", "--eigs", "40", "--method", "spectral", "-o", out)
+    run(cli, "hks", mesh_file, "--times", "0.01", "0.1", "--eigenpairs", "40", "--method", "spectral", "-o", out)
     h = wfem.hks(V, F, [0.01, 0.1], k=40, method="spectral")
     np.testing.assert_allclose(np.load(out), h, rtol=1e-10)
     # ... and the exact diagonal (no eigenpairs) on both sides.

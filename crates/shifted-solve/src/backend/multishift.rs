@@ -17,7 +17,7 @@
 //! more slowly than the sum.
 
 use super::{Pole, PoleReport, PreparedBackend, ShiftedSolve, SolveMethod};
-use crate::function::{lanczos_function_many, KrylovParams, LanczosOutcome};
+use crate::function::{lanczos_function_many, KrylovParams, LanczosReport};
 use crate::lanczos::tridiagonal_eigen;
 use crate::{OperatorPair, SolveError, SpdFactor};
 use faer::{c64, Mat, MatRef};
@@ -109,7 +109,7 @@ impl MultiShiftSolve {
             self.factor.solve_in_place(u.as_mut());
             lanczos_function_many(&solve_block, &mass, u.as_ref(), &h_plain, &lanczos, LOCKSTEP_BLOCK)?
         };
-        let cols: Vec<(Vec<f64>, LanczosOutcome)> = outcomes
+        let cols: Vec<(Vec<f64>, LanczosReport)> = outcomes
             .into_iter()
             .enumerate()
             .map(|(j, o)| (values.col(j).iter().copied().collect(), o))

@@ -8,7 +8,7 @@
 //! `λ_j = (6/h²)(1 − cos θ_j)/(2 + cos θ_j)`, θ_j = jπh, j = 1…N (all simple).
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, MatRef, Par};
-use shifted_solve::eigen::{largest_eigenpairs, symmetric_block_mul, BlockLanczosOutcome, BlockLanczosParams};
+use shifted_solve::eigen::{largest_eigenpairs, symmetric_block_mul, BlockLanczosParams, BlockLanczosReport};
 use shifted_solve::{CholeskyPattern, SolveError};
 
 fn fem_1d(nodes: usize) -> (SparseColMat<usize, f64>, SparseColMat<usize, f64>) {
@@ -49,7 +49,7 @@ fn smallest(
     k: usize,
     sigma: f64,
     params: &BlockLanczosParams,
-) -> Result<(Vec<f64>, BlockLanczosOutcome, f64), SolveError> {
+) -> Result<(Vec<f64>, BlockLanczosReport, f64), SolveError> {
     let n = l.nrows();
     let shifted = SparseColMat::try_new_from_triplets(
         n,

@@ -18,7 +18,7 @@ use super::{FactorCache, PreparedMethod, TimesResult};
 use crate::{HeatError, Operators};
 use faer::{Mat, MatMut, MatRef};
 use shifted_solve::function::{
-    lanczos_function, lanczos_function_many, lanczos_functions, lanczos_functions_many, KrylovParams, LanczosOutcome,
+    lanczos_function, lanczos_function_many, lanczos_functions, lanczos_functions_many, KrylovParams, LanczosReport,
 };
 use shifted_solve::SolveError;
 
@@ -66,7 +66,7 @@ impl Fast {
         t: f64,
         h: &(dyn Fn(f64) -> f64 + Sync),
         resolve: bool,
-    ) -> Result<(Mat<f64>, Vec<LanczosOutcome>), HeatError> {
+    ) -> Result<(Mat<f64>, Vec<LanczosReport>), HeatError> {
         let gamma = self.params.gamma;
         let factor = self.cache.get(ops, gamma * t, "M + γtL")?;
         let pair = ops.pair();
@@ -115,7 +115,7 @@ impl Fast {
         ops: &Operators,
         f: &[f64],
         t: f64,
-    ) -> Result<(Vec<f64>, LanczosOutcome), HeatError> {
+    ) -> Result<(Vec<f64>, LanczosReport), HeatError> {
         let gamma = self.params.gamma;
         let (g, mut outcomes) = self.run(
             ops,
@@ -182,7 +182,7 @@ impl Fast {
         if kernel_matrix {
             factor.solve_in_place(u.as_mut());
         }
-        let (values, outcomes): (Vec<Mat<f64>>, Vec<Vec<LanczosOutcome>>) = if k == 1 {
+        let (values, outcomes): (Vec<Mat<f64>>, Vec<Vec<LanczosReport>>) = if k == 1 {
             // One vector: its solves and products with M use every core.
             let mass = |x: &[f64]| pair.mass_mul_par(x);
             let u0: Vec<f64> = u.col(0).iter().copied().collect();
@@ -257,7 +257,7 @@ impl PreparedMethod for Fast {
         Ok(self.run(ops, f, t, &|s| exp_of(s, gamma), false)?.0)
     }
 
-    fn fast_report(&self, ops: &Operators, f: &[f64], t: f64) -> Option<Result<(Vec<f64>, LanczosOutcome), HeatError>> {
+    fn fast_report(&self, ops: &Operators, f: &[f64], t: f64) -> Option<Result<(Vec<f64>, LanczosReport), HeatError>> {
         Some(self.apply_with_outcome(ops, f, t))
     }
 
