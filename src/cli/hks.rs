@@ -25,9 +25,10 @@ pub struct HksArgs {
     #[command(flatten)]
     #[allow(missing_docs)]
     pub time_unit: super::times::TimeUnitArgs,
-    /// Number T of automatic times, log-spaced in [4 ln10/λ_k, 4 ln10/λ_2] (default 16, at
-    /// most 1000).
-    #[arg(long, alias = "scales")]
+    #[arg(long, alias = "scales", help = format!(
+        "Number T of automatic times, log-spaced in [4 ln10/λ_k, 4 ln10/λ_2] (default {DEFAULT_NUM_TIMES}, at most {})",
+        limits::MAX_TIMES
+    ))]
     pub num_times: Option<usize>,
     /// The heat kernel, by its mass: consistent is the wFEM kernel (the paper's DHK2),
     /// voronoi the Voronoi-cot kernel (its DHK1).
@@ -88,9 +89,34 @@ impl Steps {
     }
 }
 
+/// What `wfem hks` checked before reading the mesh.
+struct Checked {
+    /// Output columns T.
+    count: usize,
+    /// Figure-name suffixes of given times (`None` for automatic ones).
+    suffixes: Option<Vec<String>>,
+    mass: mesh_fem::Mass,
+}
+
+/// What `wfem hks` computed.
+struct Computed {
+    input: super::input::Input,
+    times: super::times::Times,
+    hks: shape_retrieval::mesh_hks::MeshHks,
+    /// Eigenpairs k of the spectral sum.
+    k: usize,
+}
+
 /// `wfem hks`: writes the n × T heat kernel signature `h(i, t) = Σ_k e^{−λ_k t} φ_k(i)²` of
 /// the chosen kernel (shape_retrieval::mesh_hks).
 pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let checked = validate(args)?;
+    let computed = compute(args, &checked)?;
+    write(args, &checked, &computed, out)
+}
+
+/// The arguments, before anything is read.
+fn validate(args: &HksArgs) -> Result<Checked, CliError> {
     let count = if args.times.is_empty() {
         limits::count(
             "--num-times",
@@ -103,12 +129,13 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         limits::times("--times", &args.times)?;
         args.times.len()
     };
-    let labels = (!args.times.is_empty()).then(|| short_labels(&args.times));
-    let suffixes = labels
-        .as_ref()
-        .map(|l| l.iter().map(|l| format!("t{l}")).collect::<Vec<_>>());
+    let suffixes = (!args.times.is_empty()).then(|| {
+        short_labels(&args.times)
+            .iter()
+            .map(|l| format!("t{l}"))
+            .collect::<Vec<_>>()
+    });
     args.output.check(suffixes.as_deref(), count, &[&args.input.mesh])?;
-
     let mass = args.mass.mass()?;
     // The eigenpairs serve the spectral sum and the automatic times; exact values at given
     // times need none.
@@ -119,7 +146,12 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
             args.method.name()
         )));
     }
+    Ok(Checked { count, suffixes, mass })
+}
 
+/// Reads the mesh and computes the signature.
+fn compute(args: &HksArgs, checked: &Checked) -> Result<Computed, CliError> {
+    let (count, mass) = (checked.count, checked.mass);
     let input = read_usable(&args.input)?;
     let n = input.mesh.n_vertices();
     let k = limits::descriptor_eigenpairs(
@@ -127,15 +159,12 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
             .unwrap_or(shape_retrieval::descriptor::DEFAULT_EIGENPAIRS.min(n)),
         n,
     )?;
-    limits::columns(
-        if args.times.is_empty() {
-            "--num-times"
-        } else {
-            "--times"
-        },
-        count,
-        n,
-    )?;
+    let flag = if args.times.is_empty() {
+        "--num-times"
+    } else {
+        "--times"
+    };
+    limits::columns(flag, count, n)?;
     let times = args.time_unit.resolve("--times", &input.mesh, &args.times)?;
     if !args.times.is_empty() {
         let fem = progress::run("assembling L, B, D", || input.assemble(mass.lumping()))?;
@@ -159,14 +188,23 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
         .map_err(CliError::from)
         .and_then(|fem| operators_hks(&fem, &params, None, &mut |s| steps.start(s)).map_err(retrieval));
     steps.finish();
-    let hks = result?;
+    Ok(Computed {
+        hks: result?,
+        input,
+        times,
+        k,
+    })
+}
+
+/// One output column per time, titled with how it was computed.
+fn columns(args: &HksArgs, checked: &Checked, c: &Computed) -> Vec<Column> {
     // Given times keep their labels (in their unit); automatic ones are in the mesh's units.
     let (labels, unit) = if args.times.is_empty() {
-        (short_labels(&hks.times), "")
+        (short_labels(&c.hks.times), "")
     } else {
-        (short_labels(&times.given), times.suffix())
+        (short_labels(&c.times.given), c.times.suffix())
     };
-    let columns: Vec<Column> = labels
+    labels
         .iter()
         .enumerate()
         .map(|(j, label)| Column {
@@ -174,37 +212,37 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
             suffix: format!("t{label}"),
             title: format!(
                 "{}: HKS, t = {label}{unit} ({} mass, {})",
-                input.name,
-                mass.name(),
-                match hks.sources[j] {
+                c.input.name,
+                checked.mass.name(),
+                match c.hks.sources[j] {
                     HksSource::Exact { .. } => HksMethod::Exact.name().to_string(),
-                    HksSource::Spectral { .. } => format!("k = {k}"),
+                    HksSource::Spectral { .. } => format!("k = {}", c.k),
                 }
             ),
-            t: hks.times.get(j).copied(),
-            values: hks.values.col(j).iter().copied().collect(),
+            t: c.hks.times.get(j).copied(),
+            values: c.hks.values.col(j).iter().copied().collect(),
         })
-        .collect();
-    if args.output.format == OutputFormat::Png && suffixes.is_none() {
-        // The automatic times are known only now: check their figure names.
-        let names: Vec<String> = columns.iter().map(|c| c.suffix.clone()).collect();
-        args.output.check(Some(&names), columns.len(), &[&args.input.mesh])?;
-    }
+        .collect()
+}
+
+/// The sidecar's record of how every column was computed.
+fn meta(args: &HksArgs, checked: &Checked, c: &Computed) -> serde_json::Map<String, serde_json::Value> {
     let mut meta = serde_json::Map::new();
     meta.insert("command".into(), json!("hks"));
-    meta.insert("input".into(), input.meta(&args.input.mesh));
-    meta.insert("mass".into(), json!(mass.name()));
+    meta.insert("input".into(), c.input.meta(&args.input.mesh));
+    meta.insert("mass".into(), json!(checked.mass.name()));
     meta.insert("method".into(), json!(args.method.name()));
-    meta.insert("time_unit".into(), times.meta());
-    if hks.eigenvalues.is_some() {
-        meta.insert("eigenpairs".into(), json!(k));
+    meta.insert("time_unit".into(), c.times.meta());
+    if c.hks.eigenvalues.is_some() {
+        meta.insert("eigenpairs".into(), json!(c.k));
     }
     meta.insert(
         "sources".into(),
-        json!(hks
+        json!(c
+            .hks
             .sources
             .iter()
-            .zip(&hks.times)
+            .zip(&c.hks.times)
             .map(|(s, t)| match s {
                 HksSource::Exact { relative_tail } if *relative_tail > 0.0 =>
                     json!({"t": t, "method": s.method().name(), "probing_relative_tail": relative_tail}),
@@ -215,17 +253,29 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
             })
             .collect::<Vec<_>>()),
     );
+    meta
+}
+
+/// Writes the outputs, warns where the truncated sum is off, and prints the summary.
+fn write(args: &HksArgs, checked: &Checked, c: &Computed, out: &mut dyn Write) -> Result<(), CliError> {
+    let columns = columns(args, checked, c);
+    if args.output.format == OutputFormat::Png && checked.suffixes.is_none() {
+        // The automatic times are known only now: check their figure names.
+        let names: Vec<String> = columns.iter().map(|c| c.suffix.clone()).collect();
+        args.output.check(Some(&names), columns.len(), &[&args.input.mesh])?;
+    }
     let how = Writing {
         render: args.render,
-        splats: input.splats.as_ref(),
+        splats: c.input.splats.as_ref(),
         highlight: &[],
-        meta,
+        meta: meta(args, checked, c),
         allow_infinity: false,
-        volume: input.volume.as_ref().map(|v| &v.mesh),
+        volume: c.input.volume.as_ref().map(|v| &v.mesh),
     };
-    for path in write_fields(&args.output, &input.mesh, &columns, how)? {
+    for path in write_fields(&args.output, &c.input.mesh, &columns, how)? {
         writeln!(out, "wrote {}", path.display())?;
     }
+    let (hks, k) = (&c.hks, c.k);
     // The rigorous bound is pessimistic by orders of magnitude; the Weyl-law estimate is close
     // (shape_retrieval::exact::truncation_estimate): warn where a spectral column is ~1 % off.
     let truncated: Vec<f64> = hks
@@ -249,11 +299,12 @@ pub fn hks(args: &HksArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let used = &hks.times;
     writeln!(
         out,
-        "HKS ({} mass) at {} times from {:e} to {:e} on {n} vertices: {exact} exact (selected inversion), {} spectral (k = {k}{})",
-        mass.name(),
+        "HKS ({} mass) at {} times from {:e} to {:e} on {} vertices: {exact} exact (selected inversion), {} spectral (k = {k}{})",
+        checked.mass.name(),
         used.len(),
         used.first().copied().unwrap_or(0.0),
         used.last().copied().unwrap_or(0.0),
+        c.input.mesh.n_vertices(),
         used.len() - exact,
         if exact < used.len() { format!(", estimated truncation error ≤ {:.1e}", hks.worst_estimate()) } else { String::new() },
     )?;

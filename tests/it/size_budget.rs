@@ -22,14 +22,6 @@ const FILE_ALLOW: &[(&str, &str)] = &[
         "the SQLite schema, appends and the scan share private helpers; to split",
     ),
     (
-        "crates/shrec-bench/src/eval.rs",
-        "Tables 3-5 of the paper share one loader; to split per table",
-    ),
-    (
-        "crates/shrec-bench/src/synth.rs",
-        "the transformation classes; to split per class",
-    ),
-    (
         "src/cli/retrieval.rs",
         "the five retrieval subcommands; to split one module per subcommand",
     ),
@@ -46,35 +38,16 @@ const FN_ALLOW: &[(&str, &str)] = &[
         "one pass building five connected structures",
     ),
     (
-        "crates/shrec-bench/src/eval.rs::methods",
+        "crates/shrec-bench/src/eval/methods.rs::methods",
         "the table of methods, one line each",
-    ),
-    ("crates/shrec-bench/src/eval.rs::run", "to split (issue #37)"),
-    (
-        "crates/shrec-bench/src/synth.rs::transform",
-        "one match arm per transformation class; to split",
     ),
     (
         "src/cli/approx.rs::approx",
         "to split into validate, compute, write (issue #37)",
     ),
     (
-        "src/cli/hks.rs::hks",
-        "to split into validate, compute, write (issue #37)",
-    ),
-    (
         "src/cli/retrieval.rs::run",
         "to split one function per subcommand (issue #37)",
-    ),
-    (
-        "xtask/src/bench/markdown.rs::markdown",
-        "a report template; to split per section",
-    ),
-    ("xtask/src/main.rs::run", "the chores' dispatch; to split per chore"),
-    ("xtask/src/peers.rs::run", "to split per peer stage"),
-    (
-        "xtask/src/peers.rs::markdown",
-        "a report template; to split per section",
     ),
 ];
 

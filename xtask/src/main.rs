@@ -1,7 +1,7 @@
 //! Project chores: `cargo xtask <command>`.
 use clap::Parser;
 use shrec_bench::synth::{generate, Class, GenerateOptions, DEFAULT_SHAPES};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
 #[command(name = "xtask", about = "wfem project chores")]
@@ -149,10 +149,11 @@ enum Cmd {
         json: Option<PathBuf>,
     },
     /// Measure and write the benchmark report: DIR/BENCHMARKS.md (generated section) and
-    /// DIR/bench/*.svg. Full run: 10K/41K/164K vertices (see docs/BENCHMARKS.md), then the
-    /// peers table: wfem's CLI against scipy/libigl, whole process (xtask/src/peers.rs).
+    /// DIR/bench/*.svg. Full run: 10K/41K/164K vertices (see docs/BENCHMARKS.md); with
+    /// `--peers`, then the peers table: wfem's CLI against scipy/libigl, whole process
+    /// (xtask/src/peers.rs).
     Bench {
-        /// 2.5K/10K/41K vertices: a few minutes on 2 cores.
+        /// 2.5K/10K/41K vertices: under 5 minutes on 2 cores (without `--peers`).
         #[arg(long, conflicts_with = "smoke")]
         quick: bool,
         /// Tiny meshes (162/642 vertices): checks the pipeline in seconds.
@@ -164,10 +165,11 @@ enum Cmd {
         /// Output folder (BENCHMARKS.md and bench/*.svg).
         #[arg(long, default_value = "docs")]
         out: PathBuf,
-        /// Skip the peers table (wfem's CLI against scipy/libigl, whole process; needs Python
-        /// and the pinned benches/peers/requirements.txt, installed into a venv on first use).
+        /// Also run the peers table (wfem's CLI against scipy/libigl, whole process; needs
+        /// Python and the pinned benches/peers/requirements.txt, installed into a venv on first
+        /// use): a stage of its own, since the peers take longer than wfem.
         #[arg(long, conflicts_with = "peers_only")]
-        no_peers: bool,
+        peers: bool,
         /// Only the peers table (rewrites only its block of BENCHMARKS.md).
         #[arg(long)]
         peers_only: bool,
@@ -237,6 +239,136 @@ fn emit(text: &str, out: Option<PathBuf>) -> Result<(), Box<dyn std::error::Erro
     Ok(())
 }
 
+/// The folder given, or the shared real meshes (`wfem_corpus::meshes_dir`).
+fn meshes_or_corpus(meshes: Option<PathBuf>) -> Result<PathBuf, Box<dyn std::error::Error>> {
+    Ok(match meshes {
+        Some(d) => d,
+        None => wfem_corpus::meshes_dir()?,
+    })
+}
+
+/// `cargo xtask bench`: the report, then (with `--peers`) the peers table.
+fn bench(
+    setting: xtask::bench::Setting,
+    large: bool,
+    out: &Path,
+    peers: bool,
+    peers_only: bool,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use xtask::bench::{self, BenchOptions};
+    use xtask::peers::{self, PeerOptions};
+    let start = std::time::Instant::now();
+    if !peers_only {
+        let options = BenchOptions::for_setting(setting, large);
+        let report = bench::run(&options)?;
+        for path in bench::write(&report, out)? {
+            println!("wrote {}", path.display());
+        }
+    }
+    if peers || peers_only {
+        let report = peers::run(&PeerOptions::for_setting(setting, large))?;
+        println!("{}", peers::markdown(&report));
+        println!("wrote {}", peers::write(&report, out)?.display());
+    }
+    println!("benchmark report finished in {:.0} s", start.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// `cargo xtask approx-eval`: every case of the feature-driven approximation, timed.
+fn approx_eval(meshes: Option<PathBuf>, out: Option<PathBuf>, small: bool) -> Result<(), Box<dyn std::error::Error>> {
+    let meshes_dir = meshes_or_corpus(meshes)?;
+    let cases: &[shrec_bench::approx_eval::ApproxCase] = if small {
+        &shrec_bench::approx_eval::SMALL_CASES
+    } else {
+        &shrec_bench::approx_eval::APPROX_CASES
+    };
+    let machine = xtask::bench::Machine::probe();
+    let start = std::time::Instant::now();
+    let mut results = Vec::new();
+    for case in cases {
+        let t0 = std::time::Instant::now();
+        results.push(shrec_bench::approx_eval::evaluate_case(&meshes_dir, case)?);
+        eprintln!("{}: {:.1} s", case.name, t0.elapsed().as_secs_f64());
+    }
+    let text = xtask::approx::markdown(&results, &machine, start.elapsed().as_secs_f64());
+    emit(&text, out)
+}
+
+/// `cargo xtask real-eval`: the real collections against Shape-DNA.
+#[allow(clippy::too_many_arguments)]
+fn real_eval(
+    meshes: Option<PathBuf>,
+    cache: Option<PathBuf>,
+    variants: Option<PathBuf>,
+    collections: &[String],
+    outside: bool,
+    creatures: u64,
+    out: Option<PathBuf>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use xtask::real_eval::{self, Collection, RealEvalOptions};
+    let meshes_dir = meshes_or_corpus(meshes)?;
+    let variants: Vec<xtask::lab::Variant> = match variants {
+        Some(p) => serde_json::from_str(&std::fs::read_to_string(&p)?)?,
+        None => serde_json::from_str(r#"[{"name": "default"}]"#)?,
+    };
+    let collections = Collection::parse_list(collections)?;
+    let cache = eigen_cache(cache)?;
+    let results = real_eval::run(&RealEvalOptions {
+        meshes_dir: &meshes_dir,
+        cache: &cache,
+        variants: &variants,
+        collections: &collections,
+        outside,
+        creatures,
+        creatures_dir: &std::env::temp_dir().join("wfem-creatures"),
+    })?;
+    let text = real_eval::markdown(&results);
+    match out {
+        Some(path) => {
+            real_eval::write_generated(&path, &text)?;
+            println!("wrote {}", path.display());
+        }
+        None => print!("{text}"),
+    }
+    Ok(())
+}
+
+/// `cargo xtask shrec`: the SHREC'10-style transformed shapes with ground truth.
+fn shrec(
+    meshes: Option<PathBuf>,
+    out: &Path,
+    shapes: Option<Vec<String>>,
+    classes: Option<Vec<String>>,
+    strengths: &str,
+    seed: u64,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let meshes_dir = meshes_or_corpus(meshes)?;
+    let shapes = shapes.unwrap_or_else(|| DEFAULT_SHAPES.iter().map(|s| s.to_string()).collect());
+    let classes = match classes {
+        Some(names) => names
+            .iter()
+            .map(|n| Class::from_name(n))
+            .collect::<Result<Vec<_>, _>>()?,
+        None => Class::ALL.to_vec(),
+    };
+    let opts = GenerateOptions {
+        meshes_dir,
+        out_dir: out.to_path_buf(),
+        shapes,
+        classes,
+        strengths: parse_strengths(strengths)?,
+        seed,
+    };
+    let manifest = generate(&opts)?;
+    println!(
+        "wrote {} null shapes and {} transformed shapes to {} (manifest.json)",
+        manifest.bases.len(),
+        manifest.outputs.len(),
+        out.display()
+    );
+    Ok(())
+}
+
 fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
     match cmd {
         Cmd::Version => println!("wfem xtask {}", env!("CARGO_PKG_VERSION")),
@@ -254,35 +386,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             classes,
             strengths,
             seed,
-        } => {
-            let meshes_dir = match meshes {
-                Some(d) => d,
-                None => wfem_corpus::meshes_dir()?,
-            };
-            let shapes = shapes.unwrap_or_else(|| DEFAULT_SHAPES.iter().map(|s| s.to_string()).collect());
-            let classes = match classes {
-                Some(names) => names
-                    .iter()
-                    .map(|n| Class::from_name(n))
-                    .collect::<Result<Vec<_>, _>>()?,
-                None => Class::ALL.to_vec(),
-            };
-            let opts = GenerateOptions {
-                meshes_dir,
-                out_dir: out.clone(),
-                shapes,
-                classes,
-                strengths: parse_strengths(&strengths)?,
-                seed,
-            };
-            let manifest = generate(&opts)?;
-            println!(
-                "wrote {} null shapes and {} transformed shapes to {} (manifest.json)",
-                manifest.bases.len(),
-                manifest.outputs.len(),
-                out.display()
-            );
-        }
+        } => shrec(meshes, &out, shapes, classes, &strengths, seed)?,
         Cmd::ShrecEval {
             data,
             out,
@@ -291,10 +395,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             cache,
         } => {
             let data_dir = data.unwrap_or_else(|| PathBuf::from(format!("data/shrec/eval-{}", subset.name())));
-            let meshes_dir = match meshes {
-                Some(d) => d,
-                None => wfem_corpus::meshes_dir()?,
-            };
+            let meshes_dir = meshes_or_corpus(meshes)?;
             let report = shrec_bench::eval::run(&shrec_bench::eval::EvalOptions {
                 data_dir,
                 meshes_dir,
@@ -311,10 +412,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             cache,
             out,
         } => {
-            let meshes_dir = match meshes {
-                Some(d) => d,
-                None => wfem_corpus::meshes_dir()?,
-            };
+            let meshes_dir = meshes_or_corpus(meshes)?;
             let settings: shape_retrieval::model::RetrievalSettings = match settings {
                 Some(p) => serde_json::from_str(&std::fs::read_to_string(&p)?)?,
                 None => Default::default(),
@@ -330,10 +428,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             cache,
         } => {
             let variants: Vec<xtask::lab::Variant> = serde_json::from_str(&std::fs::read_to_string(&variants)?)?;
-            let meshes_dir = match meshes {
-                Some(d) => d,
-                None => wfem_corpus::meshes_dir()?,
-            };
+            let meshes_dir = meshes_or_corpus(meshes)?;
             let cache = eigen_cache(cache)?;
             for v in &variants {
                 xtask::lab::run_variant(v, &meshes_dir, shrec.as_deref(), &cache, seeds)?;
@@ -347,36 +442,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             outside,
             creatures,
             out,
-        } => {
-            use xtask::real_eval::{self, Collection, RealEvalOptions};
-            let meshes_dir = match meshes {
-                Some(d) => d,
-                None => wfem_corpus::meshes_dir()?,
-            };
-            let variants: Vec<xtask::lab::Variant> = match variants {
-                Some(p) => serde_json::from_str(&std::fs::read_to_string(&p)?)?,
-                None => serde_json::from_str(r#"[{"name": "default"}]"#)?,
-            };
-            let collections = Collection::parse_list(&collections)?;
-            let cache = eigen_cache(cache)?;
-            let results = real_eval::run(&RealEvalOptions {
-                meshes_dir: &meshes_dir,
-                cache: &cache,
-                variants: &variants,
-                collections: &collections,
-                outside,
-                creatures,
-                creatures_dir: &std::env::temp_dir().join("wfem-creatures"),
-            })?;
-            let text = real_eval::markdown(&results);
-            match out {
-                Some(path) => {
-                    real_eval::write_generated(&path, &text)?;
-                    println!("wrote {}", path.display());
-                }
-                None => print!("{text}"),
-            }
-        }
+        } => real_eval(meshes, cache, variants, &collections, outside, creatures, out)?,
         Cmd::FusionLab {
             meshes,
             cache,
@@ -384,10 +450,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             json,
         } => {
             use xtask::real_eval::Collection;
-            let meshes_dir = match meshes {
-                Some(d) => d,
-                None => wfem_corpus::meshes_dir()?,
-            };
+            let meshes_dir = meshes_or_corpus(meshes)?;
             let collections = Collection::parse_list(&collections)?;
             let cache = eigen_cache(cache)?;
             print!(
@@ -400,11 +463,10 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             smoke,
             large,
             out,
-            no_peers,
+            peers,
             peers_only,
         } => {
-            use xtask::bench::{self, BenchOptions, Setting};
-            use xtask::peers::{self, PeerOptions};
+            use xtask::bench::Setting;
             let setting = if smoke {
                 Setting::Smoke
             } else if quick {
@@ -412,20 +474,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
             } else {
                 Setting::Full
             };
-            let start = std::time::Instant::now();
-            if !peers_only {
-                let options = BenchOptions::for_setting(setting, large);
-                let report = bench::run(&options)?;
-                for path in bench::write(&report, &out)? {
-                    println!("wrote {}", path.display());
-                }
-            }
-            if !no_peers {
-                let report = peers::run(&PeerOptions::for_setting(setting, large))?;
-                println!("{}", peers::markdown(&report));
-                println!("wrote {}", peers::write(&report, &out)?.display());
-            }
-            println!("benchmark report finished in {:.0} s", start.elapsed().as_secs_f64());
+            bench(setting, large, &out, peers, peers_only)?;
         }
         Cmd::Wheel => {
             let wheel = xtask::wheel::build()?;
@@ -436,27 +485,7 @@ fn run(cmd: Cmd) -> Result<(), Box<dyn std::error::Error>> {
                 wheel.display()
             );
         }
-        Cmd::ApproxEval { meshes, out, small } => {
-            let meshes_dir = match meshes {
-                Some(d) => d,
-                None => wfem_corpus::meshes_dir()?,
-            };
-            let cases: &[shrec_bench::approx_eval::ApproxCase] = if small {
-                &shrec_bench::approx_eval::SMALL_CASES
-            } else {
-                &shrec_bench::approx_eval::APPROX_CASES
-            };
-            let machine = xtask::bench::Machine::probe();
-            let start = std::time::Instant::now();
-            let mut results = Vec::new();
-            for case in cases {
-                let t0 = std::time::Instant::now();
-                results.push(shrec_bench::approx_eval::evaluate_case(&meshes_dir, case)?);
-                eprintln!("{}: {:.1} s", case.name, t0.elapsed().as_secs_f64());
-            }
-            let text = xtask::approx::markdown(&results, &machine, start.elapsed().as_secs_f64());
-            emit(&text, out)?;
-        }
+        Cmd::ApproxEval { meshes, out, small } => approx_eval(meshes, out, small)?,
         Cmd::TestAll {
             python_only,
             rust_only,

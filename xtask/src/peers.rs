@@ -268,6 +268,46 @@ fn owned(args: &[&str]) -> Vec<String> {
     args.iter().map(|s| s.to_string()).collect()
 }
 
+/// The peer stages' shared state: the measuring helper, what the peers' venv holds, the
+/// `wfem` binary.
+struct Stage {
+    ctx: Ctx,
+    versions: Result<Value, String>,
+    wfem: Result<PathBuf, String>,
+}
+
+impl Stage {
+    /// Why a peer needing `names` cannot run (`None`: it can).
+    fn why_not(&self, names: &[&str]) -> Option<String> {
+        let versions = match &self.versions {
+            Err(e) => return Some(format!("not run ({e})")),
+            Ok(v) => v,
+        };
+        let missing: Vec<&str> = names
+            .iter()
+            .copied()
+            .filter(|n| versions.get(n).is_none_or(|v| v.is_null()))
+            .collect();
+        (!missing.is_empty()).then(|| format!("not run ({} not installed)", missing.join(", ")))
+    }
+
+    /// `wfem cmd…`, measured as the peers are.
+    fn wfem_run(&self, cmd: &[String]) -> Result<Run, String> {
+        let exe = self.wfem.as_ref().map_err(Clone::clone)?;
+        let mut full = vec![exe.display().to_string()];
+        full.extend_from_slice(cmd);
+        self.ctx.measure(&full)
+    }
+
+    /// A peer command, unless the packages it needs are missing.
+    fn peer_run(&self, names: &[&str], args: &[&str]) -> Result<Run, String> {
+        match self.why_not(names) {
+            Some(reason) => Err(reason),
+            None => self.ctx.measure(&self.ctx.peer_cmd(args)),
+        }
+    }
+}
+
 /// Runs the peers table.
 ///
 /// # Errors
@@ -292,28 +332,28 @@ pub fn run(options: &PeerOptions) -> Result<PeersReport, BenchError> {
         Err(e) => Err(format!("peers venv: {e}")),
         Ok(()) => ctx.script(&["check"]),
     };
-    let has = |name: &str| {
-        versions
-            .as_ref()
-            .ok()
-            .and_then(|v| v.get(name))
-            .is_some_and(|v| !v.is_null())
+    let stage = Stage {
+        ctx,
+        versions,
+        wfem: build_wfem(&root),
     };
-    let why_not = |names: &[&str]| -> Option<String> {
-        if let Err(e) = &versions {
-            return Some(format!("not run ({e})"));
-        }
-        let missing: Vec<&str> = names.iter().copied().filter(|n| !has(n)).collect();
-        (!missing.is_empty()).then(|| format!("not run ({} not installed)", missing.join(", ")))
-    };
-    let wfem = build_wfem(&root);
-    let wfem_run = |cmd: &[String]| -> Result<Run, String> {
-        let exe = wfem.as_ref().map_err(Clone::clone)?;
-        let mut full = vec![exe.display().to_string()];
-        full.extend_from_slice(cmd);
-        ctx.measure(&full)
-    };
+    write_meshes(options, &dir)?;
+    let mut rows = hks_rows(options, &stage);
+    let (operator_rows, assembly) = operator_rows(options, &stage)?;
+    rows.extend(operator_rows);
+    rows.extend(heat_rows(options, &stage));
+    machine.load.1 = bench::load_average();
+    Ok(PeersReport {
+        versions: stage.versions,
+        rows,
+        assembly,
+        machine,
+        repeat: stage.ctx.repeat,
+    })
+}
 
+/// The icospheres of every level (area 4π), and the field x on those of the heat rows.
+fn write_meshes(options: &PeerOptions, dir: &Path) -> Result<(), BenchError> {
     let mut levels: Vec<u32> = options
         .hks_levels
         .iter()
@@ -331,7 +371,11 @@ pub fn run(options: &PeerOptions) -> Result<PeersReport, BenchError> {
             mesh_fem::io::write_field(&dir.join(format!("x{level}.npy")), &mesh, &[("x", &x)], None)?;
         }
     }
+    Ok(())
+}
 
+/// The HKS rows: `wfem hks` against scipy's eigsh + the formula.
+fn hks_rows(options: &PeerOptions, stage: &Stage) -> Vec<PeerRow> {
     let mut rows = Vec::new();
     for &level in &options.hks_levels {
         let n = generate::icosphere_vertex_count(level);
@@ -340,14 +384,11 @@ pub fn run(options: &PeerOptions) -> Result<PeersReport, BenchError> {
         let eigs = HKS_EIGS.min(n / 10).max(1).to_string();
         eprintln!("==> peers: HKS at {n} vertices");
         let load = bench::load_average();
-        let cmd = owned(&["hks", &mesh, "--eigs", &eigs, "-o", &w]);
-        let wfem = wfem_run(&cmd);
-        let peer_run = match why_not(&["numpy", "scipy"]) {
-            Some(reason) => Err(reason),
-            None => ctx.measure(&ctx.peer_cmd(&["hks", &mesh, "--k", &eigs, "--out", &p])),
-        };
+        let cmd = owned(&["hks", &mesh, "--eigenpairs", &eigs, "-o", &w]);
+        let wfem = stage.wfem_run(&cmd);
+        let peer_run = stage.peer_run(&["numpy", "scipy"], &["hks", &mesh, "--k", &eigs, "--out", &p]);
         let max_rel_diff = (wfem.is_ok() && peer_run.is_ok())
-            .then(|| ctx.compare(&w, &p))
+            .then(|| stage.ctx.compare(&w, &p))
             .flatten();
         rows.push(PeerRow {
             task: format!("HKS, k = {eigs}, 16 automatic times"),
@@ -364,6 +405,12 @@ pub fn run(options: &PeerOptions) -> Result<PeersReport, BenchError> {
         });
     }
 
+    rows
+}
+
+/// The operator rows (whole process) and assembly alone (in process) against libigl's.
+fn operator_rows(options: &PeerOptions, stage: &Stage) -> Result<(Vec<PeerRow>, Vec<AssemblyRow>), BenchError> {
+    let mut rows = Vec::new();
     let mut assembly = Vec::new();
     for &level in &options.operator_levels {
         let n = generate::icosphere_vertex_count(level);
@@ -371,11 +418,9 @@ pub fn run(options: &PeerOptions) -> Result<PeersReport, BenchError> {
         eprintln!("==> peers: operators at {n} vertices");
         let load = bench::load_average();
         let cmd = owned(&["operators", &mesh, "--out", &format!("ops_wfem{level}")]);
-        let wfem = wfem_run(&cmd);
-        let peer_run = match why_not(&["numpy", "scipy"]) {
-            Some(reason) => Err(reason),
-            None => ctx.measure(&ctx.peer_cmd(&["operators", &mesh, "--out", &format!("ops_peer{level}")])),
-        };
+        let wfem = stage.wfem_run(&cmd);
+        let out = format!("ops_peer{level}");
+        let peer_run = stage.peer_run(&["numpy", "scipy"], &["operators", &mesh, "--out", &out]);
         let source = peer_run
             .as_ref()
             .ok()
@@ -413,6 +458,12 @@ pub fn run(options: &PeerOptions) -> Result<PeersReport, BenchError> {
         });
     }
 
+    Ok((rows, assembly))
+}
+
+/// The K_t f rows: `wfem heat` against CRAM-16 on SuperLU.
+fn heat_rows(options: &PeerOptions, stage: &Stage) -> Vec<PeerRow> {
+    let mut rows = Vec::new();
     for &level in &options.heat_levels {
         let n = generate::icosphere_vertex_count(level);
         let mesh = format!("sphere{level}.off");
@@ -424,19 +475,19 @@ pub fn run(options: &PeerOptions) -> Result<PeersReport, BenchError> {
         let cmd = owned(&[
             "heat", &mesh, "--t", &t, "--field", &field, "--method", "fast", "-o", &w,
         ]);
-        let wfem = wfem_run(&cmd);
+        let wfem = stage.wfem_run(&cmd);
         let peer_run = if level > options.heat_peer_max_level {
             Err("not run at this size (minutes and many GB)".into())
         } else {
-            match why_not(&["numpy", "scipy"]) {
-                Some(reason) => Err(reason),
-                None => ctx.measure(&ctx.peer_cmd(&[
+            stage.peer_run(
+                &["numpy", "scipy"],
+                &[
                     "heat", &mesh, "--t", &t, "--field", &field, "--method", "cram16", "--out", &p,
-                ])),
-            }
+                ],
+            )
         };
         let max_rel_diff = (wfem.is_ok() && peer_run.is_ok())
-            .then(|| ctx.compare(&w, &p))
+            .then(|| stage.ctx.compare(&w, &p))
             .flatten();
         rows.push(PeerRow {
             task: format!("K_t f, t = {t}, f = x (wfem: fast path)"),
@@ -450,14 +501,7 @@ pub fn run(options: &PeerOptions) -> Result<PeersReport, BenchError> {
             target: None,
         });
     }
-    machine.load.1 = bench::load_average();
-    Ok(PeersReport {
-        versions,
-        rows,
-        assembly,
-        machine,
-        repeat: ctx.repeat,
-    })
+    rows
 }
 
 fn ratio(a: f64, b: f64) -> String {
@@ -536,69 +580,7 @@ pub fn markdown(report: &PeersReport) -> String {
     .iter()
     .map(|h| h.to_string())
     .collect();
-    let mut rows = Vec::new();
-    for r in &report.rows {
-        let (wt, wm) = match &r.wfem {
-            Ok(run) => (
-                bench::format_seconds(run.wall),
-                bench::format_bytes(run.maxrss as usize),
-            ),
-            Err(e) => (format!("not run: {e}"), "—".into()),
-        };
-        let (pt, pm) = match &r.peer_run {
-            Ok(run) => (
-                bench::format_seconds(run.wall),
-                bench::format_bytes(run.maxrss as usize),
-            ),
-            Err(e) => (e.clone(), "—".into()),
-        };
-        let both = r.wfem.as_ref().ok().zip(r.peer_run.as_ref().ok());
-        let (tr, mr) = match both {
-            Some((w, p)) => (
-                ratio(p.wall, w.wall),
-                format!("{:.2}", w.maxrss as f64 / p.maxrss as f64),
-            ),
-            None => ("—".into(), "—".into()),
-        };
-        let target = match (r.target, both) {
-            (Some((time, memory)), Some((w, p))) => {
-                let time_ok = p.wall / w.wall >= time;
-                let mem_ok = memory.is_none_or(|mm| (w.maxrss as f64) <= mm * p.maxrss as f64);
-                let what = match memory {
-                    Some(mm) => format!("≥ {time}×, memory ≤ {mm}×"),
-                    None => format!("≥ {time}×"),
-                };
-                format!("{what}: {}", if time_ok && mem_ok { "**met**" } else { "**not met**" })
-            }
-            (Some(_), None) => "not measured".into(),
-            (None, _) if r.task.starts_with("K_t f") && r.n >= 655_362 => match &r.wfem {
-                Ok(w) => format!(
-                    "peak ≤ 2 GiB: {}",
-                    if w.maxrss <= HEAT_MEMORY_BOUND {
-                        "**met**"
-                    } else {
-                        "**not met**"
-                    }
-                ),
-                Err(_) => "not measured".into(),
-            },
-            (None, _) => "—".into(),
-        };
-        rows.push(vec![
-            r.task.clone(),
-            bench::format_count(r.n),
-            wt,
-            wm,
-            r.peer.clone(),
-            pt,
-            pm,
-            tr,
-            mr,
-            r.max_rel_diff.map_or("—".into(), |d| format!("{d:.1e}")),
-            load(r.load),
-            target,
-        ]);
-    }
+    let rows: Vec<Vec<String>> = report.rows.iter().map(|r| peer_row(r, &load)).collect();
     s.push_str(&bench::table(&header, &rows));
     let _ = writeln!(
         s,
@@ -610,53 +592,125 @@ pub fn markdown(report: &PeersReport) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    if !report.assembly.is_empty() {
-        let _ = writeln!(s, "### Assembly alone, in process\n");
-        let _ = writeln!(
-            s,
-            "`mesh_fem::assemble` (L, B and the lumped D; median of up to 5 calls in this \
-             process) against the peer's own time for L and B (`kernel_seconds` of `peers.py \
-             operators`: `igl.cotmatrix` + `igl.massmatrix(..., MASSMATRIX_TYPE_FULL)`, file \
-             reading excluded on both sides). Target of issue #17: ≥ 6× at 655K vertices.\n"
-        );
-        let header: Vec<String> = ["n", "wfem assemble", "peer", "peer L + B", "ratio", "target"]
-            .iter()
-            .map(|h| h.to_string())
-            .collect();
-        let rows: Vec<Vec<String>> = report
-            .assembly
-            .iter()
-            .map(|a| {
-                let (pt, r, target) = match &a.peer_seconds {
-                    Ok(p) => {
-                        let target = if a.n >= 655_362 && a.peer == "libigl" {
-                            format!(
-                                "≥ 6×: {}",
-                                if p / a.wfem_seconds >= 6.0 {
-                                    "**met**"
-                                } else {
-                                    "**not met**"
-                                }
-                            )
-                        } else {
-                            "—".into()
-                        };
-                        (bench::format_seconds(*p), ratio(*p, a.wfem_seconds), target)
-                    }
-                    Err(e) => (e.clone(), "—".into(), "not measured".into()),
-                };
-                vec![
-                    bench::format_count(a.n),
-                    bench::format_seconds(a.wfem_seconds),
-                    a.peer.clone(),
-                    pt,
-                    r,
-                    target,
-                ]
-            })
-            .collect();
-        s.push_str(&bench::table(&header, &rows));
+    s.push_str(&assembly_table(report));
+    s
+}
+
+/// One row of the peers table.
+fn peer_row(r: &PeerRow, load: &dyn Fn(Option<f64>) -> String) -> Vec<String> {
+    let (wt, wm) = match &r.wfem {
+        Ok(run) => (
+            bench::format_seconds(run.wall),
+            bench::format_bytes(run.maxrss as usize),
+        ),
+        Err(e) => (format!("not run: {e}"), "—".into()),
+    };
+    let (pt, pm) = match &r.peer_run {
+        Ok(run) => (
+            bench::format_seconds(run.wall),
+            bench::format_bytes(run.maxrss as usize),
+        ),
+        Err(e) => (e.clone(), "—".into()),
+    };
+    let both = r.wfem.as_ref().ok().zip(r.peer_run.as_ref().ok());
+    let (tr, mr) = match both {
+        Some((w, p)) => (
+            ratio(p.wall, w.wall),
+            format!("{:.2}", w.maxrss as f64 / p.maxrss as f64),
+        ),
+        None => ("—".into(), "—".into()),
+    };
+    let target = match (r.target, both) {
+        (Some((time, memory)), Some((w, p))) => {
+            let time_ok = p.wall / w.wall >= time;
+            let mem_ok = memory.is_none_or(|mm| (w.maxrss as f64) <= mm * p.maxrss as f64);
+            let what = match memory {
+                Some(mm) => format!("≥ {time}×, memory ≤ {mm}×"),
+                None => format!("≥ {time}×"),
+            };
+            format!("{what}: {}", if time_ok && mem_ok { "**met**" } else { "**not met**" })
+        }
+        (Some(_), None) => "not measured".into(),
+        (None, _) if r.task.starts_with("K_t f") && r.n >= 655_362 => match &r.wfem {
+            Ok(w) => format!(
+                "peak ≤ 2 GiB: {}",
+                if w.maxrss <= HEAT_MEMORY_BOUND {
+                    "**met**"
+                } else {
+                    "**not met**"
+                }
+            ),
+            Err(_) => "not measured".into(),
+        },
+        (None, _) => "—".into(),
+    };
+    vec![
+        r.task.clone(),
+        bench::format_count(r.n),
+        wt,
+        wm,
+        r.peer.clone(),
+        pt,
+        pm,
+        tr,
+        mr,
+        r.max_rel_diff.map_or("—".into(), |d| format!("{d:.1e}")),
+        load(r.load),
+        target,
+    ]
+}
+
+/// The in-process assembly table (empty without assembly rows).
+fn assembly_table(report: &PeersReport) -> String {
+    let mut s = String::new();
+    if report.assembly.is_empty() {
+        return s;
     }
+    let _ = writeln!(s, "### Assembly alone, in process\n");
+    let _ = writeln!(
+        s,
+        "`mesh_fem::assemble` (L, B and the lumped D; median of up to 5 calls in this \
+         process) against the peer's own time for L and B (`kernel_seconds` of `peers.py \
+         operators`: `igl.cotmatrix` + `igl.massmatrix(..., MASSMATRIX_TYPE_FULL)`, file \
+         reading excluded on both sides). Target of issue #17: ≥ 6× at 655K vertices.\n"
+    );
+    let header: Vec<String> = ["n", "wfem assemble", "peer", "peer L + B", "ratio", "target"]
+        .iter()
+        .map(|h| h.to_string())
+        .collect();
+    let rows: Vec<Vec<String>> = report
+        .assembly
+        .iter()
+        .map(|a| {
+            let (pt, r, target) = match &a.peer_seconds {
+                Ok(p) => {
+                    let target = if a.n >= 655_362 && a.peer == "libigl" {
+                        format!(
+                            "≥ 6×: {}",
+                            if p / a.wfem_seconds >= 6.0 {
+                                "**met**"
+                            } else {
+                                "**not met**"
+                            }
+                        )
+                    } else {
+                        "—".into()
+                    };
+                    (bench::format_seconds(*p), ratio(*p, a.wfem_seconds), target)
+                }
+                Err(e) => (e.clone(), "—".into(), "not measured".into()),
+            };
+            vec![
+                bench::format_count(a.n),
+                bench::format_seconds(a.wfem_seconds),
+                a.peer.clone(),
+                pt,
+                r,
+                target,
+            ]
+        })
+        .collect();
+    s.push_str(&bench::table(&header, &rows));
     s
 }
 

@@ -122,6 +122,18 @@ pub fn markdown(report: &Report) -> String {
         o.repetitions, o.t
     );
 
+    s.push_str(&table2(report));
+    s.push_str(&figure3(report));
+    s.push_str(&figure2(report));
+    s.push_str(&scaling(report));
+    s.push_str(&targets(report));
+    s.push_str(&accuracy(report));
+    s
+}
+
+/// The paper's Table 2: time to build (L, B) and to compute K_t f, beside the paper's numbers.
+fn table2(report: &Report) -> String {
+    let mut s = String::new();
     // Table 2.
     let _ = writeln!(
         s,
@@ -189,6 +201,12 @@ pub fn markdown(report: &Report) -> String {
             .join("; ")
     });
 
+    s
+}
+
+/// The paper's Figure 3: the spectral truncation error.
+fn figure3(report: &Report) -> String {
+    let mut s = String::new();
     // Figure 3.
     let f3 = &report.figure3;
     let _ = writeln!(s, "### Figure 3 of the paper: spectral truncation error\n");
@@ -217,6 +235,12 @@ pub fn markdown(report: &Report) -> String {
     s.push_str(&table(&header, &rows));
     s.push('\n');
 
+    s
+}
+
+/// The paper's Figure 2(c,d): condition numbers of the shifted matrices.
+fn figure2(report: &Report) -> String {
+    let mut s = String::new();
     // Figure 2.
     let _ = writeln!(
         s,
@@ -268,6 +292,13 @@ pub fn markdown(report: &Report) -> String {
         s.push('\n');
     }
 
+    s
+}
+
+/// Time and memory against n, with fitted exponents.
+fn scaling(report: &Report) -> String {
+    let mut s = String::new();
+    let o = &report.options;
     // Scaling.
     let _ = writeln!(s, "### Scaling with n\n");
     let _ = writeln!(
@@ -318,6 +349,13 @@ pub fn markdown(report: &Report) -> String {
         let _ = writeln!(s, "Skipped (memory): {}.\n", report.skipped.join("; "));
     }
 
+    s
+}
+
+/// Issue #4's targets: against scipy and one backward-Euler step.
+fn targets(report: &Report) -> String {
+    let mut s = String::new();
+    let o = &report.options;
     // Issue #4's performance targets.
     let _ = writeln!(
         s,
@@ -372,6 +410,12 @@ pub fn markdown(report: &Report) -> String {
     s.push_str(&table(&header, &rows));
     s.push('\n');
 
+    s
+}
+
+/// Accuracy of every method against the dense reference.
+fn accuracy(report: &Report) -> String {
+    let mut s = String::new();
     // Accuracy.
     let acc = &report.accuracy;
     let _ = writeln!(s, "### Accuracy against the dense reference\n");

@@ -13,7 +13,7 @@
 //!    of the ground truth (null vertices without a preimage, e.g. removed by sampling, are
 //!    ignored).
 //! 2. **Robustness** of the dense descriptors DHK1, DHK2, DHK3 and SI-HKS (the default of
-//!    [`shape_retrieval::model::DescriptorSpec`], area time unit): the average relative L2 distance
+//!    [`shape_retrieval::descriptor::Descriptor`], area time unit): the average relative L2 distance
 //!    `‖f_X(x) − f_Y(y)‖/‖f_X(x)‖` over all ground-truth pairs
 //!    ([`shape_retrieval::features::descriptor_distance`]), Table 4 style.
 //! 3. **Retrieval** (Table 5): every [`Method`] of the subset through the protocols of
@@ -26,25 +26,27 @@
 //! scale-covariant descriptors are *expected* to fail on the `scale` class, while DHK3 and
 //! SI-HKS should not.
 
-use crate::protocol::{
-    self, leave_one_out, shrec_protocol, EigenCache, LooReport, ShapeFile, ShrecReport, PAPER_TABLE5,
-};
+use crate::protocol::{self, leave_one_out, shrec_protocol, EigenCache, LooReport, ShapeFile, ShrecReport};
 use crate::synth::{generate, Class, GenerateOptions, Manifest};
 use crate::BenchError;
 use faer::Mat;
 use mesh_fem::graph::EdgeGraph;
 use rayon::prelude::*;
-use shape_retrieval::bof::Assignment;
-use shape_retrieval::descriptor::FeatureDetector;
-use shape_retrieval::distance::BagDistance;
+use shape_retrieval::descriptor::{Descriptor, FeatureDetector};
 use shape_retrieval::features::{descriptor_distance, repeatability, FeatureSet};
 use shape_retrieval::hks::TimeSampling;
-use shape_retrieval::model::{
-    BagSettings, DescriptorSettings, DescriptorSpec, GlobalSignature, RetrievalSettings, TrainingParams, VertexWeights,
-};
+use shape_retrieval::model::DescriptorSettings;
 use shape_retrieval::RetrievalError;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+mod methods;
+mod report;
+mod tosca;
+
+pub use methods::{methods, Method, VocabularySource};
+
+pub use report::{markdown, verdicts};
+pub use tosca::{tosca_eval, tosca_markdown, ToscaEval};
 
 /// Which part of the benchmark to run (parsed from `default` / `small`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -137,202 +139,6 @@ const NUM_TIMES: usize = 6;
 const RADIUS_FRACTION: f64 = 0.05;
 /// Columns of the robustness table.
 const ROBUSTNESS_COLUMNS: [&str; 4] = ["DHK1", "DHK2", "DHK3", "SI-HKS"];
-
-/// Where a method's vocabulary is trained.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum VocabularySource {
-    /// On the null shapes of the benchmark (the clean shapes of the indexed collection).
-    NullShapes,
-    /// On [`protocol::outside_files`]: shapes in neither the benchmark nor TOSCA-76.
-    Outside,
-}
-
-/// One retrieval method of the report.
-#[derive(Clone, Debug)]
-pub struct Method {
-    /// Short name.
-    pub name: String,
-    /// What it is / what it tests.
-    pub note: String,
-    /// Its settings.
-    pub settings: RetrievalSettings,
-    /// Where its vocabulary is trained for the SHREC tables.
-    pub vocabulary: VocabularySource,
-    /// Also run TOSCA-76 leave-one-out (default subset only).
-    pub tosca: bool,
-}
-
-/// The methods of a subset: the default recipe (with both vocabularies), Shape Google SG1/SG2 as
-/// in the paper (HKS at 6 global times, no z-scoring, L1), and on the default subset the
-/// ablations of the robustness ideas.
-pub fn methods(subset: Subset, k: usize, hks_times: &[f64]) -> Vec<Method> {
-    let with_k = |mut s: RetrievalSettings| {
-        s.descriptor.eigenpairs = k;
-        s
-    };
-    let default = with_k(RetrievalSettings::default());
-    let shape_google = |descriptor: DescriptorSpec| {
-        with_k(RetrievalSettings {
-            descriptor: DescriptorSettings {
-                eigenpairs: k,
-                laplacian: Default::default(),
-                descriptor,
-                smoothing: None,
-                despiking: None,
-                denoising: None,
-                hole_filling: None,
-                topology_repair: None,
-                refinement: None,
-            },
-            // Shape Google: 48 words, raw descriptors, plain area-weighted bags, L1.
-            training: TrainingParams {
-                words: 48,
-                standardize: false,
-                ..Default::default()
-            },
-            bags: BagSettings {
-                weights: VertexWeights::Area,
-                assignment: Assignment::Normalized,
-                distance: BagDistance::L1,
-                global: None,
-                spatial: None,
-            },
-        })
-    };
-    let variant = |f: &dyn Fn(&mut RetrievalSettings)| {
-        let mut s = default.clone();
-        f(&mut s);
-        s
-    };
-    let method = |name: &str, note: &str, settings, vocabulary, tosca| Method {
-        name: name.into(),
-        note: note.into(),
-        settings,
-        vocabulary,
-        tosca,
-    };
-    let mut out = vec![
-        method(
-            "wFEM SI-HKS (default)",
-            "the CLI's defaults; vocabulary trained on the null shapes",
-            default.clone(),
-            VocabularySource::NullShapes,
-            false,
-        ),
-        method(
-            "SG1 (ours)",
-            "Shape Google: DHK1 (lumped kernel, Eq. (7)) at 6 global times, L1, no z-scoring",
-            shape_google(DescriptorSpec::Dhk1 {
-                times: TimeSampling::Explicit(hks_times.to_vec()),
-            }),
-            VocabularySource::NullShapes,
-            false,
-        ),
-        method(
-            "SG2 (ours)",
-            "Shape Google: DHK2 (wFEM kernel, Eq. (6)) at 6 global times, L1, no z-scoring",
-            shape_google(DescriptorSpec::Dhk2 {
-                times: TimeSampling::Explicit(hks_times.to_vec()),
-            }),
-            VocabularySource::NullShapes,
-            false,
-        ),
-    ];
-    if subset == Subset::Small {
-        return out;
-    }
-    out.insert(
-        1,
-        method(
-            "wFEM SI-HKS, outside vocabulary",
-            "the CLI's defaults with a vocabulary trained on 54 shapes outside the benchmark",
-            default.clone(),
-            VocabularySource::Outside,
-            true,
-        ),
-    );
-    let ablations: Vec<(&str, &str, RetrievalSettings)> = vec![
-        (
-            "DHK3 (old CLI)",
-            "the CLI before issue #13: DHK3 at 6 times in units of 1/λ_max, L1, no z-scoring",
-            shape_google(DescriptorSpec::dhk3_default()),
-        ),
-        (
-            "previous default",
-            "the default before hole filling and capped areas: spike removal and denoising, area weights",
-            variant(&|s| {
-                s.descriptor.hole_filling = None;
-                s.bags.weights = VertexWeights::Area;
-            }),
-        ),
-        (
-            "no cleaning",
-            "default without spike removal, hole filling and denoising",
-            variant(&|s| {
-                s.descriptor.despiking = None;
-                s.descriptor.hole_filling = None;
-                s.descriptor.denoising = None;
-            }),
-        ),
-        (
-            "no hole filling",
-            "default without hole filling",
-            variant(&|s| s.descriptor.hole_filling = None),
-        ),
-        (
-            "no denoising",
-            "default without denoising",
-            variant(&|s| s.descriptor.denoising = None),
-        ),
-        (
-            "no spike removal",
-            "default without spike removal",
-            variant(&|s| s.descriptor.despiking = None),
-        ),
-        (
-            "area weights",
-            "default with plain (uncapped) area weights",
-            variant(&|s| s.bags.weights = VertexWeights::Area),
-        ),
-        (
-            "no z-scoring",
-            "default without per-dimension z-scoring",
-            variant(&|s| s.training.standardize = false),
-        ),
-        (
-            "L1",
-            "default with the L1 distance",
-            variant(&|s| s.bags.distance = BagDistance::L1),
-        ),
-        (
-            "+ Shape-DNA (w = 1)",
-            "default fused with ln(λ_i A), i = 1…20, weight 1",
-            variant(&|s| {
-                s.bags.global = Some(GlobalSignature {
-                    kind: Default::default(),
-                    eigenvalues: 20,
-                    weight: 1.0,
-                })
-            }),
-        ),
-        (
-            "64 words",
-            "default with a vocabulary of 64 words",
-            variant(&|s| s.training.words = 64),
-        ),
-        (
-            "boundary damping (3 hops)",
-            "vertex weights × smoothstep(hops to the boundary / 3)",
-            variant(&|s| s.bags.weights = VertexWeights::BoundaryDamped { hops: 3 }),
-        ),
-    ];
-    out.extend(
-        ablations
-            .into_iter()
-            .map(|(n, note, s)| method(n, note, s, VocabularySource::Outside, true)),
-    );
-    out
-}
 
 /// One row of a table: a class (or `null`) and strength with one value per column
 /// (`None` where nothing could be averaged).
@@ -493,10 +299,10 @@ fn analyse(
         TimeSampling::Explicit(dhk3_times.to_vec()),
     );
     for spec in [
-        DescriptorSpec::Dhk1 { times: hks.clone() },
-        DescriptorSpec::Dhk2 { times: hks },
-        DescriptorSpec::Dhk3 { times: dhk3 },
-        DescriptorSpec::default(),
+        Descriptor::Dhk1 { times: hks.clone() },
+        Descriptor::Dhk2 { times: hks },
+        Descriptor::Dhk3 { times: dhk3 },
+        Descriptor::default(),
     ] {
         dense.push(
             spec.compute(shape)
@@ -593,19 +399,49 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
         tables_3_4(&files, &shapes, &ground_truth, &analysed, &nulls, &null_of)?;
 
     // Table 5: retrieval.
-    let clean_files: Vec<ShapeFile> = protocol::tosca_files(&meshes_dir)?
+    let (retrieval, n_clean, n_outside) = table_5(opts, &files, &nulls, &nulls_wanted, shapes, &plain, &hks_times)?;
+    let n_features = |d: usize| mean(&analysed.iter().map(|a| a.features[d].len() as f64).collect::<Vec<_>>());
+    Ok(EvalReport {
+        subset: subset.name().into(),
+        n_null: nulls.len(),
+        n_transformed: files.len() - nulls.len(),
+        n_clean,
+        n_outside,
+        eigenpairs: k,
+        mean_features: [n_features(0).unwrap_or(0.0), n_features(1).unwrap_or(0.0)],
+        repeatability: repeatability_rows,
+        robustness: robustness_rows,
+        retrieval,
+    })
+}
+
+/// Table 5: every retrieval method of the subset through the protocols, the shapes prepared
+/// once per kind of preparation (the plain `shapes` first). Returns the reports and the sizes
+/// of the clean and the outside collections.
+#[allow(clippy::too_many_arguments)]
+fn table_5(
+    opts: &EvalOptions,
+    files: &[ShapeFile],
+    nulls: &[usize],
+    nulls_wanted: &[String],
+    shapes: Vec<protocol::BenchShape>,
+    plain: &DescriptorSettings,
+    hks_times: &[f64],
+) -> Result<(Vec<MethodReport>, usize, usize), BenchError> {
+    let (subset, meshes_dir, k) = (opts.subset, &opts.meshes_dir, opts.subset.eigenpairs());
+    let clean_files: Vec<ShapeFile> = protocol::tosca_files(meshes_dir)?
         .into_iter()
         .filter(|f| subset == Subset::Default || nulls_wanted.contains(&f.family))
         .collect();
     let clean_families: Vec<String> = clean_files.iter().map(|f| f.family.clone()).collect();
-    let clean = protocol::load_shapes(clean_files.clone(), &plain, &opts.cache)?;
+    let clean = protocol::load_shapes(clean_files.clone(), plain, &opts.cache)?;
     let outside = match subset {
-        Subset::Default => protocol::load_shapes(protocol::outside_files(&meshes_dir)?, &plain, &opts.cache)?,
+        Subset::Default => protocol::load_shapes(protocol::outside_files(meshes_dir)?, plain, &opts.cache)?,
         Subset::Small => Vec::new(),
     };
     // Methods that prepare the shapes alike (spike removal, denoising, smoothing) share one
     // set of prepared shapes and eigenbases; one set is held at a time, the plain one first.
-    let methods = methods(subset, k, &hks_times);
+    let methods = methods(subset, k, hks_times);
     let preparation = |m: &Method| DescriptorSettings {
         eigenpairs: k,
         despiking: m.settings.descriptor.despiking,
@@ -629,14 +465,12 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
     let mut sets = Some((shapes, clean, outside));
     for group in &groups {
         let (mut g_shapes, mut g_clean, mut g_outside) = match sets.take() {
-            Some(plain_sets) if *group == plain => plain_sets,
+            Some(plain_sets) if group == plain => plain_sets,
             _ => (
-                protocol::load_shapes(files.clone(), group, &opts.cache)?,
+                protocol::load_shapes(files.to_vec(), group, &opts.cache)?,
                 protocol::load_shapes(clean_files.clone(), group, &opts.cache)?,
                 match subset {
-                    Subset::Default => {
-                        protocol::load_shapes(protocol::outside_files(&meshes_dir)?, group, &opts.cache)?
-                    }
+                    Subset::Default => protocol::load_shapes(protocol::outside_files(meshes_dir)?, group, &opts.cache)?,
                     Subset::Small => Vec::new(),
                 },
             ),
@@ -649,8 +483,8 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
             reports[i] = Some(run_method(
                 m,
                 &mut g_shapes,
-                &files,
-                &nulls,
+                files,
+                nulls,
                 &mut g_clean,
                 &clean_families,
                 &mut g_outside,
@@ -658,20 +492,7 @@ pub fn run(opts: &EvalOptions) -> Result<EvalReport, BenchError> {
             )?);
         }
     }
-    let retrieval: Vec<MethodReport> = reports.into_iter().flatten().collect();
-    let n_features = |d: usize| mean(&analysed.iter().map(|a| a.features[d].len() as f64).collect::<Vec<_>>());
-    Ok(EvalReport {
-        subset: subset.name().into(),
-        n_null: nulls.len(),
-        n_transformed: files.len() - nulls.len(),
-        n_clean,
-        n_outside,
-        eigenpairs: k,
-        mean_features: [n_features(0).unwrap_or(0.0), n_features(1).unwrap_or(0.0)],
-        repeatability: repeatability_rows,
-        robustness: robustness_rows,
-        retrieval,
-    })
+    Ok((reports.into_iter().flatten().collect(), n_clean, n_outside))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -853,365 +674,4 @@ fn log_spaced(a: f64, b: f64, num: usize) -> Vec<f64> {
     (0..num)
         .map(|j| (la + (lb - la) * j as f64 / (num - 1).max(1) as f64).exp())
         .collect()
-}
-
-fn fmt(v: Option<f64>, digits: usize) -> String {
-    v.filter(|x| x.is_finite())
-        .map_or_else(|| "–".into(), |v| format!("{v:.digits$}"))
-}
-
-fn table(out: &mut String, header: &[&str], rows: &[Row], digits: usize) {
-    let _ = writeln!(out, "| class | s | {} |", header.join(" | "));
-    let _ = writeln!(out, "|---|---|{}", "---|".repeat(header.len()));
-    for r in rows {
-        let vals: Vec<String> = r.values.iter().map(|v| fmt(*v, digits)).collect();
-        let _ = writeln!(out, "| {} | {} | {} |", r.class, r.strength, vals.join(" | "));
-    }
-    // Average over classes per strength (the paper's Table 4 layout).
-    let mut strengths: Vec<u8> = rows.iter().map(|r| r.strength).collect();
-    strengths.sort_unstable();
-    strengths.dedup();
-    for s in strengths {
-        let vals: Vec<String> = (0..header.len())
-            .map(|c| {
-                fmt(
-                    mean(
-                        &rows
-                            .iter()
-                            .filter(|r| r.strength == s)
-                            .filter_map(|r| r.values[c])
-                            .collect::<Vec<_>>(),
-                    ),
-                    digits,
-                )
-            })
-            .collect();
-        let _ = writeln!(out, "| **average** | {s} | {} |", vals.join(" | "));
-    }
-}
-
-/// Mean of column `c` over the rows of `class`.
-fn class_mean(rows: &[Row], class: &str, c: usize) -> Option<f64> {
-    mean(
-        &rows
-            .iter()
-            .filter(|r| r.class == class)
-            .filter_map(|r| r.values[c])
-            .collect::<Vec<_>>(),
-    )
-}
-
-/// The claims of the paper, checked on our numbers (one line each).
-pub fn verdicts(report: &EvalReport) -> Vec<String> {
-    let mut out = Vec::new();
-    let holds = |h: bool| if h { "HOLDS" } else { "DOES NOT HOLD" };
-    for class in ["sampling", "topology", "localscale"] {
-        if let (Some(l), Some(w)) = (
-            class_mean(&report.robustness, class, 0),
-            class_mean(&report.robustness, class, 1),
-        ) {
-            out.push(format!(
-                "{class}: DHK2 (wFEM) {w:.4} vs DHK1 (lumped) {l:.4} mean relative distance → claim \"wFEM at least as robust\" {}",
-                holds(w <= l * 1.001)
-            ));
-        }
-    }
-    if report.robustness.iter().any(|r| r.class == "scale") {
-        let means: Vec<Option<f64>> = (0..4).map(|c| class_mean(&report.robustness, "scale", c)).collect();
-        let best = (0..4)
-            .filter_map(|c| means[c].map(|v| (c, v)))
-            .min_by(|a, b| a.1.total_cmp(&b.1));
-        if let Some((c, v)) = best {
-            out.push(format!(
-                "scale (robustness): lowest distance {} = {v:.4} → claim \"scale-invariant descriptor best on scale\" {}",
-                ROBUSTNESS_COLUMNS[c],
-                holds(c >= 2)
-            ));
-        }
-        let scale_map = |name: &str| {
-            report
-                .retrieval
-                .iter()
-                .find(|m| m.name.starts_with(name))
-                .map(|m| m.shrec.cumulative(|q| q.transform == Class::Scale)[4])
-        };
-        if let (Some(a), Some(b), Some(si)) = (scale_map("SG1"), scale_map("SG2"), scale_map("wFEM SI-HKS")) {
-            out.push(format!(
-                "scale (retrieval, ≤ 5): SI-HKS mAP {si:.3} vs SG1 {a:.3}, SG2 {b:.3} → claim \"scale-invariant descriptor best on scale\" {}",
-                holds(si >= a.max(b) - 1e-12)
-            ));
-        }
-    }
-    out
-}
-
-fn row5(values: [f64; 5], digits: usize) -> String {
-    values
-        .iter()
-        .map(|v| fmt(Some(*v), digits))
-        .collect::<Vec<_>>()
-        .join(" | ")
-}
-
-/// The markdown report.
-pub fn markdown(report: &EvalReport) -> String {
-    let mut out = String::new();
-    let _ = writeln!(out, "# SHREC'10-style evaluation of wFEM heat kernel descriptors\n");
-    let _ = writeln!(
-        out,
-        "Generated by `cargo xtask shrec-eval --subset {}` (protocols: `crates/shrec-bench/src/protocol.rs`). \
-         {} null shapes, {} transformed shapes, clean collection of {} TOSCA shapes, {} shapes outside both for \
-         outside vocabularies, k = {} eigenpairs. Mean feature count per shape: SHK1 {:.1}, SHK2 {:.1}.\n",
-        report.subset,
-        report.n_null,
-        report.n_transformed,
-        report.n_clean,
-        report.n_outside,
-        report.eigenpairs,
-        report.mean_features[0],
-        report.mean_features[1]
-    );
-    retrieval_markdown(&mut out, report);
-    let _ = writeln!(out, "## Claims of the paper on these data\n");
-    for v in verdicts(report) {
-        let _ = writeln!(out, "* {v}");
-    }
-    let _ = writeln!(
-        out,
-        "\n## Feature repeatability (higher is better; Table 3/4 style)\n\n\
-         Geodesic distances and the diameter are edge-graph (Dijkstra) approximations; R = 5 % of \
-         the double-sweep edge-graph diameter of the null shape.\n"
-    );
-    table(&mut out, &["SHK1", "SHK2"], &report.repeatability, 3);
-    let _ = writeln!(
-        out,
-        "\n## Descriptor robustness: mean ‖f_X(x) − f_Y(y)‖/‖f_X(x)‖ at corresponding points (lower is better; Table 4 style)\n\n\
-         DHK1/DHK2 at {NUM_TIMES} global times, DHK3 at {NUM_TIMES} times in units of 1/λ_max, SI-HKS = the retrieval \
-         default (area time unit).\n"
-    );
-    table(&mut out, &ROBUSTNESS_COLUMNS, &report.robustness, 4);
-    out
-}
-
-fn retrieval_markdown(out: &mut String, report: &EvalReport) {
-    let all = |_: &protocol::QueryResult| true;
-    let _ = writeln!(
-        out,
-        "## Retrieval, SHREC'10 protocol: cumulative mAP (%) for strength ≤ s (Table 5)\n\n\
-         Column ≤ s: the queries are the transformed shapes of strength ≤ s, the database is the null shapes and \
-         every transformed shape of strength ≤ s (all classes), relevant = the same null shape, the query itself \
-         excluded. The paper's rows are copied from its Table 5 (SHREC'10's own data: 13 null shapes, 715 queries); \
-         ours run on the synthetic data of `cargo xtask shrec`.\n"
-    );
-    let _ = writeln!(out, "| method | ≤1 | ≤2 | ≤3 | ≤4 | ≤5 |\n|---|---|---|---|---|---|");
-    for (name, note, v) in PAPER_TABLE5 {
-        let _ = writeln!(out, "| paper {name} ({note}) | {} |", row5(v, 2));
-    }
-    for m in &report.retrieval {
-        let _ = writeln!(
-            out,
-            "| **{}** | {} |",
-            m.name,
-            row5(m.shrec.cumulative(all).map(|x| 100.0 * x), 2)
-        );
-    }
-    let _ = writeln!(out, "\nMethods:\n");
-    for m in &report.retrieval {
-        let vocab = match m.vocabulary {
-            VocabularySource::NullShapes => "vocabulary on the null shapes",
-            VocabularySource::Outside => "vocabulary outside",
-        };
-        let _ = writeln!(out, "* **{}**: {} ({vocab}).", m.name, m.note);
-    }
-    let _ = writeln!(
-        out,
-        "\n### The same queries against the full database (every strength in the database), mAP (%)\n\n\
-         Here every strength-5 shape of the query's null counts as relevant to every query.\n\n\
-         | method | ≤1 | ≤2 | ≤3 | ≤4 | ≤5 |\n|---|---|---|---|---|---|"
-    );
-    for m in &report.retrieval {
-        let _ = writeln!(
-            out,
-            "| {} | {} |",
-            m.name,
-            row5(m.shrec.cumulative_full(all).map(|x| 100.0 * x), 2)
-        );
-    }
-    let _ = writeln!(
-        out,
-        "\n### The same queries against the clean collection ({} TOSCA shapes; relevant = same class), mAP (%)\n\n\
-         | method | ≤1 | ≤2 | ≤3 | ≤4 | ≤5 |\n|---|---|---|---|---|---|",
-        report.n_clean
-    );
-    for m in &report.retrieval {
-        let _ = writeln!(
-            out,
-            "| {} | {} |",
-            m.name,
-            row5(m.shrec.cumulative_clean(all).map(|x| 100.0 * x), 2)
-        );
-    }
-    if let Some(m) = report.retrieval.first() {
-        let _ = writeln!(
-            out,
-            "\n### Per transformation: {} (cumulative mAP for strength ≤ s; in brackets: against the clean collection)\n\n\
-             | transformation | ≤1 | ≤2 | ≤3 | ≤4 | ≤5 |\n|---|---|---|---|---|---|",
-            m.name
-        );
-        for t in m.shrec.transforms() {
-            let a = m.shrec.cumulative(|q| q.transform == t);
-            let b = m.shrec.cumulative_clean(|q| q.transform == t);
-            let cells: Vec<String> = (0..5)
-                .map(|i| format!("{} ({})", fmt(Some(a[i]), 3), fmt(Some(b[i]), 3)))
-                .collect();
-            let _ = writeln!(out, "| {} | {} |", t.name(), cells.join(" | "));
-        }
-        let families = m.shrec.families();
-        let _ = writeln!(
-            out,
-            "\n### Per class and transformation at strength ≤ 3: {} (cumulative mAP; **bold** below 0.80)\n\n| class | {} |\n|---|{}",
-            m.name,
-            m.shrec.transforms().iter().map(|t| t.name()).collect::<Vec<_>>().join(" | "),
-            "---|".repeat(m.shrec.transforms().len())
-        );
-        for f in &families {
-            let cells: Vec<String> = m
-                .shrec
-                .transforms()
-                .iter()
-                .map(|&t| {
-                    let v = m.shrec.cumulative(|q| &q.family == f && q.transform == t)[2];
-                    if v < 0.8 {
-                        format!("**{}**", fmt(Some(v), 3))
-                    } else {
-                        fmt(Some(v), 3)
-                    }
-                })
-                .collect();
-            let _ = writeln!(out, "| {f} | {} |", cells.join(" | "));
-        }
-    }
-    let tosca: Vec<&MethodReport> = report.retrieval.iter().filter(|m| m.tosca.is_some()).collect();
-    if !tosca.is_empty() {
-        let _ = writeln!(
-            out,
-            "\n## TOSCA-76 leave-one-out (each shape queries the other 75; relevant = same class)\n\n\
-             | method | vocabulary | mAP | worst class | per class |\n|---|---|---|---|---|"
-        );
-        for m in tosca {
-            if let Some([inside, outside]) = &m.tosca {
-                for (label, r) in [("the 76 (optimistic)", inside), ("outside (54 shapes)", outside)] {
-                    let worst = r.worst_family().map_or("–".into(), |(f, v)| format!("{f} {v:.3}"));
-                    let per: Vec<String> = r.per_family.iter().map(|(f, v)| format!("{f} {v:.3}")).collect();
-                    let _ = writeln!(
-                        out,
-                        "| {} | {label} | {:.4} | {worst} | {} |",
-                        m.name,
-                        r.map,
-                        per.join(", ")
-                    );
-                }
-            }
-        }
-    }
-    let _ = writeln!(out);
-}
-
-/// TOSCA-76 leave-one-out with given settings (`cargo xtask tosca-eval`).
-#[derive(Clone, Debug, PartialEq)]
-pub struct ToscaEval {
-    /// The settings evaluated.
-    pub settings: RetrievalSettings,
-    /// Number of outside training shapes.
-    pub n_outside: usize,
-    /// Vocabulary trained on the 76 with the settings' seed (what `wfem retrieval build` does).
-    pub inside: LooReport,
-    /// Vocabulary trained on the outside shapes with the settings' seed.
-    pub outside: LooReport,
-    /// mAP over the seeds `0 .. seeds` of k-means: (inside, outside) per seed.
-    pub over_seeds: Vec<(u64, f64, f64)>,
-}
-
-/// Runs TOSCA-76 leave-one-out: each of the 76 shapes queries the other 75, relevant = same
-/// class, with a vocabulary trained on the 76 (the CLI's `build` without `--vocab`) and with one
-/// trained on [`protocol::outside_files`]; then the same for k-means seeds `0 .. seeds`.
-///
-/// # Errors
-/// The first failure, naming the shape.
-pub fn tosca_eval(
-    meshes_dir: &Path,
-    settings: &RetrievalSettings,
-    cache: &EigenCache,
-    seeds: u64,
-) -> Result<ToscaEval, BenchError> {
-    let tosca_files = protocol::tosca_files(meshes_dir)?;
-    let families: Vec<String> = tosca_files.iter().map(|f| f.family.clone()).collect();
-    let mut tosca = protocol::load_shapes(tosca_files, &settings.descriptor, cache)?;
-    let mut outside = protocol::load_shapes(protocol::outside_files(meshes_dir)?, &settings.descriptor, cache)?;
-    let f_tosca = protocol::features(&mut tosca, settings, cache)?;
-    let f_outside = protocol::features(&mut outside, settings, cache)?;
-    let run = |seed: u64| -> Result<(LooReport, LooReport), BenchError> {
-        let mut s = settings.clone();
-        s.training.seed = seed;
-        let inside = protocol::train(&s, &f_tosca)?;
-        let outside = protocol::train(&s, &f_outside)?;
-        Ok((
-            leave_one_out(&protocol::index(&inside, &s, &f_tosca)?, &families)?,
-            leave_one_out(&protocol::index(&outside, &s, &f_tosca)?, &families)?,
-        ))
-    };
-    let (inside, outside_report) = run(settings.training.seed)?;
-    let over_seeds = (0..seeds)
-        .map(|seed| run(seed).map(|(a, b)| (seed, a.map, b.map)))
-        .collect::<Result<_, _>>()?;
-    Ok(ToscaEval {
-        settings: settings.clone(),
-        n_outside: outside.len(),
-        inside,
-        outside: outside_report,
-        over_seeds,
-    })
-}
-
-/// The markdown section of a [`ToscaEval`].
-pub fn tosca_markdown(t: &ToscaEval) -> String {
-    let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "## TOSCA-76 with the CLI's defaults (`cargo xtask tosca-eval`)\n\n\
-         Index = the 76 shapes of `tosca-bcicp-5k/TOSCA_Isometric`; each queries the other 75 (self excluded); \
-         relevant = same class (name without trailing digits). Settings: {}.\n",
-        serde_json::to_string(&t.settings).unwrap_or_default()
-    );
-    let _ = writeln!(out, "| vocabulary | mAP | worst class | per class |\n|---|---|---|---|");
-    for (label, r) in [
-        (
-            "trained on the 76 (`wfem retrieval build`; optimistic)".to_string(),
-            &t.inside,
-        ),
-        (
-            format!("trained on {} shapes outside (`build --vocab`)", t.n_outside),
-            &t.outside,
-        ),
-    ] {
-        let worst = r.worst_family().map_or("–".into(), |(f, v)| format!("{f} {v:.3}"));
-        let per: Vec<String> = r.per_family.iter().map(|(f, v)| format!("{f} {v:.3}")).collect();
-        let _ = writeln!(out, "| {label} | {:.4} | {worst} | {} |", r.map, per.join(", "));
-    }
-    if !t.over_seeds.is_empty() {
-        let stat = |v: Vec<f64>| {
-            let m = v.iter().sum::<f64>() / v.len() as f64;
-            let sd = (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / v.len() as f64).sqrt();
-            let min = v.iter().copied().fold(f64::INFINITY, f64::min);
-            format!("{m:.4} ± {sd:.4} (min {min:.4})")
-        };
-        let _ = writeln!(
-            out,
-            "\nOver k-means seeds 0…{}: vocabulary on the 76: {}; outside: {}.",
-            t.over_seeds.len() - 1,
-            stat(t.over_seeds.iter().map(|x| x.1).collect()),
-            stat(t.over_seeds.iter().map(|x| x.2).collect())
-        );
-    }
-    out
 }
