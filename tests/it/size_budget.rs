@@ -55,10 +55,6 @@ const FN_ALLOW: &[(&str, &str)] = &[
         "one match arm per transformation class; to split",
     ),
     (
-        "src/cli/approx.rs::approx",
-        "to split into validate, compute, write (issue #37)",
-    ),
-    (
         "src/cli/hks.rs::hks",
         "to split into validate, compute, write (issue #37)",
     ),
