@@ -182,7 +182,8 @@ pub enum NoiseRule {
     /// f is taken as clean: the anchors are f's persistent critical points and keep f's values
     /// (issue #24's rule); no noise estimate.
     Keep,
-    /// Always denoise at the GCV scale t*: the anchors are the persistent critical points of
+    /// Always denoise at the GCV scale t* (named `always`: `denoise` is a flag of `wfem
+    /// retrieval`): the anchors are the persistent critical points of
     /// `K_t* f`, their values `K_(t*/4) f` ([`ANCHOR_VALUE_TIME_FRACTION`]), and t* joins the
     /// scales.
     Denoise,
@@ -194,7 +195,7 @@ wfem_base::registry! {
             "estimate the noise (GCV); if smoothing lowers the estimated error, anchors and values from the denoised map (default)",
         NoiseRule::Keep = NoiseRule::Keep => "keep":
             "take f as clean: anchors at f's critical points keep f's values",
-        NoiseRule::Denoise = NoiseRule::Denoise => "denoise":
+        NoiseRule::Denoise = NoiseRule::Denoise => "always":
             "always take anchors and values from the denoised map at the GCV scale",
     }
 }

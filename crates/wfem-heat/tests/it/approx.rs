@@ -9,8 +9,7 @@ use nalgebra::{DMatrix, DVector};
 use wfem_heat::approx::{
     feature_approximation, fit_global_component, fit_to_values, geometric_times, multiscale_times,
     persistent_extremum_count, ranked_anchors, ApproxHint, ApproxParams, Coefficients, NoiseRule, Persistence,
-    ScaleSampling, ANCHOR_VALUE_TIME_FRACTION, DEFAULT_GCV_TIMES, NOISE_TOLERANCE, RESOLVED_OVERLAP,
-    WARN_RELATIVE_ERROR,
+    ScaleSampling, ANCHOR_VALUE_TIME_FRACTION, DEFAULT_GCV_TIMES, RESOLVED_OVERLAP, WARN_RELATIVE_ERROR,
 };
 use wfem_heat::method::Method;
 use wfem_heat::spectral::Eigenbasis;
