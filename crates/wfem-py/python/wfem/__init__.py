@@ -45,6 +45,7 @@ from ._choices import choices
 from ._heat import (
     APPROX_COEFFICIENTS,
     APPROX_SAMPLINGS,
+    APPROX_NOISE_RULES,
     KERNELS,
     MASSES,
     METHODS,
@@ -120,6 +121,7 @@ __all__ = [
     "choices",
     "APPROX_COEFFICIENTS",
     "APPROX_SAMPLINGS",
+    "APPROX_NOISE_RULES",
     "ApproximationWarning",
     # geodesic distances
     "GeodesicSolver",
