@@ -2,15 +2,17 @@
 
 use super::choice::choice;
 use super::heat::{far_exponent, prepare_kernel, times_pow2};
+use super::input::Input;
 use super::output::{short_label, short_labels, write_fields, Column, RenderArgs, Writing};
 use super::{limits, progress, read_usable, CliError, MassArgs, MeshArgs, Output, OutputFormat};
 use clap::Args;
+use mesh_fem::Mass;
 use serde_json::json;
 use std::io::Write;
 use std::path::PathBuf;
 use wfem_base::Choice;
 use wfem_heat::approx::{
-    feature_approximation, ApproxParams, Coefficients, FeatureApproximation, Persistence, ScaleSampling,
+    feature_approximation, ApproxParams, Coefficients, FeatureApproximation, NoiseRule, Persistence, ScaleSampling,
 };
 use wfem_heat::method::Method;
 use wfem_heat::HeatParams;
@@ -44,12 +46,18 @@ pub struct ApproxArgs {
     /// Coefficients of the global component.
     #[arg(long, value_parser = choice::<Coefficients>(), default_value = Coefficients::default_name())]
     pub coefficients: Coefficients,
+    /// What to do about noise in f: by default the noise level and a scale t* are estimated
+    /// from f (GCV), and when smoothing lowers the estimated error f_glob at t* is the denoised
+    /// map (t* is added to the scales and marked in the report).
+    #[arg(long, value_parser = choice::<NoiseRule>(), default_value = NoiseRule::default_name())]
+    pub noise: NoiseRule,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub mass: MassArgs,
-    /// Output file: .ply, .npy (+ .json sidecar with the scales, anchors and coefficients) or
-    /// .csv (f, then f_glob and f_loc at every scale, named with their t), or .png (one figure
-    /// each for f, f_glob and f_loc at the coarsest scale, anchors highlighted).
+    /// Output file: .ply, .npy (+ .json sidecar with the scales, anchors and coefficients, the
+    /// noise estimate and the chosen scale) or .csv (f, then f_glob and f_loc at every scale,
+    /// named with their t), or .png (one figure each for f, f_glob and f_loc at the chosen
+    /// scale of a denoised f, else at the coarsest scale; anchors highlighted).
     #[arg(short = 'o', long = "output", value_parser = Output::parse)]
     pub output: Output,
     #[command(flatten)]
@@ -58,8 +66,8 @@ pub struct ApproxArgs {
 }
 
 /// What defines every f_glob of a run, for the sidecar: the rule and its formula, the
-/// sampling, the anchors with their persistence and, per scale, t, the anchors with a
-/// coefficient and the coefficients.
+/// sampling, the anchors with their persistence and values, the noise estimate and the chosen
+/// scale and, per scale, t, the anchors with a coefficient and the coefficients.
 fn record(a: &FeatureApproximation) -> serde_json::Value {
     let scales: Vec<serde_json::Value> = a
         .scales
@@ -77,15 +85,28 @@ fn record(a: &FeatureApproximation) -> serde_json::Value {
             })
         })
         .collect();
+    let noise = a.noise.as_ref().map(|c| {
+        json!({
+            "sigma": c.noise,
+            "gcv_sigma": c.gcv_noise,
+            "t": c.t,
+            "smoothing_helps": c.smoothing_helps(),
+            "gcv_times": c.scores.len(),
+        })
+    });
     json!({
         "coefficients": a.coefficients.name(),
         "formula": a.coefficients.formula(),
         "sampling": a.sampling.name(),
+        "noise_rule": a.noise_rule.name(),
+        "noise": noise,
+        "chosen": a.chosen,
         "lambda_k": a.lambda_k,
         "lambda_max": a.lambda_max,
         "range": a.range,
         "threshold": a.threshold,
         "anchors": a.anchors,
+        "anchor_values": a.anchor_values,
         "anchor_persistence": a.anchor_persistence,
         "persistent_extrema": a.persistent_extrema,
         "scales": scales,
@@ -98,6 +119,14 @@ const PNG_FIGURES: [&str; 3] = ["f", "glob", "loc"];
 /// `wfem approx`: splits f into its global component on the persistent critical points and
 /// its local component at every scale, writes them and prints the per-scale report.
 pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let persistence = validate(args)?;
+    let run = compute(args, persistence)?;
+    write(args, &run, out)
+}
+
+/// The checks that need neither the mesh nor the field: the number of scales, the
+/// persistence and the output paths.
+fn validate(args: &ApproxArgs) -> Result<Persistence, CliError> {
     limits::count(
         "--scales",
         args.scales,
@@ -105,8 +134,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         limits::MAX_APPROX_SCALES,
         "number of scales t_i = (i/10)/λ_k (paper: 5 to 10)",
     )?;
-    let defaults = ApproxParams::default();
-    let persistence = match (args.persistence, defaults.persistence) {
+    let persistence = match (args.persistence, ApproxParams::default().persistence) {
         (Some(x), _) if args.absolute => Persistence::Absolute(x),
         (Some(x), _) => Persistence::Relative(x),
         (None, _) if args.absolute => return Err(CliError::Usage("--absolute needs --persistence".into())),
@@ -130,8 +158,22 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     if args.output.format == OutputFormat::Png {
         args.output.check(Some(&png_names), PNG_FIGURES.len(), &inputs)?;
     } else {
-        args.output.check(Some(&[]), 1 + 2 * args.scales, &inputs)?;
+        args.output.check(Some(&[]), 1 + 2 * (args.scales + 1), &inputs)?;
     }
+    Ok(persistence)
+}
+
+/// A decomposition with what it was computed from.
+struct Run {
+    input: Input,
+    f: Vec<f64>,
+    k: usize,
+    mass: Mass,
+    approx: FeatureApproximation,
+}
+
+/// Reads the mesh and the field, checks k, assembles and decomposes.
+fn compute(args: &ApproxArgs, persistence: Persistence) -> Result<Run, CliError> {
     let input = read_usable(&args.input)?;
     if input.volume.is_some() {
         return Err(CliError::Usage(format!(
@@ -153,7 +195,7 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
             why: "λ_k comes from a partial eigensolve of k pairs, which slows down sharply beyond n/10".into(),
         });
     }
-    limits::columns("--scales", 1 + 2 * args.scales, n)?;
+    limits::columns("--scales", 1 + 2 * (args.scales + 1), n)?;
     let mass = args.mass.mass()?;
     let ops = progress::run("assembling L, B, D", || input.assemble(mass.lumping()))?;
     let kernel = prepare_kernel(
@@ -176,24 +218,55 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         },
         coefficients: args.coefficients,
         sampling: args.sampling,
-        ..defaults
+        noise: args.noise,
+        ..ApproxParams::default()
     };
-    let mut approx = progress::run(format!("λ_{k}, anchors and {} scales", args.scales), || {
+    let mut approx = progress::run(format!("λ_{k}, noise, anchors and {} scales", args.scales), || {
         feature_approximation(&input.mesh, &kernel, &times_pow2(&f, -e), &params)
     })?;
     if e != 0 {
-        for s in &mut approx.scales {
-            s.global = times_pow2(&s.global, e);
-            s.local = times_pow2(&s.local, e);
-            s.coefficients = times_pow2(&s.coefficients, e);
-            s.linf_error *= 2f64.powi(e);
-        }
-        approx.threshold *= 2f64.powi(e);
-        approx.range *= 2f64.powi(e);
+        scale_back(&mut approx, e);
     }
     if let Some(w) = approx.warning() {
         progress::warn(&w.message(&|p, v| format!("--{p}{}", v.map(|v| format!(" {v}")).unwrap_or_default())));
     }
+    Ok(Run {
+        input,
+        f,
+        k,
+        mass,
+        approx,
+    })
+}
+
+/// Multiplies every value in units of f by 2^e (the field was decomposed at 2^−e).
+fn scale_back(approx: &mut FeatureApproximation, e: i32) {
+    let up = 2f64.powi(e);
+    for s in &mut approx.scales {
+        s.global = times_pow2(&s.global, e);
+        s.local = times_pow2(&s.local, e);
+        s.coefficients = times_pow2(&s.coefficients, e);
+        s.linf_error *= up;
+    }
+    approx.anchor_values = times_pow2(&approx.anchor_values, e);
+    approx.anchor_persistence = times_pow2(&approx.anchor_persistence, e);
+    approx.threshold *= up;
+    approx.range *= up;
+    if let Some(c) = &mut approx.noise {
+        c.noise *= up;
+        c.gcv_noise *= up;
+        c.smoothed = times_pow2(&c.smoothed, e);
+        c.residual
+            .iter_mut()
+            .chain(c.scores.iter_mut())
+            .for_each(|x| *x *= up * up);
+    }
+}
+
+/// The columns to write: f, then f_glob and f_loc at the figure's scale (PNG) or at every
+/// scale.
+fn columns(args: &ApproxArgs, run: &Run) -> Vec<Column> {
+    let (input, approx) = (&run.input, &run.approx);
     let field_name = args
         .field
         .file_name()
@@ -211,18 +284,24 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         "f",
         format!("f = {field_name} (anchors: persistent critical points)"),
         None,
-        &f,
+        &run.f,
     )];
     if args.output.format == OutputFormat::Png {
-        if let Some(s) = approx.scales.last() {
+        // A denoised f is shown at its chosen scale, where f_glob is the denoised map.
+        let figure = approx
+            .chosen
+            .and_then(|i| approx.scales.get(i))
+            .or(approx.scales.last());
+        if let Some(s) = figure {
             let label = short_label(s.t);
+            let what = if approx.chosen.is_some() { "denoised, " } else { "" };
             columns.push(column(
                 format!("f_glob_t{label}"),
                 "glob",
                 format!(
-                    "f_glob of {field_name}, t = {label} ({} anchors, {} mass)",
+                    "f_glob of {field_name}, {what}t = {label} ({} anchors, {} mass)",
                     approx.anchors.len(),
-                    mass.name()
+                    run.mass.name()
                 ),
                 Some(s.t),
                 &s.global,
@@ -235,36 +314,71 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 &s.local,
             ));
         }
-    } else {
-        let times: Vec<f64> = approx.scales.iter().map(|s| s.t).collect();
-        let labels = short_labels(&times);
-        for (s, label) in approx.scales.iter().zip(&labels) {
-            columns.push(column(
-                format!("f_glob_t{label}"),
-                "",
-                String::new(),
-                Some(s.t),
-                &s.global,
-            ));
-        }
-        for (s, label) in approx.scales.iter().zip(&labels) {
-            columns.push(column(
-                format!("f_loc_t{label}"),
-                "",
-                String::new(),
-                Some(s.t),
-                &s.local,
-            ));
-        }
+        return columns;
     }
+    let times: Vec<f64> = approx.scales.iter().map(|s| s.t).collect();
+    let labels = short_labels(&times);
+    for (s, label) in approx.scales.iter().zip(&labels) {
+        columns.push(column(
+            format!("f_glob_t{label}"),
+            "",
+            String::new(),
+            Some(s.t),
+            &s.global,
+        ));
+    }
+    for (s, label) in approx.scales.iter().zip(&labels) {
+        columns.push(column(
+            format!("f_loc_t{label}"),
+            "",
+            String::new(),
+            Some(s.t),
+            &s.local,
+        ));
+    }
+    columns
+}
+
+/// The sentence on the noise estimate of the report.
+fn noise_line(a: &FeatureApproximation) -> String {
+    let percent = |x: f64| if a.range > 0.0 { 100.0 * x / a.range } else { 0.0 };
+    match (&a.noise, a.chosen) {
+        (None, _) => format!(
+            "noise: not estimated (--noise {}): f taken as clean",
+            a.noise_rule.name()
+        ),
+        (Some(c), Some(i)) => format!(
+            "noise: σ̂ = {:.3e} ({:.2} % of the range of f); GCV scale t* = {:.6e} (scale {}, marked *): f_glob there \
+             is the denoised map, its anchors the persistent critical points of K_t* f with the values of K_(φt*) f, \
+             φ = {}",
+            c.noise,
+            percent(c.noise),
+            c.t,
+            i + 1,
+            ApproxParams::default().value_time_fraction
+        ),
+        (Some(c), None) => format!(
+            "noise: σ̂ = {:.3e} ({:.2} % of the range of f); smoothing at the GCV scale t* = {:.6e} would not lower \
+             the estimated error: f taken as clean",
+            c.noise,
+            percent(c.noise),
+            c.t
+        ),
+    }
+}
+
+/// Writes the files, then the report (a reader that stops early (`| head`) loses nothing
+/// but the report).
+fn write(args: &ApproxArgs, run: &Run, out: &mut dyn Write) -> Result<(), CliError> {
+    let (input, approx) = (&run.input, &run.approx);
     let mut meta = serde_json::Map::new();
     meta.insert("command".into(), json!("approx"));
     meta.insert("input".into(), input.meta(&args.input.mesh));
     meta.insert("field".into(), json!(args.field.display().to_string()));
-    meta.insert("mass".into(), json!(mass.name()));
-    meta.insert("lambda_k".into(), json!({ "k": k, "value": approx.lambda_k }));
+    meta.insert("mass".into(), json!(run.mass.name()));
+    meta.insert("lambda_k".into(), json!({ "k": run.k, "value": approx.lambda_k }));
     meta.insert("anchors".into(), json!(approx.anchors));
-    meta.insert("approximation".into(), record(&approx));
+    meta.insert("approximation".into(), record(approx));
     let how = Writing {
         render: args.render,
         splats: input.splats.as_ref(),
@@ -273,22 +387,23 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
         allow_infinity: false,
         volume: input.volume.as_ref().map(|v| &v.mesh),
     };
-    // The files first, then the report: a reader that stops early (`| head`) loses
-    // nothing but the report.
-    let written = write_fields(&args.output, &input.mesh, &columns, how)?;
+    let written = write_fields(&args.output, &input.mesh, &columns(args, run), how)?;
+    let (Persistence::Relative(default) | Persistence::Absolute(default)) = ApproxParams::default().persistence;
+    let threshold = args.persistence.unwrap_or(default);
     writeln!(
         out,
         "{} vertices, {} critical points of f, {} anchors (persistence {}{}), λ_{} = {:.6e}; {} coefficients, {} scales",
-        n,
+        input.mesh.n_vertices(),
         approx.input_critical_points,
         approx.anchors.len(),
         threshold,
         if args.absolute { "" } else { " × range" },
-        k,
+        run.k,
         approx.lambda_k,
         approx.coefficients.name(),
         approx.sampling.name(),
     )?;
+    writeln!(out, "{}", noise_line(approx))?;
     writeln!(
         out,
         "{:>5} {:>12} {:>12} {:>10} {:>8} {:>12}",
@@ -297,13 +412,14 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
     for (i, s) in approx.scales.iter().enumerate() {
         writeln!(
             out,
-            "{:>5} {:>12.6e} {:>12.6e} {:>10.4} {:>8} {:>12}",
+            "{:>5} {:>12.6e} {:>12.6e} {:>10.4} {:>8} {:>12}{}",
             i + 1,
             s.t,
             s.linf_error,
             s.relative_linf_error,
             s.critical_points,
-            s.significant_critical_points
+            s.significant_critical_points,
+            if approx.chosen == Some(i) { " *" } else { "" }
         )?;
     }
     for path in written {

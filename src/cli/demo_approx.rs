@@ -74,16 +74,27 @@ pub fn section(
         ..defaults
     };
     let approx = feature_approximation(mesh, kernel, &f, &params)?;
-    // The figures show the scale where f_glob is closest to the clean map.
+    // The figures show the scale the default chose from f alone (issue #40), else the scale
+    // where f_glob is closest to the clean map.
     let (clo, chi) = range(&clean);
     let to_clean = |g: &[f64]| g.iter().zip(&clean).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())) / (chi - clo);
-    let best = (0..approx.scales.len())
-        .min_by(|&a, &b| to_clean(&approx.scales[a].global).total_cmp(&to_clean(&approx.scales[b].global)))
-        .unwrap_or(0);
+    let best = approx.chosen.unwrap_or_else(|| {
+        (0..approx.scales.len())
+            .min_by(|&a, &b| to_clean(&approx.scales[a].global).total_cmp(&to_clean(&approx.scales[b].global)))
+            .unwrap_or(0)
+    });
     let scale = &approx.scales[best];
     let t = scale.t;
     let label = short_label(t);
     let (lo, hi) = range(&f);
+    let which = match (&approx.noise, approx.chosen) {
+        (Some(c), Some(_)) => format!(
+            "the scale t* chosen from f alone (GCV; estimated noise σ̂ = {:.2} % of the range): f_glob is the \
+             denoised map, its anchors the persistent critical points of K_t* f with smoothed values",
+            100.0 * c.noise / (hi - lo)
+        ),
+        _ => "the scale closest to the clean map (the anchors keep f's values, see docs/APPROX-RESULTS.md)".into(),
+    };
     let mut stage = |name: &str, title: String, values: &[f64], anchors: &[u32], same_range: bool| {
         let mut params = figure_params(&title, values, anchors, views.to_vec());
         if same_range {
@@ -162,8 +173,7 @@ pub fn section(
     }
     let _ = writeln!(
         s,
-        "\nf (anchors marked), f_glob and f_loc at t = {label}, the scale closest to the clean map (f and f_glob in \
-         one color range; the anchors keep their noisy values, see docs/APPROX-RESULTS.md):\n\n\
+        "\nf (anchors marked), f_glob and f_loc at t = {label}, {which} (f and f_glob in one color range):\n\n\
          ![f](approx_f.png)\n![f_glob](approx_glob.png)\n![f_loc](approx_loc.png)\n\n\
          Fig. 13(d): f_glob at t = {label} with the anchors of decreasing persistence; critical points of f_glob \
          with persistence ≥ {} % of the range:\n\n| persistence | anchors | critical points |\n|---:|---:|---:|",

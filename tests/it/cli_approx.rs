@@ -47,69 +47,93 @@ fn approx_has_help() {
     assert!(stdout(&o).contains("--persistence"));
 }
 
-/// The npy output holds f, then f_glob and f_loc for every scale, with f_glob + f_loc = f,
-/// and the report lists one row per scale with the L∞ error of that row's f_loc.
+/// The CSV output holds f, then f_glob and f_loc for every scale, with f_glob + f_loc = f,
+/// and the report lists one row per scale with the L∞ error of that row's f_loc. The field is
+/// noisy (about 3.5 % of its range): the default adds the GCV scale t* to the four asked for,
+/// marks it and reports the noise estimate; `--noise keep` gives the four scales alone.
 #[test]
 fn approx_writes_components_and_prints_the_report() {
     let dir = tempfile::tempdir().unwrap();
     let (mesh, field, f) = setup(dir.path());
     let out = dir.path().join("approx.csv");
-    let o = wfem(&[
-        "approx",
-        mesh.to_str().unwrap(),
-        "--field",
-        field.to_str().unwrap(),
-        "--persistence",
-        "0.25",
-        "--scales",
-        "4",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let text = stdout(&o);
-    assert!(text.contains("642 vertices"), "{text}");
-    assert!(text.contains("Linf error"), "{text}");
-    let rows: Vec<Vec<String>> = text
-        .lines()
-        .filter(|l| l.split_whitespace().count() == 6 && l.split_whitespace().all(|w| w.parse::<f64>().is_ok()))
-        .map(|l| l.split_whitespace().map(String::from).collect())
-        .collect();
-    assert_eq!(rows.len(), 4, "{text}");
-    // The CSV has one column per field: f, f_glob_t<t> (4 scales), f_loc_t<t> (4 scales), each
-    // named with its t.
-    let csv = std::fs::read_to_string(&out).unwrap();
-    let lines: Vec<&str> = csv.lines().filter(|l| !l.starts_with('#')).collect();
-    let header: Vec<&str> = lines[0].split(',').collect();
-    assert_eq!(header.len(), 9, "header {}", lines[0]);
-    assert!(
-        header[1].starts_with("f_glob_t") && header[5].starts_with("f_loc_t"),
-        "header {}",
-        lines[0]
-    );
-    for (s, row) in rows.iter().enumerate() {
-        // The t in the name is the t of the report's row (4 significant digits).
-        let named: f64 = header[1 + s]["f_glob_t".len()..].parse().unwrap();
-        let printed: f64 = row[1].parse().unwrap();
-        assert!((named - printed).abs() <= 1e-3 * printed, "{named} vs {printed}");
-    }
-    let header_skip = 1;
-    let data: Vec<Vec<f64>> = lines[header_skip..]
-        .iter()
-        .map(|l| l.split(',').map(|x| x.trim().parse::<f64>().unwrap()).collect())
-        .collect();
-    assert_eq!(data.len(), 642);
-    assert_eq!(data[0].len(), 9, "columns f, glob_1..4, loc_1..4");
-    for (i, row) in data.iter().enumerate() {
-        assert!((row[0] - f[i]).abs() < 1e-12);
-        for s in 0..4 {
-            assert!((row[1 + s] + row[5 + s] - f[i]).abs() < 1e-9, "vertex {i} scale {s}");
+    for (rule, n_scales) in [(None, 5), (Some("keep"), 4)] {
+        let mut args = vec![
+            "approx",
+            mesh.to_str().unwrap(),
+            "--field",
+            field.to_str().unwrap(),
+            "--persistence",
+            "0.25",
+            "--scales",
+            "4",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        if let Some(rule) = rule {
+            args.extend(["--noise", rule]);
         }
-    }
-    for (s, row) in rows.iter().enumerate() {
-        let linf = data.iter().fold(0.0f64, |m, r| m.max(r[5 + s].abs()));
-        let printed: f64 = row[2].parse().unwrap();
-        assert!((printed - linf).abs() <= 1e-5 * linf, "scale {s}: {printed} vs {linf}");
+        let o = wfem(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = stdout(&o);
+        assert!(text.contains("642 vertices"), "{text}");
+        assert!(text.contains("Linf error"), "{text}");
+        let rows: Vec<Vec<String>> = text
+            .lines()
+            .map(|l| l.trim_end_matches(" *"))
+            .filter(|l| l.split_whitespace().count() == 6 && l.split_whitespace().all(|w| w.parse::<f64>().is_ok()))
+            .map(|l| l.split_whitespace().map(String::from).collect())
+            .collect();
+        assert_eq!(rows.len(), n_scales, "{text}");
+        let marked: Vec<&str> = text.lines().filter(|l| l.ends_with(" *")).collect();
+        match rule {
+            None => {
+                assert_eq!(marked.len(), 1, "{text}");
+                assert!(
+                    text.contains("noise: σ̂ = ") && text.contains("GCV scale t* = "),
+                    "{text}"
+                );
+            }
+            Some(_) => {
+                assert!(marked.is_empty(), "{text}");
+                assert!(text.contains("noise: not estimated (--noise keep)"), "{text}");
+            }
+        }
+        // The CSV has one column per field: f, f_glob_t<t> (one per scale), f_loc_t<t>, each
+        // named with its t.
+        let csv = std::fs::read_to_string(&out).unwrap();
+        let lines: Vec<&str> = csv.lines().filter(|l| !l.starts_with('#')).collect();
+        let header: Vec<&str> = lines[0].split(',').collect();
+        assert_eq!(header.len(), 1 + 2 * n_scales, "header {}", lines[0]);
+        assert!(
+            header[1].starts_with("f_glob_t") && header[1 + n_scales].starts_with("f_loc_t"),
+            "header {}",
+            lines[0]
+        );
+        for (s, row) in rows.iter().enumerate() {
+            // The t in the name is the t of the report's row (4 significant digits).
+            let named: f64 = header[1 + s]["f_glob_t".len()..].parse().unwrap();
+            let printed: f64 = row[1].parse().unwrap();
+            assert!((named - printed).abs() <= 1e-3 * printed, "{named} vs {printed}");
+        }
+        let data: Vec<Vec<f64>> = lines[1..]
+            .iter()
+            .map(|l| l.split(',').map(|x| x.trim().parse::<f64>().unwrap()).collect())
+            .collect();
+        assert_eq!(data.len(), 642);
+        for (i, row) in data.iter().enumerate() {
+            assert!((row[0] - f[i]).abs() < 1e-12);
+            for s in 0..n_scales {
+                assert!(
+                    (row[1 + s] + row[1 + n_scales + s] - f[i]).abs() < 1e-9,
+                    "vertex {i} scale {s}"
+                );
+            }
+        }
+        for (s, row) in rows.iter().enumerate() {
+            let linf = data.iter().fold(0.0f64, |m, r| m.max(r[1 + n_scales + s].abs()));
+            let printed: f64 = row[2].parse().unwrap();
+            assert!((printed - linf).abs() <= 1e-5 * linf, "scale {s}: {printed} vs {linf}");
+        }
     }
 }
 
@@ -182,7 +206,8 @@ fn approx_rejects_bad_input() {
 /// default decomposition (the same numbers as `feature_approximation` with
 /// `ApproxParams::default()`) and meets the paper's 2 % at the finest scale on the
 /// benchmark's small cases (docs/APPROX-RESULTS.md); the sidecar records the scales, the
-/// anchors and the coefficients; a noisy field gets a warning naming the options.
+/// anchors and the coefficients; a noisy field is denoised (issue #40), or warned about with
+/// `--noise keep`.
 #[test]
 fn issue_24_defaults_on_the_benchmark_small_cases() {
     use shrec_bench::approx_eval::{load_case, noise, BenchField, SMALL_CASES};
@@ -238,7 +263,8 @@ fn issue_24_defaults_on_the_benchmark_small_cases() {
             let finest = scales[0]["relative_linf_error"].as_f64().unwrap();
             assert!(finest < 0.02, "{} {field:?}: {finest}", case.name);
         }
-        // The noisy coordinate: the warning names the persistence and the smooth rule.
+        // Issue #40: the noisy coordinate (5 % of the range) is denoised without options, as
+        // the library does: t* among the scales, marked; σ̂ and t* in the report and the sidecar.
         let z: Vec<f64> = mesh.positions().iter().map(|p| p[2]).collect();
         let range = z.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)) - z.iter().fold(f64::INFINITY, |a, &b| a.min(b));
         let noisy: Vec<f64> = z.iter().zip(noise(z.len(), range, 0.05)).map(|(a, b)| a + b).collect();
@@ -246,18 +272,45 @@ fn issue_24_defaults_on_the_benchmark_small_cases() {
         std::fs::write(&csv, noisy.iter().map(|v| format!("{v:.17e}\n")).collect::<String>()).unwrap();
         let out = dir.path().join("n.npy");
         let path = meshes.join(case.mesh);
-        let o = wfem(&[
-            "approx",
-            path.to_str().unwrap(),
-            "--field",
-            csv.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-        ]);
+        let run = |extra: &[&str]| {
+            let mut args = vec![
+                "approx",
+                path.to_str().unwrap(),
+                "--field",
+                csv.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ];
+            args.extend_from_slice(extra);
+            wfem(&args)
+        };
+        let o = run(&[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(!stderr(&o).contains("warning"), "{}: {}", case.name, stderr(&o));
+        assert!(stdout(&o).contains("noise: σ̂ = "), "{}", stdout(&o));
+        let library = feature_approximation(&mesh, &kernel, &noisy, &ApproxParams::default()).unwrap();
+        let chosen = library.chosen.expect("5 % noise is denoised");
+        let estimate = library.noise.as_ref().unwrap();
+        assert!(
+            (estimate.noise - 0.05 * range).abs() < 0.15 * 0.05 * range,
+            "{}",
+            estimate.noise
+        );
+        let meta: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join("n.json")).unwrap()).unwrap();
+        let record = &meta["approximation"];
+        assert_eq!(record["chosen"], serde_json::json!(chosen));
+        assert_eq!(record["noise_rule"], "auto");
+        let sigma = record["noise"]["sigma"].as_f64().unwrap();
+        assert!((sigma - estimate.noise).abs() <= 1e-9 * estimate.noise);
+        let t = record["scales"][chosen]["t"].as_f64().unwrap();
+        assert!((t - estimate.t).abs() <= 1e-12 * t && (record["noise"]["t"].as_f64().unwrap() - t).abs() <= 1e-12 * t);
+        // Taken as clean, the noisy anchors are warned about, naming the noise rule.
+        let o = run(&["--noise", "keep"]);
         assert!(o.status.success(), "{}", stderr(&o));
         let err = stderr(&o);
         assert!(
-            err.contains("wfem: warning:") && err.contains("--persistence") && err.contains("--coefficients smooth"),
+            err.contains("wfem: warning:") && err.contains("--persistence") && err.contains("--noise auto"),
             "{}: {err}",
             case.name
         );

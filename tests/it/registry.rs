@@ -44,6 +44,7 @@ fn flags() -> Vec<Flag> {
         flag::<wfem_heat::geodesic::GeodesicMethod>(&["geodesic"], "--method"),
         flag::<Mass>(&["wks"], "--mass"),
         flag::<Coefficients>(&["approx"], "--coefficients"),
+        flag::<wfem_heat::approx::NoiseRule>(&["approx"], "--noise"),
         flag::<Mass>(&["approx"], "--mass"),
         flag::<mesh_fem::Lumping>(&["operators"], "--lumped"),
         flag::<Descriptor>(&["retrieval", "build"], "--descriptor"),
@@ -150,6 +151,7 @@ fn all_spellings() -> Vec<&'static str> {
     of::<wfem_heat::approx::ScaleSampling>(&mut out);
     of::<shape_retrieval::global::GlobalKind>(&mut out);
     of::<wfem_heat::approx::Coefficients>(&mut out);
+    of::<wfem_heat::approx::NoiseRule>(&mut out);
     of::<shape_retrieval::exact::HksMethod>(&mut out);
     of::<shape_retrieval::hks::SpectrumNormalization>(&mut out);
     of::<shape_retrieval::descriptor::Descriptor>(&mut out);

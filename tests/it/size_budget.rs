@@ -42,10 +42,6 @@ const FN_ALLOW: &[(&str, &str)] = &[
         "the table of methods, one line each",
     ),
     (
-        "src/cli/approx.rs::approx",
-        "to split into validate, compute, write (issue #37)",
-    ),
-    (
         "src/cli/retrieval.rs::run",
         "to split one function per subcommand (issue #37)",
     ),

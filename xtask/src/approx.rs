@@ -2,6 +2,7 @@
 //! (`cargo xtask approx-eval`, [`shrec_bench::approx_eval`]).
 
 use crate::bench::Machine;
+use shrec_bench::approx_eval::denoise::{denoise_summary, denoise_table};
 use shrec_bench::approx_eval::{noise_table, report_summary, report_tables, CaseResult};
 use std::fmt::Write as _;
 
@@ -16,8 +17,10 @@ pub fn markdown(results: &[CaseResult], machine: &Machine, seconds: f64) -> Stri
     );
     s.push_str(INTRO);
     s.push_str(&report_summary(results));
+    s.push_str(&denoise_summary(results));
     s.push_str("\n## Tables\n\n");
     s.push_str(&report_tables(results));
+    s.push_str(&denoise_table(results));
     s.push_str(&noise_table(results));
     s
 }

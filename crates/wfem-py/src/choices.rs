@@ -73,6 +73,7 @@ registries! {
     "geodesic_method" => wfem_heat::geodesic::GeodesicMethod,
     "coefficients" => wfem_heat::approx::Coefficients,
     "sampling" => wfem_heat::approx::ScaleSampling,
+    "noise" => wfem_heat::approx::NoiseRule,
     "hks_method" => shape_retrieval::exact::HksMethod,
     "normalization" => shape_retrieval::hks::SpectrumNormalization,
     "descriptor" => shape_retrieval::descriptor::Descriptor,

@@ -536,7 +536,7 @@ impl PyHeatKernel {
 
     /// The feature-driven approximation (Sect. 4.2) of f on the kernel's mesh; `None` takes the
     /// library's default ([`wfem_heat::approx::ApproxParams`]).
-    #[pyo3(signature = (f, k=None, scales=None, persistence=None, absolute=false, coefficients=None, sampling=None))]
+    #[pyo3(signature = (f, k=None, scales=None, persistence=None, absolute=false, coefficients=None, sampling=None, noise=None))]
     #[allow(clippy::too_many_arguments)]
     fn feature_approximation<'py>(
         &self,
@@ -548,8 +548,11 @@ impl PyHeatKernel {
         absolute: bool,
         coefficients: Option<&str>,
         sampling: Option<&str>,
+        noise: Option<&str>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        use wfem_heat::approx::{feature_approximation, ApproxParams, Coefficients, Persistence, ScaleSampling};
+        use wfem_heat::approx::{
+            feature_approximation, ApproxParams, Coefficients, NoiseRule, Persistence, ScaleSampling,
+        };
         let mesh = self.mesh.clone().ok_or_else(|| {
             invalid(
                 py,
@@ -566,6 +569,7 @@ impl PyHeatKernel {
         };
         let coefficients: Coefficients = choices::parse(py, "coefficients", coefficients)?;
         let sampling: ScaleSampling = choices::parse(py, "sampling", sampling)?;
+        let noise: NoiseRule = choices::parse(py, "noise", noise)?;
         let f = vec_in(&f);
         let kernel = self.kernel.clone();
         let params = ApproxParams {
@@ -574,6 +578,7 @@ impl PyHeatKernel {
             persistence,
             coefficients,
             sampling,
+            noise,
             ..defaults
         };
         let result = run(py, move |_| Ok(feature_approximation(&mesh, &kernel, &f, &params)?))?;
@@ -582,7 +587,24 @@ impl PyHeatKernel {
         d.set_item("formula", result.coefficients.formula())?;
         d.set_item("sampling", result.sampling.name())?;
         d.set_item("anchors", result.anchors.clone())?;
+        d.set_item("anchor_values", vec_out(py, result.anchor_values.clone()))?;
         d.set_item("anchor_persistence", result.anchor_persistence.clone())?;
+        d.set_item("noise_rule", result.noise_rule.name())?;
+        d.set_item("chosen", result.chosen)?;
+        let estimate = match &result.noise {
+            None => None,
+            Some(c) => {
+                let e = PyDict::new(py);
+                e.set_item("sigma", c.noise)?;
+                e.set_item("gcv_sigma", c.gcv_noise)?;
+                e.set_item("t", c.t)?;
+                e.set_item("smoothing_helps", c.smoothing_helps())?;
+                e.set_item("scores", vec_out(py, c.scores.clone()))?;
+                e.set_item("trace_fraction", vec_out(py, c.trace_fraction.clone()))?;
+                Some(e)
+            }
+        };
+        d.set_item("noise", estimate)?;
         d.set_item("threshold", result.threshold)?;
         d.set_item("range", result.range)?;
         d.set_item("lambda_k", result.lambda_k)?;

@@ -52,7 +52,8 @@ pub fn global_component(
 /// The global component `f_glob` of f on the anchors at time t (paper, Sect. 4.2), with the
 /// coefficients of `coefficients`, its anchors and coefficients. `anchors` is a priority
 /// list for [`Coefficients::Anchored`] (most important first, as
-/// [`super::ranked_anchors`] orders them).
+/// [`super::ranked_anchors`] orders them). The anchors' values are f's own
+/// ([`fit_to_values`] with `f(aⱼ)`).
 ///
 /// # Errors
 /// [`HeatError::LengthMismatch`], [`HeatError::NonFiniteInput`], [`HeatError::InvalidTime`],
@@ -65,9 +66,35 @@ pub fn fit_global_component(
     t: f64,
     coefficients: Coefficients,
 ) -> Result<GlobalComponent, HeatError> {
+    check::vector(f, kernel.n())?;
+    check_anchors(anchors, kernel.n())?;
+    let values: Vec<f64> = anchors.iter().map(|&a| f[a as usize]).collect();
+    fit_to_values(kernel, anchors, &values, f, t, coefficients)
+}
+
+/// [`fit_global_component`] with given anchor values vⱼ in place of f(aⱼ): the value f_glob
+/// keeps at a resolved anchor ([`Coefficients::Anchored`]: `f_glob(aⱼ) = vⱼ`) and the
+/// feature value of the other rules (`Σ vⱼ K_t e_(aⱼ)`, …); f itself enters through the
+/// smooth part K_t f ([`Coefficients::Anchored`], [`Coefficients::Smooth`]) and the
+/// projection ([`Coefficients::LeastSquares`]). On a noisy f the values are a smoothed
+/// estimate of the clean map at the anchors rather than the noisy samples (issue #40,
+/// [`super::NoiseRule`]).
+///
+/// # Errors
+/// As [`fit_global_component`]; [`HeatError::LengthMismatch`] when `values` and `anchors`
+/// differ in length, [`HeatError::NonFiniteInput`] for a non-finite value.
+pub fn fit_to_values(
+    kernel: &HeatKernel,
+    anchors: &[u32],
+    values: &[f64],
+    f: &[f64],
+    t: f64,
+    coefficients: Coefficients,
+) -> Result<GlobalComponent, HeatError> {
     let n = kernel.n();
     check::vector(f, n)?;
     check_anchors(anchors, n)?;
+    check::vector(values, anchors.len())?;
     check::time(t)?;
     let mut sorted = anchors.to_vec();
     sorted.sort_unstable();
@@ -77,17 +104,20 @@ pub fn fit_global_component(
             reason: format!("vertex {} is repeated", w[0]),
         });
     }
-    let fit = Fit {
-        kernel,
-        anchors,
-        t,
-        coefficients,
-    };
-    // Every rule is homogeneous of degree 1 in f: work on f/2ᵉ with 2ᵉ ≈ max|f| (exact), so
-    // that the M-products of a field of 1e308 do not overflow, and scale back.
-    let (down, up) = shifted_solve::lanczos::pow2_scale(linf(f));
+    // Every rule is homogeneous of degree 1 in (f, values): work on both over 2ᵉ with 2ᵉ ≈
+    // their largest magnitude (exact), so that the M-products of a field of 1e308 do not
+    // overflow, and scale back.
+    let (down, up) = shifted_solve::lanczos::pow2_scale(linf(f).max(linf(values)));
     if down != 1.0 {
         let scaled: Vec<f64> = f.iter().map(|x| x * down).collect();
+        let scaled_values: Vec<f64> = values.iter().map(|x| x * down).collect();
+        let fit = Fit {
+            kernel,
+            anchors,
+            values: &scaled_values,
+            t,
+            coefficients,
+        };
         let mut g = fit.unit(&scaled)?;
         g.values
             .iter_mut()
@@ -95,14 +125,23 @@ pub fn fit_global_component(
             .for_each(|x| *x *= up);
         return Ok(g);
     }
+    let fit = Fit {
+        kernel,
+        anchors,
+        values,
+        t,
+        coefficients,
+    };
     fit.unit(f)
 }
 
-/// The validated inputs of [`fit_global_component`] but the field.
+/// The validated inputs of [`fit_to_values`] but the field.
 #[derive(Clone, Copy)]
 struct Fit<'a> {
     kernel: &'a HeatKernel,
     anchors: &'a [u32],
+    /// The anchors' values, one per anchor.
+    values: &'a [f64],
     t: f64,
     coefficients: Coefficients,
 }
@@ -113,18 +152,18 @@ impl Fit<'_> {
         let Fit {
             kernel,
             anchors,
+            values,
             t,
             coefficients,
         } = self;
         let n = kernel.n();
-        let values_at = |a: &[u32]| a.iter().map(|&v| f[v as usize]).collect::<Vec<f64>>();
         match coefficients {
             Coefficients::Smooth => Ok(GlobalComponent {
                 values: kernel.apply(f, t)?,
                 anchors: Vec::new(),
                 coefficients: Vec::new(),
             }),
-            Coefficients::Anchored => anchored(kernel, anchors, f, t),
+            Coefficients::Anchored => anchored(kernel, anchors, values, f, t),
             _ if anchors.is_empty() => Ok(GlobalComponent {
                 values: vec![0.0; n],
                 anchors: Vec::new(),
@@ -133,30 +172,36 @@ impl Fit<'_> {
             Coefficients::FeatureValues => {
                 // Σ f(pᵢ) K_t eᵢ = K_t (Σ f(pᵢ) eᵢ): one application (linearity of Eq. (21)).
                 let mut masked = vec![0.0; n];
-                for &a in anchors {
-                    masked[a as usize] = f[a as usize];
+                for (&a, &v) in anchors.iter().zip(values) {
+                    masked[a as usize] = v;
                 }
                 Ok(GlobalComponent {
                     values: kernel.apply(&masked, t)?,
                     anchors: anchors.to_vec(),
-                    coefficients: values_at(anchors),
+                    coefficients: values.to_vec(),
                 })
             }
-            Coefficients::Interpolate => interpolate(kernel, anchors, f, t),
+            Coefficients::Interpolate => interpolate(kernel, anchors, values, f, t),
             Coefficients::Normalized => Ok(GlobalComponent {
-                values: normalized(kernel, anchors, f, t)?,
+                values: normalized(kernel, anchors, values, f, t)?,
                 anchors: anchors.to_vec(),
-                coefficients: values_at(anchors),
+                coefficients: values.to_vec(),
             }),
             Coefficients::LeastSquares => least_squares(kernel, anchors, f, t),
         }
     }
 }
 
-/// `f_glob = K_t f + Σ_{i∈S} cᵢ K_t eᵢ` with `f_glob(pⱼ) = f(pⱼ)` for the anchors S ⊆ A
-/// resolved at t ([`RESOLVED_OVERLAP`], greedily in the priority order of `anchors`): one
-/// block application `K_t [f, e_A]`, an |S| × |S| LU solve.
-fn anchored(kernel: &HeatKernel, anchors: &[u32], f: &[f64], t: f64) -> Result<GlobalComponent, HeatError> {
+/// `f_glob = K_t f + Σ_{i∈S} cᵢ K_t eᵢ` with `f_glob(pⱼ) = vⱼ` for the anchors S ⊆ A resolved
+/// at t ([`RESOLVED_OVERLAP`], greedily in the priority order of `anchors`): one block
+/// application `K_t [f, e_A]`, an |S| × |S| LU solve.
+fn anchored(
+    kernel: &HeatKernel,
+    anchors: &[u32],
+    values: &[f64],
+    f: &[f64],
+    t: f64,
+) -> Result<GlobalComponent, HeatError> {
     let n = kernel.n();
     let m = anchors.len();
     let block = Mat::<f64>::from_fn(n, m + 1, |i, j| match j {
@@ -170,10 +215,7 @@ fn anchored(kernel: &HeatKernel, anchors: &[u32], f: &[f64], t: f64) -> Result<G
     let kept = resolved(m, &g);
     let s = kept.len();
     let matrix = Mat::<f64>::from_fn(s, s, |r, c| g(kept[r], kept[c]));
-    let residual = Mat::<f64>::from_fn(s, 1, |r, _| {
-        let a = anchors[kept[r]] as usize;
-        f[a] - smoothed[(a, 0)]
-    });
+    let residual = Mat::<f64>::from_fn(s, 1, |r, _| values[kept[r]] - smoothed[(anchors[kept[r]] as usize, 0)]);
     let c = if s == 0 {
         Mat::<f64>::zeros(0, 1)
     } else {
@@ -269,13 +311,12 @@ fn least_squares(kernel: &HeatKernel, anchors: &[u32], f: &[f64], t: f64) -> Res
 /// is below the accuracy of the kernel (1e−9 of the largest total weight: far from all anchors
 /// at a small t) the ratio would be noise over noise, and the value of the nearest anchor in
 /// edge hops is used instead — the limit of the weighted average as t → 0.
-fn normalized(kernel: &HeatKernel, anchors: &[u32], f: &[f64], t: f64) -> Result<Vec<f64>, HeatError> {
+fn normalized(kernel: &HeatKernel, anchors: &[u32], values: &[f64], f: &[f64], t: f64) -> Result<Vec<f64>, HeatError> {
     let n = kernel.n();
     let basis = canonical_basis(kernel, anchors, t)?;
     let mut num = vec![0.0; n];
     let mut den = vec![0.0; n];
-    for (c, &a) in anchors.iter().enumerate() {
-        let fa = f[a as usize];
+    for (c, &fa) in values.iter().enumerate() {
         for i in 0..n {
             let w = basis[(i, c)].max(0.0);
             num[i] += fa * w;
@@ -287,6 +328,11 @@ fn normalized(kernel: &HeatKernel, anchors: &[u32], f: &[f64], t: f64) -> Result
     let mut out: Vec<f64> = (0..n)
         .map(|i| if den[i] > floor { num[i] / den[i] } else { f64::NAN })
         .collect();
+    // The value of each anchor by vertex (for the nearest-anchor fallback).
+    let mut value_at = vec![f64::NAN; n];
+    for (&a, &v) in anchors.iter().zip(values) {
+        value_at[a as usize] = v;
+    }
     if out.iter().any(|v| v.is_nan()) {
         // Multi-source breadth-first search from the anchors over the mesh graph.
         let pattern = kernel.operators().pair().pattern();
@@ -310,19 +356,29 @@ fn normalized(kernel: &HeatKernel, anchors: &[u32], f: &[f64], t: f64) -> Result
         for (i, o) in out.iter_mut().enumerate() {
             if o.is_nan() {
                 // A vertex in a component without anchors keeps f's own value (no feature there).
-                *o = if nearest[i] == usize::MAX { f[i] } else { f[nearest[i]] };
+                *o = if nearest[i] == usize::MAX {
+                    f[i]
+                } else {
+                    value_at[nearest[i]]
+                };
             }
         }
     }
     Ok(out)
 }
 
-/// `Σ_{i∈A} cᵢ K_t eᵢ` with `K_t[A,A] c = f_A` (its value at every anchor is f there).
-fn interpolate(kernel: &HeatKernel, anchors: &[u32], f: &[f64], t: f64) -> Result<GlobalComponent, HeatError> {
+/// `Σ_{i∈A} cᵢ K_t eᵢ` with `K_t[A,A] c = v` (its value at every anchor is the anchor's value).
+fn interpolate(
+    kernel: &HeatKernel,
+    anchors: &[u32],
+    values: &[f64],
+    f: &[f64],
+    t: f64,
+) -> Result<GlobalComponent, HeatError> {
     let m = anchors.len();
     let basis = canonical_basis(kernel, anchors, t)?;
     let g = Mat::<f64>::from_fn(m, m, |r, c| basis[(anchors[r] as usize, c)]);
-    let rhs = Mat::<f64>::from_fn(m, 1, |r, _| f[anchors[r] as usize]);
+    let rhs = Mat::<f64>::from_fn(m, 1, |r, _| values[r]);
     let c = g.partial_piv_lu().solve(&rhs);
     if c.col(0).iter().any(|x| !x.is_finite()) {
         return Err(HeatError::InvalidParameter {
@@ -333,7 +389,7 @@ fn interpolate(kernel: &HeatKernel, anchors: &[u32], f: &[f64], t: f64) -> Resul
     let out: Vec<f64> = (&basis * &c).col(0).iter().copied().collect();
     // Overlapping basis functions make K_t[A,A] nearly singular: the interpolant then swings
     // far beyond the data (measured up to 5e4 × the range of f) instead of approximating it.
-    let data = linf(f);
+    let data = linf(f).max(linf(values));
     let swing = linf(&out);
     if swing > 1e3 * data.max(f64::MIN_POSITIVE) {
         return Err(HeatError::InvalidParameter {

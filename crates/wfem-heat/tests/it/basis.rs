@@ -7,7 +7,7 @@ use mesh_fem::Mass;
 use mesh_fem::{generate, morse};
 use wfem_heat::approx::{
     eigenfunction_features, extrema, feature_approximation, global_component, multiscale_times, ApproxParams,
-    Coefficients, Persistence, ScaleSampling,
+    Coefficients, NoiseRule, Persistence, ScaleSampling,
 };
 use wfem_heat::basis::{canonical_basis, canonical_limit};
 use wfem_heat::method::Method;
@@ -319,10 +319,12 @@ fn feature_approximation_separates_noise() {
     let dense = Eigenbasis::dense(&ops.stiffness, &ops.mass).unwrap();
     let times = multiscale_times(dense.values[19], 10);
     for coefficients in [Coefficients::FeatureValues, Coefficients::Interpolate] {
+        // f taken as clean (issue #24's rule): the anchors are f's own critical points.
         let params = ApproxParams {
             persistence: Persistence::Relative(0.25),
             coefficients,
             sampling: ScaleSampling::Paper,
+            noise: NoiseRule::Keep,
             ..ApproxParams::default()
         };
         let approx = feature_approximation(&mesh, &k, &f, &params).unwrap();
@@ -515,6 +517,7 @@ fn approx_coefficients_give_meaningful_global_components() {
             scales: 4,
             persistence: Persistence::Relative(persistence),
             sampling: ScaleSampling::Paper,
+            noise: NoiseRule::Keep,
             ..ApproxParams::default()
         };
         let literal = feature_approximation(

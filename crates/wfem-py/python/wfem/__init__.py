@@ -45,6 +45,7 @@ from ._choices import choices
 from ._heat import (
     APPROX_COEFFICIENTS,
     APPROX_SAMPLINGS,
+    APPROX_NOISE_RULES,
     MASSES,
     METHODS,
     ApproximationWarning,
@@ -131,6 +132,7 @@ __all__ = [
     "choices",
     "APPROX_COEFFICIENTS",
     "APPROX_SAMPLINGS",
+    "APPROX_NOISE_RULES",
     "ApproximationWarning",
     # geodesic distances
     "GeodesicSolver",

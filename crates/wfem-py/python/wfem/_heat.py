@@ -22,6 +22,7 @@ __all__ = [
     "MASSES",
     "APPROX_COEFFICIENTS",
     "APPROX_SAMPLINGS",
+    "APPROX_NOISE_RULES",
     "ApproximationWarning",
 ]
 
@@ -33,6 +34,8 @@ MASSES = _choices.names("mass")
 APPROX_COEFFICIENTS = _choices.names("coefficients")
 #: Names accepted by ``feature_approximation(sampling=)``, default first (the library's registry).
 APPROX_SAMPLINGS = _choices.names("sampling")
+#: Names accepted by ``feature_approximation(noise=)``, default first (the library's registry).
+APPROX_NOISE_RULES = _choices.names("noise")
 
 
 class ApproximationWarning(UserWarning):
@@ -366,6 +369,7 @@ class HeatKernel:
         absolute: bool = False,
         coefficients: str | None = None,
         sampling: str | None = None,
+        noise: str | None = None,
     ) -> dict[str, Any]:
         """The feature-driven approximation ``f = f_glob + f_loc`` (paper, Sect. 4.2, Fig. 12–13).
 
@@ -379,12 +383,27 @@ class HeatKernel:
         every anchor resolved at t (the persistent features keep their values; within 2 % of
         f at the finest scale on every mesh of docs/APPROX-RESULTS.md); ``"feature-values"``
         is the paper's printed ``Σ f(a_j) K_t e_(a_j)`` (≈ 0 between sparse anchors);
-        ``"smooth"`` is ``K_t f`` for a noisy f whose extrema are noise.
+        ``"smooth"`` is ``K_t f`` without anchors.
 
-        Returns a dict: ``coefficients`` and ``formula`` (the rule), ``sampling``, ``anchors``
-        and ``anchor_persistence``, ``threshold`` and ``range`` (units of f), ``lambda_k``,
-        ``lambda_max``, ``input_critical_points``, ``persistent_extrema``, ``warning`` (or
-        None) and ``scales``, a list of dicts with ``t``, ``global_``, ``local``, ``anchors``
+        ``noise`` (one of :data:`APPROX_NOISE_RULES`) says what to do about noise in f. The
+        default, ``"auto"``, estimates the noise level σ̂ and a scale t* from f alone
+        (area-weighted generalized cross-validation of ``K_t f``, no clean map needed); when
+        smoothing at t* lowers the estimated error and the noise's expected largest value
+        ``σ̂ √(2 ln n)`` exceeds the paper's 2 % of the range, the anchors are the persistent
+        critical points of the denoised map ``K_t* f`` with values from ``K_t f`` at a quarter
+        of t*, and t* joins the scales: ``result["scales"][result["chosen"]]["global_"]`` is
+        the denoised map and its ``local`` the noise. A smooth map is left as with
+        ``"keep"`` (f taken as clean: anchors at f's critical points keep f's values);
+        ``"always"`` always denoises.
+
+        Returns a dict: ``coefficients`` and ``formula`` (the rule), ``sampling``, ``anchors``,
+        ``anchor_values`` and ``anchor_persistence``, ``threshold`` and ``range`` (units of
+        f), ``lambda_k``, ``lambda_max``, ``input_critical_points``, ``persistent_extrema``,
+        ``noise_rule``, ``noise`` (None with ``"keep"``, else a dict: ``sigma`` = σ̂ in units
+        of f, ``t`` = t*, ``gcv_sigma``, ``smoothing_helps``, the GCV ``scores`` and
+        ``trace_fraction`` of its candidate times), ``chosen`` (the index of t* in
+        ``scales`` when denoised, else None), ``warning`` (or None) and ``scales``, a list
+        of dicts with ``t``, ``global_``, ``local``, ``anchors``
         and ``coefficients`` (f_glob's basis functions K_t e_a and their coefficients),
         ``linf_error``, ``relative_linf_error``, ``anchor_error``, ``critical_points``,
         ``significant_critical_points``, ``persistent_extrema``. When f_glob stays more than
@@ -394,7 +413,7 @@ class HeatKernel:
         """
         out = dict(
             self._k.feature_approximation(
-                as_vector(f, "f"), k, scales, persistence, absolute, coefficients, sampling
+                as_vector(f, "f"), k, scales, persistence, absolute, coefficients, sampling, noise
             )
         )
         if out["warning"] is not None:

@@ -185,6 +185,7 @@ class HeatKernel:
         absolute: bool = False,
         coefficients: str | None = None,
         sampling: str | None = None,
+        noise: str | None = None,
     ) -> dict[str, Any]: ...
     def distance(
         self,

@@ -16,15 +16,25 @@
 //!   beside it the best any scale of `K_t f` alone achieves (no anchors: the smoother's own
 //!   floor);
 //! * the paper's printed formula ([`Coefficients::FeatureValues`] on its scales
-//!   `(i/10)/λ_k`) beside the default, and the default coefficients on the paper's scales.
+//!   `(i/10)/λ_k`) beside the default, and the default coefficients on the paper's scales;
+//! * **denoising** ([`denoise`], issue #40): per noise level of [`denoise::DENOISE_LEVELS`],
+//!   the default at the scale it chooses without the clean map against the best smoothing
+//!   chosen knowing it.
+//!
+//! The persistence sweep and the noise-level table take f as clean ([`NoiseRule::Keep`]:
+//! anchors at f's critical points with f's values, issue #24's rule); the denoising column is
+//! the default ([`NoiseRule::Auto`]).
+
+pub mod denoise;
 
 use crate::BenchError;
+use denoise::DenoiseResult;
 use mesh_fem::{assemble, morse, AssemblyParams, TriMesh};
 use std::path::Path;
 use wfem_base::rng::SplitMix64;
 use wfem_heat::approx::{
     feature_approximation, fit_global_component, persistent_extremum_count, ranked_anchors, ApproxParams, Coefficients,
-    FeatureApproximation, Persistence, ScaleSampling,
+    FeatureApproximation, NoiseRule, Persistence, ScaleSampling,
 };
 use wfem_heat::distance::{DiffusionDistance, DistanceKind, DistanceParams};
 use wfem_heat::spectral::{EigenParams, Eigenbasis};
@@ -152,8 +162,22 @@ impl BenchField {
 
 /// Gaussian noise of standard deviation `fraction · range` ([`NOISE_SEED`]).
 pub fn noise(n: usize, range: f64, fraction: f64) -> Vec<f64> {
-    let mut rng = SplitMix64::new(NOISE_SEED);
+    noise_with_seed(n, range, fraction, NOISE_SEED)
+}
+
+/// Gaussian noise of standard deviation `fraction · range` from `seed`.
+pub fn noise_with_seed(n: usize, range: f64, fraction: f64, seed: u64) -> Vec<f64> {
+    let mut rng = SplitMix64::new(seed);
     (0..n).map(|_| fraction * range * rng.next_normal()).collect()
+}
+
+/// [`ApproxParams::default`] taking f as clean ([`NoiseRule::Keep`]): the persistence sweep
+/// and the noise-level table.
+fn keep() -> ApproxParams {
+    ApproxParams {
+        noise: NoiseRule::Keep,
+        ..ApproxParams::default()
+    }
 }
 
 /// The decomposition of a smooth map.
@@ -219,8 +243,12 @@ pub struct FieldResult {
     /// The paper's printed formula on its scales: the best distance to the clean map.
     pub literal_error: f64,
     /// The coordinate only: per noise level of [`NOISE_LEVELS`], the best distance of f_glob
-    /// to the clean map over the default scales with the defaults, and with K_t f alone.
+    /// to the clean map over the default scales with f taken as clean, and with K_t f alone.
     pub noise_levels: Vec<(f64, f64, f64)>,
+    /// The default on the noisy map, per level of [`denoise::DENOISE_LEVELS`] (issue #40).
+    pub denoising: Vec<DenoiseResult>,
+    /// Whether the default found noise to remove in the clean map (it must not).
+    pub smooth_denoised: bool,
 }
 
 /// One mesh.
@@ -238,14 +266,14 @@ pub struct CaseResult {
     pub fields: Vec<FieldResult>,
 }
 
-fn range(f: &[f64]) -> f64 {
+pub(crate) fn range(f: &[f64]) -> f64 {
     let (lo, hi) = f
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
     hi - lo
 }
 
-fn relative_linf(a: &[f64], b: &[f64], range: f64) -> f64 {
+pub(crate) fn relative_linf(a: &[f64], b: &[f64], range: f64) -> f64 {
     a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / range
 }
 
@@ -286,11 +314,13 @@ pub fn load_case(meshes_dir: &Path, case: &ApproxCase) -> Result<(TriMesh, HeatK
 /// As [`load_case`]; [`BenchError::Heat`] from a decomposition.
 pub fn evaluate_case(meshes_dir: &Path, case: &ApproxCase) -> Result<CaseResult, BenchError> {
     let (mesh, kernel, lambda_k) = load_case(meshes_dir, case)?;
+    let oracle_times = denoise::oracle_times(&kernel, lambda_k)?;
     let mut fields = Vec::new();
     let mut lambda_max = f64::NAN;
     for field in BenchField::ALL {
         let clean = field.values(&mesh, &kernel, lambda_k)?;
         let (smooth, default) = evaluate_smooth(&mesh, &kernel, &clean, lambda_k)?;
+        let denoising = denoise::evaluate_denoising(&mesh, &kernel, &clean, lambda_k, &oracle_times)?;
         lambda_max = default.lambda_max.unwrap_or(f64::NAN);
         let (noisy, noisy_input_critical_points, smoother_floor, literal_error) =
             evaluate_noisy(&mesh, &kernel, &clean, &default, lambda_k)?;
@@ -306,6 +336,8 @@ pub fn evaluate_case(meshes_dir: &Path, case: &ApproxCase) -> Result<CaseResult,
             smoother_floor,
             literal_error,
             noise_levels,
+            denoising,
+            smooth_denoised: default.chosen.is_some(),
         });
     }
     Ok(CaseResult {
@@ -386,10 +418,7 @@ fn noise_sweep(mesh: &TriMesh, kernel: &HeatKernel, clean: &[f64]) -> Result<Vec
             .map(|(a, b)| a + b)
             .collect();
         let best = |coefficients: Coefficients| -> Result<f64, BenchError> {
-            let params = ApproxParams {
-                coefficients,
-                ..ApproxParams::default()
-            };
+            let params = ApproxParams { coefficients, ..keep() };
             let a = feature_approximation(mesh, kernel, &f, &params)?;
             Ok(a.scales
                 .iter()
@@ -421,7 +450,7 @@ fn evaluate_noisy(
     for &p in &PERSISTENCE_SWEEP {
         let params = ApproxParams {
             persistence: Persistence::Relative(p),
-            ..ApproxParams::default()
+            ..keep()
         };
         let a = feature_approximation(mesh, kernel, &f, &params)?;
         let (best, error) = a
@@ -527,8 +556,9 @@ pub fn report_tables(results: &[CaseResult]) -> String {
     let _ = writeln!(
         s,
         "\n### Noisy maps\n\n\
-         The clean map plus Gaussian noise of σ = {:.0} % of its range (seed {NOISE_SEED}). Default decomposition \
-         with the anchors at each persistence {sweep} % (Fig. 13); error = ‖f_glob − clean‖∞ / range(clean) at the \
+         The clean map plus Gaussian noise of σ = {:.0} % of its range (seed {NOISE_SEED}), taken as clean \
+         (`--noise keep`: anchors at f's critical points with f's values), with the anchors at each persistence \
+         {sweep} % (Fig. 13); error = ‖f_glob − clean‖∞ / range(clean) at the \
          best scale, first persistence; critical points of f_glob at that one scale for every persistence. \
          \"K_t f alone\" is the best scale of the smoother without anchors (`smooth` coefficients); the paper's \
          formula is at its own scales and 10 % persistence.\n\n\
@@ -574,7 +604,7 @@ pub fn noise_table(results: &[CaseResult]) -> String {
     let _ = writeln!(
         s,
         "\n### Noise levels\n\n\
-         The coordinate z plus noise of each level (same seed), decomposed with the defaults (10 % persistence): \
+         The coordinate z plus noise of each level (same seed), taken as clean (`--noise keep`, 10 % persistence): \
          the best ‖f_glob − clean‖∞ / range(clean) over the default scales, and (after the slash) the same for \
          K_t f alone.\n\n| mesh | {} |\n|---|{}",
         head.join(" | "),
@@ -636,15 +666,15 @@ pub fn report_summary(results: &[CaseResult]) -> String {
          {}–{} away (above 2 % on {paper_bad} of {n} maps): it flattens parts two or three edges wide (tails, ears, \
          legs, the tip of a distance cone). The default scales start at the mesh's resolution 1/λ_max instead \
          (geometric up to 1/λ₂₀); the table gives the largest t·λ₂₀ that stays within 2 %.\n\
-         * **Noisy maps (σ = {:.0} % of the range)**: f_glob within 2 % of the clean map at the best scale on \
+         * **Noisy maps (σ = {:.0} % of the range), persistence sweep**: taken as clean, f_glob within 2 % of the clean map at the best scale on \
          {noisy_ok} of {n} maps ({}–{}). This criterion is out of reach of heat-kernel smoothing at this noise: \
          K_t f alone, at the best of the ten scales chosen knowing the clean map, stays {}–{} away — the residual \
          noise of K_t f falls below 2 % only at scales where its bias on thin parts already exceeds 2 % (and on \
-         the coarser meshes the noise at a vertex is averaged over a few dozen neighbours at most). The default \
-         is farther still because its anchors keep f's values, noise included (the global extrema of a noisy map \
-         are its largest noise values); see the noise-level table for where the claim holds. f_loc correlates \
-         ≥ 0.9 with the noise on {corr_default} of {n} maps with the default and on {corr_smooth} of {n} with \
-         `--coefficients smooth`; the critical points of f_glob (persistence ≥ 10 %) fall with the persistence \
+         the coarser meshes the noise at a vertex is averaged over a few dozen neighbours at most). Taken as clean \
+         (`--noise keep`), the decomposition is farther still because its anchors keep f's values, noise \
+         included (the global extrema of a noisy map are its largest noise values); see the noise-level table for \
+         where the claim holds. f_loc correlates ≥ 0.9 with the noise on {corr_default} of {n} maps taken as clean \
+         and on {corr_smooth} of {n} with `--coefficients smooth`; the critical points of f_glob (persistence ≥ 10 %) fall with the persistence \
          as in Fig. 13(d) on {falls} of {n}.\n",
         results.len(),
         BenchField::ALL.len(),
