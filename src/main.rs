@@ -81,6 +81,10 @@ fn main() -> ExitCode {
             cli::progress::stderr_line(&format!("wfem: {e}"));
             ExitCode::from(cli::EXIT_REFUSED)
         }
+        Err(e @ cli::CliError::Unchecked { .. }) => {
+            cli::progress::stderr_line(&format!("wfem: {e}"));
+            ExitCode::from(cli::EXIT_UNCHECKED)
+        }
         Err(e) => {
             cli::progress::stderr_line(&format!("wfem: error: {e}"));
             ExitCode::FAILURE
