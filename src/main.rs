@@ -51,6 +51,8 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // Before any other thread: a signal removes the run's temporary files, then ends it.
+    cli::signals::install();
     let parsed = Cli::parse();
     let command = parsed.command.unwrap_or(Command::Demo(cli::DemoArgs::default()));
     let quiet = matches!(&command, Command::Demo(a) if a.quiet);

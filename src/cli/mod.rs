@@ -27,6 +27,7 @@ pub use geodesic::{geodesic, GeodesicArgs};
 pub mod hks;
 pub mod retrieval;
 mod retrieval_check;
+pub mod signals;
 pub mod wks;
 
 pub use approx::{approx, ApproxArgs};
