@@ -75,8 +75,9 @@ enum Moment {
     Fraction(f64),
 }
 
-/// Runs `case`, sends `signal` at `moment` (`length`: the reference run's) and waits for it.
-fn run_signalled(case: &Case, moment: Moment, length: Duration, signal: i32) -> std::process::ExitStatus {
+/// Runs `case`, sends `signal` at `moment` (`length`: the reference run's) and waits for it;
+/// also whether a temporary was there when the signal was sent.
+fn run_signalled(case: &Case, moment: Moment, length: Duration, signal: i32) -> (std::process::ExitStatus, bool) {
     let mut child = Command::new(bin())
         .args(&case.args)
         .stdout(Stdio::null())
@@ -93,13 +94,14 @@ fn run_signalled(case: &Case, moment: Moment, length: Duration, signal: i32) -> 
         }
         Moment::Fraction(f) => std::thread::sleep(length.mul_f64(f)),
     }
+    let writing = !temporaries(&case.folder).is_empty();
     // SAFETY: a signal to our own child, which has not been waited for yet (its pid is not
     // reused before then).
     #[allow(unsafe_code)]
     unsafe {
         libc::kill(child.id() as libc::pid_t, signal);
     }
-    child.wait().unwrap()
+    (child.wait().unwrap(), writing)
 }
 
 /// Runs `case` to completion, then signalled at many moments; after each run no temporary is
@@ -117,16 +119,18 @@ fn signal_at_many_moments(case: Case) {
     let finished_listing = listing(&case.folder);
     assert_ne!(old, new, "{}: the reference run changed nothing", case.name);
     let extras = [0, 200, 2_000, 20_000].map(Duration::from_micros);
-    let fractions = [0.3, 0.7, 0.9, 1.0];
+    // 5 % of the run: surely before it ends, so that some run is interrupted whatever the
+    // machine's load (a harness whose signals never arrive would otherwise pass).
+    let fractions = [0.05, 0.3, 0.7, 0.9, 1.0];
     let moments = extras
         .iter()
         .map(|&d| Moment::AfterTemporary(d))
         .chain(fractions.iter().map(|&f| Moment::Fraction(f)));
-    let (mut interrupted, mut finished) = (0, 0);
+    let (mut interrupted, mut finished, mut while_writing) = (0, 0, 0);
     for (k, moment) in moments.enumerate() {
         let signal = if k % 2 == 0 { libc::SIGINT } else { libc::SIGTERM };
         (case.reset)();
-        let status = run_signalled(&case, moment, length, signal);
+        let (status, writing) = run_signalled(&case, moment, length, signal);
         if status.success() {
             finished += 1;
         } else {
@@ -137,6 +141,7 @@ fn signal_at_many_moments(case: Case) {
                 case.name
             );
             interrupted += 1;
+            while_writing += usize::from(writing);
         }
         let left = temporaries(&case.folder);
         assert!(
@@ -160,10 +165,12 @@ fn signal_at_many_moments(case: Case) {
             case.name
         );
     }
-    // The signals must have hit runs (not only finished ones) for the test to mean anything.
-    assert!(
-        interrupted >= 3,
-        "{}: only {interrupted} of {} runs were interrupted",
+    // Some runs must have been interrupted for the test to mean anything. How many while a
+    // temporary existed depends on the machine's load (the write phase lasts milliseconds), so
+    // it is reported, not asserted; without the signal thread the first such run fails above.
+    assert!(interrupted >= 1, "{}: no run was interrupted", case.name);
+    eprintln!(
+        "{}: {interrupted} of {} runs interrupted, {while_writing} of them while a temporary existed",
         case.name,
         interrupted + finished
     );
