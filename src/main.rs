@@ -51,6 +51,8 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // Before any other thread: a signal removes the run's temporary files, then ends it.
+    cli::signals::install();
     let parsed = Cli::parse();
     let command = parsed.command.unwrap_or(Command::Demo(cli::DemoArgs::default()));
     let quiet = matches!(&command, Command::Demo(a) if a.quiet);
@@ -82,6 +84,10 @@ fn main() -> ExitCode {
         Err(e @ cli::CliError::Refused { .. }) => {
             cli::progress::stderr_line(&format!("wfem: {e}"));
             ExitCode::from(cli::EXIT_REFUSED)
+        }
+        Err(e @ cli::CliError::Unchecked { .. }) => {
+            cli::progress::stderr_line(&format!("wfem: {e}"));
+            ExitCode::from(cli::EXIT_UNCHECKED)
         }
         Err(e) => {
             cli::progress::stderr_line(&format!("wfem: error: {e}"));

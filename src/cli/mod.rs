@@ -26,6 +26,8 @@ pub use distance::{distance, DistanceArgs};
 pub use geodesic::{geodesic, GeodesicArgs};
 pub mod hks;
 pub mod retrieval;
+mod retrieval_check;
+pub mod signals;
 pub mod wks;
 
 pub use approx::{approx, ApproxArgs};
@@ -118,6 +120,23 @@ pub enum CliError {
         /// What was done with the others ("the index was built").
         done: String,
     },
+    /// `retrieval check` found damaged records (each listed on standard output).
+    #[error("{} is damaged: {damaged} damaged record{} (listed above); rebuild it, or restore it from a copy", path.display(), if *damaged == 1 { "" } else { "s" })]
+    Damaged {
+        /// The index.
+        path: PathBuf,
+        /// How many records are damaged.
+        damaged: usize,
+    },
+    /// `retrieval check` found nothing wrong in an index without checksums, which therefore
+    /// could not be verified: exit status [`EXIT_UNCHECKED`].
+    #[error("{} could not be verified: {why}", path.display())]
+    Unchecked {
+        /// The index.
+        path: PathBuf,
+        /// Why (and how to make it verifiable).
+        why: String,
+    },
     /// Writing to the terminal failed.
     #[error("cannot write to standard output: {0}")]
     Stdout(#[from] std::io::Error),
@@ -144,6 +163,10 @@ fn retrieval_message(e: &shape_retrieval::RetrievalError) -> String {
 /// The exit status of a collection command that used only some of its files
 /// ([`CliError::Refused`]): the outputs are written, but not from every file given.
 pub const EXIT_REFUSED: u8 = 3;
+
+/// The exit status of `retrieval check` on an index that has no checksums (a version 1
+/// SQLite file, or JSON) and showed no damage: nothing found, but nothing verified either.
+pub const EXIT_UNCHECKED: u8 = 4;
 
 /// `--mass`: which heat kernel, named by its mass matrix M (mesh_fem's [`Mass`] registry).
 #[derive(Args, Clone, Debug)]

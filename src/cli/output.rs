@@ -165,14 +165,10 @@ pub(crate) fn check_folder(path: &Path) -> Result<(), CliError> {
         Ok(m) if !m.is_dir() => return Err(output_error(path, format!("{} is not a folder", dir.display()))),
         Ok(_) => {}
     }
-    let probe = dir.join(format!(".wfem-probe-{}", std::process::id()));
-    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
-        Ok(_) => {
-            let _ = std::fs::remove_file(&probe);
-            Ok(())
-        }
-        // Another run of ours left it, or it races with one: the folder is writable.
-        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+    // A registered temporary (wfem_base::tempfiles): a signal during the probe removes it,
+    // and a killed run's probe is removed by the next one here.
+    match wfem_base::tempfiles::TempPath::file(&dir.join("wfem-probe")) {
+        Ok(_) => Ok(()),
         Err(e) => Err(output_error(
             path,
             format!("cannot create files in {}: {e}", dir.display()),

@@ -166,6 +166,17 @@ pub enum RetrievalAction {
         #[arg(long, default_value_t = DEFAULT_TOP)]
         top: usize,
     },
+    /// Verify every record of an index against its checksum and report what is damaged (exit
+    /// status 1), or that it has no checksums to verify (4: an index of an older format, or
+    /// JSON).
+    Check {
+        /// Index file written by `wfem retrieval build`.
+        index: PathBuf,
+        /// First add checksums to an index written before they existed (format version 1;
+        /// refused if anything is found damaged).
+        #[arg(long)]
+        upgrade: bool,
+    },
 }
 
 /// `--vocab` of `build` and `eval`.
@@ -760,6 +771,7 @@ pub fn run(args: &RetrievalArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 writeln!(out, "{}\t{distance:.6}\t{name}", rank + 1)?;
             }
         }
+        RetrievalAction::Check { index, upgrade } => super::retrieval_check::check(index, *upgrade, out)?,
     }
     Ok(())
 }
@@ -771,6 +783,7 @@ fn query_by_mesh(path: &Path, input: &MeshArgs, top: usize) -> Result<Vec<(f64, 
         let store = SqliteIndex::new(path);
         let (settings, rows) = store.open()?;
         stored_sizes(&settings)?;
+        note_unchecked(&rows);
         let query = read_query(input, &settings)?;
         let query = super::progress::run("describing the query", || {
             settings.describe(&input.mesh.display().to_string(), &query.as_shape())
@@ -803,6 +816,7 @@ fn query_by_name(path: &Path, name: &str, top: usize) -> Result<Vec<(f64, String
         let store = SqliteIndex::new(path);
         let (settings, rows) = store.open()?;
         stored_sizes(&settings)?;
+        note_unchecked(&rows);
         let (found, hits) = store.search_stored(&settings, &rows, name, top)?;
         if found != name {
             eprintln!("wfem: --id {name}: the indexed shape {found}");
@@ -823,6 +837,19 @@ fn query_by_name(path: &Path, name: &str, top: usize) -> Result<Vec<(f64, String
             .map(|r| (r.distance, index.entries()[r.entry].name.clone()))
             .collect()
     })
+}
+
+/// A note on standard error when the index has no checksums (format version 1): a damaged
+/// record would go unnoticed.
+fn note_unchecked(store: &retrieval_store::Store) {
+    if !store.checksummed() {
+        super::progress::note(&format!(
+            "{} has no checksums (an index of format version 1): damage would go unnoticed; \
+             `wfem retrieval check --upgrade {}` adds them",
+            store.path().display(),
+            store.path().display()
+        ));
+    }
 }
 
 /// The query of `wfem retrieval query`, read as the index needs it: with the index's
@@ -960,7 +987,7 @@ fn index_file(path: &std::path::Path) -> Box<dyn IndexStore> {
 /// Whether an existing index file is SQLite (by its 16-byte header) or JSON (a `.json` name
 /// or a document starting with `{`); anything else is refused here rather than parsed as JSON.
 /// Regular files only: a FIFO is refused, not waited on.
-fn is_sqlite(path: &std::path::Path) -> Result<bool, CliError> {
+pub(super) fn is_sqlite(path: &std::path::Path) -> Result<bool, CliError> {
     use std::io::Read;
     let mut file = mesh_fem::io::open_regular_file(path)?;
     let mut head = [0u8; 16];

@@ -109,7 +109,7 @@ fn a_tampered_bag_is_refused_by_name_instead_of_ranked_at_distance_zero() {
     // Plain bags (8 bins a row), so that row 1 starts at bin 8.
     assert!(build(&files, &index, &["--spatial", "off"]).status.success());
     // Shape 1's bag gets a negative bin (and keeps its sum): χ² would call it equal to others.
-    {
+    let tamper = || {
         let conn = rusqlite::Connection::open(&index).unwrap();
         let mut data: Vec<u8> = conn
             .query_row("SELECT data FROM chunks WHERE chunk = 0", [], |r| r.get(0))
@@ -121,8 +121,27 @@ fn a_tampered_bag_is_refused_by_name_instead_of_ranked_at_distance_zero() {
         data[at(1)..at(1) + 4].copy_from_slice(&(b + 1.0).to_le_bytes());
         conn.execute("UPDATE chunks SET data = ?1 WHERE chunk = 0", [data])
             .unwrap();
-    }
-    let o = wfem(&["retrieval", "query", index.to_str().unwrap(), files[0].as_str()]);
+    };
+    let query = || wfem(&["retrieval", "query", index.to_str().unwrap(), files[0].as_str()]);
+    let copy = dir.path().join("copy.sqlite");
+    std::fs::copy(&index, &copy).unwrap();
+    // The chunk's checksum refuses it first (issue #41) …
+    tamper();
+    let o = query();
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("corrupt index: chunk 0"), "{}", stderr(&o));
+    // … and in an index without checksums (format version 1) the distance refuses the bin.
+    std::fs::copy(&copy, &index).unwrap();
+    rusqlite::Connection::open(&index)
+        .unwrap()
+        .execute_batch(
+            "ALTER TABLE meta DROP COLUMN checksum; ALTER TABLE shapes DROP COLUMN checksum;
+             ALTER TABLE chunks DROP COLUMN checksum;
+             UPDATE meta SET value = CAST('1' AS BLOB) WHERE key = 'version';",
+        )
+        .unwrap();
+    tamper();
+    let o = query();
     assert!(!o.status.success());
     assert!(
         stderr(&o).contains("stored shape 1") && stderr(&o).contains("negative"),
@@ -321,4 +340,185 @@ fn repeated_files_are_refused_by_name() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("extra.off (2 times)"), "{}", stderr(&o));
     assert_eq!(std::fs::read(&index).unwrap(), before);
+}
+
+fn stdout(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// `wfem retrieval check INDEX` (and `--upgrade`).
+fn check(index: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["retrieval", "check", index.to_str().unwrap()];
+    args.extend(extra);
+    wfem(&args)
+}
+
+#[test]
+fn issue_41_a_flipped_bit_fails_queries_and_check_names_the_chunk() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    let index = dir.path().join("index.sqlite");
+    assert!(build(&files, &index, &[]).status.success());
+    let o = check(&index, &[]);
+    assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));
+    assert!(stdout(&o).contains("intact"), "{}", stdout(&o));
+    let query = || wfem(&["retrieval", "query", index.to_str().unwrap(), &files[1]]);
+    assert!(query().status.success());
+    // One bit of the first vector's first value (a bag bin of bumpy.off).
+    let conn = rusqlite::Connection::open(&index).unwrap();
+    let mut data: Vec<u8> = conn
+        .query_row("SELECT data FROM chunks WHERE chunk = 0", [], |r| r.get(0))
+        .unwrap();
+    data[2] ^= 0x10;
+    conn.execute("UPDATE chunks SET data = ?1 WHERE chunk = 0", [data])
+        .unwrap();
+    drop(conn);
+    for o in [
+        query(),
+        wfem(&["retrieval", "query", index.to_str().unwrap(), "--id", "sphere"]),
+    ] {
+        assert!(!o.status.success(), "a damaged index answered: {}", stdout(&o));
+        assert!(
+            stderr(&o).contains("corrupt index: chunk 0 (shapes 0 to 2): checksum mismatch"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    let o = check(&index, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}{}", stdout(&o), stderr(&o));
+    assert!(
+        stdout(&o).contains("damaged: chunk 0 (shapes 0 to 2)") && stdout(&o).contains("DAMAGED"),
+        "{}",
+        stdout(&o)
+    );
+    assert!(stderr(&o).contains("is damaged: 1 damaged record"), "{}", stderr(&o));
+}
+
+#[test]
+fn issue_41_one_changed_digit_in_the_settings_fails_every_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    let index = dir.path().join("index.sqlite");
+    assert!(build(&files[..2], &index, &[]).status.success());
+    let conn = rusqlite::Connection::open(&index).unwrap();
+    let settings: Vec<u8> = conn
+        .query_row(
+            "SELECT value FROM meta WHERE key = ?1",
+            [retrieval_store::index::SETTINGS_KEY],
+            |r| r.get(0),
+        )
+        .unwrap();
+    // The first digit after `"eigenpairs":` — any digit would do.
+    let mut text = String::from_utf8(settings).unwrap();
+    let at = text.find(|c: char| c.is_ascii_digit()).unwrap();
+    let digit = text.as_bytes()[at];
+    text.replace_range(at..at + 1, if digit == b'9' { "8" } else { "9" });
+    conn.execute(
+        "UPDATE meta SET value = CAST(?1 AS BLOB) WHERE key = ?2",
+        [text.as_str(), retrieval_store::index::SETTINGS_KEY],
+    )
+    .unwrap();
+    drop(conn);
+    let record = format!("corrupt index: metadata {:?}", retrieval_store::index::SETTINGS_KEY);
+    for o in [
+        wfem(&["retrieval", "query", index.to_str().unwrap(), &files[1]]),
+        wfem(&["retrieval", "add", index.to_str().unwrap(), &files[2]]),
+    ] {
+        assert!(!o.status.success(), "{}", stdout(&o));
+        assert!(stderr(&o).contains(&record), "{}", stderr(&o));
+    }
+    let o = check(&index, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
+    assert!(stdout(&o).contains(&format!("damaged: metadata {:?}", retrieval_store::index::SETTINGS_KEY)));
+    // And the typed error reaches library users.
+    let err = SqliteIndex::new(&index).open().unwrap_err();
+    assert!(
+        matches!(err, shape_retrieval::RetrievalError::CorruptIndex { .. }),
+        "{err}"
+    );
+}
+
+#[test]
+fn issue_41_an_index_without_checksums_is_unchecked_until_upgraded() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    let index = dir.path().join("index.sqlite");
+    assert!(build(&files[..2], &index, &[]).status.success());
+    // As builds before format version 2 wrote it.
+    rusqlite::Connection::open(&index)
+        .unwrap()
+        .execute_batch(
+            "ALTER TABLE meta DROP COLUMN checksum; ALTER TABLE shapes DROP COLUMN checksum;
+             ALTER TABLE chunks DROP COLUMN checksum;
+             UPDATE meta SET value = CAST('1' AS BLOB) WHERE key = 'version';",
+        )
+        .unwrap();
+    let o = check(&index, &[]);
+    assert_eq!(o.status.code(), Some(4), "{}{}", stdout(&o), stderr(&o));
+    assert!(stdout(&o).contains("unchecked"), "{}", stdout(&o));
+    assert!(stderr(&o).contains("--upgrade"), "{}", stderr(&o));
+    let o = wfem(&["retrieval", "query", index.to_str().unwrap(), &files[1]]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("has no checksums"), "{}", stderr(&o));
+    let add = || wfem(&["retrieval", "add", index.to_str().unwrap(), &files[2]]);
+    let o = add();
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--upgrade"), "{}", stderr(&o));
+    let o = check(&index, &["--upgrade"]);
+    assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));
+    assert!(
+        stdout(&o).contains("upgraded from format version 1 to 2"),
+        "{}",
+        stdout(&o)
+    );
+    assert!(stdout(&o).contains("intact"), "{}", stdout(&o));
+    assert!(add().status.success());
+    assert!(check(&index, &[]).status.success());
+}
+
+#[test]
+fn issue_41_an_add_held_open_across_a_rebuild_loses_nothing_committed() {
+    // The sequence the last stops named as a residual risk: an `add` whose connection is still
+    // open on a file that `build --force` replaced, while a second `add` has committed to the
+    // new file. SQLite finds the log by the file's name: if closing the first connection
+    // folded "its" log into the old file and deleted it, the second add's shapes would be
+    // gone. The bundled SQLite skips that for a file that moved; this pins it.
+    use retrieval_store::{Entry, Store};
+    let dir = tempfile::tempdir().unwrap();
+    let files = meshes(dir.path());
+    let index = dir.path().join("index.sqlite");
+    assert!(build(&files[..2], &index, &[]).status.success());
+    let as_f64 = |v: Vec<f32>| -> Vec<f64> { v.into_iter().map(f64::from).collect() };
+    // The first add commits and keeps its connection.
+    let mut first = Store::open(&index).unwrap();
+    let row = as_f64(first.vector(0).unwrap().unwrap());
+    first.add(&[Entry::new("first-add", "", &row)]).unwrap();
+    // The rebuild replaces the file (the first add's shape goes with the old one, as asked).
+    let o = build(&files[1..], &index, &["--force"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The second add commits to the new file and keeps its connection: its shape is in the
+    // new file's log only.
+    let mut second = Store::open(&index).unwrap();
+    let row = as_f64(second.vector(0).unwrap().unwrap());
+    second.add(&[Entry::new("second-add", "", &row)]).unwrap();
+    let wal = dir.path().join("index.sqlite-wal");
+    assert!(
+        std::fs::metadata(&wal).map(|m| m.len()).unwrap_or(0) > 0,
+        "the second add's commit is not in the log: the test would pin nothing"
+    );
+    drop(first);
+    let names = || -> Vec<String> {
+        let (_, store) = SqliteIndex::new(&index).open().unwrap();
+        store.shapes().unwrap().into_iter().map(|s| s.name).collect()
+    };
+    let expected = [files[1].clone(), files[2].clone(), "second-add".to_string()];
+    assert_eq!(names(), expected, "a commit to the new file was lost");
+    drop(second);
+    assert_eq!(names(), expected);
+    let o = check(&index, &[]);
+    assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));
+    // The CLI reads and extends it as any index.
+    let o = wfem(&["retrieval", "add", index.to_str().unwrap(), &files[0]]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(names().len(), 4);
 }

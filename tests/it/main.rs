@@ -13,6 +13,7 @@ mod cli_hks;
 mod cli_index_safety;
 mod cli_issue16;
 mod cli_retrieval_eval;
+mod cli_signals;
 mod cli_volumes;
 mod common;
 mod crate_roots;

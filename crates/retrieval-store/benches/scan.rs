@@ -1,7 +1,8 @@
 //! A top-10 query over a million bags (issue #14: "well under a second on this machine").
 //!
 //! Builds (once, reused across runs) a store of `WFEM_STORE_BENCH_SHAPES` (default 1,000,000)
-//! random 48-word histograms under `target/tmp`, then times, for L1 and χ²:
+//! random 48-word histograms under `target/tmp`, then times, for L1 and χ² (every chunk read
+//! is verified against its checksum, issue #41):
 //!
 //! * `open_readonly` + `search_metric(k = 10)`: what `wfem retrieval query` pays per call;
 //! * `search_metric` on an open store: what a long-lived process (Python) pays per query.
@@ -23,13 +24,17 @@ fn histogram(seed: u64) -> Vec<f64> {
 }
 
 fn store_path(shapes: usize) -> PathBuf {
-    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("retrieval-store-bench-{shapes}.sqlite"))
+    // One file per format version: a file of an older version would be read unchecked.
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "retrieval-store-bench-{shapes}-v{}.sqlite",
+        retrieval_store::FORMAT_VERSION
+    ))
 }
 
 fn build(shapes: usize) -> PathBuf {
     let path = store_path(shapes);
     if let Ok(store) = Store::open_readonly(&path) {
-        if store.len().unwrap() == shapes && store.dimension() == WORDS {
+        if store.len().unwrap() == shapes && store.dimension() == WORDS && store.checksummed() {
             return path;
         }
     }

@@ -102,12 +102,44 @@ pub enum StoreError {
         /// What is required.
         reason: String,
     },
-    /// The stored rows contradict the store's invariants.
-    #[error("{path}: corrupt store: {reason}")]
-    Corrupt {
+    /// The file is damaged or was edited behind the store's back: a record's checksum does
+    /// not match its contents, or the stored rows contradict the store's invariants. Nothing
+    /// read from such a record is used.
+    #[error("{path}: corrupt index: {record}: {reason}")]
+    CorruptIndex {
         /// The file.
         path: PathBuf,
-        /// Which invariant failed.
+        /// The damaged record: `metadata "KEY"`, `shape ID ("NAME")`, `chunk C (shapes A to
+        /// B)`, or `the chunk table` / `the file` for the structure.
+        record: String,
+        /// What does not match.
+        reason: String,
+    },
+    /// A write to a store of an older format, which has no checksums: such a file is read (as
+    /// unchecked) but not written to, so that it never holds records that cannot be verified.
+    #[error(
+        "{path} is a store of format version {version}, which has no checksums: it is read as unchecked, not written to; \
+         upgrade it in place first (`wfem retrieval check --upgrade`, Python `IndexStore.upgrade`)"
+    )]
+    NoChecksums {
+        /// The file.
+        path: PathBuf,
+        /// Its format version.
+        version: u32,
+    },
+    /// A read-only store whose write-ahead log holds committed changes that cannot be read
+    /// with it (the log is read when the shared-memory index can be created, or else in
+    /// exclusive mode; both failed): the file alone would be an older state, so it is not read.
+    #[error(
+        "{path}: its log {wal} holds committed changes that cannot be read here ({reason}); fold the log in by \
+         opening the index once where its folder is writable (e.g. `wfem retrieval check`), or copy both files there"
+    )]
+    UnreadableLog {
+        /// The file.
+        path: PathBuf,
+        /// The non-empty write-ahead log.
+        wal: PathBuf,
+        /// SQLite's error.
         reason: String,
     },
     /// The path is a directory, FIFO, socket or device, not a store file.

@@ -14,11 +14,13 @@
 //! Vectors are stored as `f32`: a bag loaded back is renormalised to sum 1 when its sum is
 //! within the rounding of `f32` (1e−4), and otherwise refused like a hand-edited JSON bag.
 
+use crate::check::{CheckReport, Damage};
 use crate::{Entry, Store, StoreError, StoreParams};
 use shape_retrieval::model::{IndexEntry, RetrievalIndex, ShapeSignature};
 use shape_retrieval::store::{index_from_settings, index_settings, IndexStore};
 use shape_retrieval::RetrievalError;
 use std::path::{Path, PathBuf};
+use wfem_base::tempfiles::{self, TempPath};
 
 /// Metadata key of the index settings.
 pub const SETTINGS_KEY: &str = "wfem-retrieval-index";
@@ -58,13 +60,24 @@ impl SqliteIndex {
         }
     }
 
+    /// A store error as the model's: damage stays typed ([`RetrievalError::CorruptIndex`]),
+    /// the rest is [`RetrievalError::Storage`].
+    fn store_error(&self, e: StoreError) -> RetrievalError {
+        match e {
+            StoreError::CorruptIndex { path, record, reason } => RetrievalError::CorruptIndex { path, record, reason },
+            e => self.storage(e),
+        }
+    }
+
     /// Opens the store read-only and reads its settings: an index with the stored vocabulary
     /// and bag settings and no entries (to compute query signatures with), and the store.
     ///
     /// # Errors
-    /// [`RetrievalError::Storage`] (not a store, no settings), [`RetrievalError::InvalidModel`].
+    /// [`RetrievalError::CorruptIndex`] (a metadata entry does not match its checksum, or the
+    /// chunk table is inconsistent), [`RetrievalError::Storage`] (not a store, no settings),
+    /// [`RetrievalError::InvalidModel`].
     pub fn open(&self) -> Result<(RetrievalIndex, Store), RetrievalError> {
-        let store = Store::open_readonly(&self.path).map_err(|e| self.storage(e))?;
+        let store = Store::open_readonly(&self.path).map_err(|e| self.store_error(e))?;
         let settings = self.settings(&store)?;
         Ok((settings, store))
     }
@@ -72,7 +85,7 @@ impl SqliteIndex {
     fn settings(&self, store: &Store) -> Result<RetrievalIndex, RetrievalError> {
         let text = store
             .meta(SETTINGS_KEY)
-            .map_err(|e| self.storage(e))?
+            .map_err(|e| self.store_error(e))?
             .ok_or_else(|| self.storage("a vector store, but not a wfem retrieval index (no settings)"))?;
         let text = String::from_utf8(text).map_err(|_| self.storage("the index settings are not UTF-8"))?;
         let index = index_from_settings(&text, Vec::new()).map_err(|e| self.located(e))?;
@@ -113,7 +126,7 @@ impl SqliteIndex {
         k: usize,
     ) -> Result<Vec<IndexHit>, RetrievalError> {
         // Validate the query once against the first stored shape (or a copy of itself).
-        let first = match store.vector(0).map_err(|e| self.storage(e))? {
+        let first = match store.vector(0).map_err(|e| self.store_error(e))? {
             Some(row) => signature(settings, &row),
             None => return Ok(Vec::new()),
         };
@@ -137,7 +150,7 @@ impl SqliteIndex {
                     settings.row_distance(query, &buffer)
                 }))
             })
-            .map_err(|e| self.storage(e))?;
+            .map_err(|e| self.store_error(e))?;
         Ok(hits
             .into_iter()
             .map(|h| IndexHit {
@@ -162,12 +175,12 @@ impl SqliteIndex {
         name: &str,
         k: usize,
     ) -> Result<(String, Vec<IndexHit>), RetrievalError> {
-        let shapes = store.shapes().map_err(|e| self.storage(e))?;
+        let shapes = store.shapes().map_err(|e| self.store_error(e))?;
         let i = shape_retrieval::model::resolve_name(shapes.iter().map(|s| s.name.as_str()), name)?;
         let id = shapes[i].id;
         let row = store
             .vector(id)
-            .map_err(|e| self.storage(e))?
+            .map_err(|e| self.store_error(e))?
             .ok_or_else(|| self.storage(format!("shape {id} ({}) has no stored vector", shapes[i].name)))?;
         let query = signature(settings, &row);
         let mut hits = self.search(settings, store, &query, k.saturating_add(1))?;
@@ -189,7 +202,7 @@ impl SqliteIndex {
     /// [`RetrievalError::Storage`] (settings changed, file replaced, a name already indexed,
     /// store errors).
     pub fn append(&self, opened: &RetrievalIndex, entries: &[IndexEntry]) -> Result<(), RetrievalError> {
-        let mut store = Store::open(&self.path).map_err(|e| self.storage(e))?;
+        let mut store = Store::open(&self.path).map_err(|e| self.store_error(e))?;
         let settings = self.settings(&store)?;
         if index_settings(&settings).map_err(|e| self.located(e))?
             != index_settings(opened).map_err(|e| self.located(e))?
@@ -209,7 +222,56 @@ impl SqliteIndex {
             .zip(&rows)
             .map(|(e, r)| Entry::new(&e.name, "", r))
             .collect();
-        store.add(&batch).map_err(|e| self.storage(e))?;
+        store.add(&batch).map_err(|e| self.store_error(e))?;
+        Ok(())
+    }
+}
+
+impl SqliteIndex {
+    /// Verifies the whole index file and reports every damaged record
+    /// ([`Store::check_with`]): each record against its checksum and the file's invariants,
+    /// the stored settings as a model (they parse, their sizes are within bounds and they
+    /// describe the stored vectors' width), and every stored bag as a histogram (no negative
+    /// bin). A version 1 file (no checksums) is reported as unchecked.
+    ///
+    /// # Errors
+    /// [`RetrievalError::Storage`] only when nothing can be checked (not a store, unreadable).
+    pub fn check(&self) -> Result<CheckReport, RetrievalError> {
+        let settings = Store::open_readonly(&self.path)
+            .map_err(|e| self.store_error(e))
+            .and_then(|store| self.settings(&store));
+        let words = settings
+            .as_ref()
+            .ok()
+            .map(|s| s.bags().bag_len(s.vocabulary().vocabulary().size()));
+        let mut report = Store::check_with(&self.path, &|_, row| {
+            let bag = &row[..words.unwrap_or(0).min(row.len())];
+            bag.iter()
+                .position(|&x| x < 0.0)
+                .map(|i| format!("bag bin {i} is {}; bags are non-negative histograms", bag[i]))
+        })
+        .map_err(|e| self.store_error(e))?;
+        match settings {
+            // Damage of the store is in the report already.
+            Ok(_) | Err(RetrievalError::CorruptIndex { .. }) => {}
+            Err(e) => report.damage.push(Damage {
+                record: format!("metadata {SETTINGS_KEY:?}"),
+                reason: match e {
+                    RetrievalError::Storage { reason, .. } => reason,
+                    e => e.to_string(),
+                },
+            }),
+        }
+        Ok(report)
+    }
+
+    /// Adds checksums to an index of format version 1 in place ([`Store::upgrade`]): its
+    /// structure and values are checked first, and an index with damage is refused.
+    ///
+    /// # Errors
+    /// [`RetrievalError::CorruptIndex`] for damage; [`RetrievalError::Storage`].
+    pub fn upgrade(&self) -> Result<(), RetrievalError> {
+        Store::upgrade(&self.path).map_err(|e| self.store_error(e))?;
         Ok(())
     }
 }
@@ -245,8 +307,8 @@ fn sibling(path: &Path, suffix: &str) -> PathBuf {
 impl IndexStore for SqliteIndex {
     fn load_index(&self) -> Result<RetrievalIndex, RetrievalError> {
         let (settings, store) = self.open()?;
-        let shapes = store.shapes().map_err(|e| self.storage(e))?;
-        let vectors = store.vectors().map_err(|e| self.storage(e))?;
+        let shapes = store.shapes().map_err(|e| self.store_error(e))?;
+        let vectors = store.vectors().map_err(|e| self.store_error(e))?;
         let dim = store.dimension();
         let entries = shapes
             .into_iter()
@@ -264,18 +326,13 @@ impl IndexStore for SqliteIndex {
         let settings = index_settings(index).map_err(|e| self.located(e))?;
         let width =
             index.bags().bag_len(index.vocabulary().vocabulary().size()) + index.bags().global.map_or(0, |g| g.len());
-        let dir = match self.path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        let name = self
-            .path
-            .file_name()
-            .map(|s| s.to_string_lossy().into_owned())
-            .ok_or_else(|| self.storage("no file name"))?;
-        crate::store::regular_or_absent(&self.path).map_err(|e| self.storage(e))?;
-        // The whole index is built under a temporary name, then renamed into place.
-        let tmp = dir.join(format!(".{name}.{}.build", std::process::id()));
+        let name = self.path.file_name().ok_or_else(|| self.storage("no file name"))?;
+        crate::store::regular_or_absent(&self.path).map_err(|e| self.store_error(e))?;
+        // The whole index is built in a private folder beside it (`.NAME.tmp-PID-N`, with
+        // SQLite's journals: removed when dropped, on a signal, or after a kill by the next
+        // writer of this path; wfem_base::tempfiles), then renamed into place.
+        let folder = TempPath::dir(&self.path).map_err(|e| self.storage(e))?;
+        let tmp = folder.path().join(name);
         let build = || -> Result<(), StoreError> {
             let mut store = Store::create(&tmp, &StoreParams::new(width), true)?;
             store.set_meta(SETTINGS_KEY, settings.as_bytes())?;
@@ -293,20 +350,17 @@ impl IndexStore for SqliteIndex {
             // either commits before (and is replaced, as asked) or sees the new file and
             // refuses (StoreError::Replaced): the two never interleave.
             let lock = Store::lock_for_replace(&self.path)?;
-            let renamed = std::fs::rename(&tmp, &self.path).map_err(|source| StoreError::Io {
-                path: self.path.clone(),
-                source,
-            });
+            let renamed =
+                tempfiles::while_locked(|| std::fs::rename(&tmp, &self.path)).map_err(|source| StoreError::Io {
+                    path: self.path.clone(),
+                    source,
+                });
             drop(lock);
             renamed
         };
         let result = build();
-        if result.is_err() {
-            for p in [tmp.clone(), sibling(&tmp, "-wal"), sibling(&tmp, "-shm")] {
-                let _ = std::fs::remove_file(p);
-            }
-        }
-        result.map_err(|e| self.storage(e))?;
+        drop(folder);
+        result.map_err(|e| self.store_error(e))?;
         // A shared-memory index left by readers of the replaced file must not describe this one.
         let _ = std::fs::remove_file(sibling(&self.path, "-shm"));
         Ok(())

@@ -49,6 +49,7 @@
 #![warn(missing_docs)]
 #![cfg_attr(not(test), warn(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod check;
 mod error;
 #[cfg(feature = "index")]
 pub mod index;

@@ -203,6 +203,19 @@ pub enum RetrievalError {
         /// What went wrong.
         reason: String,
     },
+    /// A stored index is damaged or was edited: a record does not match its checksum, or
+    /// contradicts the file's invariants (retrieval-store's `StoreError::CorruptIndex`).
+    /// Nothing read from it is used.
+    #[error("{}: corrupt index: {record}: {reason}", path.display())]
+    CorruptIndex {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The damaged record (`metadata "KEY"`, `shape ID ("NAME")`, `chunk C (shapes A to
+        /// B)`, …).
+        record: String,
+        /// What does not match.
+        reason: String,
+    },
     /// No indexed shape, or more than one, answers to a name (`query --id`).
     #[error("{reason}")]
     UnknownShape {

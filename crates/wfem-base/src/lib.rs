@@ -14,6 +14,8 @@
 //! * [`interrupt`]: cooperative interruption (a Python Ctrl-C, a cancelled request) checked
 //!   between the steps of every long loop.
 //! * [`fs`]: what a path that is not a regular file is, in one phrase for every error message.
+//! * [`tempfiles`]: the temporary files of every writer, removed on a signal and, after a
+//!   kill, by the next writer of the same target.
 //!
 //! ```
 //! use wfem_base::{registry, Choice};
@@ -48,6 +50,7 @@ pub mod fs;
 pub mod interrupt;
 pub mod rng;
 pub mod simd;
+pub mod tempfiles;
 
 pub use choice::serde_name;
 pub use choice::{check_entries, check_registry, normalize, Choice, Entry, UnknownName};

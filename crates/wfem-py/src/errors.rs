@@ -250,7 +250,7 @@ pub fn retrieval(py: Python<'_>, e: &RetrievalError) -> PyErr {
         | TooFewDescriptors { .. }
         | VertexOutOfRange { .. }
         | Labels { .. } => Class::InvalidInput,
-        Storage { .. } => Class::Store,
+        Storage { .. } | CorruptIndex { .. } => Class::Store,
         _ => Class::Retrieval,
     };
     raise_error(py, class, e, Vec::new())

@@ -226,6 +226,15 @@ impl PyRetrievalIndex {
         Ok(Self { path })
     }
 
+    /// Verifies the index file at `path` (every record against its checksum, the settings,
+    /// every bag) and reports all damage.
+    #[staticmethod]
+    fn check(py: Python<'_>, path: PathBuf) -> PyResult<crate::store::CheckTuple> {
+        run(py, move |_| {
+            Ok(crate::store::check_tuple(SqliteIndex::new(&path).check()?))
+        })
+    }
+
     /// The file.
     #[getter]
     fn path(&self) -> String {

@@ -7,6 +7,7 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
+use retrieval_store::check::CheckReport;
 use retrieval_store::metric::StandardMetric;
 use retrieval_store::{Entry, Store, StoreParams};
 use std::path::PathBuf;
@@ -14,6 +15,24 @@ use std::sync::{Arc, Mutex};
 
 /// (id, name, info, distance).
 type HitTuple = (u64, String, String, f64);
+
+/// A [`CheckReport`] for Python: (version, checksums, metadata, shapes, chunks,
+/// [(record, reason)], text).
+pub type CheckTuple = (u32, bool, usize, usize, usize, Vec<(String, String)>, String);
+
+/// The tuple form of a check report (`wfem.CheckReport` in the Python layer).
+pub fn check_tuple(r: CheckReport) -> CheckTuple {
+    let text = r.to_text();
+    (
+        r.version,
+        r.checksums,
+        r.metadata,
+        r.shapes,
+        r.chunks,
+        r.damage.into_iter().map(|d| (d.record, d.reason)).collect(),
+        text,
+    )
+}
 
 /// Rust side of `wfem.IndexStore`: one connection, used by one call at a time.
 #[pyclass(name = "IndexStore", module = "wfem._wfem", frozen)]
@@ -68,6 +87,24 @@ impl PyIndexStore {
             };
             Ok(Self::wrap(store))
         })
+    }
+
+    /// Verifies every record of the store at `path` and reports all damage.
+    #[staticmethod]
+    fn check(py: Python<'_>, path: PathBuf) -> PyResult<CheckTuple> {
+        run(py, move |_| Ok(check_tuple(Store::check(&path)?)))
+    }
+
+    /// Adds checksums to a store of format version 1 in place; returns the check after.
+    #[staticmethod]
+    fn upgrade(py: Python<'_>, path: PathBuf) -> PyResult<CheckTuple> {
+        run(py, move |_| Ok(check_tuple(Store::upgrade(&path)?)))
+    }
+
+    /// Whether every record carries a checksum (format version 2).
+    #[getter]
+    fn checksummed(&self, py: Python<'_>) -> PyResult<bool> {
+        self.with(py, |s| Ok(s.checksummed()))
     }
 
     #[getter]

@@ -261,3 +261,79 @@ def test_retrieval_index_evaluate(tmp_path):
         index.evaluate(classes[:3])
     with pytest.raises(wfem.InvalidInputError):
         index.evaluate({names[0]: "a"})
+
+
+def _flip_bit(path, chunk, byte, bit):
+    import sqlite3
+
+    with sqlite3.connect(path) as conn:
+        (data,) = conn.execute("SELECT data FROM chunks WHERE chunk = ?", (chunk,)).fetchone()
+        data = bytearray(data)
+        data[byte] ^= 1 << bit
+        conn.execute("UPDATE chunks SET data = ? WHERE chunk = ?", (bytes(data), chunk))
+    conn.close()
+
+
+def test_issue_41_a_flipped_bit_is_corrupt_index_and_check_names_it(tmp_path):
+    path = tmp_path / "index.sqlite"
+    bags = random_bags(40, 8)
+    store = wfem.IndexStore.create(path, 8, chunk_rows=16)
+    store.add([f"s{i}" for i in range(40)], bags)
+    del store
+    report = wfem.IndexStore.check(path)
+    assert report.verified and report.shapes == 40 and report.chunks == 3 and report.damage == []
+    _flip_bit(path, 1, 5, 2)
+    store = wfem.IndexStore.open(path, readonly=True)
+    assert store.checksummed
+    with pytest.raises(wfem.StoreError) as e:
+        store.search(bags[20], k=3)
+    assert e.value.kind == "CorruptIndex" and e.value.record == "chunk 1 (shapes 16 to 31)"
+    report = wfem.IndexStore.check(path)
+    assert not report.verified
+    assert report.damage[0][0] == "chunk 1 (shapes 16 to 31)" and "checksum" in report.damage[0][1]
+    assert "DAMAGED" in report.text
+
+
+def test_issue_41_a_retrieval_index_with_a_changed_setting_is_refused(tmp_path):
+    import sqlite3
+
+    paths = index_meshes(tmp_path)
+    out = tmp_path / "idx.sqlite"
+    wfem.RetrievalIndex.build(paths[:3], out, words=8)
+    assert wfem.RetrievalIndex.check(out).verified
+    with sqlite3.connect(out) as conn:
+        (text,) = conn.execute("SELECT value FROM meta WHERE key = 'wfem-retrieval-index'").fetchone()
+        text = bytes(text).decode()
+        at = next(i for i, c in enumerate(text) if c.isdigit())
+        text = text[:at] + ("8" if text[at] == "9" else "9") + text[at + 1 :]
+        conn.execute("UPDATE meta SET value = CAST(? AS BLOB) WHERE key = 'wfem-retrieval-index'", (text,))
+    conn.close()
+    with pytest.raises(wfem.StoreError) as e:
+        wfem.RetrievalIndex.open(out)
+    assert e.value.kind == "CorruptIndex" and e.value.record == 'metadata "wfem-retrieval-index"'
+    report = wfem.RetrievalIndex.check(out)
+    assert [r for r, _ in report.damage] == ['metadata "wfem-retrieval-index"']
+
+
+def test_issue_41_a_version_1_store_is_unchecked_until_upgraded(tmp_path):
+    import sqlite3
+
+    path = tmp_path / "index.sqlite"
+    bags = random_bags(10, 4)
+    wfem.IndexStore.create(path, 4).add([f"s{i}" for i in range(10)], bags)
+    with sqlite3.connect(path) as conn:
+        for table in ("meta", "shapes", "chunks"):
+            conn.execute(f"ALTER TABLE {table} DROP COLUMN checksum")
+        conn.execute("UPDATE meta SET value = CAST('1' AS BLOB) WHERE key = 'version'")
+    conn.close()
+    store = wfem.IndexStore.open(path)
+    assert not store.checksummed
+    with pytest.raises(wfem.StoreError) as e:
+        store.add(["new"], bags[:1])
+    assert e.value.kind == "NoChecksums"
+    del store
+    report = wfem.IndexStore.check(path)
+    assert report.version == 1 and not report.checksums and not report.verified and report.damage == []
+    assert wfem.IndexStore.upgrade(path).verified
+    store = wfem.IndexStore.open(path)
+    assert store.checksummed and store.add(["new"], bags[:1]) == [10]

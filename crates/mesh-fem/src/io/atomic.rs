@@ -5,14 +5,17 @@
 //! (`.NAME.tmp-PID-N`, same directory so that the final rename is atomic), flushed and fsynced;
 //! only when every file of the set is written are they renamed onto their targets. A failure
 //! (disk full, a target that is a directory, an error from the caller's writer) removes the
-//! temporary files and leaves every target as it was.
+//! temporary files and leaves every target as it was. The temporary files are
+//! [`wfem_base::tempfiles::TempPath`]s: a program ending on a signal removes them (and never
+//! between two renames of a set), and a killed one's are removed by the next writer of the
+//! same target.
 
 use super::io_error;
 use crate::MeshError;
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use wfem_base::tempfiles::{self, TempPath};
 
 /// Writes a file atomically: `write` fills a temporary file in the same directory, which is
 /// flushed, fsynced and renamed onto `path`. If `write` (or any step) fails, the temporary
@@ -45,7 +48,7 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> std::io::
 #[derive(Debug, Default)]
 pub struct AtomicSet {
     /// (temporary file, target) pairs, in staging order.
-    staged: Vec<(PathBuf, PathBuf)>,
+    staged: Vec<(TempPath, PathBuf)>,
 }
 
 impl AtomicSet {
@@ -71,33 +74,12 @@ impl AtomicSet {
         path: &Path,
         fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
     ) -> Result<(), MeshError> {
-        static COUNTER: AtomicUsize = AtomicUsize::new(0);
         if self.staged.iter().any(|(_, target)| same_file(target, path)) {
             return Err(MeshError::Invalid {
                 reason: format!("two outputs would be written to the same file {}", path.display()),
             });
         }
-        let dir = parent_dir(path);
-        let name = path
-            .file_name()
-            .ok_or_else(|| {
-                io_error(
-                    path,
-                    std::io::Error::new(std::io::ErrorKind::InvalidInput, "the path names no file"),
-                )
-            })?
-            .to_string_lossy()
-            .into_owned();
-        let tmp = dir.join(format!(
-            ".{name}.tmp-{}-{}",
-            std::process::id(),
-            COUNTER.fetch_add(1, Ordering::Relaxed)
-        ));
-        let file = OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)
-            .map_err(|e| io_error(path, e))?;
+        let (tmp, file) = TempPath::file(path).map_err(|e| io_error(path, e))?;
         let result = (|| -> std::io::Result<()> {
             let mut w = BufWriter::new(file);
             fill(&mut w)?;
@@ -109,10 +91,8 @@ impl AtomicSet {
                 self.staged.push((tmp, path.to_path_buf()));
                 Ok(())
             }
-            Err(e) => {
-                let _ = std::fs::remove_file(&tmp);
-                Err(io_error(path, e))
-            }
+            // Dropping `tmp` removes the temporary file.
+            Err(e) => Err(io_error(path, e)),
         }
     }
 
@@ -124,25 +104,22 @@ impl AtomicSet {
     /// [`MeshError::Io`] naming the target that could not be replaced; the staged files are
     /// removed.
     pub fn commit(mut self) -> Result<(), MeshError> {
+        // Dropping `staged` removes every temporary file that was not renamed.
         let staged = std::mem::take(&mut self.staged);
-        let cleanup = |from: usize| {
-            for (tmp, _) in &staged[from..] {
-                let _ = std::fs::remove_file(tmp);
-            }
-        };
         if let Some((_, target)) = staged.iter().find(|(_, target)| target.is_dir()) {
-            cleanup(0);
             return Err(io_error(
                 target,
                 std::io::Error::new(std::io::ErrorKind::IsADirectory, "the output path is a directory"),
             ));
         }
-        for (k, (tmp, target)) in staged.iter().enumerate() {
-            if let Err(e) = std::fs::rename(tmp, target) {
-                cleanup(k);
-                return Err(io_error(target, e));
+        // A signal's cleanup runs before or after the renames, never between: every target is
+        // its old file or its new one, as a set.
+        tempfiles::while_locked(|| {
+            for (tmp, target) in &staged {
+                std::fs::rename(tmp.path(), target).map_err(|e| io_error(target, e))?;
             }
-        }
+            Ok::<(), MeshError>(())
+        })?;
         // Make the renames durable where the platform allows syncing a directory.
         #[cfg(unix)]
         for (_, target) in &staged {
@@ -151,14 +128,6 @@ impl AtomicSet {
             }
         }
         Ok(())
-    }
-}
-
-impl Drop for AtomicSet {
-    fn drop(&mut self) {
-        for (tmp, _) in &self.staged {
-            let _ = std::fs::remove_file(tmp);
-        }
     }
 }
 

@@ -67,18 +67,35 @@ fn sizes_are_bounded_before_anything_is_allocated() {
     assert!(!path.exists());
 }
 
+/// Removes the checksum columns (a store of format version 1, as earlier builds wrote): what
+/// is left to catch an edit are the structural checks below.
+fn without_checksums(path: &Path) {
+    tamper(
+        path,
+        "UPDATE meta SET value = CAST('1' AS BLOB) WHERE key = 'version'",
+        None,
+    );
+    for table in ["meta", "shapes", "chunks"] {
+        tamper(path, &format!("ALTER TABLE {table} DROP COLUMN checksum"), None);
+    }
+}
+
 #[test]
 fn a_tampered_dimension_is_refused_on_open() {
     let dir = tempfile::tempdir().unwrap();
     let path = filled(dir.path(), 48, 4, 6);
-    // 4e12: would size a 16 TB read.
+    // 4e12: would size a 16 TB read. Its checksum refuses it first; without checksums, the
+    // bound does.
     tamper(
         &path,
         "UPDATE meta SET value = CAST('4000000000000' AS BLOB) WHERE key = 'dimension'",
         None,
     );
     let err = Store::open_readonly(&path).unwrap_err();
-    assert!(matches!(err, StoreError::Corrupt { .. }), "{err}");
+    assert!(matches!(err, StoreError::CorruptIndex { .. }), "{err}");
+    without_checksums(&path);
+    let err = Store::open_readonly(&path).unwrap_err();
+    assert!(err.to_string().contains("is not in 1..="), "{err}");
     // 47 over 48-wide blobs: would read misaligned vectors.
     tamper(
         &path,
@@ -87,7 +104,7 @@ fn a_tampered_dimension_is_refused_on_open() {
     );
     let err = Store::open(&path).unwrap_err().to_string();
     assert!(
-        err.contains("chunk 0 has 768 bytes") && err.contains("47 values"),
+        err.contains("chunk 0 (shapes 0 to 3): has 768 bytes") && err.contains("47 values"),
         "{err}"
     );
 }
@@ -102,7 +119,7 @@ fn a_short_or_long_chunk_blob_is_refused_on_open() {
         Some(f32_bytes(&[0.5; 5])),
     );
     let err = Store::open_readonly(&path).unwrap_err().to_string();
-    assert!(err.contains("chunk 1 has 20 bytes"), "{err}");
+    assert!(err.contains("chunk 1 (shapes 4 to 5): has 20 bytes"), "{err}");
 }
 
 #[test]
@@ -116,17 +133,27 @@ fn non_finite_stored_values_are_refused_by_reads_and_appends() {
         "UPDATE chunks SET data = ?1 WHERE chunk = 0",
         Some(f32_bytes(&values)),
     );
+    // Its checksum refuses the chunk first, naming it.
+    let store = Store::open(&path).unwrap();
+    let err = store.vectors().unwrap_err().to_string();
+    assert!(err.contains("chunk 0 (shapes 0 to 3): checksum mismatch"), "{err}");
+    drop(store);
+    // Without checksums, reads refuse the value, naming the shape; a write is refused anyway.
+    without_checksums(&path);
     let mut store = Store::open(&path).unwrap();
     let err = store.vectors().unwrap_err().to_string();
-    assert!(err.contains("shape 2 has the value NaN at index 1"), "{err}");
+    assert!(
+        err.contains("shape 2: value NaN at index 1: stored vectors must be finite"),
+        "{err}"
+    );
     let err = store
         .search_metric(&[0.5, 0.5], 3, &StandardMetric::L1)
         .unwrap_err()
         .to_string();
     assert!(err.contains("shape 2"), "{err}");
     let v = [0.5, 0.5];
-    let err = store.add(&[Entry::new("new", "", &v)]).unwrap_err().to_string();
-    assert!(err.contains("shape 2 has the value NaN"), "{err}");
+    let err = store.add(&[Entry::new("new", "", &v)]).unwrap_err();
+    assert!(matches!(err, StoreError::NoChecksums { .. }), "{err}");
     assert_eq!(store.len().unwrap(), 6);
 }
 
@@ -143,6 +170,9 @@ fn chi_squared_refuses_negative_bins_instead_of_returning_zero() {
         "{err}"
     );
     drop(store);
+    // Checksums catch damage, not meaning: a negative bin that a file holds consistently (here
+    // one without checksums) is refused by the distance, naming the shape.
+    without_checksums(&path);
     tamper(
         &path,
         "UPDATE chunks SET data = ?1 WHERE chunk = 0",

@@ -2,4 +2,6 @@
 
 mod crash;
 mod faults;
+mod integrity;
+mod readonly;
 mod store;

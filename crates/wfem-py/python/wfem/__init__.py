@@ -67,6 +67,7 @@ from ._mesh import (
 )
 from ._volume import VolumeReport, read_volume, repair_volume, validate_volume
 from ._retrieval import (
+    CheckReport,
     DESCRIPTORS,
     PAPER_DESCRIPTORS,
     Hit,
@@ -163,6 +164,7 @@ __all__ = [
     "IndexStore",
     "RetrievalIndex",
     "Hit",
+    "CheckReport",
     # errors
     "WfemError",
     "InvalidInputError",

@@ -33,6 +33,7 @@ __all__ = [
     "average_precision",
     "IndexStore",
     "Hit",
+    "CheckReport",
     "RetrievalIndex",
 ]
 
@@ -242,6 +243,39 @@ class Hit:
     distance: float
 
 
+@dataclass(frozen=True)
+class CheckReport:
+    """What :meth:`IndexStore.check` / :meth:`RetrievalIndex.check` found in an index file.
+
+    ``damage`` lists every damaged record as ``(record, reason)`` (``'metadata "KEY"'``,
+    ``'shape ID ("NAME")'``, ``'chunk C (shapes A to B)'``, ``'the file'``, …); ``checksums``
+    is False for a file of format version 1, which has none, so that its contents could not be
+    verified (:meth:`IndexStore.upgrade` adds them). ``text`` is what ``wfem retrieval check``
+    prints."""
+
+    path: str
+    version: int
+    checksums: bool
+    metadata: int
+    shapes: int
+    chunks: int
+    damage: list[tuple[str, str]]
+    text: str
+
+    @property
+    def verified(self) -> bool:
+        """Nothing is damaged and every record was verified against its checksum."""
+        return self.checksums and not self.damage
+
+
+def _check_report(path: str | os.PathLike[str], t: Any) -> CheckReport:
+    version, checksums, metadata, shapes, chunks, damage, text = t
+    return CheckReport(
+        os.fspath(path), int(version), bool(checksums), int(metadata), int(shapes), int(chunks),
+        [(str(r), str(why)) for r, why in damage], str(text),
+    )
+
+
 class IndexStore:
     """The embedded SQLite store of a retrieval index (one file; see the crate retrieval-store).
 
@@ -249,7 +283,9 @@ class IndexStore:
     vector of the store's dimension (kept as float32). :meth:`search` is an exact parallel
     top-k scan; :meth:`add` appends in one transaction (nothing is rebuilt). WAL mode: any
     number of readers (``readonly=True``) alongside one writer; a crash during ``add`` loses
-    nothing committed before.
+    nothing committed before. Every record carries a checksum: opening verifies the metadata,
+    every read what it reads (a damaged record raises :class:`StoreError` with ``kind ==
+    "CorruptIndex"`` naming it), and :meth:`check` the whole file.
     """
 
     _s: Any
@@ -266,6 +302,24 @@ class IndexStore:
     @classmethod
     def open(cls, path: str | os.PathLike[str], *, readonly: bool = False) -> "IndexStore":
         return cls(_wfem.IndexStore.open(os.fspath(path), readonly))
+
+    @staticmethod
+    def check(path: str | os.PathLike[str]) -> CheckReport:
+        """Verifies every record of the store file at ``path`` (checksums, SQLite's structure,
+        the chunk table, finite values) and reports all damage rather than raising at the first;
+        raises only when nothing can be checked (not a store, unreadable)."""
+        return _check_report(path, _wfem.IndexStore.check(os.fspath(path)))
+
+    @staticmethod
+    def upgrade(path: str | os.PathLike[str]) -> CheckReport:
+        """Adds checksums in place to a store of format version 1 (which is read unchecked and
+        not written to); a store with damage is refused. Returns the check afterwards."""
+        return _check_report(path, _wfem.IndexStore.upgrade(os.fspath(path)))
+
+    @property
+    def checksummed(self) -> bool:
+        """Whether every record carries a checksum (False: format version 1, see :meth:`upgrade`)."""
+        return bool(self._s.checksummed)
 
     def __len__(self) -> int:
         return len(self._s)
@@ -418,8 +472,15 @@ class RetrievalIndex:
 
     @classmethod
     def open(cls, path: str | os.PathLike[str]) -> "RetrievalIndex":
-        """Opens an index file (checked: format, settings, sizes)."""
+        """Opens an index file (checked: format, settings against their checksum, sizes)."""
         return cls(_wfem.RetrievalIndex.open(os.fspath(path)))
+
+    @staticmethod
+    def check(path: str | os.PathLike[str]) -> CheckReport:
+        """Verifies the whole index file at ``path`` — every record against its checksum, the
+        recipe, every stored bag — and reports all damage (``wfem retrieval check``); raises
+        only when nothing can be checked."""
+        return _check_report(path, _wfem.RetrievalIndex.check(os.fspath(path)))
 
     def __len__(self) -> int:
         return int(self._i.__len__())
