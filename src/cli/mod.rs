@@ -26,7 +26,7 @@ pub use distance::{distance, DistanceArgs};
 pub use geodesic::{geodesic, GeodesicArgs};
 pub mod hks;
 pub mod retrieval;
-mod retrieval_check;
+
 pub mod signals;
 pub mod wks;
 

@@ -2,17 +2,19 @@
 //! what is damaged (issue #41); `--upgrade` first adds checksums to an index written before
 //! they existed.
 
-use super::CliError;
+use super::super::CliError;
+use clap::Args;
 use retrieval_store::index::SqliteIndex;
 use shape_retrieval::store::{IndexStore, JsonFile};
 use std::io::Write;
 use std::path::Path;
+use std::path::PathBuf;
 
 /// Checks (and with `upgrade`, first upgrades) the index at `path`; prints one line per
 /// damaged record and a summary. Exit status: 0 verified, 1 damaged ([`CliError::Damaged`]),
-/// [`super::EXIT_UNCHECKED`] for an index without checksums that showed no damage.
+/// [`super::super::EXIT_UNCHECKED`] for an index without checksums that showed no damage.
 pub fn check(path: &Path, upgrade: bool, out: &mut dyn Write) -> Result<(), CliError> {
-    if !super::retrieval::is_sqlite(path)? {
+    if !super::is_sqlite(path)? {
         if upgrade {
             return Err(CliError::Usage(format!(
                 "--upgrade adds checksums to a SQLite index; {} is a JSON index, which has none: build a SQLite \
@@ -73,4 +75,15 @@ pub fn check(path: &Path, upgrade: bool, out: &mut dyn Write) -> Result<(), CliE
         });
     }
     Ok(())
+}
+
+/// Arguments of `wfem retrieval check`.
+#[derive(Args, Clone, Debug)]
+pub struct CheckArgs {
+    /// Index file written by `wfem retrieval build`.
+    pub index: PathBuf,
+    /// First add checksums to an index written before they existed (format version 1;
+    /// refused if anything is found damaged).
+    #[arg(long)]
+    pub upgrade: bool,
 }
