@@ -125,3 +125,70 @@ for k, fmt in enumerate(FORMATS):
         put("pipeline", f"{fmt}_{name}", bytes([k]) + raw)
         put("pipeline", f"{fmt}_tri_{name}", bytes([k + 4]) + raw)
 print({fmt: len(s) for fmt, s in seeds.items()})
+
+# The volume readers (issue #39): a cube of six tetrahedra in every dialect the readers take,
+# and the first 4 KB of the small shared volume files when ../../shared/data/volumes exists.
+CUBE_V = [(x, y, z) for z in (0.0, 1.0) for y in (0.0, 1.0) for x in (0.0, 1.0)]
+CUBE_T = [(0, 1, 3, 7), (0, 1, 5, 7), (0, 2, 3, 7), (0, 2, 6, 7), (0, 4, 5, 7), (0, 4, 6, 7)]
+
+
+def medit(version):
+    lines = [f"MeshVersionFormatted {version}", "Dimension 3", "Vertices", str(len(CUBE_V))]
+    lines += [f"{x} {y} {z} 0" for x, y, z in CUBE_V]
+    lines += ["Triangles", "1", "1 2 4 0", "Tetrahedra", str(len(CUBE_T))]
+    lines += [" ".join(str(i + 1) for i in t) + " 1" for t in CUBE_T]
+    return "\n".join(lines + ["End", ""])
+
+
+def gmsh22(binary=False):
+    head = f"$MeshFormat\n2.2 {1 if binary else 0} 8\n"
+    if binary:
+        head += struct.pack("<i", 1).decode("latin-1") + "\n"
+    head += "$EndMeshFormat\n$Nodes\n" + str(len(CUBE_V)) + "\n"
+    if binary:
+        body = b"".join(struct.pack("<i3d", i + 1, *p) for i, p in enumerate(CUBE_V))
+        elems = struct.pack("<3i", 4, len(CUBE_T), 2) + b"".join(
+            struct.pack("<7i", k + 1, 1, 1, *(i + 1 for i in t)) for k, t in enumerate(CUBE_T))
+        return (head.encode("latin-1") + body + b"\n$EndNodes\n$Elements\n" + str(len(CUBE_T)).encode()
+                + b"\n" + elems + b"\n$EndElements\n")
+    nodes = "".join(f"{i + 1} {x} {y} {z}\n" for i, (x, y, z) in enumerate(CUBE_V))
+    elems = "".join(f"{k + 1} 4 2 1 1 " + " ".join(str(i + 1) for i in t) + "\n" for k, t in enumerate(CUBE_T))
+    return head + nodes + f"$EndNodes\n$Elements\n{len(CUBE_T) + 1}\n7 2 2 1 1 1 2 4\n" + elems + "$EndElements\n"
+
+
+def gmsh41():
+    n, m = len(CUBE_V), len(CUBE_T)
+    nodes = f"$Nodes\n1 {n} 1 {n}\n3 1 0 {n}\n" + "".join(f"{i + 1}\n" for i in range(n))
+    nodes += "".join(f"{x} {y} {z}\n" for x, y, z in CUBE_V) + "$EndNodes\n"
+    elems = f"$Elements\n1 {m} 1 {m}\n3 1 4 {m}\n"
+    elems += "".join(f"{k + 1} " + " ".join(str(i + 1) for i in t) + "\n" for k, t in enumerate(CUBE_T))
+    return "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n" + nodes + elems + "$EndElements\n"
+
+
+def vtk(polydata=False):
+    pts = "".join(f"{x} {y} {z}\n" for x, y, z in CUBE_V)
+    head = f"# vtk DataFile Version 2.0\ncube\nASCII\nDATASET {'POLYDATA' if polydata else 'UNSTRUCTURED_GRID'}\n"
+    head += f"POINTS {len(CUBE_V)} float\n" + pts
+    cells = "".join("4 " + " ".join(map(str, t)) + "\n" for t in CUBE_T)
+    if polydata:
+        return head + f"POLYGONS {len(CUBE_T)} {5 * len(CUBE_T)}\n" + cells
+    return head + f"CELLS {len(CUBE_T)} {5 * len(CUBE_T)}\n" + cells + f"CELL_TYPES {len(CUBE_T)}\n" + "10\n" * len(CUBE_T)
+
+
+import struct  # noqa: E402
+
+put("volume_medit", "cube_v1.mesh", medit(1))
+put("volume_medit", "cube_v2.mesh", medit(2))
+put("volume_gmsh", "cube22.msh", gmsh22())
+put("volume_gmsh", "cube22_binary.msh", gmsh22(binary=True))
+put("volume_gmsh", "cube41.msh", gmsh41())
+put("volume_vtk", "cube_grid.vtk", vtk())
+put("volume_vtk", "cube_polydata.vtk", vtk(polydata=True))
+SHARED = os.path.join(HERE, "..", "..", "shared", "data", "volumes")
+for target, rel in [("volume_medit", "libigl-tutorial-data/octopus-low.mesh"),
+                    ("volume_gmsh", "scikit-fem/cuubat.msh"), ("volume_gmsh", "scikit-fem/box.msh"),
+                    ("volume_gmsh", "libigl-tutorial-data/hand.msh"), ("volume_vtk", "lapy/cubeTetra.vtk")]:
+    path = os.path.join(SHARED, rel)
+    if os.path.isfile(path):
+        with open(path, "rb") as fh:
+            put(target, "shared_" + rel.replace("/", "_"), fh.read(4096))

@@ -46,6 +46,9 @@ enum Command {
     /// Wave kernel signature WKS(i, e) (n × N) on the eigenpairs of the wFEM or a lumped
     /// kernel, at pyFM's energies.
     Wks(cli::wks::WksArgs),
+    /// The eigenvalue spectrum λ₁ … λ_m of a surface or a solid and its global signature
+    /// (Shape-DNA, Weyl-normalised by the area or the volume).
+    Spectrum(cli::spectrum::SpectrumArgs),
     /// Shape retrieval with bags of features: `build` an index, `query` it with a mesh.
     Retrieval(cli::retrieval::RetrievalArgs),
 }
@@ -74,6 +77,7 @@ fn main() -> ExitCode {
         Command::Approx(a) => cli::approx(&a, &mut stdout),
         Command::Hks(a) => cli::hks::hks(&a, &mut stdout),
         Command::Wks(a) => cli::wks::wks(&a, &mut stdout),
+        Command::Spectrum(a) => cli::spectrum::spectrum(&a, &mut stdout),
         Command::Retrieval(a) => cli::retrieval::run(&a, &mut stdout),
     };
     match result {

@@ -8,7 +8,7 @@ Solver(TetMesh, lump=False)), K_t f at t = 1e-3·V^(2/3) (wfem's exact default a
 backward-Euler solve (B + tL)⁻¹Bf by scipy's SuperLU — the cost LaPy's heat.diffusion pays —
 and LaPy's heat.diffusion itself), and the k smallest eigenpairs (wfem.eigenbasis against
 LaPy's Solver.eigs). Wall times of the calls (best of `--repeat`), on whatever machine runs it.
-Needs: a release wheel of wfem, lapy, scipy.
+Needs: a release wheel of wfem, lapy, scipy (benches/peers/volumes-requirements.txt).
 """
 
 from __future__ import annotations

@@ -56,6 +56,7 @@ fn demo_files() -> Vec<String> {
     let mut files = vec!["basis.ply".to_string(), "report.md".to_string()];
     files.extend(DEMO_TIMES.iter().map(|t| format!("basis_t{}.png", short_label(*t))));
     files.extend(super::demo_approx::files());
+    files.extend(super::demo_volume::files());
     files
 }
 
@@ -181,18 +182,29 @@ pub fn demo(args: &DemoArgs, out: &mut dyn Write) -> Result<(), CliError> {
     })?;
     timed("feature-driven approximation (10 scales, 7 figures)", start);
 
+    let start = Instant::now();
+    let volume = progress::run("a volume: heat from a point inside a solid", || {
+        super::demo_volume::section(&args.out, &mut set)
+    })?;
+    timed(
+        "a volume: assemble, K_t e_i at 2 times, 2 figures with cuts, VTU",
+        start,
+    );
+
     let mut report = demo_report(&mesh, anchor, eigs, &timings, &rows);
     report.push_str(&approx);
+    report.push_str(&volume);
     let report_path = args.out.join("report.md");
     set.stage(&report_path, |w| w.write_all(report.as_bytes()))?;
     set.commit()?;
     writeln!(out, "{report}")?;
     writeln!(
         out,
-        "wrote {}, {} and {} PNG files",
+        "wrote {}, {}, {} and {} PNG files",
         ply.display(),
+        args.out.join("volume.vtu").display(),
         report_path.display(),
-        DEMO_TIMES.len() + super::demo_approx::files().len()
+        DEMO_TIMES.len() + super::demo_approx::files().len() + super::demo_volume::files().len() - 1
     )?;
     Ok(())
 }

@@ -13,6 +13,7 @@ mod approx;
 pub mod choice;
 mod demo;
 mod demo_approx;
+mod demo_volume;
 mod distance;
 mod geodesic;
 mod heat;
@@ -26,8 +27,8 @@ pub use distance::{distance, DistanceArgs};
 pub use geodesic::{geodesic, GeodesicArgs};
 pub mod hks;
 pub mod retrieval;
-
 pub mod signals;
+pub mod spectrum;
 pub mod wks;
 
 pub use approx::{approx, ApproxArgs};

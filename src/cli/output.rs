@@ -578,7 +578,7 @@ pub fn write_fields(
 
 /// A volume's cut for its figures, with the plane's name: `--cut AXIS=VALUE`, or the plane
 /// through the centre of the bounding box facing the front view.
-fn volume_cut(
+pub(super) fn volume_cut(
     volume: &mesh_fem::volume::TetMesh,
     plane: Option<([f64; 3], f64)>,
     frame: &Frame,
@@ -612,7 +612,7 @@ fn volume_cut(
 }
 
 /// The figure of a volume's boundary with the figure of its cut below it, on one colour scale.
-fn with_cut(
+pub(super) fn with_cut(
     mesh: &TriMesh,
     cut: &(mesh_fem::volume::cut::Cut, [f64; 3], String),
     values: &[f64],

@@ -140,9 +140,12 @@ pub fn info(path: &std::path::Path, volume: &Volume, json: bool, out: &mut dyn W
             "n_boundary_faces": r.n_boundary_faces,
             "n_boundary_vertices": r.n_boundary_vertices,
             "boundary_euler": r.boundary_euler,
+            "n_boundary_components": r.n_boundary_components,
+            "boundary_genus": r.boundary_genus,
             "n_components": r.n_components,
             "quality_min": r.quality.0,
             "quality_median": r.quality.1,
+            "worst_tet": r.worst_tet,
             "usable": !r.problems.iter().any(|p| p.is_fatal()),
             "errors": problems(true),
             "warnings": problems(false),
@@ -160,8 +163,22 @@ pub fn info(path: &std::path::Path, volume: &Volume, json: bool, out: &mut dyn W
         "  boundary:             {} triangles on {} vertices (Euler characteristic {})",
         r.n_boundary_faces, r.n_boundary_vertices, r.boundary_euler
     )?;
+    let genus = match r.boundary_genus {
+        Some(g) => format!("genus {g}"),
+        None => "not a closed 2-manifold: genus undefined".to_string(),
+    };
+    writeln!(
+        out,
+        "  boundary topology:    {} component{}, {genus}",
+        r.n_boundary_components,
+        if r.n_boundary_components == 1 { "" } else { "s" }
+    )?;
     writeln!(out, "  components:           {}", r.n_components)?;
-    writeln!(out, "  quality (min/median): {:.3e} / {:.3}", r.quality.0, r.quality.1)?;
+    writeln!(
+        out,
+        "  quality (min/median): {:.3e} / {:.3} (6√2|T|/ℓ³_rms, 1 for the regular tetrahedron; the worst: tetrahedron {})",
+        r.quality.0, r.quality.1, r.worst_tet
+    )?;
     for e in problems(true) {
         writeln!(out, "  error: {e}")?;
     }

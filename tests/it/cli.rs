@@ -242,8 +242,16 @@ fn demo_writes_ply_png_and_report() {
         .unwrap()
         .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "png"))
         .count();
-    // Four K_t e_i figures, then f, f_glob, f_loc and f_glob at four persistences (Fig. 12–13).
-    assert_eq!(pngs, 4 + 7);
+    // Four K_t e_i figures, then f, f_glob, f_loc and f_glob at four persistences (Fig. 12–13),
+    // then the volume's two (boundary above, cut below).
+    assert_eq!(pngs, 4 + 7 + 2);
+    let vtu = std::fs::read_to_string(out.join("volume.vtu")).unwrap();
+    assert!(
+        vtu.contains("NumberOfPoints=\"5137\" NumberOfCells=\"28160\""),
+        "{}",
+        &vtu[..300]
+    );
+    assert!(vtu.contains("Name=\"heat_t0.05\""));
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("| 0.25 |"), "{report}");
     assert!(report.contains("## Feature-driven approximation"), "{report}");
@@ -251,6 +259,15 @@ fn demo_writes_ply_png_and_report() {
         report.contains("![f_glob](approx_glob.png)") && report.contains("| 40 % |"),
         "{report}"
     );
+    // The volume's heat is conserved to rounding (the last column of its table).
+    let volume = &report[report.find("## A volume").expect("a volume section")..];
+    let lost: Vec<f64> = volume
+        .lines()
+        .filter(|l| l.starts_with("| 0."))
+        .map(|l| l.trim_end_matches(" |").rsplit("| ").next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(lost.len(), 2, "{volume}");
+    assert!(lost.iter().all(|&x| x < 1e-12), "{volume}");
 }
 
 /// `--backend` selects how the rational method solves its shifted systems; every backend gives

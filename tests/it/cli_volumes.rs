@@ -36,6 +36,13 @@ fn info_heat_and_geodesic_read_a_volume() {
     assert_eq!(info["n_vertices"], n);
     assert!((info["total_volume"].as_f64().unwrap() - 1.0).abs() < 1e-12);
     assert_eq!(info["boundary_euler"], 2);
+    assert_eq!(info["n_boundary_components"], 1);
+    assert_eq!(info["boundary_genus"], 0);
+    assert!(info["worst_tet"].as_u64().unwrap() < 6 * 216);
+    let o = wfem(&["info", path]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("boundary topology:    1 component, genus 0"), "{text}");
+    assert!(text.contains("the worst: tetrahedron"), "{text}");
 
     // Heat from the centre: conserved (1ᵀB K_t e = 1ᵀB e), symmetric about the centre.
     let centre = n / 2;
@@ -212,4 +219,105 @@ fn retrieval_says_a_volume_is_not_a_surface() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("is a tetrahedral mesh"), "{}", stderr(&o));
     assert!(!index.exists());
+}
+
+/// `wfem spectrum`: the Shape-DNA of a solid with the 3-D Weyl normalisation (issue #39), the
+/// eigenvalues those of the library, and the same command on a surface with the 2-D one.
+#[test]
+fn spectrum_writes_the_shape_dna_of_a_solid_and_of_a_surface() {
+    use shape_retrieval::global::{operators_signature, GlobalKind, Measure};
+    use wfem_base::Choice;
+    let dir = tempfile::tempdir().unwrap();
+    let cube = write_cube(dir.path(), 4);
+    let csv = dir.path().join("dna.csv");
+    let o = wfem(&[
+        "spectrum",
+        cube.to_str().unwrap(),
+        "-m",
+        "8",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some(format!("eigenvalue,{}", GlobalKind::WeylShapeDna.name()).as_str())
+    );
+    let rows: Vec<[f64; 2]> = lines
+        .map(|l| {
+            let (a, b) = l.split_once(',').unwrap();
+            [a.parse().unwrap(), b.parse().unwrap()]
+        })
+        .collect();
+    assert_eq!(rows.len(), 8);
+    let fem = mesh_fem::volume::assemble_volume(&mesh_fem::generate::tet_cube(4), &Default::default()).unwrap();
+    let ops = wfem_heat::Operators::new(&fem, mesh_fem::Mass::Consistent).unwrap();
+    let sig = operators_signature(&ops, GlobalKind::WeylShapeDna, 8, Measure::Volume(1.0)).unwrap();
+    for (i, row) in rows.iter().enumerate() {
+        assert!((row[0] - sig.eigenvalues[i + 1]).abs() < 1e-9 * row[0], "λ_{}", i + 1);
+        let weyl = (6.0 * std::f64::consts::PI.powi(2) * (i + 1) as f64).powf(2.0 / 3.0);
+        assert!((row[1] - row[0] / weyl).abs() < 1e-9, "g_{}", i + 1);
+    }
+    // The sidecar of an .npy output names the measure; a histogram kind is written alone.
+    let npy = dir.path().join("dna.npy");
+    let o = wfem(&[
+        "spectrum",
+        cube.to_str().unwrap(),
+        "--kind",
+        GlobalKind::Biharmonic.name(),
+        "-o",
+        npy.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (shape, _) = read_npy(&npy).unwrap();
+    assert_eq!(shape, vec![shape_retrieval::global::BIHARMONIC_BINS]);
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("dna.json")).unwrap()).unwrap();
+    assert_eq!(meta["dimension"], 3);
+    assert!((meta["volume"].as_f64().unwrap() - 1.0).abs() < 1e-12);
+    // A surface: λ_i A/(4π i) with A its area.
+    let sphere = dir.path().join("s.off");
+    mesh_fem::io::write_mesh(&sphere, &mesh_fem::generate::icosphere(2)).unwrap();
+    let out = dir.path().join("s.npy");
+    let o = wfem(&[
+        "spectrum",
+        sphere.to_str().unwrap(),
+        "-m",
+        "3",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (shape, v) = read_npy(&out).unwrap();
+    assert_eq!(shape, vec![3, 2]);
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
+    let area = meta["area"].as_f64().unwrap();
+    assert_eq!(meta["dimension"], 2);
+    for i in 0..3 {
+        let (lambda, g) = (v[2 * i], v[2 * i + 1]);
+        // λ₁₋₃ of the unit sphere are 2 = l(l + 1), l = 1.
+        assert!((lambda - 2.0).abs() < 0.05, "{lambda}");
+        assert!((g - lambda * area / (4.0 * std::f64::consts::PI * (i + 1) as f64)).abs() < 1e-12);
+    }
+    // Bad requests: a format that holds a mesh, too many eigenvalues; nothing is written.
+    let ply = dir.path().join("x.ply");
+    let o = wfem(&["spectrum", cube.to_str().unwrap(), "-o", ply.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains(".csv"), "{}", stderr(&o));
+    let o = wfem(&[
+        "spectrum",
+        cube.to_str().unwrap(),
+        "-m",
+        "125",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("--eigenvalues"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!ply.exists());
 }

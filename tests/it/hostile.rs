@@ -995,6 +995,29 @@ fn hks_rows() -> Vec<Row> {
             "hks {d}/unref.obj --repair unreferenced -o {o}/h.npy",
             ok(&[Npy("h.npy", N, 16)]),
         ),
+        // The spectrum of the same sphere (a table of m rows, not per vertex).
+        row("spectrum {d}/sphere.off -m 5 -o {o}/s.npy", ok(&[Npy("s.npy", 5, 2)])),
+        row("spectrum {d}/sphere.off -m 41 -o {o}/s.csv", ok(&[File("s.csv")])),
+        row(
+            "spectrum {d}/sphere.off -m 0 -o {o}/s.csv",
+            Typed(&["--eigenvalues 0", "1..=41"]),
+        ),
+        row(
+            "spectrum {d}/sphere.off -m 42 -o {o}/s.csv",
+            Typed(&["--eigenvalues 42"]),
+        ),
+        row(
+            "spectrum {d}/sphere.off -m {U64} -o {o}/s.csv",
+            Typed(&["--eigenvalues"]),
+        ),
+        row("spectrum {d}/sphere.off -m -1 -o {o}/s.csv", Clap),
+        row("spectrum {d}/sphere.off --kind nope -o {o}/s.csv", Clap),
+        row(
+            "spectrum {d}/sphere.off -o {o}/s.png",
+            Typed(&["a spectrum is a table"]),
+        ),
+        row("spectrum {d}/sphere.off -o {o}/nodir/s.npy", Typed(&["does not exist"])),
+        row("spectrum {d}/fifo.off -o {o}/s.npy", Typed(&["FIFO"])),
     ]
 }
 

@@ -43,6 +43,8 @@ fn flags() -> Vec<Flag> {
         flag::<DistanceKind>(&["distance"], "--kind"),
         flag::<wfem_heat::geodesic::GeodesicMethod>(&["geodesic"], "--method"),
         flag::<Mass>(&["wks"], "--mass"),
+        flag::<shape_retrieval::global::GlobalKind>(&["spectrum"], "--kind"),
+        flag::<Mass>(&["spectrum"], "--mass"),
         flag::<Coefficients>(&["approx"], "--coefficients"),
         flag::<wfem_heat::approx::NoiseRule>(&["approx"], "--noise"),
         flag::<Mass>(&["approx"], "--mass"),

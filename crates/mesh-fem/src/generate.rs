@@ -212,11 +212,64 @@ pub fn bumpy(level: u32) -> TriMesh {
     let positions = positions
         .into_iter()
         .map(|p| {
-            let r = 1.0 + 0.25 * (3.0 * p[0]).sin() * (2.0 * p[1]).cos() * p[2].cos() + 0.15 * (5.0 * p[2]).sin();
+            let r = bump(p);
             [r * p[0], r * p[1], r * p[2]]
         })
         .collect();
     build(positions, faces)
+}
+
+/// The radius of [`bumpy`] in the direction of the unit vector `p` (between 0.6 and 1.4).
+fn bump(p: [f64; 3]) -> f64 {
+    1.0 + 0.25 * (3.0 * p[0]).sin() * (2.0 * p[1]).cos() * p[2].cos() + 0.15 * (5.0 * p[2]).sin()
+}
+
+/// A solid shaped like [`bumpy`], filled with tetrahedra: `shells` concentric copies of
+/// [`icosphere`]`(level)` at radii k/shells (k = 1 … shells), each triangle joined to the one
+/// above it by a prism cut into three tetrahedra, and a cone from the centre (vertex 0) to each
+/// triangle of the innermost sphere; then every vertex is moved radially to the bump radius of
+/// its direction. A prism's quadrilateral sides are cut from the bottom of the lower-numbered
+/// vertex to the top of the higher-numbered one, so neighbouring prisms agree; every
+/// tetrahedron is positively oriented (radial moves by a positive factor keep the order of the
+/// shells). 1 + shells · (10·4^level + 2) vertices, 3·shells − 2 tetrahedra per icosphere face.
+///
+/// # Panics
+/// If `shells` is 0.
+pub fn tet_bumpy(level: u32, shells: usize) -> crate::volume::TetMesh {
+    assert!(shells >= 1, "tet_bumpy needs at least one shell");
+    let sphere = icosphere(level);
+    let m = sphere.n_vertices() as u32;
+    let mut positions = vec![[0.0; 3]];
+    for k in 1..=shells {
+        let r = k as f64 / shells as f64;
+        positions.extend(sphere.positions().iter().map(|&p| {
+            let u = normalize(p);
+            let s = r * bump(u);
+            u.map(|x| s * x)
+        }));
+    }
+    // Vertex v of shell k (1-based) is 1 + (k − 1)·m + v.
+    let at = |k: usize, v: u32| 1 + (k as u32 - 1) * m + v;
+    let mut tets = Vec::with_capacity(sphere.n_faces() * (3 * shells - 2));
+    for f in sphere.faces() {
+        tets.push([0, at(1, f[0]), at(1, f[1]), at(1, f[2])]);
+        let mut v = *f;
+        v.sort_unstable();
+        for k in 1..shells {
+            let (lo, hi) = (|i: usize| at(k, v[i]), |i: usize| at(k + 1, v[i]));
+            tets.push([lo(0), lo(1), lo(2), hi(2)]);
+            tets.push([lo(0), lo(1), hi(1), hi(2)]);
+            tets.push([lo(0), hi(0), hi(1), hi(2)]);
+        }
+    }
+    for t in &mut tets {
+        if crate::volume::signed_volume(t.map(|v| positions[v as usize])) < 0.0 {
+            t.swap(0, 1);
+        }
+    }
+    #[allow(clippy::expect_used)]
+    // invariant: finite positions and indices below 1 + shells·m by construction.
+    crate::volume::TetMesh::new(positions, tets).expect("a generated solid is a valid mesh")
 }
 
 /// The unit cube \[0,1\]³ as a tetrahedral mesh: `n` cells per side, each split into six

@@ -1,19 +1,24 @@
 //! Global spectral signatures of a shape: one vector per shape, from the same eigenpairs of
 //! (L, B) as the dense descriptors (paper, Eq. (4): `L φ_i = λ_i B φ_i`, `ΦᵀBΦ = I`, L the
 //! cotangent stiffness, symmetric positive semidefinite), fused with the bag of features by
-//! [`crate::model::GlobalSignature`]. Every kind is invariant to scale (`λ → λ/β²`,
-//! `A → β²A`, `φ → φ/β`) and to isometries.
+//! [`crate::model::GlobalSignature`]. A shape is a surface or a solid: its [`Measure`] (area A,
+//! d = 2, or volume V, d = 3) carries the dimension that scale invariance and Weyl's law need.
+//! Every kind is invariant to scale (`λ → λ/β²`, `μ → β^d μ`, `φ → φ/β^{d/2}`) and to
+//! isometries.
 //!
-//! * [`GlobalKind::LogShapeDna`]: `g_i = ln(λ_i A)`, i = 1 … m, compared by `(1/m) Σ|g_i − h_i|`
-//!   (the first fusion; what a file without `kind` holds).
+//! * [`GlobalKind::LogShapeDna`]: `g_i = ln(λ_i μ^{2/d})` (on a surface `ln(λ_i A)`), i = 1 … m,
+//!   compared by `(1/m) Σ|g_i − h_i|` (the first fusion; what a file without `kind` holds).
 //! * [`GlobalKind::WeylShapeDna`]: Shape-DNA (Reuter et al. 2006) with Weyl's normalisation,
-//!   `g_i = λ_i A / (4π i)` (≈ 1 for every i on any surface, by Weyl's law `λ_i ≈ 4π i / A`),
-//!   compared by the Euclidean distance.
+//!   `g_i = λ_i / λ_i^{Weyl}` ≈ 1 for every i on any shape, compared by the Euclidean distance.
+//!   Weyl's law `N(λ) ≈ ω_d μ λ^{d/2}/(2π)^d` (ω_d the volume of the unit d-ball) gives
+//!   `λ_i^{Weyl} = 4πi/A` on a surface and `(6π²i/V)^{2/3}` in a solid, so
+//!   `g_i = λ_i A/(4πi)` and `g_i = λ_i V^{2/3}/(6π²i)^{2/3}` (the Shape-DNA of solids).
 //! * [`GlobalKind::Biharmonic`]: the distribution of biharmonic distances (Lipman et al. 2010)
-//!   `d(x, y)² = Σ_{i=1}^{m} (φ_i(x) − φ_i(y))² / λ_i²` between the points of the surface,
-//!   in units of √A, as a histogram of [`BIHARMONIC_BINS`] bins over `[0, BIHARMONIC_RANGE·√A]`
-//!   with pairs weighted by their areas `a_x a_y / A²` (a shape distribution, Osada et al. 2002,
-//!   of an intrinsic distance), compared by χ². Its terms decay like `1/i²`, so a few dozen
+//!   `d(x, y)² = Σ_{i=1}^{m} (φ_i(x) − φ_i(y))² / λ_i²` between the points of the shape,
+//!   in units of `μ^{(4−d)/(2d)}` (√A on a surface, V^{1/6} in a solid: d² scales like μ^{4/d−1}),
+//!   as a histogram of [`BIHARMONIC_BINS`] bins over `[0, BIHARMONIC_RANGE]` units
+//!   with pairs weighted by their measures `a_x a_y / μ²` (a shape distribution, Osada et al.
+//!   2002, of an intrinsic distance), compared by χ². Its terms decay like `1/i²`, so a few dozen
 //!   eigenpairs resolve it on any mesh, and a thin tube or a small hole moves few pairs.
 
 use crate::{check, RetrievalError};
@@ -23,10 +28,81 @@ use serde::{Deserialize, Serialize};
 
 /// Bins of the biharmonic distance distribution.
 pub const BIHARMONIC_BINS: usize = 32;
-/// Range of the biharmonic distance histogram, in units of √A.
+/// Range of the biharmonic distance histogram, in units of √A (μ^{(4−d)/(2d)}, see the module docs).
 pub const BIHARMONIC_RANGE: f64 = 1.0;
 /// Points sampled (area-proportionally) for the biharmonic distribution of a larger shape.
 pub const BIHARMONIC_SAMPLES: usize = 1000;
+
+/// The measure μ of the domain a spectrum belongs to, with its dimension d: the area of a
+/// surface or the volume of a solid (1ᵀB1 = 1ᵀD1 of its operators).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Measure {
+    /// The area A of a surface (d = 2).
+    Area(f64),
+    /// The volume V of a solid (d = 3).
+    Volume(f64),
+}
+
+impl Measure {
+    /// μ.
+    pub fn value(self) -> f64 {
+        match self {
+            Measure::Area(a) => a,
+            Measure::Volume(v) => v,
+        }
+    }
+
+    /// What μ is: "area" or "volume".
+    pub fn quantity(self) -> &'static str {
+        match self {
+            Measure::Area(_) => "area",
+            Measure::Volume(_) => "volume",
+        }
+    }
+
+    /// The dimension d of the domain.
+    pub fn dimension(self) -> usize {
+        match self {
+            Measure::Area(_) => 2,
+            Measure::Volume(_) => 3,
+        }
+    }
+
+    /// `μ^{2/d}`: λ·μ^{2/d} is invariant to scale (λ → λ/β², μ → β^d μ).
+    pub fn eigenvalue_unit(self) -> f64 {
+        match self {
+            Measure::Area(a) => a,
+            Measure::Volume(v) => v.cbrt() * v.cbrt(),
+        }
+    }
+
+    /// Weyl's asymptotic i-th eigenvalue `λ_i^{Weyl}`: 4πi/A on a surface, (6π²i/V)^{2/3} in a
+    /// solid (from `N(λ) ≈ ω_d μ λ^{d/2}/(2π)^d`).
+    pub fn weyl_eigenvalue(self, i: usize) -> f64 {
+        1.0 / self.weyl_ratio(1.0, i)
+    }
+
+    /// `λ / λ_i^{Weyl}` (the Weyl-normalised Shape-DNA entry; ≈ 1 for large i): `λA/(4πi)` on a
+    /// surface, `λV^{2/3}/(6π²i)^{2/3}` in a solid.
+    pub fn weyl_ratio(self, lambda: f64, i: usize) -> f64 {
+        use std::f64::consts::PI;
+        match self {
+            Measure::Area(a) => lambda * a / (4.0 * PI * i as f64),
+            Measure::Volume(_) => {
+                let c = (6.0 * PI * PI * i as f64).cbrt();
+                lambda * self.eigenvalue_unit() / (c * c)
+            }
+        }
+    }
+
+    /// The unit of a biharmonic distance, `μ^{(4−d)/(2d)}`: √A, V^{1/6}.
+    fn biharmonic_unit(self) -> f64 {
+        match self {
+            Measure::Area(a) => a.sqrt(),
+            Measure::Volume(v) => v.sqrt().cbrt(),
+        }
+    }
+}
 
 /// Which global signature (see the module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -62,19 +138,20 @@ impl GlobalKind {
     }
 
     /// The signature of one shape from its ascending eigenpairs (`values`, `vectors` n × k,
-    /// B-orthonormal), its vertex weights (areas, one per described vertex: the first rows of
-    /// `vectors`) and its area A; m = `eigenvalues` (≤ k − 1).
+    /// B-orthonormal), its vertex weights (areas or volumes, one per described vertex: the first
+    /// rows of `vectors`) and its [`Measure`] (area A or volume V); m = `eigenvalues` (≤ k − 1).
     ///
     /// # Errors
     /// [`RetrievalError::NoNonzeroEigenvalue`] if some λ_i, 1 ≤ i ≤ m, is not positive (a
     /// disconnected mesh has several zero eigenvalues), [`RetrievalError::DimensionMismatch`]
-    /// if there are fewer than m + 1 eigenpairs or the weights do not fit.
+    /// if there are fewer than m + 1 eigenpairs or the weights do not fit,
+    /// [`RetrievalError::InvalidParameter`] for a measure that is not finite and positive.
     pub fn compute(
         &self,
         values: &[f64],
         vectors: MatRef<'_, f64>,
         weights: &[f64],
-        area: f64,
+        measure: Measure,
         eigenvalues: usize,
     ) -> Result<Vec<f64>, RetrievalError> {
         if values.len() < eigenvalues + 1 {
@@ -84,7 +161,7 @@ impl GlobalKind {
                 actual: values.len(),
             });
         }
-        check::positive("area", area)?;
+        check::positive(measure.quantity(), measure.value())?;
         let scale = values.iter().fold(0.0f64, |m, &v| m.max(v));
         let lambda = |i: usize| -> Result<f64, RetrievalError> {
             let l = values[i];
@@ -95,9 +172,12 @@ impl GlobalKind {
             }
         };
         match self {
-            GlobalKind::LogShapeDna => (1..=eigenvalues).map(|i| Ok((lambda(i)? * area).ln())).collect(),
+            GlobalKind::LogShapeDna => {
+                let unit = measure.eigenvalue_unit();
+                (1..=eigenvalues).map(|i| Ok((lambda(i)? * unit).ln())).collect()
+            }
             GlobalKind::WeylShapeDna => (1..=eigenvalues)
-                .map(|i| Ok(lambda(i)? * area / (4.0 * std::f64::consts::PI * i as f64)))
+                .map(|i| Ok(measure.weyl_ratio(lambda(i)?, i)))
                 .collect(),
             GlobalKind::Biharmonic => {
                 let inv: Vec<f64> = (1..=eigenvalues)
@@ -108,7 +188,7 @@ impl GlobalKind {
                     weights.len().max(vectors.nrows()),
                     vectors.nrows(),
                 )?;
-                Ok(biharmonic_histogram(vectors, &inv, weights, area))
+                Ok(biharmonic_histogram(vectors, &inv, weights, measure))
             }
         }
     }
@@ -123,6 +203,50 @@ impl GlobalKind {
             }
         }
     }
+}
+
+/// A global signature of one shape with the eigenvalues it was computed from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpectrumSignature {
+    /// λ₀ … λ_m of (L, M), ascending (λ₀ = 0 on a connected shape).
+    pub eigenvalues: Vec<f64>,
+    /// The signature ([`GlobalKind::len`] values).
+    pub signature: Vec<f64>,
+    /// The measure it was normalised with.
+    pub measure: Measure,
+}
+
+/// The global signature `kind` of a surface or a solid from its operators (the one
+/// orchestration the CLI's `wfem spectrum` and Python's `shape_dna` call): the m + 1 smallest
+/// eigenpairs of `L φ = λ M φ` (paper, Eq. (4); [`crate::descriptor::smallest_eigenpairs`]:
+/// dense on small meshes, shift-invert block Lanczos otherwise), the vertex weights `M·1`, and
+/// [`GlobalKind::compute`] with `measure` (the area or volume 1ᵀD1 of the geometry, which
+/// [`Operators`](wfem_heat::Operators) cannot tell apart from a mass of another scale).
+///
+/// # Errors
+/// Those of the eigensolver and of [`GlobalKind::compute`]; [`RetrievalError::InvalidParameter`]
+/// for m = 0 or m ≥ n.
+pub fn operators_signature(
+    ops: &wfem_heat::Operators,
+    kind: GlobalKind,
+    eigenvalues: usize,
+    measure: Measure,
+) -> Result<SpectrumSignature, RetrievalError> {
+    if eigenvalues == 0 || eigenvalues >= ops.n() {
+        return Err(RetrievalError::InvalidParameter {
+            name: "eigenvalues",
+            value: eigenvalues as f64,
+            reason: "must be in 1 ..= n − 1 (the first, zero eigenvalue is not counted)",
+        });
+    }
+    let basis = crate::descriptor::smallest_eigenpairs(ops, eigenvalues + 1, &Default::default())?;
+    let weights = ops.vertex_areas();
+    let signature = kind.compute(&basis.values, basis.vectors.as_ref(), &weights, measure, eigenvalues)?;
+    Ok(SpectrumSignature {
+        eigenvalues: basis.values,
+        signature,
+        measure,
+    })
 }
 
 /// Area-proportional sample of at most [`BIHARMONIC_SAMPLES`] vertices (systematic sampling of
@@ -155,14 +279,14 @@ fn sample_vertices(weights: &[f64]) -> (Vec<usize>, Vec<f64>) {
 /// The biharmonic distance histogram of the module docs: `vectors` rows = vertices (the first
 /// `weights.len()` described), columns 0 … k−1 (column 0 the constant mode, skipped), `inv[i−1]
 /// = 1/λ_i`.
-fn biharmonic_histogram(vectors: MatRef<'_, f64>, inv: &[f64], weights: &[f64], area: f64) -> Vec<f64> {
+fn biharmonic_histogram(vectors: MatRef<'_, f64>, inv: &[f64], weights: &[f64], measure: Measure) -> Vec<f64> {
     let (idx, w) = sample_vertices(weights);
     let m = inv.len();
     let embed: Vec<Vec<f64>> = idx
         .iter()
         .map(|&v| (0..m).map(|i| vectors[(v, i + 1)] * inv[i]).collect())
         .collect();
-    let unit = area.sqrt() * BIHARMONIC_RANGE / BIHARMONIC_BINS as f64;
+    let unit = measure.biharmonic_unit() * BIHARMONIC_RANGE / BIHARMONIC_BINS as f64;
     let hist = (0..idx.len())
         .into_par_iter()
         .map(|a| {

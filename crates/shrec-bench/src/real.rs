@@ -220,7 +220,7 @@ pub fn weyl_shape_dna(values: &[f64], area: f64, m: usize) -> Vec<f64> {
     (1..=m)
         .map(|i| {
             v.get(i)
-                .map_or(0.0, |l| l * area / (4.0 * std::f64::consts::PI * i as f64))
+                .map_or(0.0, |&l| shape_retrieval::global::Measure::Area(area).weyl_ratio(l, i))
         })
         .collect()
 }

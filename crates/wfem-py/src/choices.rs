@@ -79,6 +79,7 @@ registries! {
     "descriptor" => shape_retrieval::descriptor::Descriptor,
     "detector" => shape_retrieval::descriptor::FeatureDetector,
     "bag_distance" => shape_retrieval::distance::BagDistance,
+    "global_kind" => shape_retrieval::global::GlobalKind,
     "metric" => retrieval_store::metric::StandardMetric,
     "time_unit" => shape_retrieval::sihks::TimeUnit,
     "class_from" => shape_retrieval::eval::ClassRule,

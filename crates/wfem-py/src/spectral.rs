@@ -11,6 +11,7 @@ use mesh_fem::{assemble, AssemblyParams, Mass};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use shape_retrieval::global::{GlobalKind, Measure};
 use shape_retrieval::hks::{heat_kernel_signature, HksParams, Spectrum, SpectrumNormalization, TimeSampling};
 use shape_retrieval::sihks::{scale_invariant_hks, SihksParams};
 use std::sync::Arc;
@@ -264,6 +265,64 @@ impl PyEigenbasis {
             sig.energies.energies,
             sig.energies.sigma,
         ))
+    }
+
+    /// The global signature (the Weyl-normalised Shape-DNA by default) of the first m nonzero eigenvalues, with the
+    /// shape's measure (`None`: 1ᵀM1, the area or volume for B and D) and its dimension (2 for a
+    /// surface, 3 for a solid: Weyl's law in that dimension).
+    #[pyo3(signature = (eigenvalues, kind=None, measure=None, dimension=2))]
+    fn global_signature(
+        &self,
+        py: Python<'_>,
+        eigenvalues: usize,
+        kind: Option<&str>,
+        measure: Option<f64>,
+        dimension: usize,
+    ) -> PyResult<Vec<f64>> {
+        // The Weyl-normalised Shape-DNA unless told otherwise (the registry's default is the
+        // retrieval fusion's).
+        let kind = match kind {
+            None => GlobalKind::WeylShapeDna,
+            text => choices::parse::<GlobalKind>(py, "kind", text)?,
+        };
+        let value = match measure {
+            Some(v) => v,
+            None if self.ops.mass_kind() == Some(Mass::Identity) => {
+                return Err(invalid_param(
+                    py,
+                    "measure",
+                    "the identity mass does not measure the shape: give its area or volume",
+                ))
+            }
+            None => self.ops.total_mass(),
+        };
+        let measure = match dimension {
+            2 => Measure::Area(value),
+            3 => Measure::Volume(value),
+            d => {
+                return Err(invalid_param(
+                    py,
+                    "dimension",
+                    format!("{d}: 2 for a surface, 3 for a solid"),
+                ))
+            }
+        };
+        if eigenvalues == 0 || eigenvalues >= self.basis.values.len() {
+            return Err(invalid_param(
+                py,
+                "m",
+                format!(
+                    "{eigenvalues}: the basis has {} pairs, so 1 ..= {} nonzero eigenvalues",
+                    self.basis.values.len(),
+                    self.basis.values.len().saturating_sub(1)
+                ),
+            ));
+        }
+        let (basis, ops) = (self.basis.clone(), self.ops.clone());
+        run(py, move |_| {
+            let weights = ops.vertex_areas();
+            Ok(kind.compute(&basis.values, basis.vectors.as_ref(), &weights, measure, eigenvalues)?)
+        })
     }
 
     /// The scale-invariant HKS (n, K) of Bronstein & Kokkinos.

@@ -66,8 +66,11 @@ pub fn validate_volume(py: Python<'_>, v: PyReadonlyArray2<'_, f64>, t: PyReadon
         "n_boundary_faces": r.n_boundary_faces,
         "n_boundary_vertices": r.n_boundary_vertices,
         "boundary_euler": r.boundary_euler,
+        "n_boundary_components": r.n_boundary_components,
+        "boundary_genus": r.boundary_genus,
         "n_components": r.n_components,
         "quality": [r.quality.0, r.quality.1],
+        "worst_tet": r.worst_tet,
         "usable": !r.problems.iter().any(|p| p.is_fatal()),
         "problems": problems,
     })

@@ -120,3 +120,33 @@ def test_repair_volume_drops_the_unreferenced_vertex_of_sfepys_ball(volumes):
     # on this coarse polyhedral ball P1 overestimates it by a few per cent.
     lam = wfem.eigenbasis(V2, T2, 4).values
     assert abs(lam[0]) < 1e-8 and 4.33 < lam[1] < 4.33 * 1.08, lam
+
+
+def test_shape_dna_of_a_solid_against_scipy_and_weyl(volumes):
+    """The Shape-DNA of a solid: scipy's dense generalized eigenvalues normalised by the 3-D Weyl
+    law λ_i^Weyl = (6π²i/V)^{2/3}; invariant to scale; a surface keeps λ_i A/(4πi)."""
+    V, T = wfem.read_volume(volumes / "scikit-fem/cuubat.msh")
+    L, B, D = wfem.operators(V, T)
+    lam = scipy.linalg.eigh(L.toarray(), B.toarray(), eigvals_only=True)
+    vol = wfem.validate_volume(V, T).volume
+    m = 10
+    g, ev = wfem.shape_dna(V, T, m, return_eigenvalues=True)
+    i = np.arange(1, m + 1)
+    assert np.allclose(ev[1:], lam[1 : m + 1], rtol=1e-9)
+    assert np.allclose(g, lam[1 : m + 1] * vol ** (2 / 3) / (6 * np.pi**2 * i) ** (2 / 3), rtol=1e-9)
+    assert np.allclose(wfem.shape_dna(V * 1e3, T, m), g, rtol=1e-8)
+    log = wfem.shape_dna(V, T, m, kind="log-shape-dna")
+    assert np.allclose(log, np.log(lam[1 : m + 1] * vol ** (2 / 3)), atol=1e-9)
+    assert wfem.shape_dna(V, T, m, kind=wfem.GLOBAL_KINDS[-1]).shape == (32,)
+    # A surface: the unit sphere's λ₁₋₃ = 2, area 4π.
+    S, F = wfem.generate.icosphere(3)
+    gs = wfem.shape_dna(S, F, 3)
+    area = np.asarray(wfem.operators(S, F)[2].sum())
+    basis = wfem.eigenbasis(S, F, 4)
+    assert np.allclose(gs, basis.values[1:4] * area / (4 * np.pi * np.arange(1, 4)), rtol=1e-12)
+    with pytest.raises(wfem.InvalidInputError):
+        wfem.shape_dna(V, T, m, kind="no-such-kind")
+    with pytest.raises(wfem.InvalidInputError):
+        basis.shape_dna(4)
+    with pytest.raises(wfem.InvalidInputError):
+        basis.shape_dna(2, dimension=4)

@@ -7,6 +7,7 @@ use super::{write_atomic, AtomicSet};
 use crate::{MeshError, TriMesh};
 use std::io::Write;
 use std::path::Path;
+use wfem_base::Choice;
 
 fn extension(path: &Path) -> String {
     path.extension()
@@ -232,9 +233,8 @@ pub fn stage_field_with(
             }
             set.stage(path, |w| write_ply(w, mesh, fields, colors))
         }
-        FieldFormat::Npy => {
-            require_fields(path, fields, "an NPY file")?;
-            set.stage(path, |w| write_npy(w, mesh.n_vertices(), fields))
+        FieldFormat::Npy | FieldFormat::Csv => {
+            stage_table(set, path, format, mesh.n_vertices(), fields, allow_infinity)
         }
         FieldFormat::Vtu => super::vtu::stage_vtu(
             set,
@@ -244,6 +244,43 @@ pub fn stage_field_with(
             fields,
             allow_infinity,
         ),
+    }
+}
+
+/// Named columns of `rows` values each (not tied to a mesh: a spectrum, a signature) as NPY
+/// (an array of shape (rows,) or (rows, k)) or CSV (a header of the names, shortest round-trip
+/// values), staged in `set`; the per-vertex NPY and CSV of [`stage_field`] are this with
+/// rows = n.
+///
+/// # Errors
+/// [`MeshError::FieldLength`] for a column of another length, [`MeshError::NonFiniteValue`]
+/// for NaN/∞, [`MeshError::Invalid`] for no column or an unusable name,
+/// [`MeshError::Invalid`] for PLY or VTU (they hold a mesh).
+pub fn stage_columns(
+    set: &mut AtomicSet,
+    path: &Path,
+    format: FieldFormat,
+    rows: usize,
+    fields: &[(&str, &[f64])],
+) -> Result<(), MeshError> {
+    stage_table(set, path, format, rows, fields, false)
+}
+
+/// [`stage_columns`], also writing +∞ when `allow_infinity` ([`stage_field_with`]).
+fn stage_table(
+    set: &mut AtomicSet,
+    path: &Path,
+    format: FieldFormat,
+    rows: usize,
+    fields: &[(&str, &[f64])],
+    allow_infinity: bool,
+) -> Result<(), MeshError> {
+    check_fields(path, rows, fields, None, allow_infinity)?;
+    match format {
+        FieldFormat::Npy => {
+            require_fields(path, fields, "an NPY file")?;
+            set.stage(path, |w| write_npy(w, rows, fields))
+        }
         FieldFormat::Csv => {
             require_fields(path, fields, "a CSV file")?;
             for (name, _) in fields {
@@ -254,7 +291,7 @@ pub fn stage_field_with(
             set.stage(path, |w| {
                 let names: Vec<&str> = fields.iter().map(|(n, _)| *n).collect();
                 writeln!(w, "{}", names.join(","))?;
-                for i in 0..mesh.n_vertices() {
+                for i in 0..rows {
                     for (k, (_, values)) in fields.iter().enumerate() {
                         if k > 0 {
                             w.write_all(b",")?;
@@ -266,6 +303,13 @@ pub fn stage_field_with(
                 Ok(())
             })
         }
+        FieldFormat::Ply | FieldFormat::Vtu => Err(MeshError::Invalid {
+            reason: format!(
+                "{}: a table of values is written as .npy or .csv (a .{} file holds a mesh)",
+                path.display(),
+                format.name()
+            ),
+        }),
     }
 }
 

@@ -45,7 +45,7 @@ pub mod volume;
 pub mod vtu;
 
 pub use atomic::{write_atomic, AtomicSet};
-pub use field::{read_field, stage_field, stage_field_with, write_field, write_mesh, FieldFormat};
+pub use field::{read_field, stage_columns, stage_field, stage_field_with, write_field, write_mesh, FieldFormat};
 pub use points::{load_points, load_shape, read_points, PointFormat, Shape};
 
 /// A supported mesh file format.

@@ -109,10 +109,18 @@ pub struct VolumeReport {
     pub n_boundary_vertices: usize,
     /// Euler characteristic V − E + F of the boundary surface.
     pub boundary_euler: i64,
+    /// Connected components c of the boundary surface (1 for a solid ball; a hollow shell has 2).
+    pub n_boundary_components: usize,
+    /// Total genus g of the boundary surface, `(2c − χ)/2` (0 for a ball, 1 for a solid torus),
+    /// when the boundary is a closed 2-manifold (every edge on exactly two boundary triangles);
+    /// `None` otherwise (then χ does not determine it).
+    pub boundary_genus: Option<i64>,
     /// Connected components of the tetrahedra.
     pub n_components: usize,
     /// Smallest and median quality 6√2|V|/ℓ³_rms.
     pub quality: (f64, f64),
+    /// The tetrahedron of the smallest quality.
+    pub worst_tet: usize,
     /// Every problem, fatal ones first.
     pub problems: Vec<VolumeProblem>,
 }
@@ -269,27 +277,46 @@ pub fn validate_volume(mesh: &TetMesh) -> VolumeReport {
         v.dedup();
         v.len()
     };
-    let edges = {
-        let mut e: Vec<[u32; 2]> = boundary
-            .iter()
-            .flat_map(|f| (0..3).map(move |k| [f[k].min(f[(k + 1) % 3]), f[k].max(f[(k + 1) % 3])]))
-            .collect();
-        e.sort_unstable();
-        e.dedup();
-        e.len()
-    };
+    let mut edge_uses: Vec<[u32; 2]> = boundary
+        .iter()
+        .flat_map(|f| (0..3).map(move |k| [f[k].min(f[(k + 1) % 3]), f[k].max(f[(k + 1) % 3])]))
+        .collect();
+    edge_uses.sort_unstable();
+    // A closed 2-manifold boundary has every edge on exactly two of its triangles.
+    let closed = edge_uses.chunk_by(|a, b| a == b).all(|uses| uses.len() == 2);
+    edge_uses.dedup();
+    let edges = edge_uses.len();
+    let mut sheets = UnionFind::new(n);
+    for f in &boundary {
+        sheets.union(f[0], f[1]);
+        sheets.union(f[0], f[2]);
+    }
+    let mut boundary_roots: Vec<u32> = boundary.iter().map(|f| sheets.find(f[0])).collect();
+    boundary_roots.sort_unstable();
+    boundary_roots.dedup();
+    let euler = boundary_vertices as i64 - edges as i64 + boundary.len() as i64;
+    let twice_genus = 2 * boundary_roots.len() as i64 - euler;
+    // A pinched vertex (two sheets touching at a point) keeps every edge manifold but breaks
+    // χ = Σ(2 − 2g): an odd or negative 2g gives it away.
+    let genus = (closed && twice_genus >= 0 && twice_genus % 2 == 0).then_some(twice_genus / 2);
+    let worst_tet = (0..m)
+        .min_by(|&a, &b| qualities[a].total_cmp(&qualities[b]))
+        .unwrap_or(0);
     VolumeReport {
         n_vertices: n,
         n_tets: m,
         volume: volumes.iter().map(|v| v.abs()).sum(),
         n_boundary_faces: boundary.len(),
         n_boundary_vertices: boundary_vertices,
-        boundary_euler: boundary_vertices as i64 - edges as i64 + boundary.len() as i64,
+        boundary_euler: euler,
+        n_boundary_components: boundary_roots.len(),
+        boundary_genus: genus,
         n_components: roots.len(),
         quality: (
             sorted.first().copied().unwrap_or(0.0),
             sorted.get(m / 2).copied().unwrap_or(0.0),
         ),
+        worst_tet,
         problems,
     }
 }

@@ -120,6 +120,53 @@ fn refinement_and_the_boundary_keep_the_solid() {
     assert_eq!(surface.n_vertices(), mesh.n_vertices());
 }
 
+/// The cells of `tet_cube(n)` whose centre passes `keep`, without the vertices they leave out.
+fn cells_of_cube(n: usize, keep: impl Fn([f64; 3]) -> bool) -> TetMesh {
+    let cube = tet_cube(n);
+    let tets: Vec<[u32; 4]> = (0..cube.n_tets())
+        .filter(|&t| {
+            let c = cube.corners(t);
+            // The cell of a tetrahedron: the floor of its centroid in cell units.
+            let centre = [0, 1, 2].map(|k| c.iter().map(|p| p[k]).sum::<f64>() / 4.0);
+            keep(centre.map(|x| ((x * n as f64).floor() + 0.5) / n as f64))
+        })
+        .map(|t| cube.tets()[t])
+        .collect();
+    let kept = TetMesh::new(cube.positions().to_vec(), tets).unwrap();
+    repair_volume(&kept, false, false, true).unwrap().0
+}
+
+#[test]
+fn the_boundary_genus_and_the_worst_element_are_reported() {
+    let ball = validate_volume(&tet_cube(3));
+    assert_eq!((ball.n_boundary_components, ball.boundary_genus), (1, Some(0)));
+    // The 3 × 3 × 3 cube without its central column of cells: a solid torus.
+    let middle = |x: f64| (x - 0.5).abs() < 0.1;
+    let torus = validate_volume(&cells_of_cube(3, |c| !(middle(c[0]) && middle(c[1]))));
+    assert_eq!(torus.boundary_euler, 0);
+    assert_eq!((torus.n_boundary_components, torus.boundary_genus), (1, Some(1)));
+    // Without its central cell: a hollow cube, two boundary spheres.
+    let hollow = validate_volume(&cells_of_cube(3, |c| !c.iter().all(|&x| middle(x))));
+    assert_eq!(hollow.boundary_euler, 4);
+    assert_eq!((hollow.n_boundary_components, hollow.boundary_genus), (2, Some(0)));
+    // Two columns of cells meeting along an edge: that edge is on four boundary triangles, so
+    // the boundary is no closed 2-manifold and its genus is not given.
+    let pinched = validate_volume(&cells_of_cube(2, |c| (c[0] < 0.5) == (c[1] < 0.5)));
+    assert_eq!(pinched.boundary_genus, None);
+    // The worst element is named, and it has the smallest quality.
+    let mut squashed = tet_cube(2).positions().to_vec();
+    squashed[13][2] += 0.499; // the centre next to the top one: tetrahedra of both flatten
+    let squashed = TetMesh::new(squashed, tet_cube(2).tets().to_vec()).unwrap();
+    let r = validate_volume(&squashed);
+    let q = mesh_fem::volume::tet_quality(squashed.corners(r.worst_tet));
+    assert_eq!(q, r.quality.0);
+    assert!(squashed.tets()[r.worst_tet].contains(&13));
+    assert!(r
+        .problems
+        .iter()
+        .any(|p| matches!(p, VolumeProblem::Slivers { worst, .. } if *worst == r.worst_tet)));
+}
+
 #[test]
 fn validation_names_every_problem_and_the_repairs_fix_them() {
     let cube = tet_cube(2);
@@ -477,6 +524,123 @@ fn mutated_volume_files_give_typed_errors_or_valid_tetrahedra() {
         if let Ok(read) = parse_volume(&data, VolumeFormat::Vtk, std::path::Path::new("g.vtk")) {
             let n = read.mesh.n_vertices();
             assert!(read.mesh.tets().iter().flatten().all(|&i| (i as usize) < n));
+        }
+    }
+}
+
+#[test]
+fn the_generated_bumpy_solid_is_a_valid_ball_filled_with_positive_tetrahedra() {
+    for (level, shells) in [(0, 1), (1, 3), (2, 4), (3, 8)] {
+        let solid = mesh_fem::generate::tet_bumpy(level, shells);
+        let per_shell = mesh_fem::generate::icosphere_vertex_count(level);
+        assert_eq!(solid.n_vertices(), 1 + shells * per_shell);
+        // Orientation is fixed by the generator; no tetrahedron is flat or nearly so.
+        let r = validate_volume(&solid);
+        assert!(r.problems.is_empty(), "{level}/{shells}: {:?}", r.problems);
+        assert!(r.quality.0 > 0.02, "{level}/{shells}: quality {}", r.quality.0);
+        assert_eq!((r.n_boundary_components, r.boundary_genus), (1, Some(0)));
+        // Its boundary is the outer shell, between the bump's radii 0.6 and 1.4.
+        assert_eq!(r.n_boundary_vertices, per_shell);
+        assert_eq!(solid.positions()[0], [0.0; 3]);
+        for f in boundary_faces(&solid) {
+            for v in f {
+                let radius = mesh_fem::vec3::norm(solid.positions()[v as usize]);
+                assert!((0.6..1.4).contains(&radius), "boundary radius {radius}");
+            }
+        }
+        // The tetrahedra fill what the boundary encloses, once (divergence theorem).
+        let p = solid.positions();
+        let enclosed: f64 = boundary_faces(&solid)
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|v| p[v as usize]);
+                mesh_fem::vec3::dot(a, mesh_fem::vec3::cross(b, c)) / 6.0
+            })
+            .sum();
+        assert!(
+            (enclosed - solid.volume()).abs() < 1e-12 * enclosed,
+            "{enclosed} vs {}",
+            solid.volume()
+        );
+    }
+}
+
+/// (L_ij, B_ij) by (i, j).
+type Entries = std::collections::BTreeMap<(usize, usize), (f64, f64)>;
+
+/// The plain element-by-element scatter of the module docs' matrices (no column machinery,
+/// sequential, a map per entry): L_ij += |T|∇φᵢ·∇φⱼ, B_ij += |T|(1 + δ_ij)/20, D_ii += |T|/4.
+fn scattered(mesh: &TetMesh) -> (Entries, Vec<f64>) {
+    let mut entries = std::collections::BTreeMap::new();
+    let mut d = vec![0.0; mesh.n_vertices()];
+    for (t, tet) in mesh.tets().iter().enumerate() {
+        let e = tet_element(mesh.corners(t)).unwrap();
+        for a in 0..4 {
+            d[tet[a] as usize] += e.volume / 4.0;
+            for b in 0..4 {
+                let l = e.volume * mesh_fem::vec3::dot(e.gradients[a], e.gradients[b]);
+                let m = e.volume * if a == b { 2.0 } else { 1.0 } / 20.0;
+                let x = entries.entry((tet[a] as usize, tet[b] as usize)).or_insert((0.0, 0.0));
+                x.0 += l;
+                x.1 += m;
+            }
+        }
+    }
+    (entries, d)
+}
+
+/// The parallel column assembly against the plain scatter: the same pattern, every entry of L
+/// to 1e−13 of max|L|, of B and D to 1e−13 of their largest (mixed orientation, a refined
+/// irregular solid, the real files of the corpus), and L, B bitwise symmetric.
+#[test]
+fn the_column_assembly_equals_the_plain_element_scatter() {
+    let mut cases = vec![(
+        "bumpy solid, refined".to_string(),
+        mesh_fem::generate::tet_bumpy(1, 3).refined(),
+    )];
+    // Every third tetrahedron inverted: the matrices do not depend on the orientation.
+    let cube = tet_cube(5);
+    let mixed: Vec<[u32; 4]> = cube
+        .tets()
+        .iter()
+        .enumerate()
+        .map(|(t, &[a, b, c, d])| if t % 3 == 0 { [b, a, c, d] } else { [a, b, c, d] })
+        .collect();
+    cases.push((
+        "mixed orientation".to_string(),
+        TetMesh::new(cube.positions().to_vec(), mixed).unwrap(),
+    ));
+    for rel in ["scikit-fem/cuubat.msh", "flip-free-parametrization/cow.mesh"] {
+        if let Ok(path) = wfem_corpus::volume_path(rel) {
+            cases.push((rel.to_string(), read_volume(&path).unwrap().mesh));
+        }
+    }
+    for (name, mesh) in cases {
+        let ops = assemble_volume(&mesh, &AssemblyParams::default()).unwrap();
+        let (reference, d) = scattered(&mesh);
+        let (l, b) = (ops.stiffness.as_ref(), ops.mass.as_ref());
+        assert_eq!(l.val().len(), reference.len(), "{name}: pattern size");
+        let l_max = reference.values().fold(0.0f64, |m, x| m.max(x.0.abs()));
+        let b_max = reference.values().fold(0.0f64, |m, x| m.max(x.1.abs()));
+        let mut stored = std::collections::BTreeMap::new();
+        for j in 0..ops.n() {
+            let rows = l.row_idx_of_col_raw(j);
+            assert_eq!(rows, b.row_idx_of_col_raw(j), "{name}: one pattern");
+            assert!(rows.windows(2).all(|w| w[0] < w[1]), "{name}: sorted rows");
+            for (p, &i) in rows.iter().enumerate() {
+                let (lv, bv) = (l.val_of_col(j)[p], b.val_of_col(j)[p]);
+                let (rl, rb) = reference[&(i, j)];
+                assert!((lv - rl).abs() <= 1e-13 * l_max, "{name}: L[{i}, {j}] = {lv} vs {rl}");
+                assert!((bv - rb).abs() <= 1e-13 * b_max, "{name}: B[{i}, {j}] = {bv} vs {rb}");
+                stored.insert((i, j), (lv, bv));
+            }
+        }
+        for (&(i, j), &(lv, bv)) in &stored {
+            assert_eq!(stored[&(j, i)], (lv, bv), "{name}: ({i}, {j}) not bitwise symmetric");
+        }
+        let d_max = d.iter().fold(0.0f64, |m, x| m.max(*x));
+        for (i, (x, y)) in ops.lumped_diagonal.iter().zip(&d).enumerate() {
+            assert!((x - y).abs() <= 1e-13 * d_max, "{name}: D[{i}]");
         }
     }
 }

@@ -1,7 +1,7 @@
 //! [`GlobalSignature`]: the global spectral signature fused with the bag.
 
 use crate::descriptor::ShapeDescriptors;
-use crate::global::GlobalKind;
+use crate::global::{GlobalKind, Measure};
 use crate::RetrievalError;
 use serde::{Deserialize, Serialize};
 
@@ -64,8 +64,13 @@ impl GlobalSignature {
         let mut weights = shape.vertex_areas();
         weights.truncate(shape.described_vertices());
         let basis = shape.eigenbasis(false)?;
-        self.kind
-            .compute(&basis.values, basis.vectors.as_ref(), &weights, area, self.eigenvalues)
+        self.kind.compute(
+            &basis.values,
+            basis.vectors.as_ref(),
+            &weights,
+            Measure::Area(area),
+            self.eigenvalues,
+        )
     }
 
     /// The distance of two signatures of this kind (inputs validated by the caller).

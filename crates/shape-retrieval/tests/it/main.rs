@@ -16,6 +16,7 @@ mod kmeans;
 mod model;
 mod retrieval;
 mod sihks;
+mod solids;
 mod spatial;
 mod standardize;
 mod store;

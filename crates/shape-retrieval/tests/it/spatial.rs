@@ -4,7 +4,7 @@
 use crate::common::{dense_spectrum, small_collection, small_settings};
 use faer::Mat;
 use mesh_fem::generate::{bumpy, icosphere};
-use shape_retrieval::global::{GlobalKind, BIHARMONIC_BINS};
+use shape_retrieval::global::{GlobalKind, Measure, BIHARMONIC_BINS};
 use shape_retrieval::model::{DescriptorSettings, GlobalSignature, RetrievalIndex, ShapeFeatures, VertexWeights};
 use shape_retrieval::spatial::{grouped, word_groups, ShapeSpectrum, SpatialBag};
 use shape_retrieval::store::{IndexStore, JsonFile};
@@ -343,7 +343,13 @@ fn biharmonic_distribution_is_a_scale_invariant_histogram() {
     assert!(GlobalKind::Biharmonic.distance(&s, &l) > 0.05);
     // Too few eigenpairs for the signature.
     let e = GlobalKind::Biharmonic
-        .compute(&[0.0, 1.0], Mat::<f64>::zeros(3, 2).as_ref(), &[1.0; 3], 1.0, 5)
+        .compute(
+            &[0.0, 1.0],
+            Mat::<f64>::zeros(3, 2).as_ref(),
+            &[1.0; 3],
+            Measure::Area(1.0),
+            5,
+        )
         .unwrap_err();
     assert!(matches!(e, RetrievalError::DimensionMismatch { .. }), "{e}");
 }

@@ -84,7 +84,7 @@ from ._retrieval import (
     pairwise_l1,
     sparse_features,
 )
-from ._spectral import HKS_CONVENTIONS, HKS_METHODS, Eigenbasis, eigenbasis, hks, sihks, wks
+from ._spectral import GLOBAL_KINDS, HKS_CONVENTIONS, HKS_METHODS, Eigenbasis, eigenbasis, hks, shape_dna, sihks, wks
 from . import generate
 
 __version__: str = _wfem.__version__
@@ -146,8 +146,10 @@ __all__ = [
     "hks",
     "sihks",
     "wks",
+    "shape_dna",
     "HKS_CONVENTIONS",
     "HKS_METHODS",
+    "GLOBAL_KINDS",
     # retrieval
     "DESCRIPTORS",
     "PAPER_DESCRIPTORS",

@@ -13,12 +13,16 @@ from ._errors import InvalidInputError, warn_user
 #: The library's default parameters by group (one place: the Rust crates).
 _DEFAULTS = _wfem.DEFAULTS
 
-__all__ = ["Eigenbasis", "eigenbasis", "hks", "sihks", "wks", "HKS_CONVENTIONS", "HKS_METHODS"]
+__all__ = [
+    "Eigenbasis", "eigenbasis", "hks", "sihks", "wks", "shape_dna", "HKS_CONVENTIONS", "HKS_METHODS", "GLOBAL_KINDS",
+]
 
 #: The two HKS conventions, named by what they are (see :func:`hks`).
 HKS_CONVENTIONS = _choices.names("convention")
 #: How :func:`hks` evaluates the signature.
 HKS_METHODS = _choices.names("hks_method")
+#: The global signatures of :func:`shape_dna` (``kind=``).
+GLOBAL_KINDS = _choices.names("global_kind")
 
 
 class Eigenbasis:
@@ -120,6 +124,21 @@ class Eigenbasis:
         """WKS of this basis: ``(values (n, N), log-energies (N,))``; see :func:`wks`."""
         values, energies, _ = self._b.wks(int(num_energies))
         return np.asarray(values), np.asarray(energies)
+
+    def shape_dna(
+        self,
+        m: int = 50,
+        *,
+        kind: str | None = None,
+        measure: float | None = None,
+        dimension: int = 2,
+    ) -> np.ndarray:
+        """The global signature of the first ``m`` nonzero eigenvalues of this basis (Shape-DNA
+        by default); ``measure`` the area (``dimension=2``) or volume (``dimension=3``) of the
+        shape, by default ``1ᵀM1``; see :func:`shape_dna`."""
+        return np.asarray(
+            self._b.global_signature(int(m), kind, None if measure is None else float(measure), int(dimension))
+        )
 
     def sihks(
         self,
@@ -367,3 +386,36 @@ def wks(
         v, e, _ = _wfem.eigenpairs_wks(lam, vec, int(num_energies))
         values, energies = np.asarray(v), np.asarray(e)
     return (values, energies) if return_energies else values
+
+
+def shape_dna(
+    V: Any,
+    F: Any = None,
+    m: int = 50,
+    *,
+    kind: str | None = None,
+    mass: str | None = None,
+    basis: Eigenbasis | None = None,
+    return_eigenvalues: bool = False,
+) -> Any:
+    """Shape-DNA (Reuter, Wolter & Peinecke 2006) of a surface (V, F) or a solid (V, T): the first
+    ``m`` nonzero eigenvalues of ``L x = λ M x`` normalised by Weyl's law in the shape's
+    dimension, ``g_i = λ_i / λ_i^Weyl`` ≈ 1 — ``λ_i A/(4πi)`` on a surface of area A,
+    ``λ_i V^{2/3}/(6π²i)^{2/3}`` in a solid of volume V — so it is invariant to scale.
+
+    ``kind`` (:data:`GLOBAL_KINDS`) picks another global signature of the same eigenpairs:
+    ``ln(λ_i μ^{2/d})``, or the histogram of biharmonic distances. ``basis`` reuses an
+    :class:`Eigenbasis` of at least m + 1 pairs. Returns ``g`` (m,), or ``(g, λ₀…λ_m)`` with
+    ``return_eigenvalues``.
+    """
+    from ._volume import tets_of, validate_volume
+
+    tets = tets_of(V, F)
+    if basis is None:
+        basis = eigenbasis(V, F, int(m) + 1, mass=mass)
+    if tets is not None:
+        # The geometry's volume, whatever the kernel's mass.
+        g = basis.shape_dna(m, kind=kind, measure=validate_volume(*tets).volume, dimension=3)
+    else:
+        g = basis.shape_dna(m, kind=kind)
+    return (g, basis.values[: int(m) + 1]) if return_eigenvalues else g

@@ -43,7 +43,9 @@ def read_volume(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
 @dataclass(frozen=True)
 class VolumeReport:
     """What :func:`validate_volume` found: counts, Σ|T|, the boundary surface (its Euler
-    characteristic is 2 for a solid ball), quality ``(min, median)`` of 6√2|T|/ℓ³_rms, and
+    characteristic is 2 for a solid ball; its components and total genus ``(2c − χ)/2``, ``None``
+    when the boundary is not a closed 2-manifold), quality ``(min, median)`` of 6√2|T|/ℓ³_rms
+    with the worst tetrahedron, and
     every problem (``severity`` ``"Error"`` — flat tetrahedra, unreferenced vertices, a face of
     three tetrahedra — or ``"Warning"`` — mixed orientation, slivers, components)."""
 
@@ -53,8 +55,11 @@ class VolumeReport:
     n_boundary_faces: int
     n_boundary_vertices: int
     boundary_euler: int
+    n_boundary_components: int
+    boundary_genus: int | None
     n_components: int
     quality: tuple[float, float]
+    worst_tet: int
     usable: bool
     problems: list[dict[str, Any]]
 

@@ -306,6 +306,9 @@ class Eigenbasis:
         normalization: str | None = None,
     ) -> tuple[_F64, list[float]]: ...
     def wks(self, num_energies: int = ...) -> tuple[_F64, list[float], float]: ...
+    def global_signature(
+        self, eigenvalues: int, kind: str | None = None, measure: float | None = None, dimension: int = 2
+    ) -> list[float]: ...
     def sihks(
         self,
         alpha: float = ...,
