@@ -33,10 +33,10 @@ pub struct ApproxArgs {
     /// Read --persistence in units of f instead of as a fraction of the range.
     #[arg(long)]
     pub absolute: bool,
-    /// Number of scales N (1..=100).
-    #[arg(long, default_value_t = wfem_heat::approx::ApproxParams::default().scales)]
-    pub scales: usize,
-    /// How the scales are sampled.
+    /// Number N of times t₁ < … < t_N of the hierarchy (the paper's "scales"; 1..=100).
+    #[arg(long = "num-times", alias = "scales", default_value_t = wfem_heat::approx::ApproxParams::default().scales)]
+    pub num_times: usize,
+    /// How the N times are sampled.
     #[arg(long, value_parser = choice::<ScaleSampling>(), default_value = ScaleSampling::default_name())]
     pub sampling: ScaleSampling,
     /// Index k of the eigenvalue λ_k setting the coarsest scale 1/λ_k (default min(20, n);
@@ -128,8 +128,8 @@ pub fn approx(args: &ApproxArgs, out: &mut dyn Write) -> Result<(), CliError> {
 /// persistence and the output paths.
 fn validate(args: &ApproxArgs) -> Result<Persistence, CliError> {
     limits::count(
-        "--scales",
-        args.scales,
+        "--num-times",
+        args.num_times,
         1,
         limits::MAX_APPROX_SCALES,
         "number of scales t_i = (i/10)/λ_k (paper: 5 to 10)",
@@ -158,7 +158,7 @@ fn validate(args: &ApproxArgs) -> Result<Persistence, CliError> {
     if args.output.format == OutputFormat::Png {
         args.output.check(Some(&png_names), PNG_FIGURES.len(), &inputs)?;
     } else {
-        args.output.check(Some(&[]), 1 + 2 * (args.scales + 1), &inputs)?;
+        args.output.check(Some(&[]), 1 + 2 * (args.num_times + 1), &inputs)?;
     }
     Ok(persistence)
 }
@@ -195,7 +195,7 @@ fn compute(args: &ApproxArgs, persistence: Persistence) -> Result<Run, CliError>
             why: "λ_k comes from a partial eigensolve of k pairs, which slows down sharply beyond n/10".into(),
         });
     }
-    limits::columns("--scales", 1 + 2 * (args.scales + 1), n)?;
+    limits::columns("--num-times", 1 + 2 * (args.num_times + 1), n)?;
     let mass = args.mass.mass()?;
     let ops = progress::run("assembling L, B, D", || input.assemble(mass.lumping()))?;
     let kernel = prepare_kernel(
@@ -211,7 +211,7 @@ fn compute(args: &ApproxArgs, persistence: Persistence) -> Result<Run, CliError>
     let e = far_exponent(&f);
     let params = ApproxParams {
         k,
-        scales: args.scales,
+        scales: args.num_times,
         persistence: match persistence {
             Persistence::Absolute(x) => Persistence::Absolute(x * 2f64.powi(-e)),
             relative => relative,
@@ -221,7 +221,7 @@ fn compute(args: &ApproxArgs, persistence: Persistence) -> Result<Run, CliError>
         noise: args.noise,
         ..ApproxParams::default()
     };
-    let mut approx = progress::run(format!("λ_{k}, noise, anchors and {} scales", args.scales), || {
+    let mut approx = progress::run(format!("λ_{k}, noise, anchors and {} scales", args.num_times), || {
         feature_approximation(&input.mesh, &kernel, &times_pow2(&f, -e), &params)
     })?;
     if e != 0 {

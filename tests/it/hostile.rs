@@ -825,7 +825,7 @@ fn approx_rows() -> Vec<Row> {
             ok(&[Csv("a.csv", N, 21), Stdout("Linf error")]),
         ),
         approx(
-            "--field {d}/f.csv --persistence 0.1 --scales 3 -o {o}/a.npy",
+            "--field {d}/f.csv --persistence 0.1 --num-times 3 -o {o}/a.npy",
             ok(&[Npy("a.npy", N, 7)]),
         ),
         approx(
@@ -880,22 +880,22 @@ fn approx_rows() -> Vec<Row> {
             Typed(&["--persistence inf"]),
         ),
         approx(
-            "--field {d}/f.csv --persistence 0.1 --scales 0 -o {o}/a.csv",
-            Typed(&["--scales 0", "1..=100"]),
+            "--field {d}/f.csv --persistence 0.1 --num-times 0 -o {o}/a.csv",
+            Typed(&["--num-times 0", "1..=100"]),
         ),
         approx(
-            "--field {d}/f.csv --persistence 0.1 --scales 101 -o {o}/a.csv",
-            Typed(&["--scales 101"]),
+            "--field {d}/f.csv --persistence 0.1 --num-times 101 -o {o}/a.csv",
+            Typed(&["--num-times 101"]),
         ),
         approx(
-            "--field {d}/f.csv --persistence 0.1 --scales 1000000 -o {o}/a.csv",
-            Typed(&["--scales 1000000"]),
+            "--field {d}/f.csv --persistence 0.1 --num-times 1000000 -o {o}/a.csv",
+            Typed(&["--num-times 1000000"]),
         ),
         approx(
-            "--field {d}/f.csv --persistence 0.1 --scales {U64} -o {o}/a.csv",
-            Typed(&["--scales 18446744073709551615"]),
+            "--field {d}/f.csv --persistence 0.1 --num-times {U64} -o {o}/a.csv",
+            Typed(&["--num-times 18446744073709551615"]),
         ),
-        approx("--field {d}/f.csv --persistence 0.1 --scales -1 -o {o}/a.csv", Clap),
+        approx("--field {d}/f.csv --persistence 0.1 --num-times -1 -o {o}/a.csv", Clap),
         approx(
             "--field {d}/f.csv --persistence 0.1 --k 0 -o {o}/a.csv",
             Typed(&["--k 0", "2..=42"]),

@@ -536,14 +536,14 @@ impl PyHeatKernel {
 
     /// The feature-driven approximation (Sect. 4.2) of f on the kernel's mesh; `None` takes the
     /// library's default ([`wfem_heat::approx::ApproxParams`]).
-    #[pyo3(signature = (f, k=None, scales=None, persistence=None, absolute=false, coefficients=None, sampling=None, noise=None))]
+    #[pyo3(signature = (f, k=None, num_times=None, persistence=None, absolute=false, coefficients=None, sampling=None, noise=None))]
     #[allow(clippy::too_many_arguments)]
     fn feature_approximation<'py>(
         &self,
         py: Python<'py>,
         f: PyReadonlyArray1<'py, f64>,
         k: Option<usize>,
-        scales: Option<usize>,
+        num_times: Option<usize>,
         persistence: Option<f64>,
         absolute: bool,
         coefficients: Option<&str>,
@@ -574,7 +574,7 @@ impl PyHeatKernel {
         let kernel = self.kernel.clone();
         let params = ApproxParams {
             k: k.unwrap_or(defaults.k),
-            scales: scales.unwrap_or(defaults.scales),
+            scales: num_times.unwrap_or(defaults.scales),
             persistence,
             coefficients,
             sampling,

@@ -97,3 +97,18 @@ def test_feature_approximation_rejects_unknown_names():
     with pytest.raises(wfem.InvalidInputError, match="absolute"):
         K.feature_approximation(f, absolute=True)
     assert set(wfem.APPROX_COEFFICIENTS) >= {"anchored", "feature-values", "smooth"}
+
+
+def test_scales_is_the_old_name_of_num_times():
+    """Issue #37, point 4: the number of times is `num_times` (a scale is never a time); the
+    old keyword `scales=` still works for one release, with a warning."""
+    V, F = wfem.generate.bumpy(2)
+    K = wfem.HeatKernel(V, F)
+    f = V[:, 2]
+    new = K.feature_approximation(f, num_times=3, noise="keep")
+    with pytest.warns(DeprecationWarning, match="old name of num_times"):
+        old = K.feature_approximation(f, scales=3, noise="keep")
+    assert len(new["scales"]) == len(old["scales"]) == 3
+    np.testing.assert_array_equal(new["scales"][-1]["global_"], old["scales"][-1]["global_"])
+    with pytest.raises(wfem.InvalidInputError, match="not both"), pytest.warns(DeprecationWarning):
+        K.feature_approximation(f, scales=3, num_times=3)

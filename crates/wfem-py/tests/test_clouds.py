@@ -207,7 +207,7 @@ def test_feature_approximation_and_edge_unit_on_a_cloud():
     P = sphere_points(1500, seed=3)
     f = P[:, 0] + 0.5 * P[:, 1] * P[:, 2]
     K = wfem.HeatKernel(P)
-    out = K.feature_approximation(f, scales=3)
+    out = K.feature_approximation(f, num_times=3)
     assert len(out["anchors"]) >= 2
     for s in out["scales"]:
         assert np.allclose(s["global_"] + s["local"], f, atol=1e-9)

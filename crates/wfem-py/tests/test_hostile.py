@@ -57,7 +57,7 @@ except BaseException as e:
 # (name, code, expected): "wfem" = a WfemError subclass; "ok" = runs (and its asserts hold).
 CASES: list[tuple[str, str, str]] = [
     # Sizes: bounded before allocation, with the CLI's limits.
-    ("approx scales 1e9", "K.feature_approximation(f, scales=10**9)", "wfem"),
+    ("approx num_times 1e9", "K.feature_approximation(f, num_times=10**9)", "wfem"),
     ("descriptors num_times 1e9", "wfem.descriptors(V, F, ['dhk1'], num_times=10**9)", "wfem"),
     ("hks num_times 1e9", "wfem.hks(V, F, num_times=10**9)", "wfem"),
     ("hks 100000 times", "wfem.hks(V, F, times=np.geomspace(1e-3, 1.0, 100000))", "wfem"),

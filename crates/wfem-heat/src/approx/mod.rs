@@ -640,7 +640,7 @@ fn check_inputs(mesh: &TriMesh, kernel: &HeatKernel, f: &[f64], params: &ApproxP
         });
     }
     check::vector(f, n)?;
-    crate::limits::count("scales", params.scales, 1, crate::limits::MAX_APPROX_SCALES)?;
+    crate::limits::count("num_times", params.scales, 1, crate::limits::MAX_APPROX_SCALES)?;
     crate::limits::count("gcv_times", params.gcv_times, 1, crate::limits::MAX_APPROX_SCALES)?;
     crate::limits::count("probes", params.probes, 1, 1024)?;
     let threshold_ok = match params.persistence {

@@ -427,7 +427,7 @@ fn feature_approximation_rejects_bad_parameters() {
                 scales: 0,
                 ..ApproxParams::default()
             },
-            "scales",
+            "num_times",
         ),
         (
             ApproxParams {

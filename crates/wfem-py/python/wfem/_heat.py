@@ -364,18 +364,20 @@ class HeatKernel:
         f: Any,
         *,
         k: int | None = None,
-        scales: int | None = None,
+        num_times: int | None = None,
         persistence: float | None = None,
         absolute: bool = False,
         coefficients: str | None = None,
         sampling: str | None = None,
         noise: str | None = None,
+        scales: int | None = None,
     ) -> dict[str, Any]:
         """The feature-driven approximation ``f = f_glob + f_loc`` (paper, Sect. 4.2, Fig. 12–13).
 
         The anchors A are the critical points of f with persistence ≥ ``persistence`` (relative
         to the range of f, default 0.1; absolute with ``absolute=True``), most persistent
-        first. At ``scales`` times (default 10) sampled by ``sampling`` (one of
+        first. At ``num_times`` times (default 10; the paper's "scales", and ``scales=`` is the
+        old name of this argument, which warns) sampled by ``sampling`` (one of
         :data:`APPROX_SAMPLINGS`; default geometric from 1/λ_max, the mesh's resolution, to
         1/λ_k, k = 20; ``"paper"``: t_i = (i/10)/λ_k) f splits into f_glob and
         ``f_loc = f − f_glob``. ``coefficients`` is one of :data:`APPROX_COEFFICIENTS`; the
@@ -411,9 +413,18 @@ class HeatKernel:
         option to change. Needs a kernel built from a mesh (V, F) or a point cloud P (on its
         neighbourhood mesh), not from operators.
         """
+        if scales is not None:
+            warnings.warn(
+                "feature_approximation(scales=) is the old name of num_times=; it will be removed",
+                DeprecationWarning,
+                stacklevel=2,
+            )
+            if num_times is not None:
+                raise InvalidInputError("give num_times= or its old name scales=, not both", "InvalidParameter")
+            num_times = scales
         out = dict(
             self._k.feature_approximation(
-                as_vector(f, "f"), k, scales, persistence, absolute, coefficients, sampling, noise
+                as_vector(f, "f"), k, num_times, persistence, absolute, coefficients, sampling, noise
             )
         )
         if out["warning"] is not None:

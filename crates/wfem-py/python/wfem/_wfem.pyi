@@ -180,7 +180,7 @@ class HeatKernel:
         self,
         f: _F64,
         k: int | None = None,
-        scales: int | None = None,
+        num_times: int | None = None,
         persistence: float | None = None,
         absolute: bool = False,
         coefficients: str | None = None,
