@@ -7,12 +7,9 @@ use super::{limits, progress, read_usable, CliError, MassArgs, MeshArgs, Output}
 use clap::Args;
 use mesh_fem::io::{stage_columns, AtomicSet, FieldFormat};
 use serde_json::json;
-use shape_retrieval::global::{operators_signature, GlobalKind, Measure};
+use shape_retrieval::global::{operators_signature, GlobalKind, Measure, DEFAULT_EIGENVALUES};
 use std::io::Write;
 use wfem_base::Choice;
-
-/// Default number m of eigenvalues (λ₁ … λ_m; λ₀ = 0 is not counted).
-pub const DEFAULT_EIGENVALUES: usize = 50;
 
 /// Arguments of `wfem spectrum`.
 #[derive(Args, Clone, Debug)]

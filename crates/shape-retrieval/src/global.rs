@@ -33,6 +33,12 @@ pub const BIHARMONIC_RANGE: f64 = 1.0;
 /// Points sampled (area-proportionally) for the biharmonic distribution of a larger shape.
 pub const BIHARMONIC_SAMPLES: usize = 1000;
 
+/// Default number m of eigenvalues of a global signature (λ₁ … λ_m; λ₀ = 0 is not counted):
+/// `wfem spectrum -m`, Python's `shape_dna(m=)`.
+pub const DEFAULT_EIGENVALUES: usize = 50;
+/// The dimension of the domain when a caller gives only a measure: a surface (Weyl's law in 2-D).
+pub const DEFAULT_DIMENSION: usize = 2;
+
 /// The measure μ of the domain a spectrum belongs to, with its dimension d: the area of a
 /// surface or the volume of a solid (1ᵀB1 = 1ᵀD1 of its operators).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -155,6 +155,16 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
             ],
         )?,
     )?;
+    d.set_item(
+        "global",
+        group(
+            py,
+            &[
+                ("eigenvalues", n(shape_retrieval::global::DEFAULT_EIGENVALUES)?),
+                ("dimension", n(shape_retrieval::global::DEFAULT_DIMENSION)?),
+            ],
+        )?,
+    )?;
     m.add("DEFAULTS", d)?;
     Ok(())
 }

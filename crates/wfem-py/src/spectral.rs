@@ -270,7 +270,7 @@ impl PyEigenbasis {
     /// The global signature (the Weyl-normalised Shape-DNA by default) of the first m nonzero eigenvalues, with the
     /// shape's measure (`None`: 1ᵀM1, the area or volume for B and D) and its dimension (2 for a
     /// surface, 3 for a solid: Weyl's law in that dimension).
-    #[pyo3(signature = (eigenvalues, kind=None, measure=None, dimension=2))]
+    #[pyo3(signature = (eigenvalues, kind=None, measure=None, dimension=shape_retrieval::global::DEFAULT_DIMENSION))]
     fn global_signature(
         &self,
         py: Python<'_>,

@@ -71,7 +71,7 @@ def test_no_signature_writes_a_number():
 
 
 def test_every_group_holds_numbers():
-    assert {"eigen", "diagonal", "distance", "inverse", "largest_eigenvalue", "sihks", "descriptor", "index"} <= set(D)
+    assert {"eigen", "diagonal", "distance", "inverse", "largest_eigenvalue", "sihks", "descriptor", "index", "global"} <= set(D)
     for group, values in D.items():
         assert values, group
         for name, value in values.items():
@@ -113,3 +113,16 @@ def test_kmeans_and_the_largest_eigenvalue_left_alone_use_their_groups():
     kernel = wfem.HeatKernel(V, F)
     g = D["largest_eigenvalue"]
     assert kernel.largest_eigenvalue() == kernel._k.largest_eigenvalue(g["tol"], g["max_iter"], g["seed"])
+
+
+def test_the_global_signature_left_alone_uses_the_global_group():
+    """Shape-DNA's m and the dimension of Weyl's law come from shape_retrieval::global (the CLI's
+    `wfem spectrum -m` reads the same constant)."""
+    g = D["global"]
+    basis = _wfem.Eigenbasis.from_mesh(V, F, 60)
+    alone = np.asarray(basis.global_signature(g["eigenvalues"]))
+    given = np.asarray(basis.global_signature(g["eigenvalues"], None, None, g["dimension"]))
+    assert np.array_equal(alone, given)
+    # The other dimension gives other values: the comparison can fail.
+    assert not np.array_equal(alone, np.asarray(basis.global_signature(g["eigenvalues"], None, None, 3)))
+    assert len(wfem.shape_dna(V, F)) == g["eigenvalues"]

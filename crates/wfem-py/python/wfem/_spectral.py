@@ -127,11 +127,11 @@ class Eigenbasis:
 
     def shape_dna(
         self,
-        m: int = 50,
+        m: int = _DEFAULTS["global"]["eigenvalues"],
         *,
         kind: str | None = None,
         measure: float | None = None,
-        dimension: int = 2,
+        dimension: int = _DEFAULTS["global"]["dimension"],
     ) -> np.ndarray:
         """The global signature of the first ``m`` nonzero eigenvalues of this basis (Shape-DNA
         by default); ``measure`` the area (``dimension=2``) or volume (``dimension=3``) of the
@@ -391,7 +391,7 @@ def wks(
 def shape_dna(
     V: Any,
     F: Any = None,
-    m: int = 50,
+    m: int = _DEFAULTS["global"]["eigenvalues"],
     *,
     kind: str | None = None,
     mass: str | None = None,
