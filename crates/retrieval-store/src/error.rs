@@ -119,7 +119,7 @@ pub enum StoreError {
     /// unchecked) but not written to, so that it never holds records that cannot be verified.
     #[error(
         "{path} is a store of format version {version}, which has no checksums: it is read as unchecked, not written to; \
-         upgrade it in place first (`wfem retrieval check --upgrade`, Python `IndexStore.upgrade`)"
+         upgrade it in place first (`wfem retrieval check --upgrade`, Python `VectorStore.upgrade`)"
     )]
     NoChecksums {
         /// The file.

@@ -77,7 +77,7 @@ def main() -> int:
     index_path = args.index or Path(tempfile.mkdtemp()) / "index.sqlite"
     # This custom recipe (a vocabulary on every third shape, L1) goes into the low-level store;
     # wfem.RetrievalIndex.build(paths, out) is the CLI's default recipe in the same kind of file.
-    index = wfem.IndexStore.create(index_path, voc.size, overwrite=True)
+    index = wfem.VectorStore.create(index_path, voc.size, overwrite=True)
     index.add([r["path"] for r in bag_rows], np.array([r["bag"] for r in bag_rows]),
               infos=[labels_by_name[r["path"]] for r in bag_rows])
     print(f"index {index_path}: {len(index)} shapes, {voc.size} words")

@@ -34,15 +34,15 @@ pub fn check_tuple(r: CheckReport) -> CheckTuple {
     )
 }
 
-/// Rust side of `wfem.IndexStore`: one connection, used by one call at a time.
-#[pyclass(name = "IndexStore", module = "wfem._wfem", frozen)]
-pub struct PyIndexStore {
+/// Rust side of `wfem.VectorStore`: one connection, used by one call at a time.
+#[pyclass(name = "VectorStore", module = "wfem._wfem", frozen)]
+pub struct PyVectorStore {
     store: Arc<Mutex<Store>>,
     path: PathBuf,
     dimension: usize,
 }
 
-impl PyIndexStore {
+impl PyVectorStore {
     fn wrap(store: Store) -> Self {
         Self {
             path: store.path().to_path_buf(),
@@ -68,7 +68,7 @@ impl PyIndexStore {
 }
 
 #[pymethods]
-impl PyIndexStore {
+impl PyVectorStore {
     #[staticmethod]
     #[pyo3(signature = (path, dimension, chunk_rows=retrieval_store::DEFAULT_CHUNK_ROWS, overwrite=false))]
     fn create(py: Python<'_>, path: PathBuf, dimension: usize, chunk_rows: usize, overwrite: bool) -> PyResult<Self> {
@@ -213,6 +213,6 @@ impl PyIndexStore {
 
 /// Registers the class of this module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_class::<PyIndexStore>()?;
+    m.add_class::<PyVectorStore>()?;
     Ok(())
 }

@@ -32,7 +32,7 @@ V, F = wfem.generate.icosphere(1)
 K = wfem.HeatKernel(V, F)
 f = V[:, 2].copy()
 def store(name="s.sqlite", dim=3, n=4):
-    s = wfem.IndexStore.create(os.path.join(d, name), dim)
+    s = wfem.VectorStore.create(os.path.join(d, name), dim)
     s.add([f"s{{i}}" for i in range(n)], np.full((n, dim), 1.0 / dim))
     return s
 def mesh_file(name="m.off"):
@@ -113,19 +113,19 @@ CASES: list[tuple[str, str, str]] = [
     ),
     # The store: sizes, tampering, special files.
     ("store search k 2^62", "s = store(); assert len(s.search(np.full(3, 1/3), 2**62)) == 4", "ok"),
-    ("store create dimension 1e12", "wfem.IndexStore.create(os.path.join(d, 'x.sqlite'), 10**12)", "wfem"),
-    ("store create dimension -1", "wfem.IndexStore.create(os.path.join(d, 'x.sqlite'), -1)", "wfem"),
+    ("store create dimension 1e12", "wfem.VectorStore.create(os.path.join(d, 'x.sqlite'), 10**12)", "wfem"),
+    ("store create dimension -1", "wfem.VectorStore.create(os.path.join(d, 'x.sqlite'), -1)", "wfem"),
     (
         "store tampered dimension",
         "s = store(); p = s.path; del s\n"
         "import sqlite3; c = sqlite3.connect(p); "
         "c.execute(\"UPDATE meta SET value = CAST('4000000000000' AS BLOB) WHERE key = 'dimension'\"); "
         "c.commit(); c.close()\n"
-        "wfem.IndexStore.open(p, readonly=True).vectors()",
+        "wfem.VectorStore.open(p, readonly=True).vectors()",
         "wfem",
     ),
-    ("store open directory", "wfem.IndexStore.open(d)", "wfem"),
-    ("store open FIFO", "p = os.path.join(d, 'fifo'); os.mkfifo(p); wfem.IndexStore.open(p)", "wfem"),
+    ("store open directory", "wfem.VectorStore.open(d)", "wfem"),
+    ("store open FIFO", "p = os.path.join(d, 'fifo'); os.mkfifo(p); wfem.VectorStore.open(p)", "wfem"),
     ("index open FIFO", "p = os.path.join(d, 'fifo'); os.mkfifo(p); wfem.RetrievalIndex.open(p)", "wfem"),
     ("index open directory", "wfem.RetrievalIndex.open(d)", "wfem"),
     ("index open missing", "wfem.RetrievalIndex.open(os.path.join(d, 'missing.sqlite'))", "wfem"),
@@ -228,16 +228,16 @@ def test_an_index_on_read_only_media_can_be_queried(tmp_path):
         pytest.skip("no unshare")
     folder = tmp_path / "ro"
     folder.mkdir()
-    s = wfem.IndexStore.create(folder / "s.sqlite", 3)
+    s = wfem.VectorStore.create(folder / "s.sqlite", 3)
     s.add(["a", "b"], np.eye(3)[:2])
     del s
     assert sorted(os.listdir(folder)) == ["s.sqlite"]
     code = (
         "import wfem, numpy as np\n"
         f"p = {str(folder / 's.sqlite')!r}\n"
-        "s = wfem.IndexStore.open(p, readonly=True)\n"
+        "s = wfem.VectorStore.open(p, readonly=True)\n"
         "assert len(s) == 2 and s.search(np.array([1.0, 0, 0]), 1)[0].name == 'a'\n"
-        "try:\n    wfem.IndexStore.open(p)\nexcept wfem.StoreError:\n    print('refused')\n"
+        "try:\n    wfem.VectorStore.open(p)\nexcept wfem.StoreError:\n    print('refused')\n"
     )
     mount = f"mount --bind {folder} {folder} && mount -o remount,bind,ro {folder}"
     probe = subprocess.run(["unshare", "-m", "sh", "-c", mount], capture_output=True)

@@ -101,7 +101,7 @@ def test_descriptors_take_every_name(spelling, name):
 
 @pytest.mark.parametrize("spelling,name", spellings("metric"))
 def test_store_search_takes_every_metric(tmp_path, spelling, name):
-    store = wfem.IndexStore.create(tmp_path / "s.sqlite", 3)
+    store = wfem.VectorStore.create(tmp_path / "s.sqlite", 3)
     store.add(["a", "b"], np.array([[0.2, 0.3, 0.5], [0.5, 0.3, 0.2]]))
     hits = store.search([0.2, 0.3, 0.5], 2, metric=spelling)
     assert hits[0].name == "a"
@@ -133,3 +133,13 @@ def test_an_old_name_warns_and_gives_the_new_one():
     assert "KERNELS" not in wfem.__all__
     with pytest.raises(AttributeError):
         wfem.NO_SUCH_NAME
+
+
+def test_index_store_is_the_old_name_of_vector_store():
+    """Issue #37, point 4: the Python class of the SQLite vector store was `IndexStore`, the name
+    of shape-retrieval's Rust trait for a place an index is saved to; it is `VectorStore` now and
+    the old name works, with a warning, for one release."""
+    with pytest.warns(DeprecationWarning, match="old name of wfem.VectorStore"):
+        old = wfem.IndexStore
+    assert old is wfem.VectorStore
+    assert "IndexStore" not in wfem.__all__

@@ -24,11 +24,11 @@ def random_bags(n, d, seed=0):
 def test_round_trip_and_search(tmp_path):
     path = tmp_path / "index.sqlite"
     bags = random_bags(300, 16)
-    store = wfem.IndexStore.create(path, 16, chunk_rows=64)
+    store = wfem.VectorStore.create(path, 16, chunk_rows=64)
     store.set_meta("settings", '{"a": 1}')
     ids = store.add([f"s{i}" for i in range(300)], bags, infos=[f"class{i % 3}" for i in range(300)])
     assert ids == list(range(300))
-    again = wfem.IndexStore.open(path, readonly=True)
+    again = wfem.VectorStore.open(path, readonly=True)
     assert len(again) == 300 and again.dimension == 16
     assert again.meta("settings") == b'{"a": 1}' and again.meta("nope") is None
     np.testing.assert_array_equal(again.vectors(), bags.astype(np.float32))
@@ -45,7 +45,7 @@ def test_round_trip_and_search(tmp_path):
 
 def test_adding_does_not_rebuild_and_keeps_ids(tmp_path):
     path = tmp_path / "index.sqlite"
-    store = wfem.IndexStore.create(path, 4, chunk_rows=8)
+    store = wfem.VectorStore.create(path, 4, chunk_rows=8)
     b = random_bags(30, 4, seed=1)
     store.add([f"a{i}" for i in range(5)], b[:5])
     store.add([f"a{i}" for i in range(5, 30)], b[5:])
@@ -64,25 +64,25 @@ def test_adding_does_not_rebuild_and_keeps_ids(tmp_path):
 
 def test_store_errors(tmp_path):
     with pytest.raises(wfem.StoreError) as e:
-        wfem.IndexStore.open(tmp_path / "missing.sqlite")
+        wfem.VectorStore.open(tmp_path / "missing.sqlite")
     assert e.value.kind == "Io"
     junk = tmp_path / "junk.sqlite"
     junk.write_bytes(b"not a database at all, just bytes" * 10)
     with pytest.raises(wfem.StoreError) as e2:
-        wfem.IndexStore.open(junk)
+        wfem.VectorStore.open(junk)
     assert e2.value.kind == "NotAStore"
-    wfem.IndexStore.create(tmp_path / "a.sqlite", 3)
+    wfem.VectorStore.create(tmp_path / "a.sqlite", 3)
     with pytest.raises(wfem.StoreError) as e3:
-        wfem.IndexStore.create(tmp_path / "a.sqlite", 3)
+        wfem.VectorStore.create(tmp_path / "a.sqlite", 3)
     assert e3.value.kind == "Exists"
-    ro = wfem.IndexStore.open(tmp_path / "a.sqlite", readonly=True)
+    ro = wfem.VectorStore.open(tmp_path / "a.sqlite", readonly=True)
     with pytest.raises(wfem.InvalidInputError):
         ro.add(["x"], np.ones((1, 3)))
 
 
 READER = r"""
 import sys, numpy as np, wfem
-s = wfem.IndexStore.open(sys.argv[1], readonly=True)
+s = wfem.VectorStore.open(sys.argv[1], readonly=True)
 seen = []
 for _ in range(40):
     n = len(s)
@@ -96,14 +96,14 @@ print(max(seen))
 
 def test_concurrent_readers_threads_and_process(tmp_path):
     path = tmp_path / "index.sqlite"
-    store = wfem.IndexStore.create(path, 8, chunk_rows=32)
+    store = wfem.VectorStore.create(path, 8, chunk_rows=32)
     store.add([f"s{i}" for i in range(50)], random_bags(50, 8))
     proc = subprocess.Popen([sys.executable, "-c", READER, str(path)], stdout=subprocess.PIPE, text=True)
     errors = []
 
     def read():
         try:
-            r = wfem.IndexStore.open(path, readonly=True)
+            r = wfem.VectorStore.open(path, readonly=True)
             for _ in range(30):
                 n = len(r)
                 assert n % 50 == 0
@@ -277,18 +277,18 @@ def _flip_bit(path, chunk, byte, bit):
 def test_issue_41_a_flipped_bit_is_corrupt_index_and_check_names_it(tmp_path):
     path = tmp_path / "index.sqlite"
     bags = random_bags(40, 8)
-    store = wfem.IndexStore.create(path, 8, chunk_rows=16)
+    store = wfem.VectorStore.create(path, 8, chunk_rows=16)
     store.add([f"s{i}" for i in range(40)], bags)
     del store
-    report = wfem.IndexStore.check(path)
+    report = wfem.VectorStore.check(path)
     assert report.verified and report.shapes == 40 and report.chunks == 3 and report.damage == []
     _flip_bit(path, 1, 5, 2)
-    store = wfem.IndexStore.open(path, readonly=True)
+    store = wfem.VectorStore.open(path, readonly=True)
     assert store.checksummed
     with pytest.raises(wfem.StoreError) as e:
         store.search(bags[20], k=3)
     assert e.value.kind == "CorruptIndex" and e.value.record == "chunk 1 (shapes 16 to 31)"
-    report = wfem.IndexStore.check(path)
+    report = wfem.VectorStore.check(path)
     assert not report.verified
     assert report.damage[0][0] == "chunk 1 (shapes 16 to 31)" and "checksum" in report.damage[0][1]
     assert "DAMAGED" in report.text
@@ -320,20 +320,20 @@ def test_issue_41_a_version_1_store_is_unchecked_until_upgraded(tmp_path):
 
     path = tmp_path / "index.sqlite"
     bags = random_bags(10, 4)
-    wfem.IndexStore.create(path, 4).add([f"s{i}" for i in range(10)], bags)
+    wfem.VectorStore.create(path, 4).add([f"s{i}" for i in range(10)], bags)
     with sqlite3.connect(path) as conn:
         for table in ("meta", "shapes", "chunks"):
             conn.execute(f"ALTER TABLE {table} DROP COLUMN checksum")
         conn.execute("UPDATE meta SET value = CAST('1' AS BLOB) WHERE key = 'version'")
     conn.close()
-    store = wfem.IndexStore.open(path)
+    store = wfem.VectorStore.open(path)
     assert not store.checksummed
     with pytest.raises(wfem.StoreError) as e:
         store.add(["new"], bags[:1])
     assert e.value.kind == "NoChecksums"
     del store
-    report = wfem.IndexStore.check(path)
+    report = wfem.VectorStore.check(path)
     assert report.version == 1 and not report.checksums and not report.verified and report.damage == []
-    assert wfem.IndexStore.upgrade(path).verified
-    store = wfem.IndexStore.open(path)
+    assert wfem.VectorStore.upgrade(path).verified
+    store = wfem.VectorStore.open(path)
     assert store.checksummed and store.add(["new"], bags[:1]) == [10]

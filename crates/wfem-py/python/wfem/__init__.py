@@ -71,7 +71,7 @@ from ._retrieval import (
     DESCRIPTORS,
     PAPER_DESCRIPTORS,
     Hit,
-    IndexStore,
+    VectorStore,
     RetrievalIndex,
     Vocabulary,
     average_precision,
@@ -90,7 +90,7 @@ from . import generate
 __version__: str = _wfem.__version__
 
 #: Old names kept for one release (issue #37): reading one warns and gives the new one.
-_OLD_NAMES = {"KERNELS": "MASSES"}
+_OLD_NAMES = {"KERNELS": "MASSES", "IndexStore": "VectorStore"}
 
 
 def __getattr__(name: str):
@@ -163,7 +163,7 @@ __all__ = [
     "evaluate",
     "mean_average_precision",
     "average_precision",
-    "IndexStore",
+    "VectorStore",
     "RetrievalIndex",
     "Hit",
     "CheckReport",

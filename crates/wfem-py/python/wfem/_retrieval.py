@@ -31,7 +31,7 @@ __all__ = [
     "evaluate",
     "mean_average_precision",
     "average_precision",
-    "IndexStore",
+    "VectorStore",
     "Hit",
     "CheckReport",
     "RetrievalIndex",
@@ -245,12 +245,12 @@ class Hit:
 
 @dataclass(frozen=True)
 class CheckReport:
-    """What :meth:`IndexStore.check` / :meth:`RetrievalIndex.check` found in an index file.
+    """What :meth:`VectorStore.check` / :meth:`RetrievalIndex.check` found in an index file.
 
     ``damage`` lists every damaged record as ``(record, reason)`` (``'metadata "KEY"'``,
     ``'shape ID ("NAME")'``, ``'chunk C (shapes A to B)'``, ``'the file'``, …); ``checksums``
     is False for a file of format version 1, which has none, so that its contents could not be
-    verified (:meth:`IndexStore.upgrade` adds them). ``text`` is what ``wfem retrieval check``
+    verified (:meth:`VectorStore.upgrade` adds them). ``text`` is what ``wfem retrieval check``
     prints."""
 
     path: str
@@ -276,7 +276,7 @@ def _check_report(path: str | os.PathLike[str], t: Any) -> CheckReport:
     )
 
 
-class IndexStore:
+class VectorStore:
     """The embedded SQLite store of a retrieval index (one file; see the crate retrieval-store).
 
     Metadata (bytes per key), and per shape an id, a unique name, an info string and one
@@ -296,25 +296,25 @@ class IndexStore:
     @classmethod
     def create(
         cls, path: str | os.PathLike[str], dimension: int, *, chunk_rows: int = _DEFAULTS["index"]["chunk_rows"], overwrite: bool = False
-    ) -> "IndexStore":
-        return cls(_wfem.IndexStore.create(os.fspath(path), dimension, chunk_rows, overwrite))
+    ) -> "VectorStore":
+        return cls(_wfem.VectorStore.create(os.fspath(path), dimension, chunk_rows, overwrite))
 
     @classmethod
-    def open(cls, path: str | os.PathLike[str], *, readonly: bool = False) -> "IndexStore":
-        return cls(_wfem.IndexStore.open(os.fspath(path), readonly))
+    def open(cls, path: str | os.PathLike[str], *, readonly: bool = False) -> "VectorStore":
+        return cls(_wfem.VectorStore.open(os.fspath(path), readonly))
 
     @staticmethod
     def check(path: str | os.PathLike[str]) -> CheckReport:
         """Verifies every record of the store file at ``path`` (checksums, SQLite's structure,
         the chunk table, finite values) and reports all damage rather than raising at the first;
         raises only when nothing can be checked (not a store, unreadable)."""
-        return _check_report(path, _wfem.IndexStore.check(os.fspath(path)))
+        return _check_report(path, _wfem.VectorStore.check(os.fspath(path)))
 
     @staticmethod
     def upgrade(path: str | os.PathLike[str]) -> CheckReport:
         """Adds checksums in place to a store of format version 1 (which is read unchecked and
         not written to); a store with damage is refused. Returns the check afterwards."""
-        return _check_report(path, _wfem.IndexStore.upgrade(os.fspath(path)))
+        return _check_report(path, _wfem.VectorStore.upgrade(os.fspath(path)))
 
     @property
     def checksummed(self) -> bool:
@@ -325,7 +325,7 @@ class IndexStore:
         return len(self._s)
 
     def __repr__(self) -> str:
-        return f"IndexStore({str(self.path)!r}, shapes={len(self)}, dimension={self.dimension})"
+        return f"VectorStore({str(self.path)!r}, shapes={len(self)}, dimension={self.dimension})"
 
     @property
     def path(self) -> str:
