@@ -513,7 +513,8 @@ impl GeodesicSolver {
     }
 
     /// Approximate memory of the prepared solver in bytes: the surface and its one-rings, the
-    /// triangles of fast marching, or the heat method's two Cholesky factors and gradients.
+    /// wedges of fast marching with one kept query state, or the heat method's two Cholesky
+    /// factors and gradients.
     pub fn memory_bytes(&self) -> usize {
         let n = self.surface.n_vertices();
         let base =
