@@ -33,6 +33,31 @@ pub fn clear_upper_state() {
     }
 }
 
+/// Asks the CPU to bring the memory of `items` (its first 512 bytes) into the caches (x86-64
+/// `prefetcht1`: the second-level cache and inward); nothing elsewhere. A hint: it changes no
+/// value, and it pays when the data is read some hundreds of cycles later, as fast marching
+/// reads a vertex's triangles when it accepts the vertex, long after it first reached it.
+#[inline]
+pub fn prefetch<T>(items: &[T]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let start = items.as_ptr().cast::<i8>();
+        let bytes = std::mem::size_of_val(items).min(512);
+        let mut offset = 0;
+        while offset < bytes {
+            // SAFETY: a prefetch never faults and reads nothing into the program; the address
+            // is inside the slice. SSE (which has the instruction) is part of x86-64.
+            #[allow(unsafe_code, unused_unsafe)]
+            unsafe {
+                std::arch::x86_64::_mm_prefetch(start.add(offset), std::arch::x86_64::_MM_HINT_T1);
+            }
+            offset += 64;
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = items;
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

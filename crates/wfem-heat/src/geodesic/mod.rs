@@ -513,7 +513,8 @@ impl GeodesicSolver {
     }
 
     /// Approximate memory of the prepared solver in bytes: the surface and its one-rings, the
-    /// triangles of fast marching, or the heat method's two Cholesky factors and gradients.
+    /// wedges of fast marching with one kept query state, or the heat method's two Cholesky
+    /// factors and gradients.
     pub fn memory_bytes(&self) -> usize {
         let n = self.surface.n_vertices();
         let base =
@@ -586,12 +587,7 @@ impl GeodesicSolver {
         let mut d = match &self.prepared {
             Prepared::FastMarching(eikonal) => {
                 let mut d = vec![f64::INFINITY; self.surface.n_vertices()];
-                let mut fixed = vec![false; d.len()];
-                for &(v, tau) in &seeds.fixed {
-                    d[v] = tau;
-                    fixed[v] = true;
-                }
-                eikonal.march(&mut d, &fixed);
+                eikonal.march(&seeds.fixed, &mut d);
                 d
             }
             Prepared::Heat(heat) => heat.distance(&seeds, self.n, &mut report)?,
@@ -613,9 +609,8 @@ impl GeodesicSolver {
         if sources.is_empty() {
             return Err(empty_sources());
         }
-        let n_inner = self.surface.n_vertices();
         let p = self.surface.positions();
-        let mut rhs = vec![0.0; n_inner];
+        let mut rhs: Vec<(usize, f64)> = Vec::new();
         let mut pins: Vec<(usize, f64)> = Vec::new();
         let mut ring: Vec<(usize, f64)> = Vec::new();
         for source in sources {
@@ -627,7 +622,7 @@ impl GeodesicSolver {
                             n_vertices: self.n,
                         });
                     }
-                    rhs[v as usize] += 1.0;
+                    rhs.push((v as usize, 1.0));
                     pins.push((v as usize, 0.0));
                     for &w in self.ring.of(v) {
                         ring.push((w as usize, norm(sub(p[w as usize], p[v as usize]))));
@@ -640,7 +635,7 @@ impl GeodesicSolver {
                         [acc[0] + w[k] * c[0], acc[1] + w[k] * c[1], acc[2] + w[k] * c[2]]
                     });
                     for k in 0..3 {
-                        rhs[corners[k] as usize] += w[k];
+                        rhs.push((corners[k] as usize, w[k]));
                         pins.push((corners[k] as usize, norm(sub(p[corners[k] as usize], x))));
                     }
                 }
@@ -711,7 +706,11 @@ impl GeodesicSolver {
 impl HeatMethod {
     /// Steps 1–3 of the heat method (module docs).
     fn distance(&self, seeds: &Seeds, n: usize, report: &mut GeodesicReport) -> Result<Vec<f64>, HeatError> {
-        let u = self.heat.solve_vec(&seeds.rhs);
+        let mut rhs = vec![0.0; self.gradients.n_vertices()];
+        for &(v, w) in &seeds.rhs {
+            rhs[v] += w;
+        }
+        let u = self.heat.solve_vec(&rhs);
         let g = &self.gradients;
         let field: Vec<[f64; 3]> = (0..g.n_elements())
             .into_par_iter()
@@ -739,7 +738,8 @@ impl HeatMethod {
 }
 
 struct Seeds {
-    rhs: Vec<f64>,
+    /// The heat step's right-hand side δ_S as (vertex, weight), a vertex possibly repeated.
+    rhs: Vec<(usize, f64)>,
     pins: Vec<(usize, f64)>,
     fixed: Vec<(usize, f64)>,
 }

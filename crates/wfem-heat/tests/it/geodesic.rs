@@ -283,6 +283,38 @@ fn many_sources_give_one_row_each() {
     assert!((rows[0][5] - rows[1][0]).abs() < 0.02 * rows[0][5]);
 }
 
+/// Fast marching keeps a query's state for the next query; queries from several threads at once
+/// (plain threads sharing one solver, and rayon's distance_each) give the serial rows bit for
+/// bit, and a later serial query is unchanged by them.
+#[test]
+fn concurrent_queries_equal_serial_ones() {
+    let mesh = icosphere(4);
+    let solver = GeodesicSolver::new(&mesh, &GeodesicParams::default()).unwrap();
+    let sources: Vec<u32> = (0..12).map(|k| k * 211).collect();
+    let serial: Vec<Vec<f64>> = sources.iter().map(|&s| solver.distance(&[s]).unwrap()).collect();
+    std::thread::scope(|scope| {
+        for t in 0..4 {
+            let (solver, sources, serial) = (&solver, &sources, &serial);
+            scope.spawn(move || {
+                for round in 0..3 {
+                    for k in 0..sources.len() {
+                        // Each thread in its own order, so that the queries overlap differently.
+                        let k = (k * (t + 1) + round) % sources.len();
+                        let d = solver.distance(&[sources[k]]).unwrap();
+                        assert!(d == serial[k], "thread {t}, source {}", sources[k]);
+                    }
+                }
+            });
+        }
+    });
+    assert_eq!(solver.distance_each(&sources).unwrap(), serial);
+    assert_eq!(solver.distance(&[sources[3]]).unwrap(), serial[3]);
+    // Several sources in one query after single-source ones: no state carried over.
+    let both = solver.distance(&[sources[1], sources[7]]).unwrap();
+    let fresh = GeodesicSolver::new(&mesh, &GeodesicParams::default()).unwrap();
+    assert_eq!(both, fresh.distance(&[sources[1], sources[7]]).unwrap());
+}
+
 #[test]
 fn the_cotangent_triangulation_is_selectable() {
     let mesh = icosphere(4);
