@@ -451,15 +451,29 @@ pub(crate) struct ColumnDiagonal {
     pub mass: Option<f64>,
 }
 
-/// The write pass shared by the cotangent and the intrinsic assembly: for every column j (in
-/// parallel over `chunks`), `column(j, buf)` fills `buf` with the merged off-diagonal entries
-/// `(row, L, B)` of column j (distinct rows, any order) and returns its diagonal entries; the
-/// rows are sorted, `L_jj = −Σ_i L_ij` (so `L·1 = 0`), and the entries are written into disjoint
-/// per-chunk slices of the final arrays at `col_ptr`.
-pub(crate) fn write_columns(
+/// One chunk's columns as a write pass fills them: its own disjoint slices of the final
+/// arrays (the entries of columns `columns.0..columns.1`, from `col_ptr[columns.0]`, and their
+/// D_jj), the chunk's index in `chunks`, and the column pointers.
+pub(crate) struct ChunkSlices<'a> {
+    pub l_rows: &'a mut [usize],
+    pub b_rows: &'a mut [usize],
+    pub l: &'a mut [f64],
+    pub b: &'a mut [f64],
+    pub lumped: &'a mut [f64],
+    pub columns: (usize, usize),
+    pub index: usize,
+    pub col_ptr: &'a [usize],
+}
+
+/// The arrays of the operators at `col_ptr`, filled chunk by chunk in parallel: `fill(state,
+/// slices)` writes the rows and values of one chunk's columns into its own slices, with a
+/// per-worker scratch `state` from `init`. Shared by the surface assemblies ([`write_columns`])
+/// and the tetrahedral one.
+pub(crate) fn fill_columns<S>(
     chunks: &[(usize, usize)],
     col_ptr: Vec<usize>,
-    column: impl Fn(usize, &mut Vec<(u32, f64, f64)>) -> ColumnDiagonal + Sync,
+    init: impl Fn() -> S + Sync + Send,
+    fill: impl Fn(&mut S, ChunkSlices<'_>) + Sync + Send,
 ) -> Columns {
     let n = col_ptr.len() - 1;
     let nnz = col_ptr[n];
@@ -476,41 +490,25 @@ pub(crate) fn write_columns(
             .zip(split_at_bounds(&mut l_val, &bounds))
             .zip(split_at_bounds(&mut b_val, &bounds))
             .zip(lumped_diagonal.chunks_mut(COLUMNS_PER_CHUNK))
-            .zip(chunks)
+            .zip(chunks.iter().enumerate())
             .collect();
         let col_ptr = &col_ptr;
-        work.into_par_iter()
-            .for_each(|(((((l_rows, b_rows), l), b), diag), &(col_start, col_end))| {
-                // Half-edges (row i, L value, B value) of column j.
-                let mut buf: Vec<(u32, f64, f64)> = Vec::new();
-                let base = col_ptr[col_start];
-                for j in col_start..col_end {
-                    buf.clear();
-                    let d = column(j, &mut buf);
-                    // The rows are distinct now.
-                    buf.sort_unstable_by_key(|e| e.0);
-                    diag[j - col_start] = d.lumped;
-                    let merged = &buf[..];
-                    let l_diag = -merged.iter().map(|e| e.1).sum::<f64>();
-                    let b_diag = d.mass.unwrap_or_else(|| merged.iter().map(|e| e.2).sum::<f64>());
-                    let split = merged.partition_point(|e| (e.0 as usize) < j);
-                    let mut p = col_ptr[j] - base;
-                    let mut put = |i: usize, lv: f64, bv: f64| {
-                        l_rows[p] = i;
-                        b_rows[p] = i;
-                        l[p] = lv;
-                        b[p] = bv;
-                        p += 1;
-                    };
-                    for e in &merged[..split] {
-                        put(e.0 as usize, e.1, e.2);
-                    }
-                    put(j, l_diag, b_diag);
-                    for e in &merged[split..] {
-                        put(e.0 as usize, e.1, e.2);
-                    }
-                }
-            });
+        work.into_par_iter().for_each_init(
+            &init,
+            |state, (((((l_rows, b_rows), l), b), lumped), (index, &columns))| {
+                let slices = ChunkSlices {
+                    l_rows,
+                    b_rows,
+                    l,
+                    b,
+                    lumped,
+                    columns,
+                    index,
+                    col_ptr,
+                };
+                fill(state, slices);
+            },
+        );
     }
     Columns {
         col_ptr,
@@ -519,6 +517,49 @@ pub(crate) fn write_columns(
         b_val,
         lumped_diagonal,
     }
+}
+
+/// The write pass shared by the cotangent and the intrinsic assembly: for every column j (in
+/// parallel over `chunks`), `column(j, buf)` fills `buf` with the merged off-diagonal entries
+/// `(row, L, B)` of column j (distinct rows, any order) and returns its diagonal entries; the
+/// rows are sorted, `L_jj = −Σ_i L_ij` (so `L·1 = 0`), and the entries are written into disjoint
+/// per-chunk slices of the final arrays at `col_ptr`.
+pub(crate) fn write_columns(
+    chunks: &[(usize, usize)],
+    col_ptr: Vec<usize>,
+    column: impl Fn(usize, &mut Vec<(u32, f64, f64)>) -> ColumnDiagonal + Sync,
+) -> Columns {
+    // Half-edges (row i, L value, B value) of a column.
+    fill_columns(chunks, col_ptr, Vec::<(u32, f64, f64)>::new, |buf, s| {
+        let (col_start, col_end) = s.columns;
+        let base = s.col_ptr[col_start];
+        for j in col_start..col_end {
+            buf.clear();
+            let d = column(j, buf);
+            // The rows are distinct now.
+            buf.sort_unstable_by_key(|e| e.0);
+            s.lumped[j - col_start] = d.lumped;
+            let merged = &buf[..];
+            let l_diag = -merged.iter().map(|e| e.1).sum::<f64>();
+            let b_diag = d.mass.unwrap_or_else(|| merged.iter().map(|e| e.2).sum::<f64>());
+            let split = merged.partition_point(|e| (e.0 as usize) < j);
+            let mut p = s.col_ptr[j] - base;
+            let mut put = |i: usize, lv: f64, bv: f64| {
+                s.l_rows[p] = i;
+                s.b_rows[p] = i;
+                s.l[p] = lv;
+                s.b[p] = bv;
+                p += 1;
+            };
+            for e in &merged[..split] {
+                put(e.0 as usize, e.1, e.2);
+            }
+            put(j, l_diag, b_diag);
+            for e in &merged[split..] {
+                put(e.0 as usize, e.1, e.2);
+            }
+        }
+    })
 }
 
 /// The column chunks (`COLUMNS_PER_CHUNK` columns each) and the column pointers of the

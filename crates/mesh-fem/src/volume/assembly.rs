@@ -3,7 +3,7 @@
 //! each vertex, the column layout, then every column's merged entries written in place.
 
 use super::{signed_volume, TetMesh};
-use crate::operators::{faces_around_vertices, split_at_bounds, Columns, FemOperators, Lumping, COLUMNS_PER_CHUNK};
+use crate::operators::{faces_around_vertices, fill_columns, Columns, FemOperators, Lumping, COLUMNS_PER_CHUNK};
 use crate::vec3::{cross, dot, norm, sub};
 use crate::{AssemblyParams, Laplacian, MeshError};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
@@ -237,68 +237,47 @@ fn scatter_columns(
     rows: &[Vec<u32>],
 ) -> Columns {
     let n = col_ptr.len() - 1;
-    let nnz = col_ptr[n];
-    let mut row_idx = [vec![0usize; nnz], vec![0usize; nnz]];
-    let mut l_val = vec![0.0f64; nnz];
-    let mut b_val = vec![0.0f64; nnz];
-    let mut lumped_diagonal = vec![0.0f64; n];
-    {
-        let bounds: Vec<usize> = chunks.iter().map(|&(_, end)| col_ptr[end]).collect();
-        let [l_rows, b_rows] = &mut row_idx;
-        let work: Vec<_> = split_at_bounds(l_rows, &bounds)
-            .into_iter()
-            .zip(split_at_bounds(b_rows, &bounds))
-            .zip(split_at_bounds(&mut l_val, &bounds))
-            .zip(split_at_bounds(&mut b_val, &bounds))
-            .zip(lumped_diagonal.chunks_mut(COLUMNS_PER_CHUNK))
-            .zip(chunks.iter().zip(rows))
-            .collect();
-        let col_ptr = &col_ptr;
-        work.into_par_iter().for_each_init(
-            || vec![0u32; n],
-            |pos, (((((l_rows, b_rows), l), b), diag), (&(c0, c1), rows))| {
-                let base = col_ptr[c0];
-                for j in c0..c1 {
-                    let (p0, p1) = (col_ptr[j] - base, col_ptr[j + 1] - base);
-                    let column = &rows[p0..p1];
-                    for (q, &i) in column.iter().enumerate() {
-                        pos[i as usize] = q as u32;
-                        l_rows[p0 + q] = i as usize;
-                        b_rows[p0 + q] = i as usize;
-                    }
-                    let (mut d_jj, mut b_jj) = (0.0, 0.0);
-                    for &t in &around[first[j]..first[j + 1]] {
-                        let (tet, e) = (&tets[t as usize], &entries[t as usize]);
-                        let Some(k) = tet.iter().position(|&v| v as usize == j) else {
-                            continue;
-                        };
-                        let bv = e.volume / 20.0;
-                        for (c, &i) in tet.iter().enumerate() {
-                            if c != k {
-                                let q = p0 + pos[i as usize] as usize;
-                                l[q] += e.stiffness[EDGE[k][c]];
-                                b[q] += bv;
-                            }
-                        }
-                        d_jj += e.volume / 4.0;
-                        b_jj += e.volume / 10.0;
-                    }
-                    let qd = p0 + pos[j] as usize;
-                    let off: f64 = (p0..p1).filter(|&q| q != qd).map(|q| l[q]).sum();
-                    l[qd] = -off;
-                    b[qd] = b_jj;
-                    diag[j - c0] = d_jj;
-                }
-            },
-        );
-    }
-    Columns {
+    fill_columns(
+        chunks,
         col_ptr,
-        row_idx,
-        l_val,
-        b_val,
-        lumped_diagonal,
-    }
+        || vec![0u32; n],
+        |pos, s| {
+            let (c0, c1) = s.columns;
+            let rows = &rows[s.index];
+            let base = s.col_ptr[c0];
+            for j in c0..c1 {
+                let (p0, p1) = (s.col_ptr[j] - base, s.col_ptr[j + 1] - base);
+                let column = &rows[p0..p1];
+                for (q, &i) in column.iter().enumerate() {
+                    pos[i as usize] = q as u32;
+                    s.l_rows[p0 + q] = i as usize;
+                    s.b_rows[p0 + q] = i as usize;
+                }
+                let (mut d_jj, mut b_jj) = (0.0, 0.0);
+                for &t in &around[first[j]..first[j + 1]] {
+                    let (tet, e) = (&tets[t as usize], &entries[t as usize]);
+                    let Some(k) = tet.iter().position(|&v| v as usize == j) else {
+                        continue;
+                    };
+                    let bv = e.volume / 20.0;
+                    for (c, &i) in tet.iter().enumerate() {
+                        if c != k {
+                            let q = p0 + pos[i as usize] as usize;
+                            s.l[q] += e.stiffness[EDGE[k][c]];
+                            s.b[q] += bv;
+                        }
+                    }
+                    d_jj += e.volume / 4.0;
+                    b_jj += e.volume / 10.0;
+                }
+                let qd = p0 + pos[j] as usize;
+                let off: f64 = (p0..p1).filter(|&q| q != qd).map(|q| s.l[q]).sum();
+                s.l[qd] = -off;
+                s.b[qd] = b_jj;
+                s.lumped[j - c0] = d_jj;
+            }
+        },
+    )
 }
 
 /// Red refinement of every tetrahedron into eight (Bey 1995): four at the corners, four in the
