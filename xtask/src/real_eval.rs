@@ -38,6 +38,21 @@ pub enum Collection {
     GeneratedPeople,
     /// The same with builds twice as alike (spread 0.5).
     GeneratedPeopleAlike,
+    /// `tosca-people` remeshed shape by shape to 10,000 vertices
+    /// ([`shrec_bench::real::remeshed_files`]): as the held-out people of issue #42, each
+    /// shape a triangulation of its own at that resolution.
+    ToscaPeopleRemeshed,
+    /// `tosca-noniso` remeshed likewise.
+    ToscaNonIsoRemeshed,
+    /// `shrec11-people` remeshed likewise (from 250 vertices: the coarse polyhedra).
+    Shrec11PeopleRemeshed,
+    /// `generated-people` remeshed likewise (they share one connectivity before).
+    GeneratedPeopleRemeshed,
+    /// `generated-people-alike` remeshed likewise.
+    GeneratedPeopleAlikeRemeshed,
+    /// The generated mixed collection ([`shrec_bench::mixed`]): 20 classes of corpus objects,
+    /// man-made and organic, genus 0–4, 8 stretched, bulged and remeshed variants each.
+    GeneratedMixed,
 }
 
 /// TOSCA-76's people (families).
@@ -48,7 +63,7 @@ pub const CLOUD_SEED: u64 = 27;
 
 impl Collection {
     /// Every collection.
-    pub const ALL: [Collection; 10] = [
+    pub const ALL: [Collection; 16] = [
         Collection::Shrec11,
         Collection::Tosca76,
         Collection::Shrec11Fourleg,
@@ -59,6 +74,12 @@ impl Collection {
         Collection::Shrec11People,
         Collection::GeneratedPeople,
         Collection::GeneratedPeopleAlike,
+        Collection::ToscaPeopleRemeshed,
+        Collection::ToscaNonIsoRemeshed,
+        Collection::Shrec11PeopleRemeshed,
+        Collection::GeneratedPeopleRemeshed,
+        Collection::GeneratedPeopleAlikeRemeshed,
+        Collection::GeneratedMixed,
     ];
     /// Every collection's name.
     pub const NAMES: &'static [&'static str] = &[
@@ -72,6 +93,12 @@ impl Collection {
         "shrec11-people",
         "generated-people",
         "generated-people-alike",
+        "tosca-people-remeshed",
+        "tosca-noniso-remeshed",
+        "shrec11-people-remeshed",
+        "generated-people-remeshed",
+        "generated-people-alike-remeshed",
+        "generated-mixed",
     ];
 
     /// Its name.
@@ -87,6 +114,24 @@ impl Collection {
             Collection::Shrec11People => "shrec11-people",
             Collection::GeneratedPeople => "generated-people",
             Collection::GeneratedPeopleAlike => "generated-people-alike",
+            Collection::ToscaPeopleRemeshed => "tosca-people-remeshed",
+            Collection::ToscaNonIsoRemeshed => "tosca-noniso-remeshed",
+            Collection::Shrec11PeopleRemeshed => "shrec11-people-remeshed",
+            Collection::GeneratedPeopleRemeshed => "generated-people-remeshed",
+            Collection::GeneratedPeopleAlikeRemeshed => "generated-people-alike-remeshed",
+            Collection::GeneratedMixed => "generated-mixed",
+        }
+    }
+
+    /// The collection this one is a remeshed copy of.
+    pub fn remeshed_from(self) -> Option<Collection> {
+        match self {
+            Collection::ToscaPeopleRemeshed => Some(Collection::ToscaPeople),
+            Collection::ToscaNonIsoRemeshed => Some(Collection::ToscaNonIso),
+            Collection::Shrec11PeopleRemeshed => Some(Collection::Shrec11People),
+            Collection::GeneratedPeopleRemeshed => Some(Collection::GeneratedPeople),
+            Collection::GeneratedPeopleAlikeRemeshed => Some(Collection::GeneratedPeopleAlike),
+            _ => None,
         }
     }
 
@@ -129,6 +174,24 @@ impl Collection {
             Collection::Shrec11People => "SHREC'11's man and woman classes (40 shapes, 2 classes)",
             Collection::GeneratedPeople => "Generated people of different builds (80 shapes, 10 classes)",
             Collection::GeneratedPeopleAlike => "Generated people of alike builds, spread 0.5 (80 shapes, 10 classes)",
+            Collection::ToscaPeopleRemeshed => {
+                "TOSCA's three people, each shape remeshed to 10,000 vertices (39 shapes, 3 classes)"
+            }
+            Collection::ToscaNonIsoRemeshed => {
+                "TOSCA non-isometric, each shape remeshed to 10,000 vertices (24 shapes, 3 classes)"
+            }
+            Collection::Shrec11PeopleRemeshed => {
+                "SHREC'11's man and woman, each shape remeshed to 10,000 vertices (40 shapes, 2 classes)"
+            }
+            Collection::GeneratedPeopleRemeshed => {
+                "Generated people, each shape remeshed to 10,000 vertices (80 shapes, 10 classes)"
+            }
+            Collection::GeneratedPeopleAlikeRemeshed => {
+                "Generated people of alike builds, each shape remeshed to 10,000 vertices (80 shapes, 10 classes)"
+            }
+            Collection::GeneratedMixed => {
+                "Generated mixed collection: 20 corpus objects, rigid and not, 8 variants each (160 shapes, 20 classes)"
+            }
         }
     }
 
@@ -162,6 +225,20 @@ impl Collection {
             Collection::GeneratedPeopleAlike => {
                 shrec_bench::creatures::people_files(&std::env::temp_dir().join("wfem-people-v1-spread0.5"), 0.5)
             }
+            Collection::GeneratedMixed => {
+                shrec_bench::mixed::mixed_files(meshes_dir, &std::env::temp_dir().join("wfem-mixed-v1"))
+            }
+            Collection::ToscaPeopleRemeshed
+            | Collection::ToscaNonIsoRemeshed
+            | Collection::Shrec11PeopleRemeshed
+            | Collection::GeneratedPeopleRemeshed
+            | Collection::GeneratedPeopleAlikeRemeshed => {
+                let base = self
+                    .remeshed_from()
+                    .ok_or_else(|| BenchError::Data(format!("{} is not a remeshed collection", self.name())))?;
+                let dir = std::env::temp_dir().join(format!("wfem-remeshed-v1-{}", base.name()));
+                real::remeshed_files(&base.files(meshes_dir)?, &dir, real::REMESH_VERTICES)
+            }
         }
     }
 
@@ -178,9 +255,18 @@ impl Collection {
                 .into_iter()
                 .filter(|f| !f.name.starts_with("shrec07-fourleg"))
                 .collect(),
-            Collection::ToscaNonIso => all
+            Collection::ToscaNonIso | Collection::ToscaNonIsoRemeshed => all
                 .into_iter()
                 .filter(|f| !f.name.contains("TOSCA_nonIsometric"))
+                .collect(),
+            // Its classes are corpus objects.
+            Collection::GeneratedMixed => all
+                .into_iter()
+                .filter(|f| {
+                    !shrec_bench::mixed::MIXED_CLASSES
+                        .iter()
+                        .any(|(_, file)| *file == f.name)
+                })
                 .collect(),
             _ => all,
         }))

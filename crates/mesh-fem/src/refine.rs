@@ -5,7 +5,7 @@
 //! [`crate::generate::icosphere`] (with the midpoints projected on the sphere) and by retrieval
 //! to describe coarse meshes on an accurate eigenbasis.
 
-use crate::TriMesh;
+use crate::{MeshError, TriMesh};
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
@@ -48,6 +48,39 @@ pub fn split_faces(mesh: &TriMesh) -> TriMesh {
     TriMesh::new(positions, faces).expect("a split of a valid mesh is valid")
 }
 
+/// [`split_faces`] with each edge's new vertex anywhere on the edge: vertex a + s (b − a) of
+/// the edge between vertices a < b, with s = `fraction(a, b)` in (0, 1). The four triangles
+/// of each face still tile it, so the surface is exactly the same as with midpoints, but its
+/// triangulation is another: a seeded `fraction` gives each copy of a shape a triangulation of
+/// its own (shrec-bench's remeshing, `shrec_bench::transform::remesh`).
+///
+/// # Errors
+/// [`MeshError::InvalidParameter`] if a fraction is not in (0, 1) (the edge's new vertex would
+/// fold its triangles over).
+pub fn split_faces_at(mesh: &TriMesh, fraction: impl Fn(u32, u32) -> f64) -> Result<TriMesh, MeshError> {
+    let mut positions = mesh.positions().to_vec();
+    let mut bad = None;
+    let faces = split_indexed(&mut positions, mesh.faces(), |a, b, pa, pb| {
+        let s = fraction(a, b);
+        if !(s > 0.0 && s < 1.0) {
+            bad.get_or_insert(s);
+        }
+        [
+            pa[0] + s * (pb[0] - pa[0]),
+            pa[1] + s * (pb[1] - pa[1]),
+            pa[2] + s * (pb[2] - pa[2]),
+        ]
+    });
+    if let Some(value) = bad {
+        return Err(MeshError::InvalidParameter {
+            name: "edge fraction",
+            value,
+            expected: "a number in (0, 1)",
+        });
+    }
+    TriMesh::new(positions, faces)
+}
+
 /// One split of `faces` (each triangle into four, orientation kept): a new vertex per edge is
 /// appended to `positions` at `place(a, b)` of the edge's end points, in the order the edges
 /// are first met; returns the new faces.
@@ -56,12 +89,23 @@ pub(crate) fn split_with(
     faces: &[[u32; 3]],
     place: impl Fn([f64; 3], [f64; 3]) -> [f64; 3],
 ) -> Vec<[u32; 3]> {
+    split_indexed(positions, faces, |_, _, pa, pb| place(pa, pb))
+}
+
+/// [`split_with`] whose `place(a, b, pa, pb)` also gets the edge's vertices, a < b, and their
+/// positions in that order.
+fn split_indexed(
+    positions: &mut Vec<[f64; 3]>,
+    faces: &[[u32; 3]],
+    mut place: impl FnMut(u32, u32, [f64; 3], [f64; 3]) -> [f64; 3],
+) -> Vec<[u32; 3]> {
     let mut midpoint: HashMap<(u32, u32), u32, BuildHasherDefault<EdgeHasher>> =
         HashMap::with_capacity_and_hasher(faces.len() * 3 / 2, Default::default());
     let mut mid = |a: u32, b: u32, positions: &mut Vec<[f64; 3]>| -> u32 {
         let key = if a < b { (a, b) } else { (b, a) };
         *midpoint.entry(key).or_insert_with(|| {
-            positions.push(place(positions[a as usize], positions[b as usize]));
+            let p = place(key.0, key.1, positions[key.0 as usize], positions[key.1 as usize]);
+            positions.push(p);
             (positions.len() - 1) as u32
         })
     };

@@ -14,7 +14,10 @@
 //!   Fig. 12–13) on real meshes, smooth and noisy (`cargo xtask approx-eval`,
 //!   docs/APPROX-RESULTS.md);
 //! * [`creatures`]: procedural bodies with limbs, training shapes outside every evaluation set
-//!   (`cargo xtask creatures`, `cargo xtask real-eval --creatures N`).
+//!   (`cargo xtask creatures`, `cargo xtask real-eval --creatures N`);
+//! * [`mixed`]: a generated mixed collection of 20 classes of corpus objects, rigid and not,
+//!   each in stretched, bulged and remeshed variants (`cargo xtask real-eval --collections
+//!   generated-mixed`).
 //!
 //! `xtask` is a thin command line over this crate. All randomness comes from the one seeded
 //! generator [`wfem_base::rng::SplitMix64`].
@@ -27,6 +30,7 @@ pub mod creatures;
 mod error;
 pub mod eval;
 pub mod handles;
+pub mod mixed;
 pub mod protocol;
 pub mod real;
 pub mod synth;

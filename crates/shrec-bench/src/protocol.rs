@@ -298,8 +298,10 @@ impl EigenCache {
     }
 
     /// The cache file of a prepared shape: keyed by the mesh the eigenbasis is computed on
-    /// (positions and faces after every preprocessing step, bit for bit), k and the mass, so a
-    /// change of the preprocessing or of its code can never return a stale basis.
+    /// (positions and faces after every preprocessing step, bit for bit), k, the mass and the
+    /// eigensolver's tolerance, so a change of the preprocessing, of its code or of the
+    /// tolerance (retrieval's [`shape_retrieval::descriptor::RETRIEVAL_EIGEN_TOLERANCE`]) can
+    /// never return a stale basis.
     ///
     /// The operators are those of the mesh's Laplacian or, for a point cloud (`cloud`), of the
     /// cloud whose neighbourhood mesh `shape.mesh()` is; both are in the key (the cotangent
@@ -314,6 +316,12 @@ impl EigenCache {
         let dir = self.dir.as_ref()?;
         let mut h = crate::Fnv1a::new();
         h.eat(format!("v2|{}|{lumped}|", settings.eigenpairs).bytes());
+        // The eigensolver's tolerance, when not the general default (the keys of bases computed
+        // before the retrieval tolerance existed stay what they were).
+        let tol = shape.params().eigen.tol;
+        if tol != wfem_heat::spectral::EigenParams::default().tol {
+            h.eat(format!("tol{tol:e}|").bytes());
+        }
         if cloud {
             h.eat(b"cloud|".iter().copied());
         } else if settings.laplacian != mesh_fem::Laplacian::Cotan {

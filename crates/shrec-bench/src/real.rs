@@ -108,6 +108,41 @@ pub fn fourleg_files(meshes_dir: &Path) -> Result<Vec<ShapeFile>, BenchError> {
     Ok(out)
 }
 
+/// Vertices of each shape of a remeshed collection ([`remeshed_files`]): the resolution of the
+/// held-out people of issue #42.
+pub const REMESH_VERTICES: usize = 10_000;
+
+/// The seed of a remeshed collection (mixed with each shape's name).
+pub const REMESH_SEED: u64 = 42;
+
+/// `files` remeshed one by one ([`crate::transform::remesh`] to `target` vertices, seed
+/// [`REMESH_SEED`] mixed with the shape's name, so every shape gets its own triangulation,
+/// whatever the order), written to `dir` as `NAME.off` unless already there; names and
+/// classes as in `files`. Point-cloud entries stay clouds of the remeshed file.
+///
+/// # Errors
+/// The first unreadable file or failed remeshing, naming it; [`BenchError::Data`] if `dir`
+/// cannot be made or written.
+pub fn remeshed_files(files: &[ShapeFile], dir: &Path, target: usize) -> Result<Vec<ShapeFile>, BenchError> {
+    std::fs::create_dir_all(dir).map_err(|e| BenchError::Data(format!("{}: {e}", dir.display())))?;
+    files
+        .par_iter()
+        .map(|file| {
+            let stem = file.name.replace(['/', '\\'], "_");
+            let path = dir.join(format!("{stem}.off"));
+            if !path.is_file() {
+                let (mesh, _): (mesh_fem::TriMesh, _) = mesh_fem::io::load(&file.path, &Default::default())?;
+                let mut h = crate::Fnv1a::new();
+                h.eat(file.name.bytes());
+                let remeshed = crate::transform::remesh(&mesh, target, REMESH_SEED ^ h.0)
+                    .map_err(|e| BenchError::Data(format!("{}: {e}", file.name)))?;
+                mesh_fem::io::write_mesh(&path, &remeshed).map_err(|e| BenchError::Data(e.to_string()))?;
+            }
+            Ok(ShapeFile { path, ..file.clone() })
+        })
+        .collect()
+}
+
 /// A collection loaded and described with one settings: the features of every shape, ready to
 /// be indexed with any vocabulary.
 pub struct Described {

@@ -249,7 +249,8 @@ pub fn retrieval(py: Python<'_>, e: &RetrievalError) -> PyErr {
         | MassRequired
         | TooFewDescriptors { .. }
         | VertexOutOfRange { .. }
-        | Labels { .. } => Class::InvalidInput,
+        | Labels { .. }
+        | UnknownShape { .. } => Class::InvalidInput,
         Storage { .. } | CorruptIndex { .. } => Class::Store,
         _ => Class::Retrieval,
     };

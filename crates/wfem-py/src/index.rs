@@ -318,6 +318,21 @@ impl PyRetrievalIndex {
         })
     }
 
+    /// The k indexed shapes nearest to the indexed shape `name` (its stored name, file name or
+    /// stem: `shape_retrieval::model::resolve_name`), ranked from its stored signature with the
+    /// shape itself left out; nothing is read or described (`wfem retrieval query INDEX --id
+    /// NAME`). Returns the stored name `name` resolved to and [(name, distance)], nearest first.
+    #[pyo3(signature = (name, k=shape_retrieval::model::DEFAULT_RESULTS))]
+    fn query_id(&self, py: Python<'_>, name: String, k: usize) -> PyResult<(String, Vec<(String, f64)>)> {
+        let path = self.path.clone();
+        run(py, move |_| {
+            let index = SqliteIndex::new(&path);
+            let (settings, store) = index.open()?;
+            let (resolved, hits) = index.search_stored(&settings, &store, &name, k)?;
+            Ok((resolved, hits.into_iter().map(|h| (h.name, h.distance)).collect()))
+        })
+    }
+
     /// Leave-one-out evaluation of the indexed shapes from their stored signatures
     /// (`shape_retrieval::eval`): `classes[i]` labels the i-th indexed name, or, without
     /// `classes`, each name's class by `class_from` (a `ClassRule`). Returns the report as JSON

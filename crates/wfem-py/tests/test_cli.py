@@ -89,6 +89,28 @@ def test_retrieval_index_is_shared_with_the_cli(cli, tmp_path):
     assert [line.split("\t")[2] for line in out.splitlines()] == [n for n, _ in a]
 
 
+def test_query_id_matches_the_cli(cli, tmp_path):
+    # Issue #42: RetrievalIndex.query_id ranks as `wfem retrieval query INDEX --id NAME`
+    # (the same stored signature, the shape itself left out).
+    paths = index_meshes(tmp_path)
+    index = wfem.RetrievalIndex.build(paths, tmp_path / "py.sqlite", words=8)
+    hits = index.query_id(paths[2].stem, k=5)
+    out = subprocess.run(
+        [str(cli), "retrieval", "query", str(tmp_path / "py.sqlite"), "--id", paths[2].stem, "--top", "5"],
+        capture_output=True, text=True, check=True,
+    ).stdout
+    rows = [line.split("\t") for line in out.splitlines()]
+    assert [r[2] for r in rows] == [n for n, _ in hits]
+    np.testing.assert_allclose([float(r[1]) for r in rows], [d for _, d in hits], atol=1e-6)
+    r = subprocess.run(
+        [str(cli), "retrieval", "query", str(tmp_path / "py.sqlite"), "--id", "nothing-like-it"],
+        capture_output=True, text=True,
+    )
+    assert r.returncode != 0 and "nothing-like-it" in r.stderr
+    with pytest.raises(wfem.InvalidInputError):
+        index.query_id("nothing-like-it")
+
+
 def test_approx_matches_the_cli(cli, mesh_file, tmp_path):
     # Issue #24: the defaults of `wfem approx` and of HeatKernel.feature_approximation are the
     # same library call; the sidecar records what the Python dict does.

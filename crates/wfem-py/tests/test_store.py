@@ -145,6 +145,30 @@ def test_retrieval_index_on_meshes(tmp_path):
         wfem.RetrievalIndex.open(tmp_path / "m0_1.0.off")
 
 
+def test_query_id_ranks_an_indexed_shape_from_its_stored_signature(tmp_path):
+    # Issue #42: an indexed shape is ranked by name, nothing described again, as
+    # `wfem retrieval query INDEX --id NAME`; the same ranking as describing its file again.
+    paths = index_meshes(tmp_path)
+    index = wfem.RetrievalIndex.build(paths, tmp_path / "idx.sqlite", words=8)
+    name = str(paths[2])
+    hits = index.query_id(name, k=5)
+    assert len(hits) == 5 and name not in [n for n, _ in hits]
+    # The other scale of the same shape first (SI-HKS is scale invariant).
+    assert hits[0][0] == str(paths[3]) and hits[0][1] < 1e-4
+    V, F = wfem.read_mesh(paths[2])
+    described = [(n, d) for n, d in index.query_mesh(V, F, k=6) if n != name]
+    assert [n for n, _ in hits] == [n for n, _ in described]
+    # The stored signature is float32: distances agree to its precision.
+    np.testing.assert_allclose([d for _, d in hits], [d for _, d in described], rtol=1e-5, atol=1e-6)
+    # The file name and the stem name the same shape; k bounds the answer.
+    assert index.query_id(paths[2].name, k=5) == hits
+    assert index.query_id(paths[2].stem, k=2) == hits[:2]
+    # A name of no indexed shape is refused, naming what is indexed.
+    with pytest.raises(wfem.InvalidInputError) as err:
+        index.query_id("nothing-like-it")
+    assert "nothing-like-it" in str(err.value)
+
+
 def test_retrieval_cleaning_is_recorded_and_selectable(tmp_path):
     paths = index_meshes(tmp_path)[:3]
     default = wfem.RetrievalIndex.build(paths, tmp_path / "a.sqlite", words=4)

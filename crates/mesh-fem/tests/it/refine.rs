@@ -3,7 +3,7 @@
 
 use crate::operators::{dense, generalized_eigenvalues};
 use mesh_fem::generate::{grid, icosphere, torus};
-use mesh_fem::refine::split_faces;
+use mesh_fem::refine::{split_faces, split_faces_at};
 use mesh_fem::{assemble, stats, AssemblyParams};
 
 fn area(mesh: &mesh_fem::TriMesh) -> f64 {
@@ -40,6 +40,31 @@ fn split_keeps_vertices_first_and_the_surface() {
             (t.n_boundary_loops, t.n_boundary_edges),
             (s.n_boundary_loops, 2 * s.n_boundary_edges)
         );
+    }
+}
+
+#[test]
+fn split_at_edge_points_keeps_the_surface_but_not_the_triangulation() {
+    let mesh = torus(1.0, 0.3, 12, 8);
+    // Midpoints: the mesh of split_faces (the same faces; the positions to rounding, as
+    // a + (b − a)/2 is not always (a + b)/2 in floating point).
+    let half = split_faces_at(&mesh, |_, _| 0.5).unwrap();
+    assert_eq!(half.faces(), split_faces(&mesh).faces());
+    for (p, q) in half.positions().iter().zip(split_faces(&mesh).positions()) {
+        assert!((0..3).all(|k| (p[k] - q[k]).abs() <= 1e-15), "{p:?} against {q:?}");
+    }
+    // Points elsewhere on the edges: the same vertices first, the same faces and area, other
+    // positions for the edge points.
+    let skewed = split_faces_at(&mesh, |a, b| if (a + b) % 2 == 0 { 0.3 } else { 0.8 }).unwrap();
+    let fine = split_faces(&mesh);
+    assert_eq!(skewed.faces(), fine.faces());
+    assert_eq!(&skewed.positions()[..mesh.n_vertices()], mesh.positions());
+    assert_ne!(skewed.positions(), fine.positions());
+    assert!((area(&skewed) - area(&mesh)).abs() < 1e-12 * area(&mesh));
+    // A fraction that folds the triangles over is refused by name.
+    for bad in [0.0, 1.0, -0.2, f64::NAN] {
+        let err = split_faces_at(&mesh, |_, _| bad).unwrap_err();
+        assert!(err.to_string().contains("edge fraction"), "{err}");
     }
 }
 

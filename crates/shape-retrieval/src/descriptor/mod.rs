@@ -48,6 +48,16 @@ use wfem_heat::Operators;
 /// Default number k of eigenpairs (see the module docs).
 pub const DEFAULT_EIGENPAIRS: usize = 100;
 
+/// The eigensolver's relative residual tolerance in retrieval ([`crate::model::DescriptorSettings`]
+/// describes every indexed and query shape with it): 10⁻⁸ instead of the general 10⁻¹⁰ of
+/// [`EigenParams`]. The eigenvalues' error is about its square and a descriptor moves by about
+/// the tolerance itself — measured on TOSCA non-isometric (SI-HKS, 5,000 vertices): at most
+/// 2.3·10⁻⁸ relative against 10⁻¹⁰, below the single precision an index stores a bag in —
+/// while the eigensolve of 100 pairs takes about a fifth less CPU time (0.19 s against
+/// 0.24 s there; docs/BENCHMARKS.md, issue #42 point 2). 10⁻⁶ is hardly faster (0.18 s) and
+/// moves the descriptors by 1.4·10⁻⁶.
+pub const RETRIEVAL_EIGEN_TOLERANCE: f64 = 1e-8;
+
 /// Meshes with at most this many vertices use the dense eigendecomposition.
 const DENSE_BELOW: usize = 400;
 
@@ -131,6 +141,11 @@ impl ShapeDescriptors {
     /// k = 0 or bad feature parameters.
     pub fn new(mesh: &TriMesh, params: &DescriptorParams) -> Result<Self, RetrievalError> {
         Self::with_laplacian(mesh, Laplacian::default(), params)
+    }
+
+    /// The parameters it was made with (the eigensolver's among them).
+    pub fn params(&self) -> &DescriptorParams {
+        &self.params
     }
 
     /// As [`Self::new`] with the given Laplacian ([`mesh_fem::Laplacian`]: the cotangent L or

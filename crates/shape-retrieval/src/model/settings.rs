@@ -138,10 +138,15 @@ impl DescriptorSettings {
         }
     }
 
-    /// The descriptor options of these settings.
+    /// The descriptor options of these settings: the eigensolver at
+    /// [`crate::descriptor::RETRIEVAL_EIGEN_TOLERANCE`].
     fn params(&self) -> DescriptorParams {
         DescriptorParams {
             eigenpairs: self.eigenpairs,
+            eigen: wfem_heat::spectral::EigenParams {
+                tol: crate::descriptor::RETRIEVAL_EIGEN_TOLERANCE,
+                ..Default::default()
+            },
             ..Default::default()
         }
     }

@@ -5,6 +5,7 @@ mod approx_eval;
 mod cleaning;
 mod eval;
 mod handles;
+mod mixed;
 mod synth;
 mod transform;
 

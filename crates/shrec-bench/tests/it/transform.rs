@@ -4,7 +4,8 @@ use mesh_fem::generate::{bumpy, grid, icosphere, irregular_sphere};
 use mesh_fem::graph::EdgeGraph;
 use mesh_fem::{assemble, AssemblyParams, MeshError, TriMesh};
 use shrec_bench::transform::{
-    close_pairs, largest_component, qem_decimate, submesh, vertex_normals, weld_vertices, QemDecimator, QemParams,
+    close_pairs, largest_component, qem_decimate, remesh, submesh, vertex_normals, weld_vertices, QemDecimator,
+    QemParams,
 };
 use shrec_bench::BenchError;
 use std::collections::{BTreeMap, HashMap};
@@ -376,4 +377,64 @@ fn qem_is_nested_and_rejects_bad_parameters() {
         ..QemParams::default()
     };
     assert!(matches!(QemDecimator::new(&m, bad), Err(BenchError::Argument(_))));
+}
+
+/// The nearest distance from `p` to the triangle (a, b, c) (brute force over its plane, edges
+/// and corners).
+fn point_triangle_distance(p: [f64; 3], [a, b, c]: [[f64; 3]; 3]) -> f64 {
+    let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
+    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    let segment = |x: [f64; 3], y: [f64; 3]| {
+        let d = sub(y, x);
+        let s = (dot(sub(p, x), d) / dot(d, d)).clamp(0.0, 1.0);
+        dist(p, [x[0] + s * d[0], x[1] + s * d[1], x[2] + s * d[2]])
+    };
+    let n = cross(sub(b, a), sub(c, a));
+    let h = dot(sub(p, a), n) / dot(n, n);
+    let q = [p[0] - h * n[0], p[1] - h * n[1], p[2] - h * n[2]];
+    let inside = [(a, b), (b, c), (c, a)]
+        .iter()
+        .all(|&(x, y)| dot(cross(sub(y, x), sub(q, x)), n) >= 0.0);
+    if inside {
+        dist(p, q)
+    } else {
+        segment(a, b).min(segment(b, c)).min(segment(c, a))
+    }
+}
+
+#[test]
+fn remesh_gives_each_seed_its_own_triangulation_of_the_same_surface() {
+    let m = bumpy(3);
+    let target = 1500;
+    let a = remesh(&m, target, 1).unwrap();
+    let b = remesh(&m, target, 2).unwrap();
+    for r in [&a, &b] {
+        assert!(
+            r.n_vertices() <= target && r.n_vertices() >= target - target / 50,
+            "{}",
+            r.n_vertices()
+        );
+        assert_closed_manifold(r);
+        // Every vertex is a point of the input surface (the split keeps it; QEM keeps
+        // positions).
+        for &p in r.positions() {
+            let d = (0..m.n_faces())
+                .map(|f| point_triangle_distance(p, m.corners(f)))
+                .fold(f64::INFINITY, f64::min);
+            assert!(d < 1e-12, "vertex {p:?} is {d} off the surface");
+        }
+        assert!(assemble(r, &AssemblyParams::default()).is_ok());
+    }
+    // The same seed, the same mesh; another seed, other points: two seeds share (at most) the
+    // input's own vertices, and the points each adds on the edges are its own.
+    assert_eq!(remesh(&m, target, 1).unwrap(), a);
+    let shared = a.positions().iter().filter(|p| b.positions().contains(p)).count();
+    let own = a.positions().iter().filter(|p| m.positions().contains(p)).count();
+    assert!(
+        a.n_vertices() - own > target / 2,
+        "only {} new points",
+        a.n_vertices() - own
+    );
+    assert!(shared <= own + target / 100, "{shared} shared, {own} of the input's");
+    assert!(matches!(remesh(&m, 3, 1), Err(BenchError::Argument(_))));
 }

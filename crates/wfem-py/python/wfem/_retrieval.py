@@ -564,3 +564,15 @@ class RetrievalIndex:
             return [(str(n), float(d)) for n, d in self._i.query(P, None, k, laplacian)]
         v, f = as_mesh(V, F)
         return [(str(n), float(d)) for n, d in self._i.query(v, f, k, laplacian)]
+
+    def query_id(self, name: str, k: int = _DEFAULTS["index"]["k"]) -> list[tuple[str, float]]:
+        """The k indexed shapes nearest to the **indexed** shape ``name``: ``[(name, distance)]``,
+        nearest first, the shape itself left out — as ``wfem retrieval query INDEX --id NAME``.
+
+        Ranked from its stored signature: nothing is read or described again, so it takes
+        milliseconds where :meth:`query_mesh` takes the description of a shape. ``name`` is the
+        name as indexed (see :attr:`names`), its file name or its stem (``cat0``); one that names
+        no indexed shape, or more than one, raises :class:`InvalidInputError` naming the
+        candidates."""
+        _resolved, hits = self._i.query_id(str(name), int(k))
+        return [(str(n), float(d)) for n, d in hits]
