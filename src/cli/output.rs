@@ -643,11 +643,27 @@ pub(super) fn with_cut(
     Ok(wfem_render::RgbImage::stacked(&[surface, section]).to_png()?)
 }
 
-/// The sidecar of an `.npy` output: what its columns are.
+/// The sidecar of an `.npy` output of per-vertex fields: what its columns are.
 fn sidecar_json(
     output: &Output,
     mesh: &TriMesh,
     columns: &[Column],
+    mut meta: Map<String, Value>,
+) -> Result<String, CliError> {
+    if columns.iter().any(|c| c.t.is_some()) {
+        meta.insert("times".into(), json!(columns.iter().map(|c| c.t).collect::<Vec<_>>()));
+    }
+    let names: Vec<&str> = columns.iter().map(|c| c.name.as_str()).collect();
+    npy_sidecar(output, mesh.n_vertices(), &names, meta)
+}
+
+/// The sidecar of any `.npy` table of `rows` rows and the named columns (per-vertex fields, a
+/// spectrum): the wfem version, the data file, its shape and dtype, the column names, then
+/// `meta` (the command's own keys).
+pub(super) fn npy_sidecar(
+    output: &Output,
+    rows: usize,
+    names: &[&str],
     meta: Map<String, Value>,
 ) -> Result<String, CliError> {
     let mut doc = Map::new();
@@ -656,20 +672,14 @@ fn sidecar_json(
         "data".into(),
         json!(output.path.file_name().map(|f| f.to_string_lossy().into_owned())),
     );
-    let shape = if columns.len() == 1 {
-        json!([mesh.n_vertices()])
+    let shape = if names.len() == 1 {
+        json!([rows])
     } else {
-        json!([mesh.n_vertices(), columns.len()])
+        json!([rows, names.len()])
     };
     doc.insert("shape".into(), shape);
     doc.insert("dtype".into(), json!("float64"));
-    doc.insert(
-        "columns".into(),
-        json!(columns.iter().map(|c| c.name.as_str()).collect::<Vec<_>>()),
-    );
-    if columns.iter().any(|c| c.t.is_some()) {
-        doc.insert("times".into(), json!(columns.iter().map(|c| c.t).collect::<Vec<_>>()));
-    }
+    doc.insert("columns".into(), json!(names));
     doc.extend(meta);
     serde_json::to_string_pretty(&Value::Object(doc)).map_err(|e| CliError::Usage(e.to_string()))
 }

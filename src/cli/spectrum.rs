@@ -91,14 +91,11 @@ pub fn spectrum(args: &SpectrumArgs, out: &mut dyn Write) -> Result<(), CliError
         meta.insert("input".into(), input.meta(&args.input.mesh));
         meta.insert("mass".into(), json!(mass.name()));
         meta.insert("kind".into(), json!(kind));
-        meta.insert(
-            "columns".into(),
-            json!(fields.iter().map(|(name, _)| *name).collect::<Vec<_>>()),
-        );
         meta.insert("dimension".into(), json!(measure.dimension()));
         meta.insert(measure_name.into(), json!(measure_value));
         meta.insert("eigenvalues".into(), json!(sig.eigenvalues));
-        let text = serde_json::to_string_pretty(&meta).map_err(|e| CliError::Usage(e.to_string()))?;
+        let names: Vec<&str> = fields.iter().map(|(name, _)| *name).collect();
+        let text = super::output::npy_sidecar(&args.output, sig.signature.len(), &names, meta)?;
         set.stage(&sidecar, |w| w.write_all(text.as_bytes()))?;
     }
     let written: Vec<std::path::PathBuf> = set.targets().map(std::path::Path::to_path_buf).collect();
