@@ -73,6 +73,26 @@ impl Standardizer {
         Ok(Self { mean, std })
     }
 
+    /// These statistics with dimension j weighted by `w_j` after z-scoring:
+    /// `w_j (p_j − μ_j)/s_j = (p_j − μ_j)/(s_j/w_j)`, so the weights live in the deviations and
+    /// an index stores them without a new field.
+    ///
+    /// # Errors
+    /// [`RetrievalError::DimensionMismatch`] if the lengths differ,
+    /// [`RetrievalError::InvalidParameter`] for a weight that is not finite and positive.
+    pub fn weighted(mut self, weights: &[f64]) -> Result<Self, RetrievalError> {
+        check::same(
+            "dimension weights vs z-score statistics",
+            self.dimension(),
+            weights.len(),
+        )?;
+        for (s, &w) in self.std.iter_mut().zip(weights) {
+            check::positive("dimension weight", w)?;
+            *s /= w;
+        }
+        Ok(self)
+    }
+
     /// The means μ_j.
     pub fn mean(&self) -> &[f64] {
         &self.mean

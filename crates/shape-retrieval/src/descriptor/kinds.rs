@@ -75,6 +75,15 @@ pub enum Descriptor {
         /// Number N of energies.
         energies: usize,
     },
+    /// Several descriptors side by side (per vertex: the columns of the first part, then of the
+    /// next), e.g. SI-HKS and WKS (`si-hks+wks`). In bags each part weighs alike: after the
+    /// per-dimension z-scoring, a part of dimension d_p is scaled by 1/√d_p
+    /// ([`Descriptor::dimension_weights`]), so that five SI-HKS magnitudes are not drowned by a
+    /// hundred WKS energies. Parts are computed from the one eigenbasis of the shape.
+    Combined {
+        /// The parts (at least two; none itself combined).
+        parts: Vec<Descriptor>,
+    },
 }
 
 wfem_base::registry! {
@@ -91,6 +100,8 @@ wfem_base::registry! {
             "HKS of the wFEM kernel with eigenvalues divided by λ_max (the paper's scale-invariant DHK3)",
         Descriptor::Wks { .. } = Descriptor::wks_default() => "wks" ["wave-kernel-signature"]:
             "wave kernel signature (Aubry et al. 2011) of the wFEM spectrum, pyFM's energies",
+        Descriptor::Combined { .. } = Descriptor::sihks_wks_default() => "si-hks+wks" ["hks+wks"]:
+            "SI-HKS and WKS side by side, each part weighing alike in the bags",
     }
 }
 
@@ -214,15 +225,17 @@ impl Descriptor {
         ]
     }
 
-    /// How the paper writes it (`DHK1`, …, `SI-HKS`, `area-HKS`), for tables and titles.
-    pub fn label(&self) -> &'static str {
+    /// How the paper writes it (`DHK1`, …, `SI-HKS`, `area-HKS`; parts joined by `+`), for
+    /// tables and titles.
+    pub fn label(&self) -> String {
         match self {
-            Descriptor::Dhk1 { .. } => "DHK1",
-            Descriptor::Dhk2 { .. } => "DHK2",
-            Descriptor::Dhk3 { .. } => "DHK3",
-            Descriptor::SiHks { .. } => "SI-HKS",
-            Descriptor::AreaHks { .. } => "area-HKS",
-            Descriptor::Wks { .. } => "WKS",
+            Descriptor::Dhk1 { .. } => "DHK1".into(),
+            Descriptor::Dhk2 { .. } => "DHK2".into(),
+            Descriptor::Dhk3 { .. } => "DHK3".into(),
+            Descriptor::SiHks { .. } => "SI-HKS".into(),
+            Descriptor::AreaHks { .. } => "area-HKS".into(),
+            Descriptor::Wks { .. } => "WKS".into(),
+            Descriptor::Combined { parts } => parts.iter().map(Descriptor::label).collect::<Vec<_>>().join("+"),
         }
     }
 
@@ -232,10 +245,11 @@ impl Descriptor {
         matches!(self, Descriptor::Dhk1 { .. })
     }
 
-    /// The options this descriptor takes ([`DescriptorOptions`] field names).
-    pub fn options(&self) -> &'static [&'static str] {
+    /// The options this descriptor takes ([`DescriptorOptions`] field names; a combined
+    /// descriptor takes those of its parts).
+    pub fn options(&self) -> Vec<&'static str> {
         match self {
-            Descriptor::SiHks { .. } => &[
+            Descriptor::SiHks { .. } => vec![
                 "alpha",
                 "tau_min",
                 "tau_max",
@@ -247,8 +261,36 @@ impl Descriptor {
             Descriptor::AreaHks { .. }
             | Descriptor::Dhk1 { .. }
             | Descriptor::Dhk2 { .. }
-            | Descriptor::Dhk3 { .. } => &["times"],
-            Descriptor::Wks { .. } => &["energies"],
+            | Descriptor::Dhk3 { .. } => vec!["times"],
+            Descriptor::Wks { .. } => vec!["energies"],
+            Descriptor::Combined { parts } => {
+                let mut all: Vec<&'static str> = Vec::new();
+                for o in parts.iter().flat_map(Descriptor::options) {
+                    if !all.contains(&o) {
+                        all.push(o);
+                    }
+                }
+                all
+            }
+        }
+    }
+
+    /// The weight of each dimension after z-scoring (`None`: all 1): for a combined descriptor
+    /// 1/√d_p on the d_p dimensions of each part, so that every part contributes alike to the
+    /// Euclidean distances of the vocabulary. Folded into the z-score deviations of the index
+    /// ([`crate::standardize::Standardizer::weighted`]), so index files keep their form.
+    pub fn dimension_weights(&self) -> Option<Vec<f64>> {
+        match self {
+            Descriptor::Combined { parts } => Some(
+                parts
+                    .iter()
+                    .flat_map(|p| {
+                        let d = p.dimension();
+                        std::iter::repeat_n(1.0 / (d.max(1) as f64).sqrt(), d)
+                    })
+                    .collect(),
+            ),
+            _ => None,
         }
     }
 
@@ -308,6 +350,26 @@ impl Descriptor {
             Descriptor::Wks { energies } => Descriptor::Wks {
                 energies: options.energies.unwrap_or(energies),
             },
+            Descriptor::Combined { parts } => {
+                // Each option goes to the parts that take it.
+                let mut out = Vec::with_capacity(parts.len());
+                for part in parts {
+                    let takes = part.options();
+                    let mine = DescriptorOptions {
+                        times: options.times.clone().filter(|_| takes.contains(&"times")),
+                        alpha: options.alpha.filter(|_| takes.contains(&"alpha")),
+                        tau_min: options.tau_min.filter(|_| takes.contains(&"tau_min")),
+                        tau_max: options.tau_max.filter(|_| takes.contains(&"tau_max")),
+                        tau_step: options.tau_step.filter(|_| takes.contains(&"tau_step")),
+                        frequencies: options.frequencies.filter(|_| takes.contains(&"frequencies")),
+                        time_unit: options.time_unit.filter(|_| takes.contains(&"time_unit")),
+                        convention: options.convention.filter(|_| takes.contains(&"convention")),
+                        energies: options.energies.filter(|_| takes.contains(&"energies")),
+                    };
+                    out.push(part.with_options(&mine)?);
+                }
+                Descriptor::Combined { parts: out }
+            }
         })
     }
 
@@ -321,10 +383,16 @@ impl Descriptor {
     /// [`Self::validate`].
     pub fn for_collection(self, options: &DescriptorOptions) -> Result<Self, RetrievalError> {
         let explicit = matches!(options.times, Some(TimeSampling::Explicit(_)));
-        let needs = matches!(
-            self,
-            Descriptor::AreaHks { .. } | Descriptor::Dhk1 { .. } | Descriptor::Dhk2 { .. }
-        );
+        let needs_times = |d: &Descriptor| {
+            matches!(
+                d,
+                Descriptor::AreaHks { .. } | Descriptor::Dhk1 { .. } | Descriptor::Dhk2 { .. }
+            )
+        };
+        let needs = match &self {
+            Descriptor::Combined { parts } => parts.iter().any(needs_times),
+            other => needs_times(other),
+        };
         if needs && !explicit {
             return Err(RetrievalError::MissingTimes {
                 descriptor: wfem_base::Choice::name(&self),
@@ -352,6 +420,13 @@ impl Descriptor {
     pub fn wks_default() -> Self {
         Descriptor::Wks {
             energies: crate::wks::DEFAULT_ENERGIES,
+        }
+    }
+
+    /// SI-HKS (retrieval's, [`RETRIEVAL_SIHKS`]) and the WKS at pyFM's energies side by side.
+    pub fn sihks_wks_default() -> Self {
+        Descriptor::Combined {
+            parts: vec![Descriptor::default(), Descriptor::wks_default()],
         }
     }
 
@@ -396,7 +471,7 @@ impl Descriptor {
         match self {
             Descriptor::AreaHks { times } => Some(TimeSampling::Explicit(times.clone())),
             Descriptor::Dhk1 { times } | Descriptor::Dhk2 { times } | Descriptor::Dhk3 { times } => Some(times.clone()),
-            Descriptor::SiHks { .. } | Descriptor::Wks { .. } => None,
+            Descriptor::SiHks { .. } | Descriptor::Wks { .. } | Descriptor::Combined { .. } => None,
         }
     }
 
@@ -405,6 +480,7 @@ impl Descriptor {
         match self {
             Descriptor::SiHks { frequencies, .. } => *frequencies,
             Descriptor::Wks { energies } => *energies,
+            Descriptor::Combined { parts } => parts.iter().map(Descriptor::dimension).sum(),
             other => other.times().map_or(0, |t| t.len()),
         }
     }
@@ -432,6 +508,16 @@ impl Descriptor {
                 wfem_heat::limits::times("energies", *energies)?;
                 Ok(())
             }
+            Descriptor::Combined { parts } => {
+                if parts.len() < 2 || parts.iter().any(|p| matches!(p, Descriptor::Combined { .. })) {
+                    return Err(RetrievalError::InvalidParameter {
+                        name: "parts",
+                        value: parts.len() as f64,
+                        reason: "a combined descriptor needs at least two parts, none itself combined",
+                    });
+                }
+                parts.iter().try_for_each(Descriptor::validate)
+            }
             other => match other.times() {
                 Some(TimeSampling::Explicit(t)) => {
                     check::non_empty("times", t.len())?;
@@ -450,6 +536,18 @@ impl Descriptor {
     /// ([`ShapeDescriptors::eigenbasis`]), [`heat_kernel_signature`] and
     /// [`scale_invariant_hks`].
     pub fn compute(&self, shape: &mut ShapeDescriptors) -> Result<Mat<f64>, RetrievalError> {
+        if let Descriptor::Combined { parts } = self {
+            self.validate()?;
+            let blocks = parts.iter().map(|p| p.compute(shape)).collect::<Result<Vec<_>, _>>()?;
+            let n = blocks.first().map_or(0, |b| b.nrows());
+            let mut out = Mat::<f64>::zeros(n, blocks.iter().map(|b| b.ncols()).sum());
+            let mut c0 = 0;
+            for b in &blocks {
+                out.as_mut().submatrix_mut(0, c0, n, b.ncols()).copy_from(b.as_ref());
+                c0 += b.ncols();
+            }
+            return Ok(out);
+        }
         if let Some(times) = self.times() {
             // A huge T must not cost an eigensolve, let alone an allocation.
             times.check_size(shape.mesh().n_vertices().max(1))?;
@@ -494,6 +592,7 @@ impl Descriptor {
             Descriptor::Dhk1 { times } | Descriptor::Dhk2 { times } => hks(times.clone(), SpectrumNormalization::None),
             Descriptor::Dhk3 { times } => hks(times.clone(), SpectrumNormalization::MaxEigenvalue),
             Descriptor::Wks { energies } => Ok(crate::wks::wave_kernel_signature(&spectrum, *energies)?.values),
+            Descriptor::Combined { .. } => unreachable!("combined descriptors are computed part by part above"),
         }
     }
 }

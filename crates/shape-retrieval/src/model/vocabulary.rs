@@ -186,7 +186,10 @@ impl VocabularyModel {
             r0 += s.descriptors.nrows();
         }
         let standardizer = if params.standardize {
-            let z = Standardizer::fit(pooled.as_ref())?;
+            let mut z = Standardizer::fit(pooled.as_ref())?;
+            if let Some(w) = descriptor.descriptor.dimension_weights() {
+                z = z.weighted(&w)?;
+            }
             pooled = z.apply(pooled.as_ref())?;
             Some(z)
         } else {

@@ -254,3 +254,104 @@ fn retrieval_eigen_tolerance_moves_the_default_descriptor_by_about_itself() {
         .fold(0.0, f64::max);
     assert!(worst > 0.0 && worst <= 100.0 * RETRIEVAL_EIGEN_TOLERANCE, "{worst:e}");
 }
+
+#[test]
+fn the_combined_descriptor_is_its_parts_side_by_side() {
+    // `si-hks+wks`: the columns of the SI-HKS, then of the WKS, each computed alone on a fresh
+    // shape (an independent path: no shared cache), equal to the bit.
+    let mesh = bumpy(2);
+    let p = params(40);
+    let combined = Descriptor::parse("si-hks+wks").unwrap();
+    assert_eq!(combined, Descriptor::sihks_wks_default());
+    assert_eq!(combined.label(), "SI-HKS+WKS");
+    let Descriptor::Combined { parts } = &combined else {
+        panic!("{combined:?}")
+    };
+    let mut together = ShapeDescriptors::new(&mesh, &p).unwrap();
+    let m = together.dense(&combined).unwrap();
+    assert_eq!(m.ncols(), combined.dimension());
+    assert_eq!(combined.dimension(), parts[0].dimension() + parts[1].dimension());
+    let mut c0 = 0;
+    for part in parts {
+        let alone = ShapeDescriptors::new(&mesh, &p).unwrap().dense(part).unwrap();
+        assert_eq!(alone.nrows(), m.nrows());
+        for j in 0..alone.ncols() {
+            for i in 0..alone.nrows() {
+                assert_eq!(
+                    m[(i, c0 + j)].to_bits(),
+                    alone[(i, j)].to_bits(),
+                    "{} column {j}",
+                    part.label()
+                );
+            }
+        }
+        c0 += alone.ncols();
+    }
+    // Each part weighs alike after z-scoring: 1/√d on its d dimensions (sum of squares 1 each).
+    let w = combined.dimension_weights().unwrap();
+    assert_eq!(w.len(), combined.dimension());
+    let (a, b) = w.split_at(parts[0].dimension());
+    for block in [a, b] {
+        let energy: f64 = block.iter().map(|x| x * x).sum();
+        assert!((energy - 1.0).abs() < 1e-12, "{energy}");
+    }
+    assert!(Descriptor::default().dimension_weights().is_none());
+}
+
+#[test]
+fn options_of_a_combined_descriptor_go_to_the_parts_that_take_them() {
+    let combined = Descriptor::parse("hks+wks").unwrap();
+    assert!(combined.options().contains(&"tau_min") && combined.options().contains(&"energies"));
+    let changed = combined
+        .clone()
+        .with_options(&DescriptorOptions {
+            tau_min: Some(-6.0),
+            energies: Some(12),
+            ..Default::default()
+        })
+        .unwrap();
+    let Descriptor::Combined { parts } = &changed else {
+        panic!("{changed:?}")
+    };
+    assert_eq!(parts[0].sihks_params().unwrap().tau_min, -6.0);
+    assert_eq!(parts[1], Descriptor::Wks { energies: 12 });
+    // An option no part takes is refused, as for a single descriptor.
+    let times = DescriptorOptions {
+        times: Some(TimeSampling::Explicit(vec![1.0])),
+        ..Default::default()
+    };
+    assert!(matches!(
+        combined.with_options(&times),
+        Err(RetrievalError::MisplacedOption { option: "times", .. })
+    ));
+    // Nested, single-part and bad parts are refused before any computation.
+    for bad in [
+        Descriptor::Combined {
+            parts: vec![Descriptor::default()],
+        },
+        Descriptor::Combined {
+            parts: vec![Descriptor::default(), Descriptor::sihks_wks_default()],
+        },
+        Descriptor::Combined {
+            parts: vec![Descriptor::default(), Descriptor::Wks { energies: 0 }],
+        },
+    ] {
+        assert!(bad.validate().is_err(), "{bad:?}");
+        let mut s = ShapeDescriptors::new(&bumpy(1), &params(10)).unwrap();
+        assert!(s.dense(&bad).is_err(), "{bad:?}");
+    }
+    // Absolute times of a part are needed for a collection, as alone.
+    let absolute = Descriptor::Combined {
+        parts: vec![Descriptor::parse("dhk2").unwrap(), Descriptor::wks_default()],
+    };
+    assert!(matches!(
+        absolute.for_collection(&DescriptorOptions::default()),
+        Err(RetrievalError::MissingTimes { .. })
+    ));
+    // The file form round-trips.
+    let json = serde_json::to_string(&Descriptor::sihks_wks_default()).unwrap();
+    assert_eq!(
+        serde_json::from_str::<Descriptor>(&json).unwrap(),
+        Descriptor::sihks_wks_default()
+    );
+}

@@ -717,3 +717,31 @@ fn refinement_describes_a_coarse_mesh_at_its_own_vertices_on_a_converged_eigenba
         serde_json::json!({"vertices_per_eigenpair": 20.0})
     );
 }
+
+#[test]
+fn a_combined_descriptor_weighs_its_parts_alike_in_the_vocabulary() {
+    // The z-score deviations of si-hks+wks are those of the pooled descriptors divided by the
+    // dimension weights 1/√d_p, so that after z-scoring each part has total variance 1.
+    let shapes = small_collection();
+    let mut settings = small_settings();
+    settings.descriptor.descriptor = Descriptor::sihks_wks_default();
+    settings.training.words = 4;
+    let f = ShapeFeatures::compute_many(&shapes, &settings.descriptor, &settings.bags).unwrap();
+    let v = VocabularyModel::train(&settings.descriptor, &settings.training, &f).unwrap();
+    let z = v.standardizer().unwrap();
+    let w = settings.descriptor.descriptor.dimension_weights().unwrap();
+    let n: usize = f.iter().map(|x| x.descriptors.nrows()).sum();
+    for (j, wj) in w.iter().enumerate() {
+        let all: Vec<f64> = f
+            .iter()
+            .flat_map(|x| x.descriptors.col(j).iter().copied().collect::<Vec<_>>())
+            .collect();
+        let m = all.iter().sum::<f64>() / n as f64;
+        let s = (all.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n as f64).sqrt();
+        assert!((z.std()[j] - s / wj).abs() <= 1e-12 * s / wj, "dimension {j}");
+    }
+    let index = RetrievalIndex::build(&shapes, &settings, Some(v)).unwrap();
+    for (i, e) in index.entries().iter().enumerate() {
+        assert_eq!(index.rank(&e.signature).unwrap()[0].entry, i);
+    }
+}
