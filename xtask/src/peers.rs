@@ -148,7 +148,7 @@ pub struct PeersReport {
 fn peers_python(root: &Path) -> (PathBuf, Result<(), String>) {
     let venv = target_dir(root).join("peers-venv");
     let made = ensure_venv(&venv).and_then(|python| {
-        ensure_requirements(&python, &venv, &root.join("benches/peers/requirements.txt")).map(|()| python)
+        ensure_requirements(&python, &venv, &root.join("benches/peers/requirements.txt"), false).map(|()| python)
     });
     match made {
         Ok(python) => (python, Ok(())),

@@ -9,8 +9,9 @@
 //! 2. a virtual environment under the target directory (`$CARGO_TARGET_DIR` or `target/`,
 //!    `python-venv/`), created with `python3 -m venv` (or `$WFEM_PYTHON -m venv`); a missing
 //!    `venv` module stops with the command that installs it;
-//! 3. the pinned packages of `crates/wfem-py/requirements-test.txt` from PyPI (skipped while the
-//!    file is unchanged);
+//! 3. the pinned packages of `crates/wfem-py/requirements-test.txt` from PyPI, then those of
+//!    `requirements-test-nodeps.txt` without their declared dependencies (geomfum, whose torch
+//!    the tests do not use; each skipped while its file is unchanged);
 //! 4. the extension built by maturin in the **dev** profile, the one `cargo test` just used, so
 //!    the dependencies compiled for the tests are reused, and installed into the venv as a
 //!    wheel (like a user's `pip install`);
@@ -132,8 +133,9 @@ pub(crate) fn ensure_venv(venv: &Path) -> Result<PathBuf, StepError> {
 }
 
 /// Installs the pinned requirements unless the venv already has exactly this file (a stamp
-/// `<file stem>.installed` in the venv remembers what was installed).
-pub(crate) fn ensure_requirements(python: &Path, venv: &Path, requirements: &Path) -> Result<(), StepError> {
+/// `<file stem>.installed` in the venv remembers what was installed); `no_deps`: without the
+/// packages' declared dependencies (`pip install --no-deps`).
+pub(crate) fn ensure_requirements(python: &Path, venv: &Path, requirements: &Path, no_deps: bool) -> Result<(), StepError> {
     let wanted = std::fs::read(requirements).map_err(|e| StepError(format!("{}: {e}", requirements.display())))?;
     let stem = requirements
         .file_stem()
@@ -143,7 +145,11 @@ pub(crate) fn ensure_requirements(python: &Path, venv: &Path, requirements: &Pat
         eprintln!("==> pinned Python packages already installed");
         return Ok(());
     }
-    run_step("pip install", pip_install(python).arg("-r").arg(requirements))?;
+    let mut pip = pip_install(python);
+    if no_deps {
+        pip.arg("--no-deps");
+    }
+    run_step("pip install", pip.arg("-r").arg(requirements))?;
     std::fs::write(&stamp, &wanted).map_err(|e| StepError(format!("{}: {e}", stamp.display())))
 }
 
@@ -372,7 +378,8 @@ pub fn run(opts: &TestAllOptions) -> Result<(), StepError> {
         let t = Instant::now();
         let venv = target.join("python-venv");
         let python = ensure_venv(&venv)?;
-        ensure_requirements(&python, &venv, &root.join("crates/wfem-py/requirements-test.txt"))?;
+        ensure_requirements(&python, &venv, &root.join("crates/wfem-py/requirements-test.txt"), false)?;
+        ensure_requirements(&python, &venv, &root.join("crates/wfem-py/requirements-test-nodeps.txt"), true)?;
         times.push(("Python environment", t.elapsed()));
         let t = Instant::now();
         let wheel = install_wfem(&python, &venv, &root, &target)?;
