@@ -94,3 +94,12 @@ def test_pyfms_pipeline_gives_the_same_map_with_wfems_eigen_step(corpus):
     _, ours = example.run(folder, "cat0", "cat2", 120, "wfem")
     assert ours < 0.05, ours  # a good map (the left-right flip would be ~0.2 √A)
     assert abs(ours - theirs) < 0.05 * theirs, (ours, theirs)
+
+
+def test_the_combined_descriptor_is_the_sihks_beside_the_wks():
+    V, F = wfem.generate.bumpy(2)
+    out = wfem.descriptors(V, F, ["si-hks+wks", "si-hks", "wks"], k=40)
+    both = np.hstack([out["si-hks"], out["wks"]])
+    assert out["si-hks+wks"].shape == both.shape
+    assert np.array_equal(out["si-hks+wks"], both)
+    assert "si-hks+wks" in wfem.DESCRIPTORS

@@ -62,6 +62,9 @@ def descriptors(
     * ``"si-hks"`` (or ``"sihks"``): the scale-invariant HKS of Bronstein & Kokkinos on the wFEM spectrum
       (options in ``sihks``: alpha, tau_min, tau_max, tau_step, time_unit, num_frequencies,
       convention).
+    * ``"wks"``: the wave kernel signature at pyFM's 100 energies (:func:`wfem.wks`);
+    * ``"si-hks+wks"``: the SI-HKS and the WKS side by side (columns of the first, then of the
+      second; ``sihks`` applies to the first part).
 
     HKS are in the kernel-value convention ``Σ_k e^{−λ_k t} x_k(i)²``. ``times`` explicit or
     ``num_times`` automatic log-spaced times per shape (give explicit times to compare shapes).
