@@ -17,7 +17,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::perm::PermRef;
 use faer::{c64, Conj, MatMut, Par, Side};
 
-use crate::ordering::{self, FillOrdering, Permutation};
+use crate::ordering::{self, FillOrdering};
 use crate::trisolve::SolvePlan;
 use crate::SolveError;
 
@@ -31,26 +31,25 @@ pub(crate) type CholeskySymbolic = Arc<SymbolicCholesky<usize>>;
 /// Shared symbolic LU analysis (COLAMD) of the pattern of L and B.
 pub(crate) type LuSymbolic = Arc<SymbolicLu<usize>>;
 
-/// The one place a Cholesky ordering is chosen: faer's AMD analysis, and for patterns of at
-/// least [`ordering::ND_MIN_N`] rows also our nested dissection, whose analysis is kept when
+/// The one place a Cholesky ordering is chosen: faer's AMD analysis, and for large patterns
+/// whose AMD factor is dense enough also our nested dissection, whose analysis is kept when
 /// its predicted factor needs fewer flops and no more entries ([`ordering::choose`]).
 fn analyse(
     pattern: SymbolicSparseColMatRef<'_, usize>,
     params: CholeskySymbolicParams<'_>,
 ) -> Result<(CholeskySymbolic, FillOrdering), String> {
+    analyse_with(pattern, params, ordering::ND_MIN_WORK_RATIO)
+}
+
+/// [`analyse`] with the threshold of [`ordering::choose_with`] (tests lower it).
+pub(crate) fn analyse_with(
+    pattern: SymbolicSparseColMatRef<'_, usize>,
+    params: CholeskySymbolicParams<'_>,
+    min_work_ratio: f64,
+) -> Result<(CholeskySymbolic, FillOrdering), String> {
     let amd = factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, params)
         .map_err(|e| format!("{e:?}"))?;
-    if pattern.nrows() < ordering::ND_MIN_N {
-        return Ok((Arc::new(amd), FillOrdering::Amd));
-    }
-    let amd_perm = amd.perm().map(|p| {
-        let (fwd, inv) = p.arrays();
-        Permutation {
-            fwd: fwd.to_vec(),
-            inv: inv.to_vec(),
-        }
-    });
-    let choice = ordering::choose(pattern, amd_perm.as_ref());
+    let choice = ordering::choose_with(pattern, &amd, min_work_ratio);
     let Some(perm) = choice.permutation else {
         return Ok((Arc::new(amd), FillOrdering::Amd));
     };
@@ -127,7 +126,7 @@ impl CholeskyPattern {
     }
 
     /// Wraps an existing analysis (and plans its tree-parallel solve).
-    fn from_symbolic(symbolic: CholeskySymbolic, ordering: FillOrdering) -> Self {
+    pub(crate) fn from_symbolic(symbolic: CholeskySymbolic, ordering: FillOrdering) -> Self {
         let plan = match symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(sn) if sn.nrows() >= PARALLEL_SOLVE_MIN_N => {
                 SolvePlan::new(sn, rayon::current_num_threads()).map(Arc::new)

@@ -16,16 +16,30 @@
 //! and their orders are concatenated in a fixed order) and costs O(nnz log n) for the
 //! dissection plus O(nnz(factor)) for the column counts that compare the two orderings.
 
+mod coarsen;
 mod separator;
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::amd;
-use faer::sparse::linalg::cholesky::simplicial;
+use faer::sparse::linalg::cholesky::{simplicial, SymbolicCholesky, SymbolicCholeskyRaw};
 use faer::sparse::SymbolicSparseColMatRef;
 
 /// Patterns smaller than this keep AMD without trying nested dissection: below it the two
 /// orderings' factors differ little in absolute terms and the dissection's cost is not repaid.
 pub const ND_MIN_N: usize = 20_000;
+
+/// Nested dissection is tried only when AMD's factorization costs at least this many flops
+/// (Σ cⱼ²) per unit of the dissection's own work, nnz(A)·log₂ n: below it, even a much smaller
+/// factor saves less time than the dissection costs. Measured on a loaded 2-core box
+/// (docs/BENCHMARKS.md, "Volumes"): the dissection takes about 1.2 s at 121K tetrahedral
+/// vertices (ratio 570, saving 0.7 s of factorization and solves: not repaid) and 3.7 s on the
+/// 655K icosphere (ratio 740, saving about 1.4 s of factorization: not repaid), while the 1M
+/// tetrahedral pencil (ratio far above) spends minutes in AMD's factorization.
+pub const ND_MIN_WORK_RATIO: f64 = 2000.0;
+
+/// Bisections tried at the first levels of the dissection (the best separator is kept): the top
+/// separators matter most for the fill, and the rest is one try each.
+const TOP_TRIES: [usize; 2] = [3, 2];
 
 /// Below this size the two halves of a split are ordered on one thread.
 const PARALLEL_MIN_N: usize = 20_000;
@@ -44,7 +58,7 @@ impl Default for NdParams {
     fn default() -> Self {
         Self {
             leaf_size: 200,
-            max_side: 0.6,
+            max_side: 0.7,
         }
     }
 }
@@ -250,7 +264,7 @@ pub fn nested_dissection(pattern: SymbolicSparseColMatRef<'_, usize>, params: Nd
 /// [`nested_dissection`] on a graph, with the predicted fill of the ordering.
 pub(crate) fn nested_dissection_of(graph: &Graph, params: NdParams) -> (Permutation, FillStats) {
     let ids: Vec<u32> = (0..graph.n() as u32).collect();
-    let order = dissect(graph, &ids, &params);
+    let order = dissect(graph, &ids, &params, 0);
     debug_assert_eq!(order.len(), graph.n());
     let perm = Permutation::from_fwd(order.into_iter().map(|v| v as usize).collect());
     let (etree, stats) = elimination_tree(graph, &perm);
@@ -259,7 +273,7 @@ pub(crate) fn nested_dissection_of(graph: &Graph, params: NdParams) -> (Permutat
 
 /// The order of the vertices of `g` (named by `ids`): the two halves of a separator each
 /// dissected in turn, then the separator; components one after the other.
-fn dissect(g: &Graph, ids: &[u32], params: &NdParams) -> Vec<u32> {
+fn dissect(g: &Graph, ids: &[u32], params: &NdParams, depth: usize) -> Vec<u32> {
     let n = g.n();
     if n <= params.leaf_size.max(3) {
         return leaf_order(g, ids);
@@ -269,11 +283,12 @@ fn dissect(g: &Graph, ids: &[u32], params: &NdParams) -> Vec<u32> {
         let mut order = Vec::with_capacity(n);
         for (sub, map) in g.split(&label, n_components) {
             let sub_ids: Vec<u32> = map.iter().map(|&v| ids[v as usize]).collect();
-            order.extend(dissect(&sub, &sub_ids, params));
+            order.extend(dissect(&sub, &sub_ids, params, depth));
         }
         return order;
     }
-    let Some(side) = separator::bisect(g, params.max_side) else {
+    let tries = TOP_TRIES.get(depth).copied().unwrap_or(1);
+    let Some(side) = separator::bisect(g, params.max_side, tries) else {
         return leaf_order(g, ids);
     };
     let label: Vec<u32> = side.iter().map(|&s| if s < 2 { u32::from(s) } else { u32::MAX }).collect();
@@ -283,9 +298,9 @@ fn dissect(g: &Graph, ids: &[u32], params: &NdParams) -> Vec<u32> {
     let ids_a: Vec<u32> = ma.iter().map(|&v| ids[v as usize]).collect();
     let ids_b: Vec<u32> = mb.iter().map(|&v| ids[v as usize]).collect();
     let (mut order, order_b) = if n >= PARALLEL_MIN_N {
-        rayon::join(|| dissect(&ga, &ids_a, params), || dissect(&gb, &ids_b, params))
+        rayon::join(|| dissect(&ga, &ids_a, params, depth + 1), || dissect(&gb, &ids_b, params, depth + 1))
     } else {
-        (dissect(&ga, &ids_a, params), dissect(&gb, &ids_b, params))
+        (dissect(&ga, &ids_a, params, depth + 1), dissect(&gb, &ids_b, params, depth + 1))
     };
     order.reserve(n - order.len());
     order.extend(order_b);
@@ -390,49 +405,97 @@ pub fn fill_stats(pattern: SymbolicSparseColMatRef<'_, usize>, perm: &Permutatio
     elimination_tree(&graph, perm).1
 }
 
+/// The dissection's work unit nnz(A)·log₂ n of [`ND_MIN_WORK_RATIO`].
+pub fn work_unit(pattern: SymbolicSparseColMatRef<'_, usize>) -> f64 {
+    pattern.compute_nnz() as f64 * (pattern.nrows().max(2) as f64).log2()
+}
+
 /// The outcome of [`choose`]: the chosen ordering, its permutation when it is not faer's own
-/// AMD, and the predicted fill of both candidates.
+/// AMD, and the predicted fill of the candidates.
 #[derive(Clone, Debug)]
 pub struct OrderingChoice {
     /// The ordering kept.
     pub chosen: FillOrdering,
     /// The nested-dissection permutation when it was chosen.
     pub permutation: Option<Permutation>,
-    /// The fill with AMD (`None` when ND was not tried).
-    pub amd: Option<FillStats>,
+    /// The fill with AMD: from the column counts when ND was tried, else from the supernodes
+    /// of faer's analysis (an upper bound if faer relaxed them).
+    pub amd: FillStats,
     /// The fill with ND (`None` when it was not tried).
     pub nd: Option<FillStats>,
 }
 
-/// Chooses between AMD (whose permutation `amd_perm` the caller has, from faer's analysis) and
-/// nested dissection for the pattern: ND is tried only from [`ND_MIN_N`] rows and kept only
-/// when its factor needs fewer flops and no more entries than AMD's.
-pub fn choose(pattern: SymbolicSparseColMatRef<'_, usize>, amd_perm: Option<&Permutation>) -> OrderingChoice {
-    let keep_amd = OrderingChoice {
+/// The fill of a symbolic factor read from its structure in O(n): the column counts of a
+/// simplicial factor, or of the supernodes (each column of a supernode of width w with r
+/// rows below it has w − k + r entries).
+pub fn symbolic_stats(symbolic: &SymbolicCholesky<usize>) -> FillStats {
+    let mut stats = FillStats {
+        entries: 0,
+        flops: 0.0,
+    };
+    let mut add = |c: usize| {
+        stats.entries += c as u64;
+        stats.flops += (c as f64) * (c as f64);
+    };
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => s.col_ptr().windows(2).for_each(|w| add(w[1] - w[0])),
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let (begin, end, rows) = (s.supernode_begin(), s.supernode_end(), s.col_ptr_for_row_idx());
+            for k in 0..s.n_supernodes() {
+                let (width, below) = (end[k] - begin[k], rows[k + 1] - rows[k]);
+                (0..width).for_each(|j| add(width - j + below));
+            }
+        }
+    }
+    stats
+}
+
+/// Chooses between faer's AMD analysis `amd` of `pattern` and nested dissection. ND is tried
+/// only from [`ND_MIN_N`] rows and when AMD's factorization is expensive against the cost of
+/// the dissection ([`ND_MIN_WORK_RATIO`]; CHOLMOD tries METIS on a test of the same kind), so
+/// that other patterns pay O(n) for the choice; it is kept only when its factor needs fewer
+/// flops and no more entries than AMD's, from the column counts of both.
+pub fn choose(pattern: SymbolicSparseColMatRef<'_, usize>, amd: &SymbolicCholesky<usize>) -> OrderingChoice {
+    choose_with(pattern, amd, ND_MIN_WORK_RATIO)
+}
+
+/// [`choose`] with the threshold `min_work_ratio` in place of [`ND_MIN_WORK_RATIO`].
+pub(crate) fn choose_with(
+    pattern: SymbolicSparseColMatRef<'_, usize>,
+    amd: &SymbolicCholesky<usize>,
+    min_work_ratio: f64,
+) -> OrderingChoice {
+    let n = pattern.nrows();
+    let amd_stats = symbolic_stats(amd);
+    let mut choice = OrderingChoice {
         chosen: FillOrdering::Amd,
         permutation: None,
-        amd: None,
+        amd: amd_stats,
         nd: None,
     };
-    let n = pattern.nrows();
-    let Some(amd_perm) = amd_perm else { return keep_amd };
-    if n < ND_MIN_N || n != pattern.ncols() || u32::try_from(n).is_err() || amd_perm.fwd.len() != n {
-        return keep_amd;
+    let dense_enough = amd_stats.flops >= min_work_ratio * work_unit(pattern);
+    let Some(amd_perm) = amd.perm() else { return choice };
+    if n < ND_MIN_N || !dense_enough || n != pattern.ncols() || u32::try_from(n).is_err() {
+        return choice;
     }
+    let (fwd, inv) = amd_perm.arrays();
+    let amd_perm = Permutation {
+        fwd: fwd.to_vec(),
+        inv: inv.to_vec(),
+    };
     let graph = Graph::from_pattern(pattern);
-    let amd = elimination_tree(&graph, amd_perm).1;
-    let (perm, nd) = nested_dissection_of(&graph, NdParams::default());
-    let better = nd.flops < amd.flops && nd.entries <= amd.entries;
-    OrderingChoice {
-        chosen: if better {
-            FillOrdering::NestedDissection
-        } else {
-            FillOrdering::Amd
-        },
-        permutation: better.then_some(perm),
-        amd: Some(amd),
-        nd: Some(nd),
+    let (amd_stats, (perm, nd)) = rayon::join(
+        || elimination_tree(&graph, &amd_perm).1,
+        || nested_dissection_of(&graph, NdParams::default()),
+    );
+    let better = nd.flops < amd_stats.flops && nd.entries <= amd_stats.entries;
+    choice.amd = amd_stats;
+    choice.nd = Some(nd);
+    if better {
+        choice.chosen = FillOrdering::NestedDissection;
+        choice.permutation = Some(perm);
     }
+    choice
 }
 
 #[cfg(test)]

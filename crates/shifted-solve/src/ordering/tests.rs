@@ -1,8 +1,12 @@
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymmetricOrdering};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
 use wfem_base::rng::SplitMix64;
 
 use super::*;
 use crate::CholeskyPattern;
+
+/// A 3-D grid large enough for nested dissection to be tried.
+const GRID: usize = 32;
 
 /// The full symmetric pattern (with diagonal) of an undirected edge list.
 fn pattern_of(n: usize, edges: &[(usize, usize)]) -> SymbolicSparseColMat<usize> {
@@ -125,7 +129,7 @@ fn nd_is_a_permutation_on_random_and_disconnected_graphs() {
 fn separator_splits_a_3d_grid() {
     let (n, edges) = grid_edges(&[24, 24, 24]);
     let graph = Graph::from_pattern(pattern_of(n, &edges).as_ref());
-    let side = separator::bisect(&graph, 0.6).expect("a grid splits");
+    let side = separator::bisect(&graph, 0.6, 1).expect("a grid splits");
     let mut count = [0usize; 3];
     for &s in &side {
         count[s as usize] += 1;
@@ -145,7 +149,7 @@ fn separator_check_can_fail() {
     // The check of the test above sees an edge across two halves if the separator is dropped.
     let (n, edges) = grid_edges(&[6, 6, 6]);
     let graph = Graph::from_pattern(pattern_of(n, &edges).as_ref());
-    let side: Vec<u8> = separator::bisect(&graph, 0.6)
+    let side: Vec<u8> = separator::bisect(&graph, 0.6, 1)
         .expect("split")
         .iter()
         .map(|&s| s.min(1))
@@ -176,30 +180,58 @@ fn fill_stats_counts_a_tridiagonal_factor() {
     assert_eq!(stats.flops, 9.0 * 4.0 + 1.0);
 }
 
+fn amd_symbolic(pattern: SymbolicSparseColMatRef<'_, usize>) -> SymbolicCholesky<usize> {
+    factorize_symbolic_cholesky(pattern, faer::Side::Lower, SymmetricOrdering::Amd, CholeskySymbolicParams::default())
+        .expect("symbolic")
+}
+
 #[test]
-fn choose_keeps_amd_below_the_threshold_and_never_a_bigger_factor() {
+fn symbolic_stats_match_the_column_counts() {
+    // Read from faer's supernodal structure or from our column counts: the same factor.
+    let a = grid_matrix(&[16, 16, 16]);
+    let symbolic = amd_symbolic(a.symbolic());
+    let (fwd, inv) = symbolic.perm().expect("AMD permutes").arrays();
+    let perm = Permutation {
+        fwd: fwd.to_vec(),
+        inv: inv.to_vec(),
+    };
+    let from_counts = fill_stats(a.symbolic(), &perm);
+    let from_structure = symbolic_stats(&symbolic);
+    assert!(from_structure.entries >= from_counts.entries);
+    assert!((from_structure.entries as f64) < 1.2 * from_counts.entries as f64, "{from_structure:?} {from_counts:?}");
+}
+
+#[test]
+fn choose_keeps_amd_below_the_thresholds_and_never_a_bigger_factor() {
+    // Too small, and a surface-like 2-D grid: not tried.
     let small = grid_matrix(&[20, 20, 20]);
-    let perm = amd_permutation(small.symbolic());
-    assert_eq!(choose(small.symbolic(), Some(&perm)).chosen, FillOrdering::Amd);
-    let big = grid_matrix(&[28, 28, 28]);
-    let perm = amd_permutation(big.symbolic());
-    let choice = choose(big.symbolic(), Some(&perm));
-    let (amd, nd) = (choice.amd.expect("tried"), choice.nd.expect("tried"));
+    let choice = choose(small.symbolic(), &amd_symbolic(small.symbolic()));
+    assert_eq!((choice.chosen, choice.nd), (FillOrdering::Amd, None));
+    let flat = grid_matrix(&[200, 200]);
+    let choice = choose(flat.symbolic(), &amd_symbolic(flat.symbolic()));
+    assert_eq!((choice.chosen, choice.nd), (FillOrdering::Amd, None));
+    let big = grid_matrix(&[GRID, GRID, GRID]);
+    let choice = choose_with(big.symbolic(), &amd_symbolic(big.symbolic()), 0.0);
+    let (amd, nd) = (choice.amd, choice.nd.expect("tried"));
     let nd_wins = nd.flops < amd.flops && nd.entries <= amd.entries;
     assert_eq!(choice.chosen == FillOrdering::NestedDissection, nd_wins);
     assert_eq!(choice.permutation.is_some(), nd_wins);
-    assert!(nd_wins, "ND {nd:?} against AMD {amd:?} on a 28³ grid");
+    assert!(nd_wins, "ND {nd:?} against AMD {amd:?} on a {GRID}³ grid");
 }
 
 #[test]
 fn factor_with_the_chosen_ordering_solves_to_1e_12() {
-    // 28³ = 21,952 ≥ ND_MIN_N: the analysis tries nested dissection and keeps it.
-    let a = grid_matrix(&[28, 28, 28]);
+    // GRID³ ≥ ND_MIN_N: with the work threshold lowered, the analysis of factor.rs tries
+    // nested dissection and keeps it, simplicial or supernodal.
+    let a = grid_matrix(&[GRID, GRID, GRID]);
     let n = a.nrows();
-    for pattern in [
-        CholeskyPattern::new(a.symbolic()).expect("analysis"),
-        CholeskyPattern::supernodal(a.symbolic()).expect("analysis"),
-    ] {
+    let supernodal = CholeskySymbolicParams {
+        supernodal_flop_ratio_threshold: faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
+        ..Default::default()
+    };
+    for params in [CholeskySymbolicParams::default(), supernodal] {
+        let (symbolic, ordering) = crate::factor::analyse_with(a.symbolic(), params, 0.0).expect("analysis");
+        let pattern = CholeskyPattern::from_symbolic(symbolic, ordering);
         assert_eq!(pattern.ordering(), FillOrdering::NestedDissection);
         let factor = pattern.factor(a.as_ref(), faer::Par::Seq).expect("SPD");
         let b: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 - 50.0).collect();
