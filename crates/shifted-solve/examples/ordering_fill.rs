@@ -22,7 +22,8 @@ use faer::sparse::{SparseColMat, SymbolicSparseColMatRef, Triplet};
 use faer::Side;
 use mesh_fem::AssemblyParams;
 use shifted_solve::ordering::{
-    fill_stats, nested_dissection, symbolic_stats, FillStats, NdParams, Permutation, work_unit, ND_MIN_N, ND_MIN_WORK_RATIO,
+    fill_stats, nested_dissection, symbolic_stats, work_unit, FillStats, NdParams, Permutation, ND_MIN_N,
+    ND_MIN_WORK_RATIO,
 };
 use shifted_solve::CholeskyPattern;
 
@@ -43,8 +44,14 @@ fn pencil(args: &[String]) -> Result<(String, Matrix), Box<dyn std::error::Error
         }
         let ops = mesh_fem::volume::assemble_volume(&mesh, &AssemblyParams::default())?;
         let volume: f64 = ops.mass.val().iter().sum();
-        let stem = std::path::Path::new(first).file_stem().map(|s| s.to_string_lossy().into_owned());
-        (format!("{} ×{count} refined", stem.unwrap_or_default()), ops, 1e-3 * volume.powf(2.0 / 3.0))
+        let stem = std::path::Path::new(first)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned());
+        (
+            format!("{} ×{count} refined", stem.unwrap_or_default()),
+            ops,
+            1e-3 * volume.powf(2.0 / 3.0),
+        )
     };
     let n = ops.stiffness.nrows();
     let trip: Vec<_> = ops
@@ -83,7 +90,15 @@ fn numeric(symbolic: &SymbolicCholesky<usize>, a: &Matrix) -> f64 {
     start.elapsed().as_secs_f64()
 }
 
-fn row(name: &str, n: usize, ordering: &str, stats: FillStats, analysis_s: f64, symbolic: &SymbolicCholesky<usize>, a: &Matrix) {
+fn row(
+    name: &str,
+    n: usize,
+    ordering: &str,
+    stats: FillStats,
+    analysis_s: f64,
+    symbolic: &SymbolicCholesky<usize>,
+    a: &Matrix,
+) {
     let num_s = numeric(symbolic, a);
     println!(
         "| {name} | {n} | {ordering} | {:.2}M | {:.2}M | {:.2} G | {analysis_s:.3} | {num_s:.3} |",

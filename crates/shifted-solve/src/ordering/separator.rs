@@ -36,7 +36,8 @@ pub(super) fn bisect(g: &Graph, max_side: f64, tries: usize) -> Option<Vec<u8>> 
     let fine = WGraph::unit(g);
     let limit = side_limit(&fine, max_side);
     let attempt = |k: usize| {
-        bisect_once(&fine, max_side, SEED.wrapping_add(k as u64)).map(|side| (score(&weights(&fine, &side), limit), side))
+        bisect_once(&fine, max_side, SEED.wrapping_add(k as u64))
+            .map(|side| (score(&weights(&fine, &side), limit), side))
     };
     // The tries run in parallel (the top of the dissection is otherwise one thread); the best
     // is the first of the smallest score, whatever the scheduling.

@@ -78,8 +78,14 @@ fn amd_permutation(pattern: SymbolicSparseColMatRef<'_, usize>) -> Permutation {
     let (mut fwd, mut inv) = (vec![0; n], vec![0; n]);
     let nnz = pattern.compute_nnz();
     let mut buf = MemBuffer::new(amd::order_maybe_unsorted_scratch::<usize>(n, nnz));
-    amd::order_maybe_unsorted(&mut fwd, &mut inv, pattern, amd::Control::default(), MemStack::new(&mut buf))
-        .expect("amd");
+    amd::order_maybe_unsorted(
+        &mut fwd,
+        &mut inv,
+        pattern,
+        amd::Control::default(),
+        MemStack::new(&mut buf),
+    )
+    .expect("amd");
     Permutation { fwd, inv }
 }
 
@@ -162,7 +168,10 @@ fn nd_gives_less_fill_than_amd_on_a_3d_grid_laplacian() {
     let a = grid_matrix(&[30, 30, 30]);
     let pattern = a.symbolic();
     let with_amd = fill_stats(pattern, &amd_permutation(pattern));
-    let with_nd = fill_stats(pattern, &nd(&pattern.to_owned().expect("alloc"), NdParams::default().leaf_size));
+    let with_nd = fill_stats(
+        pattern,
+        &nd(&pattern.to_owned().expect("alloc"), NdParams::default().leaf_size),
+    );
     assert!(
         with_nd.entries < with_amd.entries && with_nd.flops < with_amd.flops,
         "ND {with_nd:?} against AMD {with_amd:?}"
@@ -181,8 +190,13 @@ fn fill_stats_counts_a_tridiagonal_factor() {
 }
 
 fn amd_symbolic(pattern: SymbolicSparseColMatRef<'_, usize>) -> SymbolicCholesky<usize> {
-    factorize_symbolic_cholesky(pattern, faer::Side::Lower, SymmetricOrdering::Amd, CholeskySymbolicParams::default())
-        .expect("symbolic")
+    factorize_symbolic_cholesky(
+        pattern,
+        faer::Side::Lower,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams::default(),
+    )
+    .expect("symbolic")
 }
 
 #[test]
@@ -198,7 +212,10 @@ fn symbolic_stats_match_the_column_counts() {
     let from_counts = fill_stats(a.symbolic(), &perm);
     let from_structure = symbolic_stats(&symbolic);
     assert!(from_structure.entries >= from_counts.entries);
-    assert!((from_structure.entries as f64) < 1.2 * from_counts.entries as f64, "{from_structure:?} {from_counts:?}");
+    assert!(
+        (from_structure.entries as f64) < 1.2 * from_counts.entries as f64,
+        "{from_structure:?} {from_counts:?}"
+    );
 }
 
 #[test]
