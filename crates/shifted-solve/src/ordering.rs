@@ -34,12 +34,14 @@ use faer::sparse::SymbolicSparseColMatRef;
 pub const ND_MIN_N: usize = 20_000;
 
 /// Nested dissection is tried only when AMD's factorization costs at least this many flops
-/// (Σ cⱼ²) per unit of the dissection's own work, nnz(A)·log₂ n: below it, even a much smaller
-/// factor saves less time than the dissection costs. Measured on a loaded 2-core box
-/// (docs/BENCHMARKS.md, "Volumes"): the dissection takes about 1.2 s at 121K tetrahedral
-/// vertices (ratio 570, saving 0.7 s of factorization and solves: not repaid) and 3.7 s on the
-/// 655K icosphere (ratio 740, saving about 1.4 s of factorization: not repaid), while the 1M
-/// tetrahedral pencil (ratio far above) spends minutes in AMD's factorization.
+/// (Σ cⱼ² of its supernodes) per unit of the dissection's own work, nnz(A)·log₂ n: the
+/// dissection is paid once per pattern, the saving on every factorization and solve, and a
+/// caller with a single K_t f must not get slower. Measured on a 2-core box (docs/BENCHMARKS.md,
+/// "Volumes", 2026-12-06): ratio 578 on the 121K armadillo (ND 0.7 s; one fast-path K_t f
+/// 5–9 % faster with ND, one backward-Euler solve 45 % slower), 747 on the 655K icosphere (ND
+/// 2.0 s; the fast path's K_t f 23–30 % faster once prepared, but one call slower by the
+/// dissection), 5054 on the 1M monkey (ND 8.9 s against a 36 s AMD factorization: the fast
+/// path 1.3× faster end to end). The threshold keeps both smaller cases on AMD.
 pub const ND_MIN_WORK_RATIO: f64 = 2000.0;
 
 /// Bisections tried at the first levels of the dissection (the best separator is kept): the top
@@ -520,5 +522,4 @@ pub(crate) fn choose_with(
 }
 
 #[cfg(test)]
-#[path = "ordering/tests.rs"]
 mod tests;
