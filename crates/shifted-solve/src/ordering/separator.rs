@@ -169,7 +169,7 @@ fn pseudo_peripheral(g: &WGraph, start: usize) -> usize {
         let (order, level) = bfs_order(g, root);
         let Some(&far) = order.last() else { break };
         let last = level[far as usize];
-        if last as usize + 1 <= depth {
+        if (last as usize) < depth {
             break;
         }
         depth = last as usize + 1;
@@ -267,9 +267,9 @@ fn fm_pass(g: &WGraph, side: &mut [u8], sizes: &mut [u64; 3], work: &mut Work, l
     let n = g.n();
     let mut heaps: [Heap; 2] = [BinaryHeap::new(), BinaryHeap::new()];
     for v in (0..n).filter(|&v| side[v] == 2) {
-        for to in 0..2 {
+        for (to, heap) in heaps.iter_mut().enumerate() {
             work.gains[to][v] = gain(g, side, v, to as u8);
-            heaps[to].push((work.gains[to][v], Reverse(v as u32)));
+            heap.push((work.gains[to][v], Reverse(v as u32)));
         }
     }
     let patience = (n / 200).clamp(16, 100);
@@ -344,10 +344,10 @@ fn fm_pass(g: &WGraph, side: &mut [u8], sizes: &mut [u64; 3], work: &mut Work, l
         }
         for &u in &pulled {
             work.pulled[u] = false;
-            for t in 0..2 {
+            for (t, heap) in heaps.iter_mut().enumerate() {
                 work.gains[t][u] = gain(g, side, u, t as u8);
                 if !work.locked[u] {
-                    heaps[t].push((work.gains[t][u], Reverse(u as u32)));
+                    heap.push((work.gains[t][u], Reverse(u as u32)));
                 }
             }
         }

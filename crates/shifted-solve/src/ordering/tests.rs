@@ -255,9 +255,9 @@ fn factor_with_the_chosen_ordering_solves_to_1e_12() {
         let x = factor.solve_vec(&b);
         // Independent check: multiply back with the matrix itself.
         let mut r = b.clone();
-        for j in 0..n {
+        for (j, &xj) in x.iter().enumerate() {
             for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
-                r[i] -= v * x[j];
+                r[i] -= v * xj;
             }
         }
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
