@@ -117,9 +117,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("| mesh | n | ordering | L entries (counts) | L stored (supernodal) | flops Σc² | ordering + symbolic (s) | numeric (s) |");
     println!("|---|---:|---|---:|---:|---:|---:|---:|");
 
+    let mut params = NdParams::default();
+    if let Ok(v) = std::env::var("ND_LEAF") {
+        params.leaf_size = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("ND_MAX_SIDE") {
+        params.max_side = v.parse()?;
+    }
     if std::env::var_os("ND_ONLY").is_some() {
         let start = Instant::now();
-        let perm = nested_dissection(pattern, NdParams::default()).expect("square");
+        let perm = nested_dissection(pattern, params).expect("square");
         let stats = fill_stats(pattern, &perm);
         println!("ND only: {:.3} s, {stats:?}", start.elapsed().as_secs_f64());
         return Ok(());
@@ -145,13 +152,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     drop(amd);
 
     let start = Instant::now();
-    let mut params = NdParams::default();
-    if let Ok(v) = std::env::var("ND_LEAF") {
-        params.leaf_size = v.parse()?;
-    }
-    if let Ok(v) = std::env::var("ND_MAX_SIDE") {
-        params.max_side = v.parse()?;
-    }
     let perm = nested_dissection(pattern, params).expect("square");
     let order_s = start.elapsed().as_secs_f64();
     let nd = factorize_symbolic_cholesky(
