@@ -7,6 +7,7 @@
 use std::sync::Arc;
 
 use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
@@ -16,6 +17,7 @@ use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, Symbolic
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{c64, Conj, MatMut, Par, Side};
 
+use crate::ordering::{self, FillOrdering};
 use crate::trisolve::SolvePlan;
 use crate::SolveError;
 
@@ -23,20 +25,39 @@ use crate::SolveError;
 /// less than the fork/join and the per-worker buffers cost).
 const PARALLEL_SOLVE_MIN_N: usize = 8192;
 
-/// Shared symbolic Cholesky analysis (AMD ordering) of the pattern of L and B.
+/// Shared symbolic Cholesky analysis of the pattern of L and B (its ordering chosen by
+/// [`analyse`]).
 pub(crate) type CholeskySymbolic = Arc<SymbolicCholesky<usize>>;
 /// Shared symbolic LU analysis (COLAMD) of the pattern of L and B.
 pub(crate) type LuSymbolic = Arc<SymbolicLu<usize>>;
 
-pub(crate) fn cholesky_symbolic(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result<CholeskySymbolic, String> {
-    factorize_symbolic_cholesky(
-        pattern,
-        Side::Lower,
-        SymmetricOrdering::Amd,
-        CholeskySymbolicParams::default(),
-    )
-    .map(Arc::new)
-    .map_err(|e| format!("{e:?}"))
+/// The one place a Cholesky ordering is chosen: faer's AMD analysis, and for large patterns
+/// whose AMD factor is dense enough also our nested dissection, whose analysis is kept when
+/// its predicted factor needs fewer flops and no more entries ([`ordering::choose`]).
+fn analyse(
+    pattern: SymbolicSparseColMatRef<'_, usize>,
+    params: CholeskySymbolicParams<'_>,
+) -> Result<(CholeskySymbolic, FillOrdering), String> {
+    analyse_with(pattern, params, ordering::ND_MIN_WORK_RATIO)
+}
+
+/// [`analyse`] with the threshold of [`ordering::choose_with`] (tests lower it).
+pub(crate) fn analyse_with(
+    pattern: SymbolicSparseColMatRef<'_, usize>,
+    params: CholeskySymbolicParams<'_>,
+    min_work_ratio: f64,
+) -> Result<(CholeskySymbolic, FillOrdering), String> {
+    let amd = factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, params)
+        .map_err(|e| format!("{e:?}"))?;
+    let choice = ordering::choose_with(pattern, &amd, min_work_ratio);
+    let Some(perm) = choice.permutation else {
+        return Ok((Arc::new(amd), FillOrdering::Amd));
+    };
+    drop(amd);
+    let perm_ref = PermRef::new_checked(&perm.fwd, &perm.inv, pattern.nrows());
+    let nd = factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Custom(perm_ref), params)
+        .map_err(|e| format!("{e:?}"))?;
+    Ok((Arc::new(nd), FillOrdering::NestedDissection))
 }
 
 pub(crate) fn lu_symbolic(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result<LuSymbolic, String> {
@@ -45,12 +66,15 @@ pub(crate) fn lu_symbolic(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result
         .map_err(|e| format!("{e:?}"))
 }
 
-/// Symbolic Cholesky analysis (AMD ordering, elimination tree, supernodes) of a symmetric
+/// Symbolic Cholesky analysis (fill-reducing ordering — AMD, or nested dissection on large
+/// patterns where it gives a smaller factor —, elimination tree, supernodes) of a symmetric
 /// pattern, computed once and reused for every numeric factorization on that pattern (every
 /// shift `A = M + sL`, every t).
 #[derive(Clone, Debug)]
 pub struct CholeskyPattern {
     symbolic: CholeskySymbolic,
+    /// The ordering the analysis kept.
+    ordering: FillOrdering,
     /// The tree-parallel solve plan, when the factor is supernodal and the split pays.
     plan: Option<Arc<SolvePlan>>,
 }
@@ -61,14 +85,15 @@ impl CholeskyPattern {
     /// # Errors
     /// [`SolveError::Factorization`] if faer's symbolic analysis fails.
     pub fn new(pattern: SymbolicSparseColMatRef<'_, usize>) -> Result<Self, SolveError> {
-        let symbolic = cholesky_symbolic(pattern).map_err(|detail| SolveError::Factorization {
-            what: "symbolic Cholesky",
-            detail,
-        })?;
-        Ok(Self::from_symbolic(symbolic))
+        let (symbolic, ordering) =
+            analyse(pattern, CholeskySymbolicParams::default()).map_err(|detail| SolveError::Factorization {
+                what: "symbolic Cholesky",
+                detail,
+            })?;
+        Ok(Self::from_symbolic(symbolic, ordering))
     }
 
-    /// Analyses the pattern with a supernodal factor forced (AMD ordering): what the
+    /// Analyses the pattern with a supernodal factor forced (same ordering choice): what the
     /// complex-symmetric LDLᵀ needs, so that it and every real Cholesky share one analysis.
     ///
     /// # Errors
@@ -78,13 +103,11 @@ impl CholeskyPattern {
             supernodal_flop_ratio_threshold: faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        let symbolic = factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, params)
-            .map(Arc::new)
-            .map_err(|e| SolveError::Factorization {
-                what: "symbolic Cholesky",
-                detail: format!("{e:?}"),
-            })?;
-        Ok(Self::from_symbolic(symbolic))
+        let (symbolic, ordering) = analyse(pattern, params).map_err(|detail| SolveError::Factorization {
+            what: "symbolic Cholesky",
+            detail,
+        })?;
+        Ok(Self::from_symbolic(symbolic, ordering))
     }
 
     /// The symbolic analysis.
@@ -92,15 +115,29 @@ impl CholeskyPattern {
         &self.symbolic
     }
 
+    /// The fill-reducing ordering the analysis kept.
+    pub fn ordering(&self) -> FillOrdering {
+        self.ordering
+    }
+
+    /// Number of stored scalars of every factor on this pattern.
+    pub fn n_values(&self) -> usize {
+        self.symbolic.len_val()
+    }
+
     /// Wraps an existing analysis (and plans its tree-parallel solve).
-    pub(crate) fn from_symbolic(symbolic: CholeskySymbolic) -> Self {
+    pub(crate) fn from_symbolic(symbolic: CholeskySymbolic, ordering: FillOrdering) -> Self {
         let plan = match symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(sn) if sn.nrows() >= PARALLEL_SOLVE_MIN_N => {
                 SolvePlan::new(sn, rayon::current_num_threads()).map(Arc::new)
             }
             _ => None,
         };
-        Self { symbolic, plan }
+        Self {
+            symbolic,
+            ordering,
+            plan,
+        }
     }
 
     /// Numeric factorization `A = PᵀRRᵀP` of a symmetric positive definite `a` on the analysed

@@ -35,7 +35,8 @@
 //! * [`lanczos`]: the one Lanczos process; [`lanczos::symmetric_eigen`], the one scale-robust
 //!   dense symmetric eigensolver of the Lanczos methods and of wfem-heat's dense reference.
 //! * [`CholeskyPattern`], [`SpdFactor`]: the real sparse Cholesky (symbolic once, numeric per
-//!   shift) with its tree-parallel solve.
+//!   shift) with its tree-parallel solve; its fill-reducing ordering (AMD, or our nested
+//!   dissection where it gives a smaller factor) is chosen in [`ordering`].
 //! * [`ConditionReport`]: 2-norm condition numbers of tL − zB and of the preconditioned
 //!   operator (paper Fig. 2c,d).
 
@@ -55,6 +56,7 @@ pub mod iterative;
 pub mod lanczos;
 mod ldlt;
 mod operators;
+pub mod ordering;
 pub mod poles;
 mod selected;
 mod solver;
