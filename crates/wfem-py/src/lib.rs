@@ -4,6 +4,11 @@
 //! Every long call runs without the GIL and can be interrupted with Ctrl-C (`run.rs`); every
 //! Rust error becomes an exception of `wfem._errors` keeping the culprit (`errors.rs`).
 
+/// mimalloc as the extension's allocator (see Cargo.toml): freed memory is reused by the next
+/// call instead of being unmapped and faulted in again.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 mod choices;
 mod cloud;
 mod convert;

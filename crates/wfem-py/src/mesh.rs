@@ -2,7 +2,7 @@
 
 use crate::convert::mesh_in;
 use crate::errors::{invalid_param, Error};
-use crate::out::{mesh_out, sparse_out, SparseOut};
+use crate::out::{mesh_out, sparse_out_owned, SparseOut};
 use crate::run::run;
 use mesh_fem::io::{load, LoadOptions};
 use mesh_fem::stats::stats;
@@ -159,10 +159,11 @@ pub fn operators<'py>(
     let fem = run(py, move |_| {
         assemble(&mesh, &AssemblyParams { lumping, laplacian }).map_err(Error::from)
     })?;
+    let lumped = fem.lumped_mass();
     Ok((
-        sparse_out(py, fem.stiffness.as_ref()),
-        sparse_out(py, fem.mass.as_ref()),
-        sparse_out(py, fem.lumped_mass().as_ref()),
+        sparse_out_owned(py, fem.stiffness),
+        sparse_out_owned(py, fem.mass),
+        sparse_out_owned(py, lumped),
     ))
 }
 

@@ -1,7 +1,7 @@
 //! Rust values to new C-ordered NumPy arrays (outputs; no checks, so no errors: the module
 //! every other one may use).
 
-use faer::sparse::SparseColMatRef;
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Mat, MatRef};
 use mesh_fem::TriMesh;
 use numpy::ndarray::{Array2, Array3};
@@ -31,32 +31,66 @@ pub fn mesh_out<'py>(py: Python<'py>, mesh: &TriMesh) -> (Bound<'py, PyArray2<f6
     let f = Array2::from_shape_fn((f.len(), 3), |(i, j)| i64::from(f[i][j])).into_pyarray(py);
     (v, f)
 }
-/// CSC arrays (indptr, indices, data) of a faer matrix, one entry per stored value.
+/// CSC arrays (indptr, indices, data) of a faer matrix, one entry per stored value. The index
+/// arrays are int32 when every index fits (what scipy would convert them to, so it keeps them
+/// as they are), int64 otherwise.
 pub type SparseOut<'py> = (
-    Bound<'py, PyArray1<i64>>,
-    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
     Bound<'py, PyArray1<f64>>,
     (usize, usize),
 );
 
+/// The index arrays of a CSC pattern (indptr, indices), int32 when nnz fits.
+fn index_arrays<'py>(
+    py: Python<'py>,
+    sym: SymbolicSparseColMatRef<'_, usize>,
+) -> (Bound<'py, PyAny>, Bound<'py, PyAny>) {
+    let nnz: usize = (0..sym.ncols()).map(|j| sym.col_range(j).len()).sum();
+    fn gather<T: numpy::Element>(
+        sym: SymbolicSparseColMatRef<'_, usize>,
+        nnz: usize,
+        cast: impl Fn(usize) -> T,
+    ) -> (Vec<T>, Vec<T>) {
+        let mut indptr = Vec::with_capacity(sym.ncols() + 1);
+        let mut indices = Vec::with_capacity(nnz);
+        indptr.push(cast(0));
+        for j in 0..sym.ncols() {
+            indices.extend(sym.row_idx()[sym.col_range(j)].iter().map(|&i| cast(i)));
+            indptr.push(cast(indices.len()));
+        }
+        (indptr, indices)
+    }
+    if nnz.max(sym.nrows()).max(sym.ncols()) <= i32::MAX as usize {
+        // invariant: every index and offset is at most nnz or n, checked to fit just above.
+        let (indptr, indices) = gather(sym, nnz, |i| i as i32);
+        (indptr.into_pyarray(py).into_any(), indices.into_pyarray(py).into_any())
+    } else {
+        let (indptr, indices) = gather(sym, nnz, |i| i as i64);
+        (indptr.into_pyarray(py).into_any(), indices.into_pyarray(py).into_any())
+    }
+}
+
 /// A faer matrix as CSC arrays for `scipy.sparse.csc_matrix((data, indices, indptr), shape)`.
 pub fn sparse_out<'py>(py: Python<'py>, a: SparseColMatRef<'_, usize, f64>) -> SparseOut<'py> {
     let sym = a.symbolic();
-    let mut indptr = Vec::with_capacity(a.ncols() + 1);
-    let mut indices = Vec::with_capacity(a.val().len());
     let mut data = Vec::with_capacity(a.val().len());
-    indptr.push(0i64);
     for j in 0..a.ncols() {
-        for q in sym.col_range(j) {
-            indices.push(sym.row_idx()[q] as i64);
-            data.push(a.val()[q]);
-        }
-        indptr.push(indices.len() as i64);
+        data.extend_from_slice(&a.val()[sym.col_range(j)]);
     }
-    (
-        indptr.into_pyarray(py),
-        indices.into_pyarray(py),
-        data.into_pyarray(py),
-        (a.nrows(), a.ncols()),
-    )
+    let (indptr, indices) = index_arrays(py, sym);
+    (indptr, indices, data.into_pyarray(py), (a.nrows(), a.ncols()))
+}
+
+/// [`sparse_out`] of an owned matrix: its values move into the array without a copy when the
+/// columns are stored one after the other (as assembled matrices are).
+pub fn sparse_out_owned<'py>(py: Python<'py>, a: SparseColMat<usize, f64>) -> SparseOut<'py> {
+    let compact = a.symbolic().col_nnz().is_none();
+    if !compact {
+        return sparse_out(py, a.as_ref());
+    }
+    let (indptr, indices) = index_arrays(py, a.symbolic());
+    let shape = (a.nrows(), a.ncols());
+    let (_, values) = a.into_parts();
+    (indptr, indices, values.into_pyarray(py), shape)
 }

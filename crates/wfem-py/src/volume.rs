@@ -4,7 +4,7 @@
 
 use crate::convert::{elements_in, Elements};
 use crate::errors::Error;
-use crate::out::{sparse_out, SparseOut};
+use crate::out::{sparse_out_owned, SparseOut};
 use crate::run::run;
 use mesh_fem::io::volume::read_volume as read_volume_file;
 use mesh_fem::volume::{assemble_volume, validate_volume as validate_tets, TetMesh};
@@ -98,10 +98,11 @@ pub fn volume_operators<'py>(
         )
         .map_err(Error::from)
     })?;
+    let lumped = fem.lumped_mass();
     Ok((
-        sparse_out(py, fem.stiffness.as_ref()),
-        sparse_out(py, fem.mass.as_ref()),
-        sparse_out(py, fem.lumped_mass().as_ref()),
+        sparse_out_owned(py, fem.stiffness),
+        sparse_out_owned(py, fem.mass),
+        sparse_out_owned(py, lumped),
     ))
 }
 

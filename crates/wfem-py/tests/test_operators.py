@@ -58,3 +58,46 @@ def test_real_mesh_operators_equal_igl(corpus):
     L, B, _ = wfem.operators(V, F)
     assert _rel_diff(L, -igl.cotmatrix(V, F)) <= 1e-12
     assert _rel_diff(B, igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_FULL)) <= 1e-12
+
+
+def _cube_tets(m: int):
+    """The unit cube in m³ cells, six tetrahedra each (Kuhn), positively oriented."""
+    g = np.linspace(0.0, 1.0, m + 1)
+    V = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    idx = lambda i, j, k: (i * (m + 1) + j) * (m + 1) + k
+    T = []
+    paths = [(0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]
+    for i in range(m):
+        for j in range(m):
+            for k in range(m):
+                for p in paths:
+                    c = [i, j, k]
+                    tet = [idx(*c)]
+                    for axis in p:
+                        c[axis] += 1
+                        tet.append(idx(*c))
+                    T.append(tet)
+    T = np.array(T, dtype=np.int64)
+    a, b, c, d = (V[T[:, q]] for q in range(4))
+    flip = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a) < 0
+    T[flip, 2], T[flip, 3] = T[flip, 3], T[flip, 2].copy()
+    return V, T
+
+
+@pytest.mark.parametrize("volume", [False, True])
+def test_operators_are_canonical_csc_with_int32_indices(volume):
+    # The index arrays come out int32 (what scipy keeps for such sizes: no conversion pass) and
+    # the matrices are canonical CSC equal to the same matrices built from COO triplets.
+    if volume:
+        V, T = _cube_tets(3)
+        mats = wfem.operators(V, T)
+        assert abs(mats[1].sum() - 1.0) < 1e-14  # the consistent mass integrates to the volume
+    else:
+        V, F = wfem.generate.bumpy(2)
+        mats = wfem.operators(V, F)
+    for M in mats:
+        assert M.format == "csc"
+        assert M.indices.dtype == np.int32 and M.indptr.dtype == np.int32
+        assert M.has_canonical_format
+        again = sp.csc_matrix(sp.coo_matrix(M.toarray()))
+        assert abs(M - again).max() == 0.0

@@ -11,7 +11,9 @@ import numpy.typing as npt
 _F64 = npt.NDArray[np.float64]
 _F32 = npt.NDArray[np.float32]
 _I64 = npt.NDArray[np.int64]
-_Sparse = tuple[_I64, _I64, _F64, tuple[int, int]]
+# CSC index arrays: int32 when every index fits (what scipy keeps), int64 otherwise.
+_Index = npt.NDArray[np.int32] | npt.NDArray[np.int64]
+_Sparse = tuple[_Index, _Index, _F64, tuple[int, int]]
 _Mesh = tuple[_F64, _I64]
 _Path = str | PathLike[str]
 
