@@ -128,16 +128,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let n = pattern.nrows();
         let start = Instant::now();
         let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
-        let mut buf = MemBuffer::new(faer::sparse::linalg::amd::order_scratch::<usize>(n, pattern.compute_nnz()));
-        let flops = faer::sparse::linalg::amd::order(&mut fwd, &mut inv, pattern, Default::default(), MemStack::new(&mut buf))?;
+        let mut buf = MemBuffer::new(faer::sparse::linalg::amd::order_scratch::<usize>(
+            n,
+            pattern.compute_nnz(),
+        ));
+        let flops =
+            faer::sparse::linalg::amd::order(&mut fwd, &mut inv, pattern, Default::default(), MemStack::new(&mut buf))?;
         let t_order = start.elapsed().as_secs_f64();
         let start = Instant::now();
         let perm = PermRef::new_checked(&fwd, &inv, n);
-        let _sym = factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Custom(perm), supernodal_params())?;
+        let _sym = factorize_symbolic_cholesky(
+            pattern,
+            Side::Lower,
+            SymmetricOrdering::Custom(perm),
+            supernodal_params(),
+        )?;
         let t_sym = start.elapsed().as_secs_f64();
         let start = Instant::now();
         let _amd = factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, supernodal_params())?;
-        println!("AMD order {t_order:.3} s (flops {:.3e}), symbolic on it {t_sym:.3} s; faer Amd symbolic {:.3} s", flops.n_mult_subs_ldl, start.elapsed().as_secs_f64());
+        println!(
+            "AMD order {t_order:.3} s (flops {:.3e}), symbolic on it {t_sym:.3} s; faer Amd symbolic {:.3} s",
+            flops.n_mult_subs_ldl,
+            start.elapsed().as_secs_f64()
+        );
         return Ok(());
     }
     if std::env::var_os("ND_ONLY").is_some() {

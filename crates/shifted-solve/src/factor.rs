@@ -47,6 +47,17 @@ pub(crate) fn analyse_with(
     params: CholeskySymbolicParams<'_>,
     min_work_ratio: f64,
 ) -> Result<(CholeskySymbolic, FillOrdering), String> {
+    if ordering::eager(pattern) {
+        if let Some(choice) = ordering::choose_eager(pattern, min_work_ratio) {
+            if let Some(perm) = &choice.permutation {
+                let perm_ref = PermRef::new_checked(&perm.fwd, &perm.inv, pattern.nrows());
+                let symbolic =
+                    factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Custom(perm_ref), params)
+                        .map_err(|e| format!("{e:?}"))?;
+                return Ok((Arc::new(symbolic), choice.chosen));
+            }
+        }
+    }
     let amd = factorize_symbolic_cholesky(pattern, Side::Lower, SymmetricOrdering::Amd, params)
         .map_err(|e| format!("{e:?}"))?;
     let choice = ordering::choose_with(pattern, &amd, min_work_ratio);

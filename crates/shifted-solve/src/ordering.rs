@@ -44,6 +44,21 @@ pub const ND_MIN_N: usize = 20_000;
 /// path 1.3× faster end to end). The threshold keeps both smaller cases on AMD.
 pub const ND_MIN_WORK_RATIO: f64 = 2000.0;
 
+/// Large three-dimensional patterns — at least this many rows and [`ND_EAGER_MIN_DEGREE`]
+/// entries per column — compute faer's AMD ordering and the dissection **side by side** (one
+/// core each) instead of one after the other, and run one symbolic analysis, of the ordering
+/// kept ([`choose_eager`]). At this size a tetrahedral pencil's work ratio is far above
+/// [`ND_MIN_WORK_RATIO`] (5054 at 1M vertices; it grows like n / log n), so the dissection is
+/// almost never wasted; below it the sequential choice keeps a mid-size volume from paying for
+/// a dissection AMD would win (121K: ratio 578). At 1M tetrahedral vertices the fast path's
+/// preparation went from 16.4–17.1 s to 13.0 s (docs/BENCHMARKS.md, "Volumes").
+pub const ND_EAGER_MIN_N: usize = 400_000;
+
+/// Entries per column (of the lower triangle with the diagonal) of a pattern treated as
+/// three-dimensional by [`ND_EAGER_MIN_N`]: a P1 tetrahedral pencil has about 8 (a vertex has
+/// about 14 neighbours), a triangle mesh about 4.
+pub const ND_EAGER_MIN_DEGREE: f64 = 6.0;
+
 /// Bisections tried at the first levels of the dissection (the best separator is kept): the top
 /// separators matter most for the fill, and the rest is one try each.
 const TOP_TRIES: [usize; 2] = [3, 2];
@@ -519,6 +534,66 @@ pub(crate) fn choose_with(
         choice.permutation = Some(perm);
     }
     choice
+}
+
+/// Whether `pattern` takes the side-by-side choice of [`choose_eager`] (see [`ND_EAGER_MIN_N`]).
+pub fn eager(pattern: SymbolicSparseColMatRef<'_, usize>) -> bool {
+    let n = pattern.nrows();
+    if n < ND_EAGER_MIN_N || n != pattern.ncols() || u32::try_from(n).is_err() {
+        return false;
+    }
+    // Lower triangle with the diagonal, whichever triangles the pattern stores.
+    let lower: usize = (0..n)
+        .map(|j| pattern.row_idx_of_col_raw(j).iter().filter(|&&i| i >= j).count())
+        .sum();
+    lower as f64 >= ND_EAGER_MIN_DEGREE * n as f64
+}
+
+/// faer's AMD permutation of the pattern of A + Aᵀ (`None` if faer refuses it).
+fn amd_permutation(pattern: SymbolicSparseColMatRef<'_, usize>) -> Option<Permutation> {
+    let n = pattern.nrows();
+    let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
+    let mut buf = MemBuffer::new(amd::order_maybe_unsorted_scratch::<usize>(n, pattern.compute_nnz()));
+    amd::order_maybe_unsorted(
+        &mut fwd,
+        &mut inv,
+        pattern,
+        amd::Control::default(),
+        MemStack::new(&mut buf),
+    )
+    .ok()?;
+    Some(Permutation { fwd, inv })
+}
+
+/// The choice of [`choose_with`] for a large three-dimensional pattern ([`eager`]): AMD's
+/// ordering (with its column counts) and the dissection computed side by side, the dissection
+/// kept when AMD's factorization is dense enough (`min_work_ratio`) and the dissection's factor
+/// needs fewer flops and no more entries. The permutation of the ordering kept is always
+/// returned (the caller runs one symbolic analysis, on it); `None` if AMD itself failed.
+pub(crate) fn choose_eager(pattern: SymbolicSparseColMatRef<'_, usize>, min_work_ratio: f64) -> Option<OrderingChoice> {
+    let graph = Graph::from_pattern(pattern);
+    let (amd, (nd_perm, nd)) = rayon::join(
+        || {
+            amd_permutation(pattern).map(|perm| {
+                let stats = elimination_tree(&graph, &perm).1;
+                (perm, stats)
+            })
+        },
+        || nested_dissection_of(&graph, NdParams::default()),
+    );
+    let (amd_perm, amd_stats) = amd?;
+    let dense_enough = amd_stats.flops >= min_work_ratio * work_unit(pattern);
+    let better = dense_enough && nd.flops < amd_stats.flops && nd.entries <= amd_stats.entries;
+    Some(OrderingChoice {
+        chosen: if better {
+            FillOrdering::NestedDissection
+        } else {
+            FillOrdering::Amd
+        },
+        permutation: Some(if better { nd_perm } else { amd_perm }),
+        amd: amd_stats,
+        nd: Some(nd),
+    })
 }
 
 #[cfg(test)]

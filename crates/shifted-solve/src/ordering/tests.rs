@@ -265,3 +265,89 @@ fn factor_with_the_chosen_ordering_solves_to_1e_12() {
         assert!(rel < 1e-12, "relative residual {rel:e}");
     }
 }
+
+/// Edges of a grid with its face and body diagonals too (the 27-point stencil): about 13
+/// neighbours below each vertex, as dense as a tetrahedral pencil.
+fn dense_grid_edges(m: usize) -> (usize, Vec<(usize, usize)>) {
+    let id = |i: usize, j: usize, k: usize| (i * m + j) * m + k;
+    let mut edges = Vec::new();
+    for i in 0..m {
+        for j in 0..m {
+            for k in 0..m {
+                for (di, dj, dk) in (0..27).map(|c| (c / 9, c / 3 % 3, c % 3)) {
+                    let (a, b, c) = (i + di, j + dj, k + dk);
+                    // Neighbours at +0/+1/+2 − 1 in each direction, each pair once.
+                    if (di, dj, dk) <= (1, 1, 1) || a < 1 || b < 1 || c < 1 || a > m || b > m || c > m {
+                        continue;
+                    }
+                    edges.push((id(i, j, k), id(a - 1, b - 1, c - 1)));
+                }
+            }
+        }
+    }
+    (m * m * m, edges)
+}
+
+#[test]
+fn the_side_by_side_choice_is_taken_by_large_dense_patterns_only() {
+    // 76³ = 438,976 rows ≥ ND_EAGER_MIN_N: the 7-point stencil (4 entries per lower column) is
+    // not dense enough, the 27-point one (14) is; a smaller dense one is not large enough.
+    let sparse = grid_matrix(&[76, 76, 76]);
+    assert!(!eager(sparse.symbolic()));
+    let (n, edges) = dense_grid_edges(76);
+    assert!(n >= ND_EAGER_MIN_N);
+    assert!(eager(pattern_of(n, &edges).as_ref()));
+    let (n, edges) = dense_grid_edges(40);
+    assert!(!eager(pattern_of(n, &edges).as_ref()));
+}
+
+#[test]
+fn the_side_by_side_choice_keeps_the_better_ordering_and_solves() {
+    // choose_eager on a GRID³ grid: ND kept when AMD is dense enough (threshold 0) and its
+    // factor is smaller, AMD with a huge threshold; either way a valid permutation, and
+    // factor.rs solves with it to 1e-12.
+    let a = grid_matrix(&[GRID, GRID, GRID]);
+    let n = a.nrows();
+    let nd = choose_eager(a.symbolic(), 0.0).expect("AMD");
+    assert_eq!(nd.chosen, FillOrdering::NestedDissection, "{:?} / {:?}", nd.amd, nd.nd);
+    assert_permutation(nd.permutation.as_ref().expect("kept"), n);
+    let amd = choose_eager(a.symbolic(), f64::INFINITY).expect("AMD");
+    assert_eq!(amd.chosen, FillOrdering::Amd);
+    let amd_perm = amd.permutation.expect("kept");
+    assert_permutation(&amd_perm, n);
+    assert_eq!(
+        amd_perm.fwd,
+        amd_permutation(a.symbolic()).fwd,
+        "faer's AMD permutation"
+    );
+    for choice in [
+        nd,
+        OrderingChoice {
+            permutation: Some(amd_perm),
+            ..amd
+        },
+    ] {
+        let perm = choice.permutation.expect("kept");
+        let perm = faer::perm::PermRef::new_checked(&perm.fwd, &perm.inv, n);
+        let symbolic = factorize_symbolic_cholesky(
+            a.symbolic(),
+            faer::Side::Lower,
+            SymmetricOrdering::Custom(perm),
+            CholeskySymbolicParams::default(),
+        )
+        .expect("symbolic");
+        let pattern = CholeskyPattern::from_symbolic(std::sync::Arc::new(symbolic), choice.chosen);
+        let factor = pattern.factor(a.as_ref(), faer::Par::Seq).expect("numeric");
+        let x: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 / 101.0 - 0.5).collect();
+        let mut b = vec![0.0; n];
+        for j in 0..n {
+            for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+                b[i] += v * x[j];
+            }
+        }
+        let mut y = faer::Mat::from_fn(n, 1, |i, _| b[i]);
+        factor.solve_in_place(y.as_mut());
+        let err = (0..n).map(|i| (y[(i, 0)] - x[i]).abs()).fold(0.0, f64::max);
+        assert!(err < 1e-12, "{:?}: {err:e}", choice.chosen);
+    }
+}
