@@ -651,7 +651,7 @@ mod tests {
                 descriptor,
                 owners,
             } => {
-                assert_eq!((option, descriptor, owners), ("energies", "si-hks", vec!["wks"]));
+                assert_eq!((option, descriptor, owners), ("energies", "si-hks", vec!["wks", "si-hks+wks"]));
             }
             other => panic!("{other:?}"),
         }
