@@ -592,7 +592,12 @@ impl Descriptor {
             Descriptor::Dhk1 { times } | Descriptor::Dhk2 { times } => hks(times.clone(), SpectrumNormalization::None),
             Descriptor::Dhk3 { times } => hks(times.clone(), SpectrumNormalization::MaxEigenvalue),
             Descriptor::Wks { energies } => Ok(crate::wks::wave_kernel_signature(&spectrum, *energies)?.values),
-            Descriptor::Combined { .. } => unreachable!("combined descriptors are computed part by part above"),
+            // Computed part by part above; reaching here would be a nested combination.
+            Descriptor::Combined { parts } => Err(RetrievalError::InvalidParameter {
+                name: "parts",
+                value: parts.len() as f64,
+                reason: "a combined descriptor is computed part by part, none itself combined",
+            }),
         }
     }
 }
@@ -651,7 +656,10 @@ mod tests {
                 descriptor,
                 owners,
             } => {
-                assert_eq!((option, descriptor, owners), ("energies", "si-hks", vec!["wks", "si-hks+wks"]));
+                assert_eq!(
+                    (option, descriptor, owners),
+                    ("energies", "si-hks", vec!["wks", "si-hks+wks"])
+                );
             }
             other => panic!("{other:?}"),
         }

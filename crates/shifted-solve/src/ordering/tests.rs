@@ -74,19 +74,7 @@ fn nd(pattern: &SymbolicSparseColMat<usize>, leaf_size: usize) -> Permutation {
 }
 
 fn amd_permutation(pattern: SymbolicSparseColMatRef<'_, usize>) -> Permutation {
-    let n = pattern.nrows();
-    let (mut fwd, mut inv) = (vec![0; n], vec![0; n]);
-    let nnz = pattern.compute_nnz();
-    let mut buf = MemBuffer::new(amd::order_maybe_unsorted_scratch::<usize>(n, nnz));
-    amd::order_maybe_unsorted(
-        &mut fwd,
-        &mut inv,
-        pattern,
-        amd::Control::default(),
-        MemStack::new(&mut buf),
-    )
-    .expect("amd");
-    Permutation { fwd, inv }
+    super::amd_permutation(pattern).expect("amd")
 }
 
 #[test]
@@ -340,9 +328,9 @@ fn the_side_by_side_choice_keeps_the_better_ordering_and_solves() {
         let factor = pattern.factor(a.as_ref(), faer::Par::Seq).expect("numeric");
         let x: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 / 101.0 - 0.5).collect();
         let mut b = vec![0.0; n];
-        for j in 0..n {
+        for (j, &xj) in x.iter().enumerate() {
             for (&i, &v) in a.row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
-                b[i] += v * x[j];
+                b[i] += v * xj;
             }
         }
         let mut y = faer::Mat::from_fn(n, 1, |i, _| b[i]);
