@@ -135,7 +135,12 @@ pub(crate) fn ensure_venv(venv: &Path) -> Result<PathBuf, StepError> {
 /// Installs the pinned requirements unless the venv already has exactly this file (a stamp
 /// `<file stem>.installed` in the venv remembers what was installed); `no_deps`: without the
 /// packages' declared dependencies (`pip install --no-deps`).
-pub(crate) fn ensure_requirements(python: &Path, venv: &Path, requirements: &Path, no_deps: bool) -> Result<(), StepError> {
+pub(crate) fn ensure_requirements(
+    python: &Path,
+    venv: &Path,
+    requirements: &Path,
+    no_deps: bool,
+) -> Result<(), StepError> {
     let wanted = std::fs::read(requirements).map_err(|e| StepError(format!("{}: {e}", requirements.display())))?;
     let stem = requirements
         .file_stem()
@@ -378,8 +383,18 @@ pub fn run(opts: &TestAllOptions) -> Result<(), StepError> {
         let t = Instant::now();
         let venv = target.join("python-venv");
         let python = ensure_venv(&venv)?;
-        ensure_requirements(&python, &venv, &root.join("crates/wfem-py/requirements-test.txt"), false)?;
-        ensure_requirements(&python, &venv, &root.join("crates/wfem-py/requirements-test-nodeps.txt"), true)?;
+        ensure_requirements(
+            &python,
+            &venv,
+            &root.join("crates/wfem-py/requirements-test.txt"),
+            false,
+        )?;
+        ensure_requirements(
+            &python,
+            &venv,
+            &root.join("crates/wfem-py/requirements-test-nodeps.txt"),
+            true,
+        )?;
         times.push(("Python environment", t.elapsed()));
         let t = Instant::now();
         let wheel = install_wfem(&python, &venv, &root, &target)?;
